@@ -1,0 +1,68 @@
+// Battery monitor: 100k/47k divider into A1 (thesis sec. 5.2, 6.1, 6.2).
+//
+// counts -> millivolts is the thesis's map(x, 0, 1023, 0, 15638): full scale 15.638 V at 5 V
+// on the pin. Under load the reading drops below the battery's true voltage (11.35 V true,
+// 10.8 V read); the sag is measured during the first sweep, averaged over 40 us PWM bins
+// (13 bins) and stored as offsets; the offset for the last PWM sent is added to each reading.
+#pragma once
+#include <stdint.h>
+
+namespace tc {
+
+constexpr uint8_t kSagBins = 13;
+constexpr uint16_t kSagBinWidthUs = 40;
+
+struct BatteryConfig {
+  uint16_t full_scale_mv = 15638;  // (R1 + R2) / R2 * 5 V with R1 = 100k, R2 = 47k
+  uint16_t adc_max_counts = 1023;  // thesis map() uses 1023
+  uint16_t min_sane_mv = 6000;     // below: sensor fault or dead pack (2S is out of scope)
+  uint16_t max_sane_mv = 17500;    // above: sensor fault or wrong divider
+};
+
+// Full scale in millivolts of a divider R1 (top) / R2 (bottom) at a 5 V ADC reference.
+uint16_t dividerFullScaleMillivolts(uint32_t r1_ohm, uint32_t r2_ohm, uint16_t vref_mv = 5000);
+
+// Sag offsets: offset_mv[i] is how much lower the monitor read in PWM bin i than in bin 0.
+struct SagTable {
+  uint16_t base_pwm_us = 1000;          // PWM at the start of bin 0
+  int16_t offset_mv[kSagBins] = {};     // >= 0 normally; bin 0 is always 0
+
+  // Bin of a PWM: (pwm - base) / 40, clamped to 0..12 (below base: bin 0).
+  static uint8_t binFor(uint16_t pwm_us, uint16_t base_pwm_us);
+  int16_t offsetFor(uint16_t pwm_us) const { return offset_mv[binFor(pwm_us, base_pwm_us)]; }
+};
+
+class BatteryMonitor {
+ public:
+  explicit BatteryMonitor(const BatteryConfig& config = BatteryConfig()) : config_(config) {}
+  // Thesis map(): counts * full_scale / adc_max. Counts above adc_max read as full scale.
+  uint16_t millivoltsFromCounts(uint16_t counts) const;
+  // Reading + sag offset of the last PWM sent (thesis fig. 6.9). Saturates at 0 and 65535.
+  uint16_t compensatedMillivolts(uint16_t measured_mv, uint16_t last_pwm_us,
+                                 const SagTable& sag) const;
+  bool isSane(uint16_t mv) const { return mv >= config_.min_sane_mv && mv <= config_.max_sane_mv; }
+  const BatteryConfig& config() const { return config_; }
+
+ private:
+  BatteryConfig config_;
+};
+
+// Collects (pwm, battery) pairs during a sweep and turns them into the start voltage and the
+// 13 offsets (thesis fig. 6.9: average per 40 us bin; Average[0] is the start voltage;
+// offset[i] = Average[0] - Average[i]). Bins nobody visited take the nearest visited bin's
+// offset; samples below base go to bin 0, above the last bin to bin 12.
+class SagBuilder {
+ public:
+  void reset(uint16_t base_pwm_us);
+  void add(uint16_t pwm_us, uint16_t vbat_mv);
+  // False (out untouched) when bin 0 has no sample: there is no start voltage.
+  bool build(SagTable& out, uint16_t& start_mv) const;
+  uint16_t samples(uint8_t bin) const { return bin < kSagBins ? count_[bin] : 0; }
+
+ private:
+  uint16_t base_pwm_us_ = 1000;
+  uint32_t sum_mv_[kSagBins] = {};
+  uint16_t count_[kSagBins] = {};
+};
+
+}  // namespace tc

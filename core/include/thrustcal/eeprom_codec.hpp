@@ -1,0 +1,137 @@
+// EEPROM codec for the per-motor calibration record, layout version 1.
+//
+// The thesis layout (table 6.1/6.2, 1024 bytes per motor at 0/1024/2048/3072) is the
+// reference; version 1 keeps its order and size and adds a version byte and a CRC:
+//
+//   offset  size  field
+//        0     1  layout version (1); 0xFF = erased
+//        1     2  first curve start voltage, mV (little endian)
+//        3     2  first curve PWM at 1 g, us
+//        5   499  first curve steps, us per gram (0xFF = unreachable from here on)
+//      504     2  sag table base PWM, us
+//      506    13  sag offsets, int8, units of 10 mV (bin width 40 us)
+//      519     2  second curve start voltage, mV (0 = no second curve)
+//      521     2  second curve PWM at 1 g, us
+//      523   499  second curve steps
+//     1022     2  CRC-16/CCITT-FALSE of bytes 0..1021 (little endian)
+//
+// Serialization is byte by byte through a Storage type with static
+//   uint8_t readByte(uint16_t addr);  void updateByte(uint16_t addr, uint8_t value);
+// (hal::Eeprom on the board, a RAM array in tests and host tools). Never memcpy structs.
+// Decoding never yields garbage: erased, wrong version, bad CRC or implausible content all
+// decode as "not calibrated" (out.clear()) with the reason in the status.
+#pragma once
+#include <stdint.h>
+
+#include "thrustcal/crc16.hpp"
+#include "thrustcal/motor_calibration.hpp"
+
+namespace tc {
+
+constexpr uint8_t kLayoutVersion1 = 1;
+constexpr uint16_t kRecordBytes = 1024;
+constexpr uint8_t kMotorSlots = 4;
+constexpr uint16_t kRecordCrcOffset = kRecordBytes - 2;
+constexpr int16_t kSagUnitMv = 10;
+
+inline uint16_t slotAddress(uint8_t slot) { return static_cast<uint16_t>(slot) * kRecordBytes; }
+
+enum class DecodeStatus : uint8_t {
+  kOk = 0,
+  kErased,      // version byte 0xFF: never written
+  kBadVersion,  // a layout this firmware does not know
+  kBadCrc,      // corrupt: power lost while writing, worn cell, foreign data
+  kBadContent,  // CRC fine but values impossible (voltage, PWM, steps)
+};
+
+// Short human text for a status ("ok", "erased", ...). Never null.
+const char* decodeStatusText(DecodeStatus status);
+
+namespace codec_detail {
+
+// Checks the decoded fields (voltages, PWMs, step sequences) and finalizes the curves.
+DecodeStatus validate(MotorCalibration& cal);
+int8_t sagToByte(int16_t offset_mv);
+
+template <class Storage>
+struct Writer {
+  uint16_t addr;
+  uint16_t crc;
+  void u8(uint8_t v) {
+    Storage::updateByte(addr++, v);
+    crc = crc16Update(crc, v);
+  }
+  void u16(uint16_t v) {
+    u8(static_cast<uint8_t>(v & 0xFF));
+    u8(static_cast<uint8_t>(v >> 8));
+  }
+};
+
+template <class Storage>
+struct Reader {
+  uint16_t addr;
+  uint16_t crc;
+  uint8_t u8() {
+    uint8_t v = Storage::readByte(addr++);
+    crc = crc16Update(crc, v);
+    return v;
+  }
+  uint16_t u16() {
+    uint16_t lo = u8();
+    return static_cast<uint16_t>(lo | (static_cast<uint16_t>(u8()) << 8));
+  }
+};
+
+}  // namespace codec_detail
+
+template <class Storage>
+void writeRecord(uint8_t slot, const MotorCalibration& cal) {
+  codec_detail::Writer<Storage> w{slotAddress(slot), 0xFFFF};
+  w.u8(kLayoutVersion1);
+  w.u16(cal.first.start_mv);
+  w.u16(cal.first.pwm_at_1g_us);
+  for (uint16_t i = 0; i < cal.first.stepCount(); ++i) w.u8(cal.first.steps()[i]);
+  w.u16(cal.sag.base_pwm_us);
+  for (uint8_t i = 0; i < kSagBins; ++i)
+    w.u8(static_cast<uint8_t>(codec_detail::sagToByte(cal.sag.offset_mv[i])));
+  w.u16(cal.hasSecondCurve() ? cal.second.start_mv : 0);
+  w.u16(cal.second.pwm_at_1g_us);
+  for (uint16_t i = 0; i < cal.second.stepCount(); ++i) w.u8(cal.second.steps()[i]);
+  const uint16_t crc = w.crc;
+  w.u16(crc);
+}
+
+template <class Storage>
+DecodeStatus readRecord(uint8_t slot, MotorCalibration& out) {
+  codec_detail::Reader<Storage> r{slotAddress(slot), 0xFFFF};
+  out.clear();
+  const uint8_t version = r.u8();
+  if (version == 0xFF) return DecodeStatus::kErased;
+  if (version != kLayoutVersion1) return DecodeStatus::kBadVersion;
+  out.first.start_mv = r.u16();
+  out.first.pwm_at_1g_us = r.u16();
+  for (uint16_t i = 0; i < out.first.stepCount(); ++i) out.first.steps()[i] = r.u8();
+  out.sag.base_pwm_us = r.u16();
+  for (uint8_t i = 0; i < kSagBins; ++i)
+    out.sag.offset_mv[i] = static_cast<int16_t>(static_cast<int8_t>(r.u8()) * kSagUnitMv);
+  out.second.start_mv = r.u16();
+  out.second.pwm_at_1g_us = r.u16();
+  for (uint16_t i = 0; i < out.second.stepCount(); ++i) out.second.steps()[i] = r.u8();
+  const uint16_t computed = r.crc;
+  const uint16_t stored = r.u16();
+  if (stored != computed) {
+    out.clear();
+    return DecodeStatus::kBadCrc;
+  }
+  const DecodeStatus status = codec_detail::validate(out);
+  if (status != DecodeStatus::kOk) out.clear();
+  return status;
+}
+
+// Marks a slot as not calibrated (version byte 0xFF; only that byte is written).
+template <class Storage>
+void eraseRecord(uint8_t slot) {
+  Storage::updateByte(slotAddress(slot), 0xFF);
+}
+
+}  // namespace tc

@@ -1,0 +1,50 @@
+// Running median over an odd window (1..201 samples), cheap enough to update on every ADC
+// sample on the ATmega2560: push() is one insertion into a sorted array plus one removal,
+// O(window) byte moves, no division, no heap.
+#pragma once
+#include <stdint.h>
+
+namespace tc {
+
+// Size-independent part (ETL style): the code exists once, whatever the window.
+class MedianFilterBase {
+ public:
+  // Forgets every sample.
+  void reset();
+  // Adds a sample; once the window is full the oldest sample leaves.
+  void push(uint16_t sample);
+  // Median of the samples held (lower median while fewer than `window` samples and their
+  // count is even). Returns 0 when empty: check count() first.
+  uint16_t median() const;
+  uint16_t count() const { return count_; }
+  uint16_t window() const { return window_; }
+  bool full() const { return count_ == window_; }
+
+ protected:
+  MedianFilterBase(uint16_t* sorted, uint16_t* ring, uint16_t window)
+      : sorted_(sorted), ring_(ring), window_(window) {}
+
+ private:
+  uint16_t* sorted_;  // the samples held, ascending
+  uint16_t* ring_;    // the samples held, oldest at head_
+  uint16_t window_;
+  uint16_t count_ = 0;
+  uint16_t head_ = 0;
+};
+
+template <uint16_t Window>
+class MedianFilter : public MedianFilterBase {
+  static_assert(Window % 2 == 1, "median window must be odd");
+  static_assert(Window >= 1 && Window <= 201, "median window must be 1..201");
+
+ public:
+  MedianFilter() : MedianFilterBase(sorted_storage_, ring_storage_, Window) {}
+  MedianFilter(const MedianFilter&) = delete;
+  MedianFilter& operator=(const MedianFilter&) = delete;
+
+ private:
+  uint16_t sorted_storage_[Window];
+  uint16_t ring_storage_[Window];
+};
+
+}  // namespace tc
