@@ -16,20 +16,30 @@ enum class LineEvent : uint8_t {
 
 class LineReader {
  public:
-  // Consumes received bytes (non-blocking). Echoes printable characters, handles backspace.
+  // Consumes received bytes (non-blocking) until a line is complete or nothing is left.
+  // Echoes printable characters, handles backspace (0x08, 0x7F) and ends a line on CR, LF or
+  // CRLF (the LF of a CRLF is swallowed). A tab counts as a space; other control bytes are
+  // ignored. A line longer than kLineMax is discarded whole and reported as kTooLong once
+  // its end arrives.
   LineEvent poll();
   // Feeds one byte (what poll() does per received byte); exposed for tests.
   LineEvent feed(uint8_t byte);
+  // The last complete line (valid until the next byte is fed). Mutable so it can be
+  // tokenized in place.
   const char* line() const { return buffer_; }
+  char* line() { return buffer_; }
+  // Forgets a partial line (e.g. after a sweep ends, so keys that aborted it do not linger).
   void clear();
 
  private:
   char buffer_[kLineMax + 1] = {};
   uint8_t length_ = 0;
   bool overflow_ = false;
+  bool last_was_cr_ = false;
 };
 
-// Splits `line` in place on spaces; returns the number of tokens (at most max_tokens).
+// Splits `line` in place on spaces; returns the number of tokens (at most max_tokens; any
+// further tokens are ignored, so pass one slot more than a command takes to detect extras).
 uint8_t tokenize(char* line, char** tokens, uint8_t max_tokens);
 
 // Parses a whole token as a decimal integer in [min, max]. False (value untouched) on an
