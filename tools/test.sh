@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Every test: installs what is missing (Debian packages), builds the AVR images and the host
+# tree (core/ instrumented for line coverage), runs all tests with ctest (host unit tests,
+# firmware logic on the fake HAL, plant fidelity, model lab, HIL tests of the real images in
+# simavr), prints core/ line coverage, and ends with ctest's summary. Non-zero on any failure.
+set -euo pipefail
+source "$(dirname "$0")/lib/common.sh"
+cd "$THRUSTCAL_ROOT"
+
+ensure_packages
+build_avr
+print_firmware_sizes
+build_host -DTHRUSTCAL_COVERAGE=ON
+
+say "running tests"
+find build/host -name '*.gcda' -delete 2>/dev/null || true
+log=build/host/ctest.log
+set +e
+ctest --test-dir build/host -j "$JOBS" --output-on-failure --timeout 900 2>&1 | tee "$log"
+status=${PIPESTATUS[0]}
+set -e
+
+say "core/ line coverage"
+cov_status=0
+cov_out=$(gcovr -r "$THRUSTCAL_ROOT" --filter "$THRUSTCAL_ROOT/core/" --object-directory build/host \
+  --print-summary --fail-under-line 90 -o build/host/coverage.txt 2>&1) || cov_status=$?
+echo "$cov_out" | grep -E '^(lines|branches):' || echo "$cov_out"
+[ $cov_status -eq 0 ] || echo "error: core/ line coverage is below 90 % (details: build/host/coverage.txt)"
+
+echo
+echo "ctest summary:"
+sed -n '/tests passed, /,$p' "$log"
+[ "$status" -eq 0 ] || exit "$status"
+exit $cov_status
