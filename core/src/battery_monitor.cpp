@@ -1,1 +1,92 @@
-// placeholder: implemented by the core work
+// Battery monitor: thesis map() from counts to millivolts, sag offsets per 40 us PWM bin.
+#include "thrustcal/battery_monitor.hpp"
+
+namespace tc {
+
+uint16_t dividerFullScaleMillivolts(uint32_t r1_ohm, uint32_t r2_ohm, uint16_t vref_mv) {
+  if (r2_ohm == 0) return 0;  // no bottom resistor: not a divider
+  // vref * (r1 + r2) / r2 = vref * q + vref * rem / r2, all in uint32. Scale both resistors
+  // down (same ratio) until vref * rem cannot overflow; only megaohm dividers lose bits.
+  while (r2_ohm > 0xFFFFFFFFul / (vref_mv ? vref_mv : 1u) || r1_ohm > 0xFFFFFFFFul - r2_ohm) {
+    r1_ohm >>= 1;
+    r2_ohm >>= 1;
+  }
+  const uint32_t total = r1_ohm + r2_ohm;
+  const uint32_t q = total / r2_ohm;
+  const uint32_t rem = total % r2_ohm;
+  const uint32_t frac = (static_cast<uint32_t>(vref_mv) * rem + r2_ohm / 2) / r2_ohm;
+  if (q > 0xFFFFul) return 0xFFFF;
+  const uint32_t mv = static_cast<uint32_t>(vref_mv) * q + frac;
+  return mv > 0xFFFFul ? static_cast<uint16_t>(0xFFFF) : static_cast<uint16_t>(mv);
+}
+
+uint8_t SagTable::binFor(uint16_t pwm_us, uint16_t base_pwm_us) {
+  if (pwm_us <= base_pwm_us) return 0;
+  const uint16_t bin = static_cast<uint16_t>((pwm_us - base_pwm_us) / kSagBinWidthUs);
+  return bin >= kSagBins ? static_cast<uint8_t>(kSagBins - 1) : static_cast<uint8_t>(bin);
+}
+
+uint16_t BatteryMonitor::millivoltsFromCounts(uint16_t counts) const {
+  if (config_.adc_max_counts == 0) return 0;
+  if (counts >= config_.adc_max_counts) return config_.full_scale_mv;
+  // map(x, 0, adc_max, 0, full_scale): truncating, like Arduino's map().
+  return static_cast<uint16_t>(static_cast<uint32_t>(counts) * config_.full_scale_mv /
+                               config_.adc_max_counts);
+}
+
+uint16_t BatteryMonitor::compensatedMillivolts(uint16_t measured_mv, uint16_t last_pwm_us,
+                                               const SagTable& sag) const {
+  const int32_t mv = static_cast<int32_t>(measured_mv) + sag.offsetFor(last_pwm_us);
+  if (mv < 0) return 0;
+  if (mv > 0xFFFFL) return 0xFFFF;
+  return static_cast<uint16_t>(mv);
+}
+
+void SagBuilder::reset(uint16_t base_pwm_us) {
+  base_pwm_us_ = base_pwm_us;
+  for (uint8_t i = 0; i < kSagBins; ++i) {
+    sum_mv_[i] = 0;
+    count_[i] = 0;
+  }
+}
+
+void SagBuilder::add(uint16_t pwm_us, uint16_t vbat_mv) {
+  const uint8_t bin = SagTable::binFor(pwm_us, base_pwm_us_);
+  if (count_[bin] == 0xFFFF) return;  // 65535 samples per bin are plenty: the sum stays exact
+  sum_mv_[bin] += vbat_mv;
+  ++count_[bin];
+}
+
+bool SagBuilder::build(SagTable& out, uint16_t& start_mv) const {
+  if (count_[0] == 0) return false;
+  int32_t average_mv[kSagBins];
+  for (uint8_t i = 0; i < kSagBins; ++i) {
+    average_mv[i] = count_[i] ? static_cast<int32_t>((sum_mv_[i] + count_[i] / 2u) / count_[i]) : 0;
+  }
+  out.base_pwm_us = base_pwm_us_;
+  for (uint8_t i = 0; i < kSagBins; ++i) {
+    // Unvisited bins borrow from the nearest visited bin (the lower one on a tie). Bin 0 is
+    // visited, so there is always one.
+    uint8_t src = i;
+    if (count_[i] == 0) {
+      for (uint8_t d = 1; d < kSagBins; ++d) {
+        if (i >= d && count_[i - d]) {
+          src = static_cast<uint8_t>(i - d);
+          break;
+        }
+        if (i + d < kSagBins && count_[i + d]) {
+          src = static_cast<uint8_t>(i + d);
+          break;
+        }
+      }
+    }
+    int32_t offset = average_mv[0] - average_mv[src];
+    if (offset > 32767) offset = 32767;
+    if (offset < -32768) offset = -32768;
+    out.offset_mv[i] = static_cast<int16_t>(offset);
+  }
+  start_mv = static_cast<uint16_t>(average_mv[0]);
+  return true;
+}
+
+}  // namespace tc

@@ -1,1 +1,165 @@
-// placeholder: implemented by the core work
+// Force-curve builder: sort, merge equal PWMs, pool adjacent violators, invert per gram.
+// int32 only (sums of decigrams, exact mean comparisons by quotient and remainder), no float,
+// no recursion, no heap: the work space is the caller-sized arrays of CurveBuilder<N>.
+#include "thrustcal/curve_builder.hpp"
+
+namespace tc {
+
+namespace {
+
+constexpr uint8_t kMaxStepUs = 254;  // kUnreachable (255) is the end marker
+constexpr int32_t kDecigramsPerGram = 10;
+
+// Floor division for den > 0: num = q * den + r with 0 <= r < den.
+void floorDivMod(int32_t num, int32_t den, int32_t& q, int32_t& r) {
+  q = num / den;
+  r = num % den;
+  if (r < 0) {
+    r += den;
+    --q;
+  }
+}
+
+// Exact sum_a / weight_a > sum_b / weight_b without a 64-bit product.
+bool meanGreater(int32_t sum_a, uint16_t weight_a, int32_t sum_b, uint16_t weight_b) {
+  int32_t qa, ra, qb, rb;
+  floorDivMod(sum_a, weight_a, qa, ra);
+  floorDivMod(sum_b, weight_b, qb, rb);
+  if (qa != qb) return qa > qb;
+  // ra < weight_a <= 1024 and rb < weight_b <= 1024: the products stay below 2^20.
+  return ra * static_cast<int32_t>(weight_b) > rb * static_cast<int32_t>(weight_a);
+}
+
+// Mean rounded to the nearest decigram (halves up), saturated to int16.
+int16_t roundedMean(int32_t sum, uint16_t weight) {
+  int32_t q, r;
+  floorDivMod(2 * sum + weight, 2 * static_cast<int32_t>(weight), q, r);
+  if (q > 32767) return 32767;
+  if (q < -32768) return -32768;
+  return static_cast<int16_t>(q);
+}
+
+}  // namespace
+
+bool CurveBuilderBase::add(uint16_t pwm_us, int16_t force_dg) {
+  if (count_ >= capacity_) return false;
+  samples_[count_].pwm_us = pwm_us;
+  samples_[count_].force_dg = force_dg;
+  ++count_;
+  return true;
+}
+
+BuildReport CurveBuilderBase::build(ForceCurveBase& out) {
+  BuildReport report;
+  const uint16_t keep_start_mv = out.start_mv;
+  out.clear();
+
+  // 1. Sort by PWM: insertion sort, O(n) for the usual already-ascending sweep, stable.
+  for (uint16_t i = 1; i < count_; ++i) {
+    const SweepSample s = samples_[i];
+    uint16_t j = i;
+    while (j > 0 && samples_[j - 1].pwm_us > s.pwm_us) {
+      samples_[j] = samples_[j - 1];
+      --j;
+    }
+    samples_[j] = s;
+  }
+
+  // 2. Merge equal PWMs: a point's sum and weight (raw samples) go to the PAVA arrays.
+  uint16_t points = 0;
+  for (uint16_t i = 0; i < count_; ++i) {
+    if (points > 0 && samples_[points - 1].pwm_us == samples_[i].pwm_us) {
+      block_sum_[points - 1] += samples_[i].force_dg;
+      ++block_weight_[points - 1];
+    } else {
+      samples_[points].pwm_us = samples_[i].pwm_us;
+      block_sum_[points] = samples_[i].force_dg;
+      block_weight_[points] = 1;
+      ++points;
+    }
+  }
+  count_ = points;
+  report.samples_used = points;
+  if (points < 2) {
+    report.status = BuildStatus::kTooFewSamples;
+    return report;
+  }
+
+  // 3. Pool adjacent violators (weighted by raw samples: least squares on the raw data).
+  //    Blocks form a stack in the low indices of the work arrays; a block's last point index
+  //    is parked in samples_[block].force_dg, which the merge step no longer needs.
+  uint16_t blocks = 0;
+  for (uint16_t i = 0; i < points; ++i) {
+    int32_t sum = block_sum_[i];
+    uint16_t weight = block_weight_[i];
+    while (blocks > 0 && meanGreater(block_sum_[blocks - 1], block_weight_[blocks - 1], sum, weight)) {
+      --blocks;
+      sum += block_sum_[blocks];
+      weight = static_cast<uint16_t>(weight + block_weight_[blocks]);
+    }
+    block_sum_[blocks] = sum;
+    block_weight_[blocks] = weight;
+    samples_[blocks].force_dg = static_cast<int16_t>(i);
+    ++blocks;
+  }
+  //    Expand from the last block backwards: block b starts at index >= b, so writing its
+  //    points never overwrites the end index of a block still to be read.
+  uint16_t pooled = 0;
+  for (uint16_t b = blocks; b-- > 0;) {
+    const uint16_t last = static_cast<uint16_t>(samples_[b].force_dg);
+    const uint16_t first = b > 0 ? static_cast<uint16_t>(samples_[b - 1].force_dg + 1) : 0;
+    const int16_t fitted_dg = roundedMean(block_sum_[b], block_weight_[b]);
+    if (last > first) pooled = static_cast<uint16_t>(pooled + (last - first + 1u));
+    for (uint16_t i = first; i <= last; ++i) samples_[i].force_dg = fitted_dg;
+  }
+  report.violations = pooled;
+  report.max_force_dg = samples_[points - 1].force_dg;
+
+  // 4. Invert: for each whole gram the PWM where the fitted force first reaches it.
+  if (report.max_force_dg < kDecigramsPerGram) {
+    report.status = BuildStatus::kNoForce;
+    return report;
+  }
+  uint16_t max_grams = static_cast<uint16_t>(report.max_force_dg / kDecigramsPerGram);
+  if (max_grams > out.capacityGrams()) max_grams = out.capacityGrams();
+
+  uint8_t* steps = out.steps();
+  uint16_t reach = 0;  // first point whose fitted force >= target
+  uint16_t previous_pwm = 0;
+  for (uint16_t grams = 1; grams <= max_grams; ++grams) {
+    const int32_t target_dg = static_cast<int32_t>(grams) * kDecigramsPerGram;
+    while (samples_[reach].force_dg < target_dg) ++reach;  // stops: last point >= max_grams
+    uint16_t pwm = samples_[reach].pwm_us;
+    if (reach > 0) {
+      // f0 < target <= f1: linear interpolation, rounded to the nearest microsecond.
+      const SweepSample& lo = samples_[reach - 1];
+      const SweepSample& hi = samples_[reach];
+      const uint32_t above = static_cast<uint32_t>(target_dg - lo.force_dg);        // < 2^16
+      const uint32_t span_us = static_cast<uint32_t>(hi.pwm_us - lo.pwm_us);       // < 2^16
+      const uint32_t span_dg = static_cast<uint32_t>(hi.force_dg - lo.force_dg);   // > 0
+      const uint32_t num = above * span_us;
+      uint32_t add = num / span_dg;
+      if (2u * (num % span_dg) >= span_dg) ++add;
+      pwm = static_cast<uint16_t>(lo.pwm_us + add);
+    }
+    if (grams == 1) {
+      out.pwm_at_1g_us = pwm;
+    } else {
+      const uint16_t step = static_cast<uint16_t>(pwm - previous_pwm);
+      if (step > kMaxStepUs) {
+        out.clear();
+        report.status = BuildStatus::kCurveTooSteep;
+        return report;
+      }
+      steps[grams - 2] = static_cast<uint8_t>(step);
+    }
+    previous_pwm = pwm;
+  }
+  out.start_mv = keep_start_mv;
+  out.finalize();
+  report.max_grams = max_grams;
+  report.status = BuildStatus::kOk;
+  return report;
+}
+
+}  // namespace tc

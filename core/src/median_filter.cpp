@@ -1,1 +1,85 @@
-// placeholder: implemented by the core work
+// Running median: a ring buffer remembers arrival order, a sorted array answers the median.
+// push() = two binary searches + one shift of the elements between the leaving and the
+// arriving sample: O(window) moves, O(log window) compares, no division.
+#include "thrustcal/median_filter.hpp"
+
+namespace tc {
+
+namespace {
+
+// First index in sorted[0..n) whose value is >= v.
+uint16_t lowerBound(const uint16_t* sorted, uint16_t n, uint16_t v) {
+  uint16_t lo = 0;
+  uint16_t hi = n;
+  while (lo < hi) {
+    const uint16_t mid = static_cast<uint16_t>(lo + ((hi - lo) >> 1));
+    if (sorted[mid] < v) {
+      lo = static_cast<uint16_t>(mid + 1);
+    } else {
+      hi = mid;
+    }
+  }
+  return lo;
+}
+
+// First index in sorted[0..n) whose value is > v.
+uint16_t upperBound(const uint16_t* sorted, uint16_t n, uint16_t v) {
+  uint16_t lo = 0;
+  uint16_t hi = n;
+  while (lo < hi) {
+    const uint16_t mid = static_cast<uint16_t>(lo + ((hi - lo) >> 1));
+    if (sorted[mid] <= v) {
+      lo = static_cast<uint16_t>(mid + 1);
+    } else {
+      hi = mid;
+    }
+  }
+  return lo;
+}
+
+}  // namespace
+
+void MedianFilterBase::reset() {
+  count_ = 0;
+  head_ = 0;
+}
+
+void MedianFilterBase::push(uint16_t sample) {
+  if (count_ < window_) {
+    // Filling up: head_ stays 0, the ring is written in order.
+    ring_[count_] = sample;
+    uint16_t pos = upperBound(sorted_, count_, sample);
+    for (uint16_t i = count_; i > pos; --i) sorted_[i] = sorted_[i - 1];
+    sorted_[pos] = sample;
+    ++count_;
+    return;
+  }
+  // Full: the oldest sample leaves, the new one takes its ring slot.
+  const uint16_t oldest = ring_[head_];
+  ring_[head_] = sample;
+  head_ = static_cast<uint16_t>(head_ + 1);
+  if (head_ == window_) head_ = 0;
+  if (oldest == sample) return;  // the sorted array is unchanged
+
+  uint16_t out = lowerBound(sorted_, count_, oldest);  // sorted_[out] == oldest
+  if (sample > oldest) {
+    // The new sample goes to the right: shift (out, dest) one to the left.
+    const uint16_t dest = upperBound(sorted_, count_, sample);  // > out
+    const uint16_t last = static_cast<uint16_t>(dest - 1);
+    for (uint16_t i = out; i < last; ++i) sorted_[i] = sorted_[i + 1];
+    sorted_[last] = sample;
+  } else {
+    // The new sample goes to the left: shift [dest, out) one to the right.
+    const uint16_t dest = upperBound(sorted_, out, sample);
+    for (uint16_t i = out; i > dest; --i) sorted_[i] = sorted_[i - 1];
+    sorted_[dest] = sample;
+  }
+}
+
+uint16_t MedianFilterBase::median() const {
+  if (count_ == 0) return 0;
+  // Odd count: the middle; even count (only while filling): the lower of the two middles.
+  return sorted_[(count_ - 1u) >> 1];
+}
+
+}  // namespace tc

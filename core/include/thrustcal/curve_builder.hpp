@@ -30,7 +30,8 @@ enum class BuildStatus : uint8_t {
 struct BuildReport {
   BuildStatus status = BuildStatus::kTooFewSamples;
   uint16_t samples_used = 0;   // after merging equal PWMs
-  uint16_t violations = 0;     // samples the monotone fit had to move
+  uint16_t violations = 0;     // points (after merging) the monotone fit pooled with a
+                               // neighbour: 0 for a monotone sweep
   int16_t max_force_dg = 0;    // largest fitted force
   uint16_t max_grams = 0;      // heaviest gram in the curve
 };
@@ -43,8 +44,14 @@ class CurveBuilderBase {
   uint16_t size() const { return count_; }
   uint16_t capacity() const { return capacity_; }
   const SweepSample& sample(uint16_t i) const { return samples_[i]; }
-  // Fills `out`'s PWM at 1 g and steps (start_mv is left to the caller) and finalizes it.
-  // On any status but kOk `out` is left absent (start_mv = 0). The samples are reordered.
+  // Fills `out`'s PWM at 1 g and steps and finalizes it; on kOk out.start_mv keeps the value
+  // it had (setting it is the caller's job, maxGrams() is 0 until then). Grams beyond
+  // out.capacityGrams() are dropped. On any status but kOk `out` is cleared (absent,
+  // start_mv = 0). Afterwards the buffer holds the merged points, ascending in PWM, with
+  // their fitted (monotone) force: size() may shrink; reset() before the next sweep.
+  // int32 arithmetic only, O(n) for an ascending sweep (insertion sort), O(n + grams).
+  // Status kTooFewSamples: under 2 distinct PWMs; kNoForce: fitted force never reaches 1 g;
+  // kCurveTooSteep: two neighbouring grams more than 254 us apart.
   BuildReport build(ForceCurveBase& out);
 
  protected:

@@ -33,6 +33,12 @@ constexpr uint16_t kRecordBytes = 1024;
 constexpr uint8_t kMotorSlots = 4;
 constexpr uint16_t kRecordCrcOffset = kRecordBytes - 2;
 constexpr int16_t kSagUnitMv = 10;
+// What a decoded record may hold (anything else is kBadContent): start voltages of a 1S..6S
+// pack or bench supply, PWMs of a servo-style ESC pulse.
+constexpr uint16_t kPlausibleMinMv = 3000;
+constexpr uint16_t kPlausibleMaxMv = 30000;
+constexpr uint16_t kPlausibleMinPwmUs = 500;
+constexpr uint16_t kPlausibleMaxPwmUs = 2500;
 
 inline uint16_t slotAddress(uint8_t slot) { return static_cast<uint16_t>(slot) * kRecordBytes; }
 
@@ -50,7 +56,12 @@ const char* decodeStatusText(DecodeStatus status);
 namespace codec_detail {
 
 // Checks the decoded fields (voltages, PWMs, step sequences) and finalizes the curves.
+// kBadContent when: the first curve is missing or its start voltage, PWM at 1 g or PWM at its
+// heaviest gram is implausible, or its steps continue after the end marker; the sag base PWM
+// is implausible or offset 0 is not 0; a present second curve fails the same checks as the
+// first. An absent second curve (start_mv 0) is cleared whatever its other bytes hold.
 DecodeStatus validate(MotorCalibration& cal);
+// Sag offset in mV -> stored byte: nearest multiple of kSagUnitMv, saturated to int8.
 int8_t sagToByte(int16_t offset_mv);
 
 template <class Storage>
@@ -94,9 +105,12 @@ void writeRecord(uint8_t slot, const MotorCalibration& cal) {
   w.u16(cal.sag.base_pwm_us);
   for (uint8_t i = 0; i < kSagBins; ++i)
     w.u8(static_cast<uint8_t>(codec_detail::sagToByte(cal.sag.offset_mv[i])));
-  w.u16(cal.hasSecondCurve() ? cal.second.start_mv : 0);
-  w.u16(cal.second.pwm_at_1g_us);
-  for (uint16_t i = 0; i < cal.second.stepCount(); ++i) w.u8(cal.second.steps()[i]);
+  // An absent second curve is written as start 0, PWM 0, steps kUnreachable: no stale bytes.
+  const bool second = cal.hasSecondCurve();
+  w.u16(second ? cal.second.start_mv : 0);
+  w.u16(second ? cal.second.pwm_at_1g_us : 0);
+  for (uint16_t i = 0; i < cal.second.stepCount(); ++i)
+    w.u8(second ? cal.second.steps()[i] : kUnreachable);
   const uint16_t crc = w.crc;
   w.u16(crc);
 }

@@ -18,14 +18,19 @@ constexpr uint8_t kCheckpointEvery = 32;   // grams between precomputed PWMs
 class ForceCurveBase {
  public:
   bool isPresent() const { return start_mv != 0; }
-  // Heaviest gram the curve reaches (0 when absent or empty).
-  uint16_t maxGrams() const { return max_grams_; }
+  // Heaviest gram the curve reaches (0 when absent, i.e. start_mv == 0, or empty, i.e.
+  // pwm_at_1g_us == 0).
+  uint16_t maxGrams() const { return isPresent() ? max_grams_ : 0; }
   // PWM for `grams` (1..maxGrams()). grams == 0 -> 0. grams > maxGrams() -> PWM at maxGrams().
+  // An absent or empty curve answers 0 for every gram. O(kCheckpointEvery) additions.
   uint16_t pwmForGrams(uint16_t grams) const;
   // Rebuilds maxGrams() and the checkpoints from pwm_at_1g_us and the steps. Call after
   // filling the public fields by hand or by decoding. Returns false if a step sequence
-  // is inconsistent (a real step after kUnreachable); the curve is then truncated there.
+  // is inconsistent (a real step after kUnreachable, or a PWM above 65535 us); the curve is
+  // then truncated there (every later step becomes kUnreachable).
   bool finalize();
+  // Absent and empty: start_mv = 0, pwm_at_1g_us = 0, every step kUnreachable.
+  void clear();
   uint16_t capacityGrams() const { return grams_; }
   uint8_t* steps() { return steps_; }
   const uint8_t* steps() const { return steps_; }
