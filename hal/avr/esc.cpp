@@ -1,1 +1,90 @@
-// placeholder
+// Four ESC outputs, 16-bit timers in fast PWM mode 14 (TOP = ICRn), prescaler 8 -> 0.5 us
+// per tick. ICRn = 2e6 / frame_hz - 1 (39999 at 50 Hz, 4999 at 400 Hz), OCRnx = 2 * pwm_us - 1.
+//   ESC 0  D6  PH3 OC4A      ESC 2  D8  PH5 OC4C
+//   ESC 1  D7  PH4 OC4B      ESC 3  D11 PB5 OC1A
+// OCRnx is double-buffered in mode 14: a new pulse width takes effect at the next frame.
+#include <avr/io.h>
+#include <util/atomic.h>
+
+#include "hal/hal.hpp"
+
+static_assert(F_CPU == 16000000UL, "ESC timer settings assume a 16 MHz clock (0.5 us ticks)");
+
+namespace {
+
+constexpr uint32_t kTicksPerSecond = F_CPU / 8;
+uint16_t g_pulse_us[hal::kEscChannels] = {};
+uint16_t g_frame_hz = 0;
+
+uint16_t topFor(uint16_t frame_hz) {
+  return static_cast<uint16_t>(kTicksPerSecond / frame_hz - 1);
+}
+
+void writeCompare(uint8_t channel, uint16_t ticks) {
+  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {  // 16-bit registers share the TEMP byte
+    switch (channel) {
+      case 0: OCR4A = ticks; break;
+      case 1: OCR4B = ticks; break;
+      case 2: OCR4C = ticks; break;
+      default: OCR1A = ticks; break;
+    }
+  }
+}
+
+}  // namespace
+
+namespace hal {
+
+void Esc::init(uint16_t frame_hz) {
+  if (frame_hz < kEscMinFrameHz || frame_hz > kEscMaxFrameHz) frame_hz = kEscDefaultFrameHz;
+  // Stop both timers while configuring.
+  TCCR4B = 0;
+  TCCR1B = 0;
+  g_frame_hz = frame_hz;
+  const uint16_t top = topFor(frame_hz);
+  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+    ICR4 = top;
+    ICR1 = top;
+    TCNT4 = 0;
+    TCNT1 = 0;
+  }
+  for (uint8_t ch = 0; ch < kEscChannels; ++ch) writePulse(ch, 1000);
+  // Non-inverting compare outputs, WGM 14 = WGMn3:WGMn2:WGMn1.
+  TCCR4A = _BV(COM4A1) | _BV(COM4B1) | _BV(COM4C1) | _BV(WGM41);
+  TCCR1A = _BV(COM1A1) | _BV(WGM11);
+  DDRH |= _BV(PH3) | _BV(PH4) | _BV(PH5);
+  DDRB |= _BV(PB5);
+  // Start both at clk / 8, back to back so the frames stay nearly aligned.
+  TCCR4B = _BV(WGM43) | _BV(WGM42) | _BV(CS41);
+  TCCR1B = _BV(WGM13) | _BV(WGM12) | _BV(CS11);
+}
+
+bool Esc::setFrameRate(uint16_t frame_hz) {
+  if (frame_hz < kEscMinFrameHz || frame_hz > kEscMaxFrameHz) return false;
+  g_frame_hz = frame_hz;
+  const uint16_t top = topFor(frame_hz);
+  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+    // Restart the frame: a counter above the new TOP would otherwise run on to 0xFFFF.
+    ICR4 = top;
+    ICR1 = top;
+    TCNT4 = 0;
+    TCNT1 = 0;
+  }
+  return true;
+}
+
+uint16_t Esc::frameRateHz() { return g_frame_hz; }
+
+void Esc::writePulse(uint8_t channel, uint16_t pwm_us) {
+  if (channel >= kEscChannels) return;
+  if (pwm_us < kEscPulseMinUs) pwm_us = kEscPulseMinUs;
+  if (pwm_us > kEscPulseMaxUs) pwm_us = kEscPulseMaxUs;
+  g_pulse_us[channel] = pwm_us;
+  writeCompare(channel, static_cast<uint16_t>(2u * pwm_us - 1u));
+}
+
+uint16_t Esc::pulseUs(uint8_t channel) {
+  return channel < kEscChannels ? g_pulse_us[channel] : 0;
+}
+
+}  // namespace hal
