@@ -1,0 +1,743 @@
+// read_run (thesis "Read and Run") against the fake HAL: start-up report, arming, the
+// Force-PWM path per frame (option 2.1 and sag offsets), commands, failsafe, lift-off, rate.
+//
+// Seam: the test links read_run_app + fw_common + core + the fake HAL. Calibration records are
+// built from a simple plant with tc::CurveBuilder and written into the fake EEPROM with
+// tc::writeRecord<hal::Eeprom>, exactly as gather_store would store them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hal/fake.hpp"
+#include "hal/hal.hpp"
+#include "read_run_app.hpp"
+#include "thrustcal/battery_monitor.hpp"
+#include "thrustcal/curve_builder.hpp"
+#include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/force_pwm.hpp"
+
+namespace fake = hal::fake;
+
+namespace {
+
+// Battery readings the tests use, as ADC counts on A1 (thesis divider, 15.638 V full scale).
+constexpr uint16_t kCountsV1 = 740;  // first curve's start voltage (LiPo)
+constexpr uint16_t kCountsV2 = 820;  // second curve's start voltage
+
+uint16_t mvFromCounts(uint16_t counts) { return tc::BatteryMonitor().millivoltsFromCounts(counts); }
+
+// Plant: thrust follows the effective motor voltage duty * V (DESIGN.md), quadratically:
+//   F = k * ((pwm - 1080 us) / 1000 us * V)^2,  k in g/V^2 differs per motor.
+double plantForceG(double k, uint16_t pwm_us, uint16_t vbat_mv) {
+  if (pwm_us <= 1080) return 0.0;
+  const double x = (pwm_us - 1080) / 1000.0 * (vbat_mv / 1000.0);
+  return k * x * x;
+}
+
+// One sweep of the plant at a fixed battery voltage, turned into a force curve.
+void buildCurve(tc::ForceCurveBase& curve, double k, uint16_t vbat_mv) {
+  auto builder = std::make_unique<tc::CurveBuilder<128>>();
+  for (uint16_t pwm = 1000; pwm <= 2000; pwm += 10) {
+    builder->add(pwm, static_cast<int16_t>(std::lround(plantForceG(k, pwm, vbat_mv) * 10.0)));
+  }
+  const tc::BuildReport report = builder->build(curve);
+  ASSERT_EQ(report.status, tc::BuildStatus::kOk);
+  curve.start_mv = vbat_mv;
+}
+
+struct MotorSpec {
+  double k = 13.5;              // plant constant, g/V^2
+  bool second_curve = true;     // false: first curve only
+  int16_t sag_mv_per_bin = 0;   // sag offset of bin i = i * this
+};
+
+std::unique_ptr<tc::MotorCalibration> makeCalibration(const MotorSpec& spec) {
+  auto cal = std::make_unique<tc::MotorCalibration>();
+  buildCurve(cal->first, spec.k, mvFromCounts(kCountsV1));
+  if (spec.second_curve) buildCurve(cal->second, spec.k, mvFromCounts(kCountsV2));
+  cal->sag.base_pwm_us = 1000;
+  for (uint8_t i = 0; i < tc::kSagBins; ++i) {
+    cal->sag.offset_mv[i] = static_cast<int16_t>(i * spec.sag_mv_per_bin);
+  }
+  return cal;
+}
+
+void storeMotor(uint8_t slot, const MotorSpec& spec) {
+  auto cal = makeCalibration(spec);
+  tc::writeRecord<hal::Eeprom>(slot, *cal);
+}
+
+// What the EEPROM round trip gives the firmware (the sag table is stored in 10 mV units).
+std::unique_ptr<tc::MotorCalibration> storedCalibration(uint8_t slot) {
+  auto cal = std::make_unique<tc::MotorCalibration>();
+  EXPECT_EQ(tc::readRecord<hal::Eeprom>(slot, *cal), tc::DecodeStatus::kOk);
+  return cal;
+}
+
+// Thesis option 2.1 written out independently in floating point.
+double option21PwmUs(const tc::MotorCalibration& cal, uint16_t force_g, uint16_t vbat_mv) {
+  const double c1 = cal.first.pwmForGrams(force_g);
+  const double c2 = cal.second.pwmForGrams(force_g);
+  const double v1 = cal.first.start_mv;
+  const double v2 = cal.second.start_mv;
+  return c1 + (vbat_mv - v1) * (c2 - c1) / (v2 - v1);
+}
+
+std::string volts(uint16_t mv) {
+  char text[16];
+  std::snprintf(text, sizeof text, "%u.%03u", mv / 1000u, mv % 1000u);
+  return text;
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::string line;
+  std::istringstream in(text);
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    out.push_back(line);
+  }
+  return out;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+class ReadRun : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    fake::reset();
+    fake::setTimeLimitMs(120000);  // a wait that never ends fails the test instead of hanging
+    fake::setAdcCounts(hal::kAdcBattery, kCountsV1);
+  }
+
+  void TearDown() override { fake::setTickHook(nullptr); }
+
+  void storeFourMotors() {
+    storeMotor(0, {13.5, true, 0});
+    storeMotor(1, {12.0, true, 0});
+    storeMotor(2, {15.0, true, 0});
+    storeMotor(3, {14.0, true, 0});
+  }
+
+  // main.cpp's sequence up to the loop: init, banner, load, arm.
+  void boot() {
+    app_ = std::make_unique<rr::ReadRunApp>();
+    hal::Esc::init(hal::kEscDefaultFrameHz);
+    hal::Clock::init();
+    hal::Uart::init(115200);
+    hal::Adc::init();
+    app_->printBanner();
+    calibrated_ = app_->loadCalibration();
+    app_->arm();
+  }
+
+  // main.cpp's loop for `ms` simulated milliseconds. With keep_alive, an empty line every
+  // 200 ms stands in for a host that keeps the failsafe from tripping.
+  void runFor(uint32_t ms, bool keep_alive = false) {
+    const uint32_t end_ms = fake::nowMs() + ms;
+    app_->runOnce();
+    while (fake::nowMs() < end_ms) {
+      hal::Clock::sleepUntilInterrupt();
+      if (keep_alive && fake::nowMs() % 200 == 0) fake::feedInput("\n");
+      app_->runOnce();
+    }
+  }
+
+  // Sends one command line and lets the loop handle it and run two frames.
+  std::string command(const std::string& line, bool keep_alive = true) {
+    fake::takeOutput();
+    fake::feedInput(line + "\n");
+    runFor(50, keep_alive);
+    return fake::takeOutput();
+  }
+
+  uint16_t pulse(uint8_t motor) const { return fake::pulseUs(motor); }
+
+  std::unique_ptr<rr::ReadRunApp> app_;
+  uint8_t calibrated_ = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Start-up
+
+TEST_F(ReadRun, StartUpReportsEveryCalibratedSlotWithItsVoltagesAndMaxForce) {
+  // given: two good motors (one without a second curve), one corrupt, one erased
+  storeMotor(0, {13.5, true, 0});
+  storeMotor(1, {13.5, false, 0});
+  storeMotor(2, {13.5, true, 0});
+  fake::eeprom()[tc::slotAddress(2) + 100] ^= 0x01;  // one flipped bit in the first curve
+
+  // when
+  boot();
+
+  // then
+  const std::string out = fake::output();
+  EXPECT_EQ(calibrated_, 2);
+  const std::string v1 = volts(mvFromCounts(kCountsV1));
+  const std::string v2 = volts(mvFromCounts(kCountsV2));
+  EXPECT_TRUE(contains(out, "motor 0: ok, V1 " + v1 + " V, V2 " + v2 + " V, max 500 g")) << out;
+  EXPECT_TRUE(contains(out, "motor 1: ok, V1 " + v1 + " V, V2 none (single curve")) << out;
+  EXPECT_TRUE(contains(out, "motor 2: not calibrated: corrupt (CRC mismatch) - refusing to arm; "
+                            "recalibrate it with gather_store"))
+      << out;
+  EXPECT_TRUE(contains(out, "motor 3: not calibrated: erased")) << out;
+  EXPECT_TRUE(contains(out, "calibrated motors: 2 of 4")) << out;
+  EXPECT_EQ(app_->motor(2).record, tc::DecodeStatus::kBadCrc);
+  EXPECT_EQ(app_->motor(3).record, tc::DecodeStatus::kErased);
+}
+
+TEST_F(ReadRun, StartUpReadsEepromButNeverWritesIt) {
+  // given
+  storeFourMotors();
+  fake::resetEepromWrites();
+
+  // when
+  boot();
+  command("f 300");
+
+  // then
+  EXPECT_EQ(fake::eepromWrites(), 0u);
+}
+
+TEST_F(ReadRun, StartUpWithNothingCalibratedWarnsAndRefusesEveryForce) {
+  // given: an erased EEPROM
+  boot();
+  EXPECT_TRUE(contains(fake::output(), "warning: no motor is calibrated")) << fake::output();
+
+  // when
+  const std::string out = command("f 100");
+
+  // then
+  EXPECT_TRUE(contains(out, "error: no motor is calibrated; calibrate them with gather_store"))
+      << out;
+  for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), 1000) << "motor " << int(m);
+}
+
+struct BadSlotCase {
+  const char* name;
+  void (*damage)(uint8_t* slot_bytes);
+  const char* reason;
+};
+
+const BadSlotCase kBadSlots[] = {
+    {"flipped curve byte", [](uint8_t* b) { b[300] ^= 0x40; }, "corrupt (CRC mismatch)"},
+    {"flipped CRC byte", [](uint8_t* b) { b[tc::kRecordCrcOffset] ^= 0x01; }, "corrupt (CRC mismatch)"},
+    {"unknown layout version", [](uint8_t* b) { b[0] = 7; }, "unknown layout version"},
+    {"erased", [](uint8_t* b) { b[0] = 0xFF; }, "erased (never calibrated)"},
+};
+
+TEST_F(ReadRun, MissingOrCorruptSlotIsNeverArmedAndEveryCommandToItIsRefused) {
+  for (const BadSlotCase& bad : kBadSlots) {
+    SCOPED_TRACE(bad.name);
+    // given: four good motors, then slot 2 damaged
+    fake::reset();
+    fake::setTimeLimitMs(120000);
+    fake::setAdcCounts(hal::kAdcBattery, kCountsV1);
+    storeFourMotors();
+    bad.damage(fake::eeprom() + tc::slotAddress(2));
+    boot();
+    EXPECT_TRUE(contains(fake::output(), std::string("motor 2: not calibrated: ") + bad.reason))
+        << fake::output();
+
+    // when: motor 2 alone, then all motors
+    const std::string one = command("f 2 300");
+    const std::string all = command("f 300");
+    const std::string lift = command("liftoff 200");
+
+    // then: motor 2 stays at 1000 us, the others run, each refusal is one clear line
+    EXPECT_TRUE(contains(one, "error: motor 2 is not calibrated: " + std::string(bad.reason) +
+                                  "; it stays at 1000 us - recalibrate it with gather_store"))
+        << one;
+    EXPECT_TRUE(contains(all, "warning: motor 2 not calibrated")) << all;
+    EXPECT_TRUE(contains(lift, "error: liftoff needs all four motors calibrated; motor 2 is not "
+                               "calibrated"))
+        << lift;
+    EXPECT_EQ(pulse(2), 1000);
+    EXPECT_EQ(app_->motor(2).force_g, 0);
+    EXPECT_GT(pulse(0), 1400);
+    EXPECT_GT(pulse(3), 1400);
+    EXPECT_EQ(app_->mode(), rr::Mode::kReady);  // liftoff did not start
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Arming
+
+TEST_F(ReadRun, ArmingHoldsEveryEscAt1000UsForTwoSecondsAndIgnoresEarlyInput) {
+  // given: four calibrated motors, and a command typed while arming
+  storeFourMotors();
+  fake::feedInputAt(500, "f 300\n");
+  uint16_t max_pulse_us = 0;
+  uint16_t min_pulse_us = 0xFFFF;
+  uint32_t armed_at_ms = 0;
+  fake::setTickHook([&](uint32_t now_ms) {
+    if (armed_at_ms == 0 && contains(fake::output(), "armed\r\n")) armed_at_ms = now_ms;
+    if (armed_at_ms != 0) return;
+    for (uint8_t m = 0; m < rr::kMotors; ++m) {
+      max_pulse_us = std::max(max_pulse_us, fake::pulseUs(m));
+      min_pulse_us = std::min(min_pulse_us, fake::pulseUs(m));
+    }
+  });
+
+  // when
+  boot();
+  const uint32_t arm_end_ms = fake::nowMs();
+  runFor(200, true);
+
+  // then
+  EXPECT_GE(arm_end_ms, 2000u);
+  EXPECT_LE(arm_end_ms, 2002u);
+  EXPECT_GE(armed_at_ms, 2000u);
+  EXPECT_EQ(max_pulse_us, 1000);
+  EXPECT_EQ(min_pulse_us, 1000);
+  EXPECT_TRUE(contains(fake::output(), "arming...")) << fake::output();
+  EXPECT_TRUE(contains(fake::output(), "input received while arming was ignored"));
+  for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), 1000) << "motor " << int(m);
+  EXPECT_EQ(fake::frameRateHz(), 50);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Force commands
+
+TEST_F(ReadRun, ForceForAllMotorsGivesEachMotorThePwmOfItsOwnCurve) {
+  // given: four different motors, battery at the first curve's voltage
+  storeFourMotors();
+  const double k[rr::kMotors] = {13.5, 12.0, 15.0, 14.0};
+  boot();
+
+  // when
+  command("f 300");
+
+  // then: each pulse is the motor's own curve value and its plant makes ~300 g with it
+  const uint16_t v1_mv = mvFromCounts(kCountsV1);
+  for (uint8_t m = 0; m < rr::kMotors; ++m) {
+    SCOPED_TRACE(m);
+    auto cal = storedCalibration(m);
+    EXPECT_EQ(pulse(m), cal->first.pwmForGrams(300));
+    EXPECT_NEAR(plantForceG(k[m], pulse(m), v1_mv), 300.0, 6.0);
+    EXPECT_EQ(app_->motor(m).force_g, 300);
+  }
+  EXPECT_NE(pulse(1), pulse(2));  // different motors, different pulses, same force
+}
+
+TEST_F(ReadRun, ForceForOneMotorLeavesTheOthersStopped) {
+  // given
+  storeFourMotors();
+  boot();
+
+  // when
+  const std::string out = command("f 1 250");
+
+  // then
+  EXPECT_FALSE(contains(out, "error")) << out;
+  EXPECT_EQ(pulse(1), storedCalibration(1)->first.pwmForGrams(250));
+  EXPECT_EQ(pulse(0), 1000);
+  EXPECT_EQ(pulse(2), 1000);
+  EXPECT_EQ(pulse(3), 1000);
+}
+
+TEST_F(ReadRun, StopSendsEveryEscTo1000UsAtOnce) {
+  // given
+  storeFourMotors();
+  boot();
+  command("f 300");
+  ASSERT_GT(pulse(0), 1400);
+
+  // when: stop, observed before the next frame
+  fake::feedInput("stop\n");
+  app_->runOnce();
+
+  // then
+  for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), 1000) << "motor " << int(m);
+  EXPECT_FALSE(app_->isRunning());
+}
+
+TEST_F(ReadRun, StatusShowsForcePwmFlagsInWordsAndBothBatteryVoltages) {
+  // given: a weak motor 2 (saturates at 300 g) and a single-curve motor 3
+  storeMotor(0, {13.5, true, 0});
+  storeMotor(1, {13.5, true, 0});
+  storeMotor(2, {2.0, true, 0});
+  storeMotor(3, {13.5, false, 0});
+  boot();
+  command("f 300");
+
+  // when
+  const std::string out = command("status");
+
+  // then
+  const std::string v1 = volts(mvFromCounts(kCountsV1));
+  const std::string pwm0 = std::to_string(pulse(0));
+  EXPECT_TRUE(contains(out, "motor 0: 300 g, " + pwm0 + " us, battery " + v1 +
+                                " V compensated, flags: none"))
+      << out;
+  EXPECT_TRUE(contains(out, "motor 2: 300 g, " + std::to_string(pulse(2)) + " us")) << out;
+  EXPECT_TRUE(contains(out, "flags: saturated")) << out;
+  EXPECT_TRUE(contains(out, "flags: single curve")) << out;
+  EXPECT_TRUE(contains(out, "battery " + v1 + " V raw (median of 101), frame rate 50 Hz, running"))
+      << out;
+  EXPECT_TRUE(contains(out, "rr> ")) << out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Battery: option 2.1 and the sag offsets
+
+struct VoltageCase {
+  uint16_t counts;
+  const char* what;
+};
+
+TEST_F(ReadRun, Option21InterpolatesBetweenTheTwoCurvesAsTheBatteryVoltageChanges) {
+  // given
+  storeFourMotors();
+  boot();
+  auto cal = storedCalibration(0);
+  const uint16_t force_g = 300;
+  const uint16_t c1 = cal->first.pwmForGrams(force_g);
+  const uint16_t c2 = cal->second.pwmForGrams(force_g);
+  ASSERT_GT(c1, c2 + 30) << "the plant needs less PWM at the higher voltage";
+  command("f 300");
+
+  const VoltageCase cases[] = {
+      {kCountsV1, "at V1: the first curve"},
+      {kCountsV2, "at V2: the second curve"},
+      {780, "between: interpolated"},
+      {700, "below V1: extrapolated"},
+      {850, "above V2: extrapolated"},
+  };
+  uint16_t previous_pwm = 0;
+  for (const VoltageCase& c : cases) {
+    SCOPED_TRACE(c.what);
+    // when: the battery reading changes and the median follows
+    fake::setAdcCounts(hal::kAdcBattery, c.counts);
+    runFor(1000, true);
+
+    // then
+    const uint16_t vbat_mv = mvFromCounts(c.counts);
+    EXPECT_EQ(app_->batteryMv(), vbat_mv);
+    EXPECT_NEAR(pulse(0), option21PwmUs(*cal, force_g, vbat_mv), 1.0);
+    EXPECT_NE(pulse(0), previous_pwm);
+    previous_pwm = pulse(0);
+  }
+  fake::setAdcCounts(hal::kAdcBattery, kCountsV1);
+  runFor(1000, true);
+  EXPECT_EQ(pulse(0), c1);
+  fake::setAdcCounts(hal::kAdcBattery, kCountsV2);
+  runFor(1000, true);
+  EXPECT_EQ(pulse(0), c2);
+}
+
+TEST_F(ReadRun, SagOffsetOfTheLastPwmIsAddedToTheBatteryReading) {
+  // given: motors 0 and 1 identical except for motor 0's sag table (50 mV per 40 us bin)
+  storeMotor(0, {13.5, true, 50});
+  storeMotor(1, {13.5, true, 0});
+  storeMotor(2, {13.5, true, 0});
+  storeMotor(3, {13.5, true, 0});
+  const uint16_t read_counts = kCountsV1 - 39;  // the monitor reads ~0.6 V low under load
+  fake::setAdcCounts(hal::kAdcBattery, read_counts);
+  boot();
+
+  // when
+  command("f 300");
+  runFor(500, true);
+
+  // then: motor 0 is driven as if the battery were read + offset of its PWM's bin
+  auto cal = storedCalibration(0);
+  const uint16_t read_mv = mvFromCounts(read_counts);
+  const int16_t offset_mv = cal->sag.offsetFor(pulse(0));
+  EXPECT_EQ(offset_mv, 600) << "pwm " << pulse(0) << " is in the last bin";
+  EXPECT_EQ(app_->motor(0).vbat_mv, read_mv + offset_mv);
+  EXPECT_EQ(app_->motor(1).vbat_mv, read_mv);
+  EXPECT_NEAR(pulse(0), option21PwmUs(*cal, 300, read_mv + offset_mv), 1.0);
+  EXPECT_NEAR(pulse(1), option21PwmUs(*cal, 300, read_mv), 1.0);
+  EXPECT_LT(pulse(0) + 10, pulse(1)) << "without the offset the motor would get more PWM";
+  // and the compensated voltage is what status shows for that motor
+  const std::string out = command("status");
+  EXPECT_TRUE(contains(out, "battery " + volts(read_mv + offset_mv) + " V compensated")) << out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Failsafe
+
+TEST_F(ReadRun, FailsafeStopsAllMotors500MsAfterTheLastCommandButNotAt490Ms) {
+  // given
+  storeFourMotors();
+  boot();
+  fake::feedInput("f 300\n");
+  const uint32_t sent_ms = fake::nowMs();
+
+  // when / then: still running at 490 ms
+  runFor(490);
+  for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_GT(pulse(m), 1400) << "motor " << int(m);
+  EXPECT_FALSE(contains(fake::output(), "failsafe"));
+
+  // when / then: stopped at 500 ms
+  runFor(sent_ms + 500 - fake::nowMs());
+  EXPECT_EQ(fake::nowMs(), sent_ms + 500);
+  for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), 1000) << "motor " << int(m);
+  EXPECT_TRUE(contains(fake::output(), "failsafe: no command for 500 ms, motors stopped"));
+  EXPECT_FALSE(app_->isRunning());
+  EXPECT_EQ(app_->failsafeTrips(), 1u);
+
+  // and the motors stay stopped afterwards
+  runFor(1000);
+  EXPECT_EQ(pulse(0), 1000);
+  EXPECT_EQ(app_->failsafeTrips(), 1u);
+}
+
+TEST_F(ReadRun, AnyCompleteLineKeepsTheMotorsRunning) {
+  const char* keep_alives[] = {"\n", "\r", "status\n", "bogus\n", "f 300\n"};
+  for (const char* line : keep_alives) {
+    SCOPED_TRACE(testing::PrintToString(line));
+    // given
+    fake::reset();
+    fake::setTimeLimitMs(120000);
+    fake::setAdcCounts(hal::kAdcBattery, kCountsV1);
+    storeFourMotors();
+    boot();
+    fake::feedInput("f 300\n");
+
+    // when: the line every 400 ms for 3 s
+    for (int i = 0; i < 8; ++i) {
+      runFor(400);
+      fake::feedInput(line);
+    }
+    runFor(10);
+
+    // then
+    EXPECT_EQ(app_->failsafeTrips(), 0u);
+    EXPECT_GT(pulse(0), 1400);
+  }
+}
+
+TEST_F(ReadRun, PartialLineIsNotAKeepAlive) {
+  // given
+  storeFourMotors();
+  boot();
+  fake::feedInput("f 300\n");
+  const uint32_t sent_ms = fake::nowMs();
+
+  // when: a half-typed command at 300 ms, never finished
+  runFor(300);
+  fake::feedInput("sta");
+  runFor(sent_ms + 500 - fake::nowMs());
+
+  // then
+  EXPECT_EQ(app_->failsafeTrips(), 1u);
+  EXPECT_EQ(pulse(0), 1000);
+}
+
+TEST_F(ReadRun, StoppedMotorsNeverTripTheFailsafe) {
+  // given
+  storeFourMotors();
+  boot();
+
+  // when
+  runFor(3000);
+
+  // then
+  EXPECT_EQ(app_->failsafeTrips(), 0u);
+  EXPECT_FALSE(contains(fake::output(), "failsafe:"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Lift-off sequence
+
+TEST_F(ReadRun, LiftoffRampsAllFourMotorsThenHoldsThenStops) {
+  // given
+  storeFourMotors();
+  boot();
+  std::vector<uint16_t> pwm0;  // motor 0's pulse at every simulated ms after the command
+  std::vector<uint16_t> pwm3;
+  fake::setTickHook([&](uint32_t) {
+    pwm0.push_back(fake::pulseUs(0));
+    pwm3.push_back(fake::pulseUs(3));
+  });
+
+  // when: 300 g, 1000 ms ramp, 2000 ms hold, no input at all for 3.5 s
+  fake::feedInput("liftoff 300 1000 2000\n");
+  runFor(3500);
+
+  // then
+  const std::string out = fake::output();
+  auto cal0 = storedCalibration(0);
+  auto cal3 = storedCalibration(3);
+  ASSERT_GE(pwm0.size(), 3400u);
+  for (size_t t = 1; t < 1000; ++t) ASSERT_GE(pwm0[t], pwm0[t - 1]) << "ramp goes up, t " << t;
+  EXPECT_LE(pwm0[5], cal0->first.pwmForGrams(10)) << "the ramp starts near 0 g";
+  EXPECT_NEAR(pwm0[500], cal0->first.pwmForGrams(150), 15) << "half way: half the force";
+  for (size_t t = 1030; t < 2990; t += 10) {
+    ASSERT_EQ(pwm0[t], cal0->first.pwmForGrams(300)) << "hold, t " << t;
+    ASSERT_EQ(pwm3[t], cal3->first.pwmForGrams(300)) << "hold, t " << t;
+  }
+  for (size_t t = 3030; t < pwm0.size(); ++t) ASSERT_EQ(pwm0[t], 1000) << "stopped, t " << t;
+  EXPECT_TRUE(contains(out, "# liftoff: ramp 0 -> 300 g in 1000 ms, hold 2000 ms")) << out;
+  EXPECT_TRUE(contains(out, "# hold 300 g for 2000 ms")) << out;
+  EXPECT_TRUE(contains(out, "# liftoff done: motors stopped")) << out;
+  EXPECT_TRUE(contains(out, "# t 0.500 s ramp 150 g, pwm ")) << out;
+  EXPECT_TRUE(contains(out, "# t 2.000 s hold 300 g, pwm ")) << out;
+  EXPECT_EQ(app_->failsafeTrips(), 0u) << "the sequence is the command source";
+  EXPECT_EQ(app_->mode(), rr::Mode::kReady);
+}
+
+TEST_F(ReadRun, AnyKeyAbortsTheLiftoffAndStopsTheMotorsAtOnce) {
+  // given: a lift-off in its hold phase
+  storeFourMotors();
+  boot();
+  fake::feedInput("liftoff 300 500 5000\n");
+  runFor(1500);
+  ASSERT_GT(pulse(0), 1400);
+
+  // when: one key, no newline
+  fake::feedInput("x");
+  app_->runOnce();
+
+  // then
+  for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), 1000) << "motor " << int(m);
+  EXPECT_TRUE(contains(fake::output(), "# liftoff aborted by input: motors stopped"));
+  EXPECT_EQ(app_->mode(), rr::Mode::kReady);
+  runFor(6000);
+  EXPECT_EQ(pulse(0), 1000) << "the sequence does not resume";
+  EXPECT_FALSE(contains(fake::output(), "# liftoff done"));
+}
+
+TEST_F(ReadRun, LiftoffIsRefusedWhileMotorsRun) {
+  // given
+  storeFourMotors();
+  boot();
+  command("f 200");
+  const uint16_t before = pulse(0);
+
+  // when
+  const std::string out = command("liftoff 300");
+
+  // then
+  EXPECT_TRUE(contains(out, "error: motors are running; send stop first")) << out;
+  EXPECT_EQ(app_->mode(), rr::Mode::kReady);
+  EXPECT_EQ(pulse(0), before);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input
+
+TEST_F(ReadRun, BadInputGetsOneErrorLineAndChangesNothing) {
+  const char* bad_lines[] = {
+      "f",           "f 501",        "f -1",          "f 4 100",     "f 1 2 3",
+      "f abc",       "f 1 x",        "liftoff",       "liftoff 0",   "liftoff 300 70000",
+      "liftoff 9 1 2 3", "rate 49",  "rate 401",      "rate",        "rate fast",
+      "stream maybe", "stream",      "xyz",           "F 100",
+      "0123456789012345678901234567890123456789012345678901234567890",
+  };
+  // given: motors running at 200 g
+  storeFourMotors();
+  boot();
+  command("f 200");
+  uint16_t before[rr::kMotors];
+  for (uint8_t m = 0; m < rr::kMotors; ++m) before[m] = pulse(m);
+
+  for (const char* bad : bad_lines) {
+    SCOPED_TRACE(bad);
+    // when
+    const std::string out = command(bad);
+
+    // then: echo, exactly one "error: " line, the prompt; nothing else moved
+    const std::vector<std::string> got = lines(out);
+    ASSERT_EQ(got.size(), 3u) << out;
+    EXPECT_EQ(got[1].rfind("error: ", 0), 0u) << out;
+    EXPECT_EQ(got[2], "rr> ");
+    for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), before[m]);
+    EXPECT_EQ(app_->motor(0).force_g, 200);
+    EXPECT_EQ(fake::frameRateHz(), 50);
+    EXPECT_EQ(app_->mode(), rr::Mode::kReady);
+    EXPECT_FALSE(app_->isStreaming());
+  }
+}
+
+TEST_F(ReadRun, HelpListsEveryCommand) {
+  storeFourMotors();
+  boot();
+  const std::string out = command("help");
+  for (const char* verb : {"f G", "f N G", "stop", "status", "liftoff G", "stream on|off", "rate HZ"}) {
+    EXPECT_TRUE(contains(out, verb)) << verb << "\n" << out;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Frame rate and stream
+
+TEST_F(ReadRun, RateChangesTheEscFrameRateAndTheControlLoopFollows) {
+  struct Case {
+    uint16_t hz;
+  };
+  for (const Case c : {Case{400}, Case{100}, Case{50}}) {
+    SCOPED_TRACE(c.hz);
+    // given
+    fake::reset();
+    fake::setTimeLimitMs(120000);
+    fake::setAdcCounts(hal::kAdcBattery, kCountsV1);
+    storeFourMotors();
+    boot();
+
+    // when
+    const std::string out = command("rate " + std::to_string(c.hz));
+    const uint32_t conversions_before = fake::adcConversions();
+    runFor(1000);
+
+    // then: the ESC timer runs at the new rate and the battery is sampled once per frame
+    EXPECT_TRUE(contains(out, "frame rate " + std::to_string(c.hz) + " Hz")) << out;
+    EXPECT_EQ(fake::frameRateHz(), c.hz);
+    const uint32_t frames = (fake::adcConversions() - conversions_before) /
+                            rr::kBatterySamplesPerFrame;
+    EXPECT_NEAR(static_cast<double>(frames), c.hz, 1.0);
+  }
+}
+
+TEST_F(ReadRun, RateIsRefusedWhileMotorsRun) {
+  storeFourMotors();
+  boot();
+  command("f 100");
+  const std::string out = command("rate 400");
+  EXPECT_TRUE(contains(out, "error: motors are running; send stop first")) << out;
+  EXPECT_EQ(fake::frameRateHz(), 50);
+}
+
+TEST_F(ReadRun, StreamPrintsTenCsvLinesPerSecondWithThePulsesAndTheBattery) {
+  // given
+  storeFourMotors();
+  boot();
+  command("f 300");
+
+  // when
+  const std::string on = command("stream on");
+  fake::takeOutput();
+  runFor(1000, true);
+  const std::string streamed = fake::takeOutput();
+  command("stream off");
+  runFor(500, true);
+
+  // then
+  EXPECT_TRUE(contains(on, "t_s,motor0_pwm_us,motor1_pwm_us,motor2_pwm_us,motor3_pwm_us,vbat_v"))
+      << on;
+  const std::regex row(R"((\d+\.\d{3}),(\d+),(\d+),(\d+),(\d+),(\d+\.\d{3}))");
+  int rows = 0;
+  for (const std::string& line : lines(streamed)) {
+    std::smatch m;
+    if (!std::regex_match(line, m, row)) continue;
+    ++rows;
+    EXPECT_EQ(std::stoi(m[2]), pulse(0));
+    EXPECT_EQ(std::stoi(m[5]), pulse(3));
+    EXPECT_EQ(m[6].str(), volts(mvFromCounts(kCountsV1)));
+  }
+  EXPECT_EQ(rows, 10) << streamed;
+  EXPECT_FALSE(app_->isStreaming());
+  const std::string after = fake::takeOutput();
+  EXPECT_FALSE(std::regex_search(after, row)) << after;
+}
+
+}  // namespace
