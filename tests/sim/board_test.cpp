@@ -1,0 +1,142 @@
+// The simavr harness wired to a probe program (tests/sim/probe/probe.c): ESC pulse widths from
+// compare-output edges, ADC millivolts, UART pacing and expect(), EEPROM in and out, speed.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "sim/board.hpp"
+#include "sim/console.hpp"
+#include "sim/intel_hex.hpp"
+
+namespace {
+
+class ProbeBoard : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (std::string(SIM_PROBE_ELF).empty()) GTEST_SKIP() << "avr-gcc not found: no probe image";
+    board = std::make_unique<sim::Board>(SIM_PROBE_ELF);
+    console = std::make_unique<sim::Console>(*board, "p> ");
+    console->waitPrompt(0.1);
+  }
+  std::unique_ptr<sim::Board> board;
+  std::unique_ptr<sim::Console> console;
+};
+
+struct PulseCase {
+  int channel;
+  int set_us;
+};
+
+class ProbePulses : public ProbeBoard, public ::testing::WithParamInterface<PulseCase> {};
+
+TEST_P(ProbePulses, EscPulseWidthIsMeasuredFromPinEdgesWithinOneTick) {
+  // given
+  const auto c = GetParam();
+  console->command(fmt::format("pwm {} {}", c.channel, c.set_us));
+  // when: a few 50 Hz frames pass
+  board->runFor(0.1);
+  // then: the probe sets OCR = 2 * us - 1, so the pin is high OCR + 1 ticks of 0.5 us
+  EXPECT_NEAR(board->escPulseUs(c.channel), c.set_us, 0.1);
+  EXPECT_NEAR(board->escPin(c.channel).last_period_us, 20000.5, 1.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Table, ProbePulses,
+                         ::testing::Values(PulseCase{0, 1000}, PulseCase{1, 1234}, PulseCase{2, 1680},
+                                           PulseCase{3, 2000}));
+
+TEST_F(ProbeBoard, PulseListenersHearEveryFrame) {
+  int pulses = 0;
+  board->addPulseListener([&](int ch, double, double) { pulses += ch == 0; });
+  board->runFor(1.0);
+  EXPECT_NEAR(pulses, 50, 1);
+}
+
+TEST_F(ProbeBoard, AdcReadsTheInjectedMillivoltsScaledBy1023) {
+  board->setAdcSource([](int channel) { return channel == 0 ? 2500.0 : 1234.0; });
+  auto a0 = console->command("adc 0");
+  auto a1 = console->command("adc 1");
+  ASSERT_EQ(a0.size(), 1u);
+  EXPECT_EQ(a0[0], "adc 0 511");  // floor(2500 * 1023 / 5000)
+  EXPECT_EQ(a1[0], "adc 1 252");  // floor(1234 * 1023 / 5000)
+}
+
+TEST_F(ProbeBoard, ExpectReturnsRegexGroups) {
+  board->runFor(0.25);
+  console->send("ms");
+  auto g = console->expect(R"(^ms (\d+)$)", 0.1);
+  ASSERT_EQ(g.size(), 2u);
+  EXPECT_NEAR(std::stod(g[1]), 250, 2);
+}
+
+TEST_F(ProbeBoard, ExpectTimeoutShowsTheConsoleTail) {
+  console->command("er 7");
+  try {
+    console->expect("never printed", 0.05);
+    FAIL();
+  } catch (const sim::ExpectTimeout& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("/never printed/ within 0.05 s"), std::string::npos) << what;
+    EXPECT_NE(what.find("| ee 7 255"), std::string::npos) << what;
+  }
+}
+
+TEST_F(ProbeBoard, LongInputIsPacedSoNoByteIsLost) {
+  // given: 10 commands queued at once (160 bytes, far more than simavr's 64-byte FIFO)
+  std::string many;
+  for (int i = 0; i < 10; ++i) many += fmt::format("ee {} {}\r", 100 + i, i + 1);
+  board->sendText(many);
+  // when
+  board->runFor(0.1);
+  // then: every byte arrived
+  const auto image = board->eeprom();
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(image[100 + i], i + 1) << i;
+}
+
+TEST_F(ProbeBoard, EepromImageGoesInAndOutThroughIntelHex) {
+  // given: an image with a pattern, loaded the way --eeprom FILE does
+  std::vector<uint8_t> image(sim::kEepromBytes, 0xFF);
+  image[4095] = 0x5A;
+  board->setEeprom(sim::parseIntelHex(sim::formatIntelHex(image), sim::kEepromBytes));
+  // when the firmware reads and writes
+  auto r = console->command("er 4095");
+  console->command("ee 3 200");
+  // then
+  EXPECT_EQ(r.at(0), "ee 4095 90");
+  const auto out = board->eeprom();
+  EXPECT_EQ(out[3], 200);
+  EXPECT_EQ(out[4095], 0x5A);
+  EXPECT_EQ(out[0], 0xFF);
+}
+
+TEST_F(ProbeBoard, TickHookRunsEveryMillisecondOfSimulatedTime) {
+  int ticks = 0;
+  double last_t = 0;
+  board->setTickHook([&](double t) { ++ticks; last_t = t; });
+  const double t0 = board->timeS();
+  board->runFor(0.5);
+  EXPECT_NEAR(ticks, 500, 1);
+  EXPECT_NEAR(last_t, t0 + 0.5, 0.0011);
+}
+
+TEST_F(ProbeBoard, IdleFirmwareRunsFarFasterThanRealTime) {
+  board->runFor(5.0);
+  EXPECT_GT(board->realtimeFactor(), 20.0);
+}
+
+TEST_F(ProbeBoard, StoppedFirmwareIsReportedNotHung) {
+  console->send("halt");
+  EXPECT_THROW(board->runFor(0.1), sim::BoardError);
+}
+
+TEST(Board, MissingImageSaysWhatToDo) {
+  try {
+    sim::Board b("/nonexistent/gather_store.elf");
+    FAIL();
+  } catch (const sim::BoardError& e) {
+    EXPECT_NE(std::string(e.what()).find("build it first"), std::string::npos);
+  }
+}
+
+}  // namespace

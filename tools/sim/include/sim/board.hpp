@@ -1,0 +1,152 @@
+// A simulated Arduino Mega2560 (ATmega2560 at 16 MHz in libsimavr 1.6) running an unchanged
+// firmware ELF, with its pins wired to the host:
+//   ESC 0..3  compare-output pins PH3 (OC4A), PH4 (OC4B), PH5 (OC4C), PB5 (OC1A): every edge is
+//             timestamped with the simulated cycle counter; the high time is the pulse width.
+//   A0..A15   answered in millivolts from an AdcSource when a conversion starts.
+//   UART0     bytes out are collected (and passed to listeners); bytes in are paced at the
+//             line rate (one byte per character time at the firmware's baud) and held back
+//             while the receiver is off or simavr's input FIFO signals XOFF.
+//   EEPROM    4 KiB, moved in and out whole.
+// A periodic tick (default 1 ms simulated) lets a plant model advance in step with the CPU.
+//
+// Time is simulated cycles only: the firmware's idle sleep skips ahead (the sleep callback is
+// a no-op), nothing waits on the wall clock, and the same ELF + inputs give the same run.
+#pragma once
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+struct avr_t;
+struct avr_irq_t;
+
+namespace sim {
+
+constexpr uint32_t kCpuHz = 16000000;
+constexpr int kEscChannels = 4;
+constexpr std::size_t kEepromBytes = 4096;
+
+inline uint64_t secondsToCycles(double s) { return static_cast<uint64_t>(s * kCpuHz + 0.5); }
+inline double cyclesToSeconds(uint64_t c) { return static_cast<double>(c) / kCpuHz; }
+
+// The firmware stopped (crashed, or returned from main with interrupts off) or could not be
+// loaded; what() says which and what to do.
+class BoardError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// What one ESC input pin has seen.
+struct EscPin {
+  double last_pulse_us = 0;      // width of the last complete high pulse
+  double last_period_us = 0;     // rising edge to rising edge
+  uint64_t last_rise_cycle = 0;  // cycle of the last rising edge
+  uint64_t last_fall_cycle = 0;
+  uint64_t pulses = 0;           // complete pulses seen
+  bool high = false;
+};
+
+class Board {
+ public:
+  // Millivolts on ADC channel `channel` (0..15) at the moment a conversion starts.
+  using AdcSource = std::function<double(int channel)>;
+  // Called every tick with the simulated time in seconds.
+  using TickHook = std::function<void(double t_s)>;
+  // Called for every complete ESC pulse: channel, width in us, time of its falling edge.
+  using PulseListener = std::function<void(int channel, double width_us, double t_s)>;
+  using ByteListener = std::function<void(uint8_t byte)>;
+
+  // Loads `elf_path` into a fresh ATmega2560 (the MCU and clock in the ELF's .mmcu tag win if
+  // present; otherwise atmega2560 at 16 MHz, 5 V). Throws BoardError if the file cannot be read
+  // or is not an AVR ELF. The EEPROM starts erased (all 0xFF) unless the ELF has an .eeprom
+  // section.
+  explicit Board(const std::string& elf_path);
+  ~Board();
+  Board(const Board&) = delete;
+  Board& operator=(const Board&) = delete;
+
+  // --- wiring ---
+  void setAdcSource(AdcSource source) { adc_source_ = std::move(source); }
+  // Replaces the tick hook and its period (cycles > 0). The first call arms the timer.
+  void setTickHook(TickHook hook, uint64_t period_cycles = kCpuHz / 1000);
+  void addPulseListener(PulseListener listener) { pulse_listeners_.push_back(std::move(listener)); }
+  void addOutputListener(ByteListener listener) { output_listeners_.push_back(std::move(listener)); }
+
+  // --- ESC pins ---
+  const EscPin& escPin(int channel) const { return esc_.at(channel); }
+  // Width of the last pulse on `channel`, or 0 if no pulse ended within `max_age_s` (a dead
+  // output: an ESC disarms on that).
+  double escPulseUs(int channel, double max_age_s = 0.1) const;
+
+  // --- UART0 ---
+  // Queues bytes for the firmware's receiver; they arrive at the line rate while the board runs.
+  void sendText(const std::string& text);
+  std::size_t pendingInput() const { return input_.size(); }
+  // Everything the firmware has written to UART0 since reset.
+  const std::string& output() const { return output_; }
+
+  // --- EEPROM ---
+  std::vector<uint8_t> eeprom() const;
+  // Loads a whole image (exactly kEepromBytes bytes; throws std::invalid_argument otherwise).
+  void setEeprom(const std::vector<uint8_t>& image);
+
+  // --- running ---
+  uint64_t cycle() const;
+  double timeS() const { return cyclesToSeconds(cycle()); }
+  // Runs `cycles` simulated cycles. Throws BoardError if the firmware crashes or stops.
+  void run(uint64_t cycles);
+  void runFor(double seconds) { run(secondsToCycles(seconds)); }
+  // Runs until `done()` is true (checked before starting and every `check_cycles`) or
+  // `budget_cycles` pass. Returns whether done() became true.
+  bool runUntil(const std::function<bool()>& done, uint64_t budget_cycles,
+                uint64_t check_cycles = kCpuHz / 1000);
+
+  // Wall time spent inside run() and the simulated time covered; their ratio is the real-time
+  // factor (simulated seconds per wall second).
+  double wallSeconds() const { return wall_s_; }
+  double simulatedSeconds() const { return simulated_s_; }
+  double realtimeFactor() const { return wall_s_ > 0 ? simulated_s_ / wall_s_ : 0.0; }
+
+  avr_t* avr() { return avr_; }
+
+ private:
+  static void onEscEdge(avr_irq_t* irq, uint32_t value, void* param);
+  static void onAdcTrigger(avr_irq_t* irq, uint32_t value, void* param);
+  static void onUartOut(avr_irq_t* irq, uint32_t value, void* param);
+  static void onUartXon(avr_irq_t* irq, uint32_t value, void* param);
+  static void onUartXoff(avr_irq_t* irq, uint32_t value, void* param);
+  static uint64_t tickTimer(avr_t* avr, uint64_t when, void* param);
+  static uint64_t rxTimer(avr_t* avr, uint64_t when, void* param);
+
+  void escEdge(int channel, bool level);
+  void armRx();
+  uint64_t cyclesPerByte() const;
+
+  avr_t* avr_ = nullptr;
+  AdcSource adc_source_;
+  TickHook tick_hook_;
+  uint64_t tick_period_ = kCpuHz / 1000;
+  bool tick_armed_ = false;
+  std::vector<PulseListener> pulse_listeners_;
+  std::vector<ByteListener> output_listeners_;
+  std::array<EscPin, kEscChannels> esc_{};
+  struct EdgeParam {
+    Board* board;
+    int channel;
+  };
+  std::array<EdgeParam, kEscChannels> edge_params_{};
+  std::deque<uint8_t> input_;
+  bool rx_armed_ = false;
+  bool xoff_ = false;
+  std::string output_;
+  double wall_s_ = 0;
+  double simulated_s_ = 0;
+  std::vector<avr_irq_t*> irqs_;
+};
+
+}  // namespace sim

@@ -1,0 +1,313 @@
+#include "sim/board.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sys/stat.h>
+
+extern "C" {
+#include <simavr/avr_adc.h>
+#include <simavr/avr_eeprom.h>
+#include <simavr/avr_ioport.h>
+#include <simavr/avr_uart.h>
+#include <simavr/sim_avr.h>
+#include <simavr/sim_cycle_timers.h>
+#include <simavr/sim_elf.h>
+#include <simavr/sim_irq.h>
+}
+
+namespace sim {
+namespace {
+
+// ATmega2560 UART0 registers (data space addresses).
+constexpr uint16_t kUcsr0a = 0xC0;
+constexpr uint16_t kUcsr0b = 0xC1;
+constexpr uint16_t kUbrr0l = 0xC4;
+constexpr uint16_t kUbrr0h = 0xC5;
+constexpr uint8_t kRxen0Bit = 4;
+constexpr uint8_t kU2x0Bit = 1;
+
+struct EscWire {
+  char port;
+  int pin;
+};
+constexpr EscWire kEscWires[kEscChannels] = {{'H', 3}, {'H', 4}, {'H', 5}, {'B', 5}};
+
+void noSleep(avr_t*, avr_cycle_count_t) {}
+
+// simavr logs "Loaded N .text" and friends for every image; keep errors only.
+void quietLogger(avr_t* avr, const int level, const char* format, va_list ap) {
+  (void)avr;
+  if (level <= LOG_ERROR) {
+    std::vfprintf(stderr, format, ap);
+  }
+}
+
+}  // namespace
+
+Board::Board(const std::string& elf_path) {
+  struct stat st {};
+  if (::stat(elf_path.c_str(), &st) != 0)
+    throw BoardError(fmt::format("{}: no such firmware image; build it first (cmake --build "
+                                 "build/avr) or pass the right --elf path",
+                                 elf_path));
+  avr_global_logger_set(quietLogger);
+  auto* fw = static_cast<elf_firmware_t*>(std::calloc(1, sizeof(elf_firmware_t)));
+  if (elf_read_firmware(elf_path.c_str(), fw) != 0) {
+    std::free(fw);
+    throw BoardError(fmt::format("{}: not a readable AVR ELF file (is it the .elf, not the .hex?)",
+                                 elf_path));
+  }
+  if (fw->mmcu[0] == '\0') std::strcpy(fw->mmcu, "atmega2560");
+  if (std::strcmp(fw->mmcu, "atmega2560") != 0) {
+    std::string mmcu = fw->mmcu;
+    std::free(fw->flash);
+    std::free(fw->eeprom);
+    std::free(fw);
+    throw BoardError(fmt::format("{}: built for {}, but the virtual board is an atmega2560 "
+                                 "(rebuild with the AVR toolchain file)",
+                                 elf_path, mmcu));
+  }
+  if (fw->frequency == 0) fw->frequency = kCpuHz;
+  avr_ = avr_make_mcu_by_name(fw->mmcu);
+  if (!avr_) {
+    std::free(fw->flash);
+    std::free(fw->eeprom);
+    std::free(fw);
+    throw BoardError("libsimavr does not know the atmega2560; reinstall libsimavr-dev/simavr");
+  }
+  avr_init(avr_);
+  avr_->log = LOG_ERROR;
+  avr_->sleep = noSleep;  // idle sleep skips ahead instead of waiting on the wall clock
+  {
+    std::vector<uint8_t> erased(kEepromBytes, 0xFF);
+    avr_eeprom_desc_t d{erased.data(), 0, static_cast<uint32_t>(erased.size())};
+    avr_ioctl(avr_, AVR_IOCTL_EEPROM_SET, &d);
+  }
+  avr_load_firmware(avr_, fw);
+  if (fw->frequency != kCpuHz)
+    fmt::print(stderr, "warning: {} says F_CPU = {} Hz; the plant assumes {} Hz timing\n",
+               elf_path, fw->frequency, kCpuHz);
+  avr_->frequency = fw->frequency;
+  if (avr_->vcc == 0) avr_->vcc = 5000;
+  if (avr_->avcc == 0) avr_->avcc = 5000;
+  if (avr_->aref == 0) avr_->aref = 5000;
+  std::free(fw->flash);
+  std::free(fw->eeprom);
+  std::free(fw);
+
+  for (int ch = 0; ch < kEscChannels; ++ch) {
+    edge_params_[ch] = EdgeParam{this, ch};
+    avr_irq_t* irq =
+        avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(kEscWires[ch].port), kEscWires[ch].pin);
+    avr_irq_register_notify(irq, &Board::onEscEdge, &edge_params_[ch]);
+  }
+  avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_OUT_TRIGGER),
+                          &Board::onAdcTrigger, this);
+
+  uint32_t flags = 0;
+  avr_ioctl(avr_, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+  flags &= ~(AVR_UART_FLAG_POLL_SLEEP | AVR_UART_FLAG_STDIO);
+  avr_ioctl(avr_, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+  avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT),
+                          &Board::onUartOut, this);
+  avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XON),
+                          &Board::onUartXon, this);
+  avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUT_XOFF),
+                          &Board::onUartXoff, this);
+}
+
+Board::~Board() {
+  if (avr_) {
+    avr_terminate(avr_);
+    std::free(avr_);
+  }
+}
+
+void Board::setTickHook(TickHook hook, uint64_t period_cycles) {
+  tick_hook_ = std::move(hook);
+  tick_period_ = period_cycles > 0 ? period_cycles : 1;
+  if (!tick_armed_) {
+    tick_armed_ = true;
+    avr_cycle_timer_register(avr_, tick_period_, &Board::tickTimer, this);
+  }
+}
+
+uint64_t Board::tickTimer(avr_t*, uint64_t when, void* param) {
+  auto* self = static_cast<Board*>(param);
+  if (self->tick_hook_) self->tick_hook_(cyclesToSeconds(when));
+  return when + self->tick_period_;
+}
+
+// --- ESC ---
+
+void Board::onEscEdge(avr_irq_t*, uint32_t value, void* param) {
+  auto* p = static_cast<EdgeParam*>(param);
+  p->board->escEdge(p->channel, value != 0);
+}
+
+void Board::escEdge(int channel, bool level) {
+  EscPin& pin = esc_[channel];
+  if (level == pin.high) return;
+  const uint64_t now = avr_->cycle;
+  pin.high = level;
+  if (level) {
+    if (pin.last_rise_cycle != 0)
+      pin.last_period_us = static_cast<double>(now - pin.last_rise_cycle) * 1e6 / kCpuHz;
+    pin.last_rise_cycle = now;
+  } else {
+    pin.last_fall_cycle = now;
+    if (pin.last_rise_cycle != 0) {
+      pin.last_pulse_us = static_cast<double>(now - pin.last_rise_cycle) * 1e6 / kCpuHz;
+      ++pin.pulses;
+      for (auto& listener : pulse_listeners_)
+        listener(channel, pin.last_pulse_us, cyclesToSeconds(now));
+    }
+  }
+}
+
+double Board::escPulseUs(int channel, double max_age_s) const {
+  const EscPin& pin = esc_.at(channel);
+  if (pin.pulses == 0) return 0;
+  if (cyclesToSeconds(cycle() - pin.last_fall_cycle) > max_age_s) return 0;
+  return pin.last_pulse_us;
+}
+
+// --- ADC ---
+
+void Board::onAdcTrigger(avr_irq_t*, uint32_t value, void* param) {
+  auto* self = static_cast<Board*>(param);
+  avr_adc_mux_t mux;
+  std::memset(&mux, 0, sizeof mux);
+  static_assert(sizeof(mux) >= sizeof(value), "mux descriptor fits the IRQ value");
+  std::memcpy(&mux, &value, sizeof value);
+  if (!self->adc_source_) return;
+  auto feed = [&](int channel) {
+    double mv = self->adc_source_(channel);
+    if (mv < 0) mv = 0;
+    if (mv > 5500) mv = 5500;
+    avr_raise_irq(avr_io_getirq(self->avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0 + channel),
+                  static_cast<uint32_t>(mv + 0.5));
+  };
+  if (mux.kind == ADC_MUX_SINGLE && mux.src < 8) {
+    feed(mux.src);
+  } else if (mux.kind == ADC_MUX_DIFF && mux.src < 8 && mux.diff < 8) {
+    feed(mux.src);
+    feed(mux.diff);
+  }
+}
+
+// --- UART ---
+
+void Board::onUartOut(avr_irq_t*, uint32_t value, void* param) {
+  auto* self = static_cast<Board*>(param);
+  const auto byte = static_cast<uint8_t>(value);
+  self->output_.push_back(static_cast<char>(byte));
+  for (auto& listener : self->output_listeners_) listener(byte);
+}
+
+void Board::onUartXon(avr_irq_t*, uint32_t, void* param) {
+  static_cast<Board*>(param)->xoff_ = false;
+}
+
+void Board::onUartXoff(avr_irq_t*, uint32_t value, void* param) {
+  if (value) static_cast<Board*>(param)->xoff_ = true;
+}
+
+uint64_t Board::cyclesPerByte() const {
+  const uint32_t ubrr = avr_->data[kUbrr0l] | ((avr_->data[kUbrr0h] & 0x0F) << 8);
+  const bool u2x = (avr_->data[kUcsr0a] >> kU2x0Bit) & 1;
+  const uint64_t per_bit = static_cast<uint64_t>(ubrr + 1) * (u2x ? 8 : 16);
+  const uint64_t per_byte = per_bit * 10;  // start + 8 data + stop
+  return per_byte < 160 ? 160 : per_byte;
+}
+
+void Board::sendText(const std::string& text) {
+  for (char c : text) input_.push_back(static_cast<uint8_t>(c));
+  armRx();
+}
+
+void Board::armRx() {
+  if (rx_armed_ || input_.empty()) return;
+  rx_armed_ = true;
+  avr_cycle_timer_register(avr_, cyclesPerByte(), &Board::rxTimer, this);
+}
+
+uint64_t Board::rxTimer(avr_t* avr, uint64_t when, void* param) {
+  auto* self = static_cast<Board*>(param);
+  if (self->input_.empty()) {
+    self->rx_armed_ = false;
+    return 0;
+  }
+  const bool rx_enabled = (avr->data[kUcsr0b] >> kRxen0Bit) & 1;
+  if (rx_enabled && !self->xoff_) {
+    const uint8_t byte = self->input_.front();
+    self->input_.pop_front();
+    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT), byte);
+  }
+  if (self->input_.empty()) {
+    self->rx_armed_ = false;
+    return 0;
+  }
+  return when + self->cyclesPerByte();
+}
+
+// --- EEPROM ---
+
+std::vector<uint8_t> Board::eeprom() const {
+  std::vector<uint8_t> image(kEepromBytes, 0xFF);
+  avr_eeprom_desc_t d{image.data(), 0, static_cast<uint32_t>(image.size())};
+  avr_ioctl(avr_, AVR_IOCTL_EEPROM_GET, &d);
+  return image;
+}
+
+void Board::setEeprom(const std::vector<uint8_t>& image) {
+  if (image.size() != kEepromBytes)
+    throw std::invalid_argument(
+        fmt::format("EEPROM image has {} bytes; the ATmega2560 has {}", image.size(), kEepromBytes));
+  std::vector<uint8_t> copy = image;
+  avr_eeprom_desc_t d{copy.data(), 0, static_cast<uint32_t>(copy.size())};
+  avr_ioctl(avr_, AVR_IOCTL_EEPROM_SET, &d);
+}
+
+// --- running ---
+
+uint64_t Board::cycle() const { return avr_->cycle; }
+
+void Board::run(uint64_t cycles) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  const uint64_t start = avr_->cycle;
+  const uint64_t end = start + cycles;
+  while (avr_->cycle < end) {
+    const int state = avr_run(avr_);
+    if (state == cpu_Done || state == cpu_Crashed) {
+      const double t = timeS();
+      simulated_s_ += cyclesToSeconds(avr_->cycle - start);
+      throw BoardError(fmt::format(
+          "the firmware {} at t = {:.6f} s (pc 0x{:05X}); {}",
+          state == cpu_Crashed ? "crashed" : "stopped (sleep with interrupts off, or main returned)",
+          t, avr_->pc,
+          state == cpu_Crashed ? "run it under simavr -g and avr-gdb to see where"
+                               : "the image must loop forever with interrupts on"));
+    }
+  }
+  simulated_s_ += cyclesToSeconds(avr_->cycle - start);
+  wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+}
+
+bool Board::runUntil(const std::function<bool()>& done, uint64_t budget_cycles,
+                     uint64_t check_cycles) {
+  if (done()) return true;
+  const uint64_t end = cycle() + budget_cycles;
+  while (cycle() < end) {
+    const uint64_t left = end - cycle();
+    run(left < check_cycles ? left : check_cycles);
+    if (done()) return true;
+  }
+  return false;
+}
+
+}  // namespace sim
