@@ -1,0 +1,830 @@
+// Gather and Store console (see gather_store_app.hpp for the flow and the rules).
+// Every constant string goes through TC_PSTR so it stays in flash on the AVR.
+#include "gather_store_app.hpp"
+
+#include "hal/hal.hpp"
+#include "thrustcal/force_pwm.hpp"
+
+namespace gs {
+
+namespace {
+
+constexpr uint8_t kMaxTokens = 4;  // command + up to 2 arguments + 1 to detect extras
+constexpr int16_t kDecigramsPerGram = 10;
+
+void say(const char* progmem) { hal::Uart::printP(progmem); }
+void sayLine(const char* progmem) {
+  hal::Uart::printP(progmem);
+  fw::newline();
+}
+
+// Nearest integer of num / den (den > 0), halves away from zero.
+int32_t divRound(int32_t num, int32_t den) {
+  return num >= 0 ? (num + den / 2) / den : -((-num + den / 2) / den);
+}
+
+int32_t absolute(int32_t v) { return v < 0 ? -v : v; }
+
+void printEscPin(uint8_t slot) {
+  switch (slot) {
+    case 0: say(TC_PSTR("D6 (PH3, OC4A)")); break;
+    case 1: say(TC_PSTR("D7 (PH4, OC4B)")); break;
+    case 2: say(TC_PSTR("D8 (PH5, OC4C)")); break;
+    default: say(TC_PSTR("D11 (PB5, OC1A)")); break;
+  }
+}
+
+void printRecordRange(uint8_t slot) {
+  say(TC_PSTR("EEPROM "));
+  fw::printUint(tc::slotAddress(slot));
+  say(TC_PSTR(".."));
+  fw::printUint(tc::slotAddress(slot) + tc::kRecordBytes - 1u);
+}
+
+void printVolts(uint16_t mv) {
+  fw::printFixed(mv, 3);
+  say(TC_PSTR(" V"));
+}
+
+// "error: <what> must be a whole number in MIN..MAX, got 'TOKEN'; nothing changed"
+void rangeError(const char* what_progmem, int32_t min, int32_t max, const char* token) {
+  say(TC_PSTR("error: "));
+  say(what_progmem);
+  say(TC_PSTR(" must be a whole number in "));
+  fw::printInt(min);
+  say(TC_PSTR(".."));
+  fw::printInt(max);
+  say(TC_PSTR(", got '"));
+  hal::Uart::print(token);
+  sayLine(TC_PSTR("'; nothing changed"));
+}
+
+// "error: usage: <usage>; nothing changed"
+void usageError(const char* usage_progmem) {
+  say(TC_PSTR("error: usage: "));
+  say(usage_progmem);
+  sayLine(TC_PSTR("; nothing changed"));
+}
+
+// One argument in [min, max]; prints the error itself.
+bool oneArg(char** args, uint8_t n, const char* usage_progmem, const char* what_progmem,
+            int32_t min, int32_t max, int32_t& value) {
+  if (n != 2) {
+    usageError(usage_progmem);
+    return false;
+  }
+  if (!fw::parseInt(args[1], min, max, value)) {
+    rangeError(what_progmem, min, max, args[1]);
+    return false;
+  }
+  return true;
+}
+
+void printBuildProblem(tc::BuildStatus status) {
+  switch (status) {
+    case tc::BuildStatus::kTooFewSamples:
+      sayLine(TC_PSTR("fewer than 2 PWM steps: widen the range (range MIN MAX)"));
+      break;
+    case tc::BuildStatus::kNoForce:
+      sayLine(TC_PSTR("the force never reached 1 g: check that the motor spins with its "
+                      "propeller and that the cell was tared with the motor stopped"));
+      break;
+    case tc::BuildStatus::kCurveTooSteep:
+      sayLine(TC_PSTR("two neighbouring grams lie more than 254 us apart: use a smaller step"));
+      break;
+    case tc::BuildStatus::kOk:
+      fw::newline();
+      break;
+  }
+}
+
+// "curve 1: start 12.600 V, 1..500 g; 1 g 1105 us, 100 g 1310 us, ..."
+void printCurve(uint8_t which, const tc::ForceCurveBase& curve) {
+  say(TC_PSTR("curve "));
+  fw::printUint(which);
+  say(TC_PSTR(": start "));
+  printVolts(curve.start_mv);
+  say(TC_PSTR(", 1.."));
+  fw::printUint(curve.maxGrams());
+  say(TC_PSTR(" g; PWM per gram:"));
+  uint16_t grams = 1;
+  for (;;) {
+    hal::Uart::write(' ');
+    fw::printUint(grams);
+    say(TC_PSTR(" g "));
+    fw::printUint(curve.pwmForGrams(grams));
+    say(TC_PSTR(" us"));
+    if (grams == curve.maxGrams()) break;
+    grams = grams == 1 ? 100 : static_cast<uint16_t>(grams + 100);
+    if (grams > curve.maxGrams()) grams = curve.maxGrams();
+    hal::Uart::write(',');
+  }
+  fw::newline();
+}
+
+}  // namespace
+
+GatherStoreApp::GatherStoreApp() { sag_builder_.reset(settings_.pwm_min_us); }
+
+void GatherStoreApp::begin() {
+  for (uint8_t ch = 0; ch < hal::kEscChannels; ++ch) hal::Esc::writePulse(ch, kStopPwmUs);
+  armed_at_ms_ = hal::Clock::millis();
+  fw::newline();
+  sayLine(TC_PSTR("thrustcal gather_store: Gather and Store (thesis sec. 6.4), 115200 8N1"));
+  sayLine(TC_PSTR("ESCs armed at 1000 us. Load cell A0, battery A1. Type help for the commands."));
+  prompt();
+}
+
+void GatherStoreApp::prompt() { say(TC_PSTR("gs> ")); }
+
+bool GatherStoreApp::poll() {
+  const fw::LineEvent event = reader_.poll();
+  if (event == fw::LineEvent::kNone) return false;
+  if (event == fw::LineEvent::kTooLong) {
+    say(TC_PSTR("error: line longer than "));
+    fw::printUint(fw::kLineMax);
+    sayLine(TC_PSTR(" characters, ignored; nothing changed (type help for the commands)"));
+  } else {
+    execute(reader_.line());
+  }
+  prompt();
+  return true;
+}
+
+void GatherStoreApp::execute(char* line) {
+  char* args[kMaxTokens];
+  const uint8_t n = fw::tokenize(line, args, kMaxTokens);
+  if (n == 0) return;  // empty line: just a new prompt
+  const char* cmd = args[0];
+  const bool no_args = (n == 1);
+  if (fw::equalsP(cmd, TC_PSTR("help")) && no_args) {
+    cmdHelp();
+  } else if (fw::equalsP(cmd, TC_PSTR("motor"))) {
+    cmdMotor(args, n);
+  } else if (fw::equalsP(cmd, TC_PSTR("plate"))) {
+    cmdPlate(args, n);
+  } else if (fw::equalsP(cmd, TC_PSTR("weigh")) && no_args) {
+    cmdWeigh();
+  } else if (fw::equalsP(cmd, TC_PSTR("tare")) && no_args) {
+    cmdTare();
+  } else if (fw::equalsP(cmd, TC_PSTR("cal"))) {
+    cmdCal(args, n);
+  } else if (fw::equalsP(cmd, TC_PSTR("span"))) {
+    cmdSpan(args, n);
+  } else if (fw::equalsP(cmd, TC_PSTR("range"))) {
+    cmdRange(args, n);
+  } else if (fw::equalsP(cmd, TC_PSTR("step"))) {
+    cmdStep(args, n);
+  } else if (fw::equalsP(cmd, TC_PSTR("settle"))) {
+    cmdSettle(args, n);
+  } else if (fw::equalsP(cmd, TC_PSTR("sweep")) && no_args) {
+    cmdSweep();
+  } else if (fw::equalsP(cmd, TC_PSTR("store"))) {
+    cmdStore(args, n);
+  } else if (fw::equalsP(cmd, TC_PSTR("show")) && no_args) {
+    cmdShow();
+  } else if (fw::equalsP(cmd, TC_PSTR("erase")) && no_args) {
+    cmdErase();
+  } else if (fw::equalsP(cmd, TC_PSTR("status")) && no_args) {
+    cmdStatus();
+  } else if (fw::equalsP(cmd, TC_PSTR("help")) || fw::equalsP(cmd, TC_PSTR("weigh")) ||
+             fw::equalsP(cmd, TC_PSTR("tare")) || fw::equalsP(cmd, TC_PSTR("sweep")) ||
+             fw::equalsP(cmd, TC_PSTR("show")) || fw::equalsP(cmd, TC_PSTR("erase")) ||
+             fw::equalsP(cmd, TC_PSTR("status"))) {
+    say(TC_PSTR("error: "));
+    hal::Uart::print(cmd);
+    sayLine(TC_PSTR(" takes no arguments; nothing changed"));
+  } else {
+    say(TC_PSTR("error: unknown command '"));
+    hal::Uart::print(cmd);
+    sayLine(TC_PSTR("'; type help for the commands"));
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Settings
+
+void GatherStoreApp::cmdHelp() {
+  sayLine(TC_PSTR("commands (one per line, numbers in decimal):"));
+  sayLine(TC_PSTR("  help          this list"));
+  sayLine(TC_PSTR("  motor N       select motor slot N (0..3): ESC output and EEPROM record"));
+  sayLine(TC_PSTR("  plate G       plate weight in g, 0..500 (default 60)"));
+  sayLine(TC_PSTR("  weigh         weight on the plate (median of 201 readings)"));
+  sayLine(TC_PSTR("  cal W         calibrate: motor + propeller weigh W g (1..950); also tares"));
+  sayLine(TC_PSTR("  tare          zerolize: force reads 0 g now (motor mounted, stopped)"));
+  sayLine(TC_PSTR("  span W        optional gain: after tare put W g on the plate, then span W"));
+  sayLine(TC_PSTR("  range MIN MAX sweep PWM range in us, 1000..2000 (default 1000 1800)"));
+  sayLine(TC_PSTR("  step US       sweep step in us, 1..100 (default 10)"));
+  sayLine(TC_PSTR("  settle MS     wait per step in ms, 0..10000 (default 200)"));
+  sayLine(TC_PSTR("  sweep         run the sweep, stream CSV; any key aborts (motor -> 1000 us)"));
+  sayLine(TC_PSTR("  store 1       store the last sweep as curve 1 (+ start voltage, sag offsets)"));
+  sayLine(TC_PSTR("  store 2       store the last sweep as curve 2 (another battery voltage)"));
+  sayLine(TC_PSTR("  show          what the selected slot's EEPROM record holds"));
+  sayLine(TC_PSTR("  erase         mark the selected slot not calibrated"));
+  sayLine(TC_PSTR("  status        settings, live force and battery, last sweep"));
+}
+
+void GatherStoreApp::cmdMotor(char** args, uint8_t n) {
+  int32_t slot;
+  if (!oneArg(args, n, TC_PSTR("motor N (N = 0..3)"), TC_PSTR("motor slot"), 0,
+              tc::kMotorSlots - 1, slot))
+    return;
+  settings_.slot = static_cast<uint8_t>(slot);
+  say(TC_PSTR("motor "));
+  fw::printUint(settings_.slot);
+  say(TC_PSTR(" selected: ESC "));
+  printEscPin(settings_.slot);
+  say(TC_PSTR(", "));
+  printRecordRange(settings_.slot);
+  fw::newline();
+}
+
+void GatherStoreApp::cmdPlate(char** args, uint8_t n) {
+  int32_t grams;
+  if (!oneArg(args, n, TC_PSTR("plate G (e.g. plate 60)"), TC_PSTR("plate weight in g"), 0,
+              kPlateMaxG, grams))
+    return;
+  settings_.plate_g = static_cast<int16_t>(grams);
+  cell_.setPlateGrams(settings_.plate_g);
+  say(TC_PSTR("plate "));
+  fw::printInt(grams);
+  sayLine(TC_PSTR(" g (weigh and cal leave it out)"));
+}
+
+void GatherStoreApp::cmdRange(char** args, uint8_t n) {
+  if (n != 3) {
+    usageError(TC_PSTR("range MIN MAX (e.g. range 1000 1800)"));
+    return;
+  }
+  int32_t lo, hi;
+  if (!fw::parseInt(args[1], kPwmLowestUs, kPwmHighestUs - 1, lo)) {
+    rangeError(TC_PSTR("range MIN in us"), kPwmLowestUs, kPwmHighestUs - 1, args[1]);
+    return;
+  }
+  if (!fw::parseInt(args[2], lo + 1, kPwmHighestUs, hi)) {
+    rangeError(TC_PSTR("range MAX in us"), lo + 1, kPwmHighestUs, args[2]);
+    return;
+  }
+  const uint32_t samples = static_cast<uint32_t>(hi - lo) / settings_.step_us + 1u;
+  if (samples > kMaxSweepSamples) {
+    say(TC_PSTR("error: that range is "));
+    fw::printUint(samples);
+    say(TC_PSTR(" steps of "));
+    fw::printUint(settings_.step_us);
+    say(TC_PSTR(" us, at most "));
+    fw::printUint(kMaxSweepSamples);
+    say(TC_PSTR(" fit: set a step of at least "));
+    fw::printUint((static_cast<uint32_t>(hi - lo) + kMaxSweepSamples - 2u) / (kMaxSweepSamples - 1u));
+    sayLine(TC_PSTR(" us first; nothing changed"));
+    return;
+  }
+  settings_.pwm_min_us = static_cast<uint16_t>(lo);
+  settings_.pwm_max_us = static_cast<uint16_t>(hi);
+  say(TC_PSTR("range "));
+  fw::printInt(lo);
+  say(TC_PSTR(".."));
+  fw::printInt(hi);
+  say(TC_PSTR(" us, "));
+  fw::printUint(plannedSamples());
+  sayLine(TC_PSTR(" steps"));
+}
+
+void GatherStoreApp::cmdStep(char** args, uint8_t n) {
+  int32_t step;
+  if (!oneArg(args, n, TC_PSTR("step US (e.g. step 10)"), TC_PSTR("step in us"), kStepMinUs,
+              kStepMaxUs, step))
+    return;
+  const uint32_t samples =
+      static_cast<uint32_t>(settings_.pwm_max_us - settings_.pwm_min_us) / step + 1u;
+  if (samples > kMaxSweepSamples) {
+    say(TC_PSTR("error: a step of "));
+    fw::printInt(step);
+    say(TC_PSTR(" us makes "));
+    fw::printUint(samples);
+    say(TC_PSTR(" steps, at most "));
+    fw::printUint(kMaxSweepSamples);
+    sayLine(TC_PSTR(" fit: use a larger step or a smaller range; nothing changed"));
+    return;
+  }
+  settings_.step_us = static_cast<uint16_t>(step);
+  say(TC_PSTR("step "));
+  fw::printInt(step);
+  say(TC_PSTR(" us, "));
+  fw::printUint(plannedSamples());
+  sayLine(TC_PSTR(" steps"));
+}
+
+void GatherStoreApp::cmdSettle(char** args, uint8_t n) {
+  int32_t ms;
+  if (!oneArg(args, n, TC_PSTR("settle MS (e.g. settle 200)"), TC_PSTR("settle time in ms"),
+              kSettleMinMs, kSettleMaxMs, ms))
+    return;
+  settings_.settle_ms = static_cast<uint16_t>(ms);
+  say(TC_PSTR("settle "));
+  fw::printInt(ms);
+  sayLine(TC_PSTR(" ms per step"));
+}
+
+// ---------------------------------------------------------------------------------------
+// Load cell (thesis phase 1: weigh and calibrate; phase 2: zerolize)
+
+uint16_t GatherStoreApp::medianForceCounts() {
+  force_median_.reset();
+  for (uint16_t i = 0; i < kForceWindow; ++i) force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
+  return force_median_.median();
+}
+
+uint16_t GatherStoreApp::medianBatteryCounts() {
+  battery_median_.reset();
+  for (uint16_t i = 0; i < kBatteryWindow; ++i)
+    battery_median_.push(hal::Adc::readCounts(hal::kAdcBattery));
+  return battery_median_.median();
+}
+
+bool GatherStoreApp::requireSaneCell(uint16_t counts) {
+  if (cell_.check(counts) != tc::LoadCellStatus::kImplausible) return true;
+  say(TC_PSTR("error: load cell reads "));
+  fw::printUint(counts);
+  sayLine(TC_PSTR(" counts (ADC rail): check the amplifier supply and the wire to A0; "
+                  "nothing changed"));
+  return false;
+}
+
+void GatherStoreApp::cmdWeigh() {
+  const uint16_t counts = medianForceCounts();
+  if (!requireSaneCell(counts)) return;
+  say(TC_PSTR("weight "));
+  fw::printInt(cell_.weightGrams(counts));
+  say(TC_PSTR(" g (plate "));
+  fw::printInt(settings_.plate_g);
+  say(TC_PSTR(" g left out), "));
+  fw::printUint(counts);
+  say(TC_PSTR(" counts"));
+  if (cell_.isTared()) {
+    say(TC_PSTR(", force "));
+    fw::printFixed(divRound(cell_.forceMilligrams(counts), 100), 1);
+    say(TC_PSTR(" g"));
+  }
+  fw::newline();
+}
+
+void GatherStoreApp::cmdTare() {
+  const uint16_t counts = medianForceCounts();
+  if (!requireSaneCell(counts)) return;
+  cell_.tare(counts);
+  tare_counts_ = counts;
+  say(TC_PSTR("tared: force reads 0.0 g now ("));
+  fw::printUint(counts);
+  sayLine(TC_PSTR(" counts); ready to sweep"));
+}
+
+void GatherStoreApp::cmdCal(char** args, uint8_t n) {
+  int32_t grams;
+  if (!oneArg(args, n, TC_PSTR("cal W (W = motor + propeller in g, e.g. cal 95)"),
+              TC_PSTR("known weight in g"), 1, cell_.config().overload_g, grams))
+    return;
+  const uint16_t counts = medianForceCounts();
+  if (!requireSaneCell(counts)) return;
+  cell_.calibrateWeight(counts, static_cast<int16_t>(grams));  // in range: cannot fail
+  // Thesis: after calibration the program zerolizes and reads force upwards (phase 2).
+  cell_.tare(counts);
+  tare_counts_ = counts;
+  say(TC_PSTR("calibrated: motor + propeller weigh "));
+  fw::printInt(grams);
+  sayLine(TC_PSTR(" g; tared (force 0.0 g): ready to sweep"));
+}
+
+void GatherStoreApp::cmdSpan(char** args, uint8_t n) {
+  int32_t grams;
+  if (!oneArg(args, n, TC_PSTR("span W (W = known weight in g, e.g. span 200)"),
+              TC_PSTR("known weight in g"), 1, cell_.config().overload_g, grams))
+    return;
+  if (!cell_.isTared()) {
+    sayLine(TC_PSTR("error: span needs a tare first: tare, put the known weight on the "
+                    "plate, then span W; nothing changed"));
+    return;
+  }
+  const uint16_t counts = medianForceCounts();
+  if (!requireSaneCell(counts)) return;
+  if (!cell_.calibrateSpan(tare_counts_, counts, static_cast<int16_t>(grams))) {
+    say(TC_PSTR("error: the reading moved from "));
+    fw::printUint(tare_counts_);
+    say(TC_PSTR(" to "));
+    fw::printUint(counts);
+    sayLine(TC_PSTR(" counts: a known weight must lower it by at least 10 counts at "
+                    "0.25..3 g per count; put the weight on the plate and try again; "
+                    "nothing changed"));
+    return;
+  }
+  say(TC_PSTR("span: "));
+  fw::printFixed(cell_.config().slope_ug_per_count, 6);
+  sayLine(TC_PSTR(" g per count; remove the weight, then tare before the sweep"));
+}
+
+// ---------------------------------------------------------------------------------------
+// Sweep (thesis: for every PWM, settle, read force and battery, keep them)
+
+uint16_t GatherStoreApp::plannedSamples() const {
+  return static_cast<uint16_t>((settings_.pwm_max_us - settings_.pwm_min_us) / settings_.step_us +
+                               1u);
+}
+
+void GatherStoreApp::stopMotor() { hal::Esc::writePulse(settings_.slot, kStopPwmUs); }
+
+bool GatherStoreApp::waitOrAbort(uint16_t ms) {
+  const uint32_t start = hal::Clock::millis();
+  for (;;) {
+    if (hal::Uart::available()) {
+      abortSweep(SweepEnd::kKey, 0);
+      return false;
+    }
+    if (hal::Clock::millis() - start >= ms) return true;
+    hal::Clock::sleepUntilInterrupt();
+  }
+}
+
+bool GatherStoreApp::readForceCounts(uint16_t& counts) {
+  force_median_.reset();
+  for (uint16_t i = 0; i < kForceWindow; ++i) {
+    if (hal::Uart::available()) {
+      abortSweep(SweepEnd::kKey, 0);
+      return false;
+    }
+    force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
+  }
+  counts = force_median_.median();
+  return true;
+}
+
+bool GatherStoreApp::readBatteryCounts(uint16_t& counts) {
+  battery_median_.reset();
+  for (uint16_t i = 0; i < kBatteryWindow; ++i) {
+    if (hal::Uart::available()) {
+      abortSweep(SweepEnd::kKey, 0);
+      return false;
+    }
+    battery_median_.push(hal::Adc::readCounts(hal::kAdcBattery));
+  }
+  counts = battery_median_.median();
+  return true;
+}
+
+void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
+  stopMotor();  // first, before any output
+  last_end_ = why;
+  sweep_.valid = false;
+  while (hal::Uart::available()) hal::Uart::read();  // the key that aborted is not a command
+  reader_.clear();
+  say(TC_PSTR("# aborted: "));
+  switch (why) {
+    case SweepEnd::kKey:
+      say(TC_PSTR("key pressed"));
+      break;
+    case SweepEnd::kOverload:
+      say(TC_PSTR("load cell overload, force "));
+      fw::printInt(static_cast<int16_t>(value));
+      say(TC_PSTR(" g (limit "));
+      fw::printInt(cell_.config().overload_g);
+      say(TC_PSTR(" g): lower range MAX"));
+      break;
+    case SweepEnd::kImplausible:
+      say(TC_PSTR("load cell reads "));
+      fw::printUint(value);
+      say(TC_PSTR(" counts (ADC rail): check the amplifier and the wire to A0"));
+      break;
+    case SweepEnd::kBattery:
+      say(TC_PSTR("battery reads "));
+      printVolts(value);
+      say(TC_PSTR(", outside "));
+      printVolts(battery_.config().min_sane_mv);
+      say(TC_PSTR(".."));
+      printVolts(battery_.config().max_sane_mv);
+      say(TC_PSTR(": check the pack and the divider on A1"));
+      break;
+    case SweepEnd::kDone:
+      break;
+  }
+  sayLine(TC_PSTR("; motor stopped (1000 us), nothing kept: type sweep to start again"));
+}
+
+void GatherStoreApp::cmdSweep() {
+  if (!cell_.isTared()) {
+    sayLine(TC_PSTR("error: a sweep needs a tare first: with the motor mounted and stopped, "
+                    "type tare (or cal W)"));
+    return;
+  }
+  const uint16_t planned = plannedSamples();
+  if (planned > kMaxSweepSamples) {  // range and step refuse this already; kept as a guard
+    sayLine(TC_PSTR("error: too many steps for the sample buffer: use a larger step"));
+    return;
+  }
+  const uint8_t slot = settings_.slot;
+  sweep_.valid = false;
+  builder_.reset();
+  sag_builder_.reset(settings_.pwm_min_us);
+
+  say(TC_PSTR("# sweep motor "));
+  fw::printUint(slot);
+  say(TC_PSTR(": "));
+  fw::printUint(settings_.pwm_min_us);
+  say(TC_PSTR(".."));
+  fw::printUint(settings_.pwm_max_us);
+  say(TC_PSTR(" us, step "));
+  fw::printUint(settings_.step_us);
+  say(TC_PSTR(" us, settle "));
+  fw::printUint(settings_.settle_ms);
+  say(TC_PSTR(" ms, "));
+  fw::printUint(planned);
+  sayLine(TC_PSTR(" steps; any key aborts"));
+
+  const uint32_t since_arm = hal::Clock::millis() - armed_at_ms_;
+  if (since_arm < kArmMs) {
+    sayLine(TC_PSTR("# arming the ESC (1000 us)"));
+    if (!waitOrAbort(static_cast<uint16_t>(kArmMs - since_arm))) return;
+  }
+
+  sayLine(TC_PSTR("pwm_us,force_g,vbat_v,t_s,motor,dir"));
+  const uint32_t start_ms = hal::Clock::millis();
+  uint16_t pwm = settings_.pwm_min_us;
+  int16_t max_force_dg = 0;
+  for (uint16_t i = 0; i < planned; ++i, pwm = static_cast<uint16_t>(pwm + settings_.step_us)) {
+    hal::Esc::writePulse(slot, pwm);
+    if (!waitOrAbort(settings_.settle_ms)) return;
+
+    uint16_t force_counts;
+    if (!readForceCounts(force_counts)) return;
+    const tc::LoadCellStatus cell_status = cell_.check(force_counts);
+    if (cell_status == tc::LoadCellStatus::kImplausible) {
+      abortSweep(SweepEnd::kImplausible, force_counts);
+      return;
+    }
+    const int32_t force_mg = cell_.forceMilligrams(force_counts);
+    if (cell_status == tc::LoadCellStatus::kOverload) {
+      abortSweep(SweepEnd::kOverload, static_cast<uint16_t>(cell_.forceGrams(force_counts)));
+      return;
+    }
+    uint16_t battery_counts;
+    if (!readBatteryCounts(battery_counts)) return;
+    const uint16_t vbat_mv = battery_.millivoltsFromCounts(battery_counts);
+    if (!battery_.isSane(vbat_mv)) {
+      abortSweep(SweepEnd::kBattery, vbat_mv);
+      return;
+    }
+    const uint32_t t_ms = hal::Clock::millis() - start_ms;
+
+    const int16_t force_dg = static_cast<int16_t>(divRound(force_mg, 100));
+    if (force_dg > max_force_dg) max_force_dg = force_dg;
+    builder_.add(pwm, force_dg);
+    sag_builder_.add(pwm, vbat_mv);
+
+    // pwm_us,force_g,vbat_v,t_s,motor,dir (dir 1: PWM rising)
+    fw::printUint(pwm);
+    hal::Uart::write(',');
+    fw::printFixed(force_dg, 1);
+    hal::Uart::write(',');
+    fw::printFixed(vbat_mv, 3);
+    hal::Uart::write(',');
+    fw::printFixed(static_cast<int32_t>(t_ms), 3);
+    hal::Uart::write(',');
+    fw::printUint(slot);
+    say(TC_PSTR(",1"));
+    fw::newline();
+
+    const uint16_t done = static_cast<uint16_t>(i + 1);
+    if (done % kProgressEvery == 0 && done != planned) {
+      say(TC_PSTR("# "));
+      fw::printUint(done);
+      hal::Uart::write('/');
+      fw::printUint(planned);
+      say(TC_PSTR(" steps, max force "));
+      fw::printFixed(max_force_dg, 1);
+      sayLine(TC_PSTR(" g"));
+    }
+  }
+  stopMotor();
+  last_end_ = SweepEnd::kDone;
+  const uint32_t elapsed_ms = hal::Clock::millis() - start_ms;
+
+  // Filter functions: sag offsets and start voltage (fig. 6.9), then the force curve.
+  uint16_t start_mv = 0;
+  sweep_.sag = tc::SagTable();
+  sag_builder_.build(sweep_.sag, start_mv);  // bin 0 holds the first step: cannot fail
+  sweep_.curve.start_mv = start_mv;
+  sweep_.samples = builder_.size();
+  sweep_.report = builder_.build(sweep_.curve);
+  sweep_.slot = slot;
+
+  say(TC_PSTR("# done: "));
+  fw::printUint(sweep_.samples);
+  say(TC_PSTR(" samples in "));
+  fw::printFixed(static_cast<int32_t>(elapsed_ms / 100u), 1);
+  sayLine(TC_PSTR(" s, motor stopped (1000 us)"));
+  say(TC_PSTR("# max force "));
+  fw::printFixed(sweep_.report.max_force_dg, 1);
+  say(TC_PSTR(" g (monotone fit), violations "));
+  fw::printUint(sweep_.report.violations);
+  say(TC_PSTR(", start voltage "));
+  printVolts(start_mv);
+  say(TC_PSTR(", sag in the top bin "));
+  printVolts(static_cast<uint16_t>(sweep_.sag.offset_mv[tc::kSagBins - 1] > 0
+                                       ? sweep_.sag.offset_mv[tc::kSagBins - 1]
+                                       : 0));
+  fw::newline();
+  if (sweep_.report.status != tc::BuildStatus::kOk) {
+    say(TC_PSTR("# no curve: "));
+    printBuildProblem(sweep_.report.status);
+    return;
+  }
+  sweep_.valid = true;
+  say(TC_PSTR("# curve 1.."));
+  fw::printUint(sweep_.curve.maxGrams());
+  say(TC_PSTR(" g: 1 g at "));
+  fw::printUint(sweep_.curve.pwmForGrams(1));
+  say(TC_PSTR(" us, "));
+  fw::printUint(sweep_.curve.maxGrams());
+  say(TC_PSTR(" g at "));
+  fw::printUint(sweep_.curve.pwmForGrams(sweep_.curve.maxGrams()));
+  sayLine(TC_PSTR(" us"));
+  say(TC_PSTR("# next: store 1 (first curve) or store 2 (second curve) for motor "));
+  fw::printUint(slot);
+  fw::newline();
+}
+
+// ---------------------------------------------------------------------------------------
+// EEPROM record (thesis "First or second?")
+
+void GatherStoreApp::cmdStore(char** args, uint8_t n) {
+  int32_t which;
+  if (!oneArg(args, n, TC_PSTR("store 1 | store 2"), TC_PSTR("curve number"), 1, 2, which))
+    return;
+  const uint8_t slot = settings_.slot;
+  if (!sweep_.valid) {
+    sayLine(TC_PSTR("error: nothing to store: run a complete sweep first"));
+    return;
+  }
+  if (sweep_.slot != slot) {
+    say(TC_PSTR("error: the last sweep was on motor "));
+    fw::printUint(sweep_.slot);
+    say(TC_PSTR(" but motor "));
+    fw::printUint(slot);
+    say(TC_PSTR(" is selected: type motor "));
+    fw::printUint(sweep_.slot);
+    sayLine(TC_PSTR(" or sweep again; nothing changed"));
+    return;
+  }
+  const tc::DecodeStatus before = tc::readRecord<hal::Eeprom>(slot, record_);
+  if (which == 1) {
+    if (before != tc::DecodeStatus::kOk) record_.clear();
+    record_.first = sweep_.curve;
+    record_.sag = sweep_.sag;
+  } else {
+    if (before != tc::DecodeStatus::kOk) {
+      say(TC_PSTR("error: motor "));
+      fw::printUint(slot);
+      say(TC_PSTR(" has no first curve ("));
+      hal::Uart::print(tc::decodeStatusText(before));
+      sayLine(TC_PSTR("): store 1 first; nothing changed"));
+      return;
+    }
+    const int32_t span_mv =
+        absolute(static_cast<int32_t>(sweep_.curve.start_mv) - record_.first.start_mv);
+    const uint16_t min_span_mv = tc::ForcePwmLimits().min_voltage_span_mv;
+    if (span_mv < min_span_mv) {
+      say(TC_PSTR("error: this sweep started at "));
+      printVolts(sweep_.curve.start_mv);
+      say(TC_PSTR(", within "));
+      printVolts(min_span_mv);
+      say(TC_PSTR(" of curve 1 ("));
+      printVolts(record_.first.start_mv);
+      sayLine(TC_PSTR("): sweep again at another battery voltage; nothing changed"));
+      return;
+    }
+    record_.second = sweep_.curve;
+  }
+  tc::writeRecord<hal::Eeprom>(slot, record_);
+  const tc::DecodeStatus after = tc::readRecord<hal::Eeprom>(slot, record_);
+  if (after != tc::DecodeStatus::kOk) {
+    say(TC_PSTR("error: read-back of motor "));
+    fw::printUint(slot);
+    say(TC_PSTR("'s record failed ("));
+    hal::Uart::print(tc::decodeStatusText(after));
+    sayLine(TC_PSTR("): the EEPROM may be worn; try another slot"));
+    return;
+  }
+  say(TC_PSTR("stored curve "));
+  fw::printInt(which);
+  say(TC_PSTR(" of motor "));
+  fw::printUint(slot);
+  say(TC_PSTR(" ("));
+  printRecordRange(slot);
+  say(TC_PSTR("): start "));
+  printVolts(sweep_.curve.start_mv);
+  say(TC_PSTR(", 1.."));
+  fw::printUint(sweep_.curve.maxGrams());
+  say(TC_PSTR(" g"));
+  if (which == 1) {
+    say(TC_PSTR(", sag offsets in 13 bins of 40 us from "));
+    fw::printUint(record_.sag.base_pwm_us);
+    say(TC_PSTR(" us"));
+    if (record_.hasSecondCurve()) say(TC_PSTR("; curve 2 kept"));
+  }
+  fw::newline();
+}
+
+void GatherStoreApp::cmdShow() {
+  const uint8_t slot = settings_.slot;
+  const tc::DecodeStatus status = tc::readRecord<hal::Eeprom>(slot, record_);
+  say(TC_PSTR("motor "));
+  fw::printUint(slot);
+  say(TC_PSTR(" ("));
+  printRecordRange(slot);
+  say(TC_PSTR("): "));
+  if (status != tc::DecodeStatus::kOk) {
+    say(TC_PSTR("not calibrated: "));
+    hal::Uart::print(tc::decodeStatusText(status));
+    fw::newline();
+    return;
+  }
+  sayLine(record_.hasSecondCurve() ? TC_PSTR("calibrated, two curves")
+                                   : TC_PSTR("calibrated, one curve"));
+  printCurve(1, record_.first);
+  say(TC_PSTR("sag offsets in mV per 40 us from "));
+  fw::printUint(record_.sag.base_pwm_us);
+  say(TC_PSTR(" us:"));
+  for (uint8_t i = 0; i < tc::kSagBins; ++i) {
+    hal::Uart::write(' ');
+    fw::printInt(record_.sag.offset_mv[i]);
+  }
+  fw::newline();
+  if (record_.hasSecondCurve()) {
+    printCurve(2, record_.second);
+  } else {
+    sayLine(TC_PSTR("curve 2: none (store 2 after a sweep at another battery voltage)"));
+  }
+}
+
+void GatherStoreApp::cmdErase() {
+  const uint8_t slot = settings_.slot;
+  tc::eraseRecord<hal::Eeprom>(slot);
+  say(TC_PSTR("erased motor "));
+  fw::printUint(slot);
+  say(TC_PSTR(" ("));
+  printRecordRange(slot);
+  sayLine(TC_PSTR("): not calibrated now, both curves and the sag offsets are gone"));
+}
+
+void GatherStoreApp::cmdStatus() {
+  say(TC_PSTR("motor "));
+  fw::printUint(settings_.slot);
+  say(TC_PSTR(" (ESC "));
+  printEscPin(settings_.slot);
+  say(TC_PSTR(" at "));
+  fw::printUint(hal::Esc::pulseUs(settings_.slot));
+  say(TC_PSTR(" us), plate "));
+  fw::printInt(settings_.plate_g);
+  say(TC_PSTR(" g, range "));
+  fw::printUint(settings_.pwm_min_us);
+  say(TC_PSTR(".."));
+  fw::printUint(settings_.pwm_max_us);
+  say(TC_PSTR(" us, step "));
+  fw::printUint(settings_.step_us);
+  say(TC_PSTR(" us, settle "));
+  fw::printUint(settings_.settle_ms);
+  sayLine(TC_PSTR(" ms"));
+
+  const uint16_t counts = medianForceCounts();
+  say(TC_PSTR("load cell "));
+  fw::printUint(counts);
+  say(TC_PSTR(" counts"));
+  if (cell_.check(counts) == tc::LoadCellStatus::kImplausible) {
+    say(TC_PSTR(" (ADC rail: check A0)"));
+  } else if (cell_.isTared()) {
+    say(TC_PSTR(", force "));
+    fw::printFixed(divRound(cell_.forceMilligrams(counts), 100), 1);
+    say(TC_PSTR(" g"));
+  } else {
+    say(TC_PSTR(", weight "));
+    fw::printInt(cell_.weightGrams(counts));
+    say(TC_PSTR(" g, not tared"));
+  }
+  say(TC_PSTR("; battery "));
+  printVolts(battery_.millivoltsFromCounts(medianBatteryCounts()));
+  fw::newline();
+
+  say(TC_PSTR("last sweep: "));
+  if (!sweep_.valid) {
+    sayLine(TC_PSTR("none kept"));
+    return;
+  }
+  say(TC_PSTR("motor "));
+  fw::printUint(sweep_.slot);
+  say(TC_PSTR(", "));
+  fw::printUint(sweep_.samples);
+  say(TC_PSTR(" samples, max force "));
+  fw::printFixed(sweep_.report.max_force_dg, 1);
+  say(TC_PSTR(" g, curve 1.."));
+  fw::printUint(sweep_.curve.maxGrams());
+  sayLine(TC_PSTR(" g (store 1 or store 2 saves it)"));
+}
+
+}  // namespace gs

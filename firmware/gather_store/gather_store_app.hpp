@@ -1,0 +1,151 @@
+// Gather and Store (thesis sec. 6.4, fig. 6.8, appendix G): the bench-side program, as a
+// serial console (115200 8N1, prompt "gs> ").
+//
+// Flow (fig. 6.8): choose the motor slot -> phase 1, weigh: calibrate with the known weight of
+// motor + propeller (plate excluded) -> phase 2, zerolize (tare) -> sweep the PWM range: per
+// step wait `settle` ms, read force (median of 201) and battery (median of 101) -> filter
+// functions: force curve (PWM per gram, 1..500 g) and battery sag offsets (40 us bins) ->
+// "first or second?": store the first curve with its start voltage and offsets, or the second
+// curve, in the slot's EEPROM record (read-modify-write).
+//
+// Console rules:
+//  - errors are one line starting "error: " that says what was wrong and what to do; a
+//    rejected command changes nothing;
+//  - during a sweep every line that is not CSV starts with "# ", so a captured log is a CSV
+//    file with comments (header `pwm_us,force_g,vbat_v,t_s,motor,dir`, once per sweep);
+//  - any byte received during a sweep aborts it: the motor goes to 1000 us before anything
+//    is printed. A load-cell overload (> 950 g), a reading at the ADC rail or a battery
+//    reading outside 6..17.5 V aborts it too.
+//
+// Motor slot N (0..3) drives ESC output N (D6, D7, D8, D11) and is stored at EEPROM N * 1024.
+// Host tests drive this class against the fake HAL; main.cpp is the AVR-only part.
+#pragma once
+#include <stdint.h>
+
+#include "console.hpp"
+#include "thrustcal/battery_monitor.hpp"
+#include "thrustcal/curve_builder.hpp"
+#include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/force_curve.hpp"
+#include "thrustcal/load_cell.hpp"
+#include "thrustcal/median_filter.hpp"
+#include "thrustcal/motor_calibration.hpp"
+
+namespace gs {
+
+constexpr uint16_t kStopPwmUs = 1000;      // ESC "motor off" / arming pulse
+constexpr uint16_t kArmMs = 2000;          // ESC sees 1000 us this long before a sweep starts
+constexpr uint16_t kForceWindow = 201;     // thesis: median of 201 load-cell readings
+constexpr uint16_t kBatteryWindow = 101;   // thesis: median of 101 battery readings
+constexpr uint16_t kMaxSweepSamples = 161; // 1000..1800 us in 5 us steps; default uses 81
+constexpr uint8_t kProgressEvery = 10;     // one "# " progress line per this many samples
+
+// Accepted ranges of the settings (inclusive).
+constexpr uint16_t kPwmLowestUs = 1000;
+constexpr uint16_t kPwmHighestUs = 2000;
+constexpr uint16_t kStepMinUs = 1;
+constexpr uint16_t kStepMaxUs = 100;
+constexpr uint16_t kSettleMinMs = 0;
+constexpr uint16_t kSettleMaxMs = 10000;
+constexpr int16_t kPlateMaxG = 500;
+
+struct Settings {
+  uint8_t slot = 0;             // motor slot 0..3 = ESC output and EEPROM record
+  int16_t plate_g = 60;         // plate carrying the motor (thesis 60 g)
+  uint16_t pwm_min_us = 1000;   // sweep start
+  uint16_t pwm_max_us = 1800;   // sweep end (inclusive when on the step grid)
+  uint16_t step_us = 10;
+  uint16_t settle_ms = 200;     // thesis: 200 ms per step
+};
+
+// Why a sweep ended.
+enum class SweepEnd : uint8_t {
+  kDone = 0,
+  kKey,          // a byte arrived on the UART
+  kOverload,     // |load| above 950 g
+  kImplausible,  // load-cell ADC at a rail
+  kBattery,      // battery reading outside the sane range
+};
+
+// What the last sweep left for `store`.
+struct SweepResult {
+  bool valid = false;            // a completed sweep whose curve was built
+  uint8_t slot = 0;              // the slot it was measured on
+  uint16_t samples = 0;
+  tc::BuildReport report;
+  tc::ThesisCurve curve;         // start_mv = average battery of the first 40 us bin
+  tc::SagTable sag;
+};
+
+class GatherStoreApp {
+ public:
+  GatherStoreApp();
+  GatherStoreApp(const GatherStoreApp&) = delete;
+  GatherStoreApp& operator=(const GatherStoreApp&) = delete;
+
+  // Arms the ESCs (1000 us on all four), prints the banner and the first prompt.
+  void begin();
+  // Handles at most one complete command line from the UART (non-blocking when none is
+  // there; a sweep blocks until it ends). Returns true when a line was handled.
+  bool poll();
+
+  // Observers for tests.
+  const Settings& settings() const { return settings_; }
+  const tc::LoadCell& loadCell() const { return cell_; }
+  const SweepResult& lastSweep() const { return sweep_; }
+  SweepEnd lastSweepEnd() const { return last_end_; }
+
+ private:
+  void execute(char* line);
+  void prompt();
+
+  // Commands.
+  void cmdHelp();
+  void cmdMotor(char** args, uint8_t n);
+  void cmdPlate(char** args, uint8_t n);
+  void cmdWeigh();
+  void cmdTare();
+  void cmdCal(char** args, uint8_t n);
+  void cmdSpan(char** args, uint8_t n);
+  void cmdRange(char** args, uint8_t n);
+  void cmdStep(char** args, uint8_t n);
+  void cmdSettle(char** args, uint8_t n);
+  void cmdSweep();
+  void cmdStore(char** args, uint8_t n);
+  void cmdShow();
+  void cmdErase();
+  void cmdStatus();
+
+  // Sweep parts.
+  uint16_t plannedSamples() const;
+  bool waitOrAbort(uint16_t ms);  // false: a key arrived (motor already stopped)
+  bool readForceCounts(uint16_t& counts);  // false: a key arrived during the 201 readings
+  bool readBatteryCounts(uint16_t& counts);
+  void stopMotor();
+  void abortSweep(SweepEnd why, uint16_t value);
+  void printSweepSummary();
+
+  // Readings outside a sweep.
+  uint16_t medianForceCounts();
+  uint16_t medianBatteryCounts();
+  bool requireSaneCell(uint16_t counts);  // prints an error and returns false at a rail
+
+  Settings settings_;
+  tc::LoadCell cell_;
+  tc::BatteryMonitor battery_;
+  uint16_t tare_counts_ = 0;  // load-cell reading at the last tare (the span's empty point)
+  uint32_t armed_at_ms_ = 0;
+
+  fw::LineReader reader_;
+  SweepEnd last_end_ = SweepEnd::kDone;
+  SweepResult sweep_;
+
+  // Work space (static in the AVR image: the app object is a global).
+  tc::MedianFilter<kForceWindow> force_median_;
+  tc::MedianFilter<kBatteryWindow> battery_median_;
+  tc::CurveBuilder<kMaxSweepSamples> builder_;
+  tc::SagBuilder sag_builder_;
+  tc::MotorCalibration record_;  // read-modify-write buffer for store / show
+};
+
+}  // namespace gs

@@ -1,0 +1,30 @@
+// gather_store image for the ATmega2560 (thesis "Gather and Store", fig. 6.8, appendix G.1).
+// All logic lives in gather_store_app.cpp, which the host tests run against the fake HAL.
+#include <avr/avr_mcu_section.h>
+
+#include "gather_store_app.hpp"
+#include "hal/hal.hpp"
+#include "simavr_mcu_tag.hpp"
+
+// simavr reads the part, clock and supply voltages from this tag (the virtual bench).
+// simavr_mcu_tag.hpp makes the C header's tags survive C++ (see there).
+AVR_MCU(F_CPU, "atmega2560");
+AVR_MCU_VOLTAGES(5000, 5000, 5000);
+
+namespace {
+gs::GatherStoreApp app;  // sweep buffers, median windows and the record buffer live in .bss
+}  // namespace
+
+int main() {
+  hal::Esc::init(hal::kEscDefaultFrameHz);  // first: the ESC sees 1000 us from power-on
+  hal::Clock::init();
+  hal::Uart::init(115200);
+  hal::Adc::init();
+
+  app.begin();  // arm (1000 us), banner, prompt
+
+  for (;;) {  // choose motor, weigh, calibrate, tare, sweep, store 1 / store 2, show ...
+    app.poll();
+    hal::Clock::sleepUntilInterrupt();  // wake on the 1 ms tick or a received byte
+  }
+}
