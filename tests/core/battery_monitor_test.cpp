@@ -1,0 +1,185 @@
+#include <gtest/gtest.h>
+
+#include "thrustcal/battery_monitor.hpp"
+
+namespace {
+
+using tc::BatteryMonitor;
+using tc::SagBuilder;
+using tc::SagTable;
+
+TEST(BatteryMonitor, CountsMapToMillivoltsLikeThesisMap) {
+  struct Row {
+    uint16_t counts;
+    uint16_t mv;
+  };
+  // map(x, 0, 1023, 0, 15638), truncating
+  const Row rows[] = {{0, 0}, {1, 15}, {512, 7826}, {700, 10700}, {1022, 15622}, {1023, 15638}, {2000, 15638}};
+  const BatteryMonitor monitor;
+  for (const auto& r : rows) EXPECT_EQ(monitor.millivoltsFromCounts(r.counts), r.mv) << r.counts;
+}
+
+TEST(BatteryMonitor, ZeroAdcMaxReadsZeroInsteadOfDividingByZero) {
+  tc::BatteryConfig config;
+  config.adc_max_counts = 0;
+  EXPECT_EQ(BatteryMonitor(config).millivoltsFromCounts(500), 0);
+}
+
+TEST(BatteryMonitor, DividerFullScaleOf100kOver47kIs15638Millivolts) {
+  struct Row {
+    uint32_t r1, r2;
+    uint16_t vref_mv;
+    uint16_t full_scale_mv;
+  };
+  const Row rows[] = {
+      {100000, 47000, 5000, 15638},
+      {10000000, 4700000, 5000, 15638},  // same ratio in megaohms
+      {10000, 10000, 5000, 10000},
+      {0, 1000, 5000, 5000},             // no top resistor: the pin sees the battery
+      {100000, 47000, 3300, 10321},
+      {1000000, 1000, 5000, 65535},      // saturates
+      {100000, 0, 5000, 0},              // no bottom resistor: not a divider
+      {4000000000u, 4000000000u, 65535, 65535},
+  };
+  for (const auto& r : rows)
+    EXPECT_EQ(tc::dividerFullScaleMillivolts(r.r1, r.r2, r.vref_mv), r.full_scale_mv) << r.r1 << "/" << r.r2;
+  EXPECT_EQ(tc::dividerFullScaleMillivolts(100000, 47000), tc::BatteryConfig().full_scale_mv);
+}
+
+TEST(BatteryMonitor, SaneRangeIsInclusive) {
+  const BatteryMonitor monitor;
+  EXPECT_FALSE(monitor.isSane(5999));
+  EXPECT_TRUE(monitor.isSane(6000));
+  EXPECT_TRUE(monitor.isSane(17500));
+  EXPECT_FALSE(monitor.isSane(17501));
+}
+
+TEST(SagTable, BinIsFortyMicrosecondsWideAndClampedToThirteenBins) {
+  struct Row {
+    uint16_t pwm_us, base_us;
+    uint8_t bin;
+  };
+  const Row rows[] = {{0, 1000, 0},     {900, 1000, 0},   {1000, 1000, 0},  {1039, 1000, 0},
+                      {1040, 1000, 1},  {1479, 1000, 11}, {1480, 1000, 12}, {1519, 1000, 12},
+                      {2000, 1000, 12}, {65535, 1000, 12}, {1119, 1080, 0}, {1120, 1080, 1}};
+  for (const auto& r : rows) EXPECT_EQ(SagTable::binFor(r.pwm_us, r.base_us), r.bin) << r.pwm_us << " base " << r.base_us;
+}
+
+TEST(BatteryMonitor, CompensationAddsTheOffsetOfTheLastPwmSent) {
+  // given the thesis's sag: 11.35 V true read as 10.8 V at full sweep
+  SagTable sag;
+  sag.offset_mv[12] = 550;
+  sag.offset_mv[5] = 200;
+  const BatteryMonitor monitor;
+  // then
+  EXPECT_EQ(monitor.compensatedMillivolts(10800, 1600, sag), 11350);
+  EXPECT_EQ(monitor.compensatedMillivolts(11000, 1200, sag), 11200);
+  EXPECT_EQ(monitor.compensatedMillivolts(11400, 1000, sag), 11400);
+}
+
+TEST(BatteryMonitor, CompensationSaturatesAtBothEnds) {
+  SagTable sag;
+  sag.offset_mv[0] = -100;
+  sag.offset_mv[1] = 100;
+  const BatteryMonitor monitor;
+  EXPECT_EQ(monitor.compensatedMillivolts(50, 1000, sag), 0);
+  EXPECT_EQ(monitor.compensatedMillivolts(65500, 1040, sag), 65535);
+}
+
+TEST(SagBuilder, AveragesPerBinAndOffsetsAreDropsFromTheStartVoltage) {
+  // given a thesis sweep 1000..1519 us, the reading dropping 50 mV per 40 us bin
+  SagBuilder builder;
+  builder.reset(1000);
+  for (uint16_t pwm = 1000; pwm < 1520; ++pwm) {
+    const uint16_t bin = static_cast<uint16_t>((pwm - 1000) / 40);
+    const uint16_t jitter = (pwm % 2) ? 4 : 0;  // average of each bin is +2 mV
+    builder.add(pwm, static_cast<uint16_t>(12000 - 50 * bin + jitter));
+  }
+  // when
+  SagTable sag;
+  uint16_t start_mv = 0;
+  ASSERT_TRUE(builder.build(sag, start_mv));
+  // then
+  EXPECT_EQ(start_mv, 12002);  // Average[0]
+  EXPECT_EQ(sag.base_pwm_us, 1000);
+  for (uint8_t i = 0; i < tc::kSagBins; ++i) {
+    EXPECT_EQ(builder.samples(i), 40) << int(i);
+    EXPECT_EQ(sag.offset_mv[i], 50 * i) << int(i);
+  }
+  EXPECT_EQ(builder.samples(tc::kSagBins), 0);
+}
+
+TEST(SagBuilder, EmptyBinsBorrowTheNearestVisitedBinLowerOnTies) {
+  // given only bins 0, 3 and 12 visited
+  SagBuilder builder;
+  builder.reset(1000);
+  builder.add(1000, 12000);
+  builder.add(1120, 11700);  // bin 3: offset 300
+  builder.add(1480, 11000);  // bin 12: offset 1000
+  // when
+  SagTable sag;
+  uint16_t start_mv = 0;
+  ASSERT_TRUE(builder.build(sag, start_mv));
+  // then
+  const int16_t expected[tc::kSagBins] = {0, 0, 300, 300, 300, 300, 300, 300, 1000, 1000, 1000, 1000, 1000};
+  for (uint8_t i = 0; i < tc::kSagBins; ++i) EXPECT_EQ(sag.offset_mv[i], expected[i]) << int(i);
+  // and with bins 0 and 2 visited, bin 1 is a tie: the lower bin wins
+  builder.reset(1000);
+  builder.add(1000, 12000);
+  builder.add(1080, 11800);
+  ASSERT_TRUE(builder.build(sag, start_mv));
+  EXPECT_EQ(sag.offset_mv[1], 0);
+  EXPECT_EQ(sag.offset_mv[12], 200);
+}
+
+TEST(SagBuilder, SamplesOutsideTheBinsGoToTheFirstOrLastBin) {
+  SagBuilder builder;
+  builder.reset(1080);
+  builder.add(1000, 12000);  // below base: bin 0
+  builder.add(1999, 11500);  // far above: bin 12
+  EXPECT_EQ(builder.samples(0), 1);
+  EXPECT_EQ(builder.samples(12), 1);
+  SagTable sag;
+  uint16_t start_mv = 0;
+  ASSERT_TRUE(builder.build(sag, start_mv));
+  EXPECT_EQ(sag.base_pwm_us, 1080);
+  EXPECT_EQ(sag.offset_mv[12], 500);
+}
+
+TEST(SagBuilder, AverageRoundsToNearestMillivolt) {
+  SagBuilder builder;
+  builder.reset(1000);
+  builder.add(1000, 11000);
+  builder.add(1001, 11001);
+  SagTable sag;
+  uint16_t start_mv = 0;
+  ASSERT_TRUE(builder.build(sag, start_mv));
+  EXPECT_EQ(start_mv, 11001);
+}
+
+TEST(SagBuilder, WithoutAStartVoltageBuildFailsAndLeavesOutputUntouched) {
+  // given samples only above bin 0
+  SagBuilder builder;
+  builder.reset(1000);
+  builder.add(1200, 11000);
+  SagTable sag;
+  sag.offset_mv[3] = 77;
+  uint16_t start_mv = 1234;
+  // when / then
+  EXPECT_FALSE(builder.build(sag, start_mv));
+  EXPECT_EQ(sag.offset_mv[3], 77);
+  EXPECT_EQ(start_mv, 1234);
+}
+
+TEST(SagBuilder, ResetForgetsPreviousSweep) {
+  SagBuilder builder;
+  builder.reset(1000);
+  builder.add(1000, 11000);
+  builder.reset(1000);
+  EXPECT_EQ(builder.samples(0), 0);
+  SagTable sag;
+  uint16_t start_mv = 0;
+  EXPECT_FALSE(builder.build(sag, start_mv));
+}
+
+}  // namespace

@@ -1,0 +1,118 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <deque>
+#include <random>
+#include <vector>
+
+#include "thrustcal/median_filter.hpp"
+
+namespace {
+
+// Lower median of what a window of `window` samples holds: std::nth_element reference.
+uint16_t referenceMedian(const std::deque<uint16_t>& held) {
+  std::vector<uint16_t> v(held.begin(), held.end());
+  const size_t mid = (v.size() - 1) / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(mid), v.end());
+  return v[mid];
+}
+
+template <uint16_t Window>
+void expectMatchesReference(uint32_t seed, uint16_t max_value, size_t length) {
+  tc::MedianFilter<Window> filter;
+  std::deque<uint16_t> held;
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<uint32_t> dist(0, max_value);
+  for (size_t i = 0; i < length; ++i) {
+    const uint16_t sample = static_cast<uint16_t>(dist(rng));
+    filter.push(sample);
+    held.push_back(sample);
+    if (held.size() > Window) held.pop_front();
+    ASSERT_EQ(filter.count(), held.size());
+    ASSERT_EQ(filter.median(), referenceMedian(held))
+        << "window " << Window << " seed " << seed << " after " << (i + 1) << " samples";
+  }
+}
+
+struct StreamCase {
+  uint32_t seed;
+  uint16_t max_value;  // small ranges give many duplicates
+};
+
+const StreamCase kStreams[] = {{1, 65535}, {2, 1023}, {3, 20}, {4, 1}, {5, 0}};
+
+// Each stream is 3 windows + 7 samples long: the ring wraps around several times.
+TEST(MedianFilter, WindowOfOneFollowsTheLastSample) {
+  for (const auto& s : kStreams) expectMatchesReference<1>(s.seed, s.max_value, 3 * 1 + 7);
+}
+
+TEST(MedianFilter, WindowOfThreeMatchesNthElementReference) {
+  for (const auto& s : kStreams) expectMatchesReference<3>(s.seed, s.max_value, 3 * 3 + 7);
+}
+
+TEST(MedianFilter, WindowOf101MatchesNthElementReferenceAcrossRingWrapAround) {
+  for (const auto& s : kStreams) expectMatchesReference<101>(s.seed, s.max_value, 3 * 101 + 7);
+}
+
+TEST(MedianFilter, WindowOf201MatchesNthElementReferenceAcrossRingWrapAround) {
+  for (const auto& s : kStreams) expectMatchesReference<201>(s.seed, s.max_value, 3 * 201 + 7);
+}
+
+TEST(MedianFilter, EmptyFilterReportsZeroAndNoSamples) {
+  tc::MedianFilter<5> filter;
+  EXPECT_EQ(filter.count(), 0);
+  EXPECT_EQ(filter.median(), 0);
+  EXPECT_EQ(filter.window(), 5);
+  EXPECT_FALSE(filter.full());
+}
+
+TEST(MedianFilter, EvenCountWhileFillingGivesLowerMedian) {
+  // given
+  tc::MedianFilter<5> filter;
+  // when
+  filter.push(40);
+  filter.push(10);
+  // then
+  EXPECT_EQ(filter.median(), 10);
+  filter.push(30);
+  filter.push(20);
+  EXPECT_EQ(filter.median(), 20);
+}
+
+TEST(MedianFilter, RejectsASingleSpikeInTheWindow) {
+  // given a steady load cell reading with one electrical spike
+  tc::MedianFilter<5> filter;
+  const uint16_t readings[] = {500, 501, 1023, 499, 500};
+  // when
+  for (uint16_t r : readings) filter.push(r);
+  // then
+  EXPECT_TRUE(filter.full());
+  EXPECT_EQ(filter.median(), 500);
+}
+
+TEST(MedianFilter, OldestSampleLeavesOnceFull) {
+  // given
+  tc::MedianFilter<3> filter;
+  for (uint16_t v : {100, 100, 100}) filter.push(v);
+  // when two new samples push out two old ones
+  filter.push(7);
+  filter.push(9);
+  // then the window holds {100, 7, 9}
+  EXPECT_EQ(filter.median(), 9);
+  filter.push(8);  // {7, 9, 8}
+  EXPECT_EQ(filter.median(), 8);
+}
+
+TEST(MedianFilter, ResetForgetsEverySample) {
+  // given
+  tc::MedianFilter<3> filter;
+  for (uint16_t v : {5, 6, 7, 8}) filter.push(v);
+  // when
+  filter.reset();
+  filter.push(42);
+  // then
+  EXPECT_EQ(filter.count(), 1);
+  EXPECT_EQ(filter.median(), 42);
+}
+
+}  // namespace
