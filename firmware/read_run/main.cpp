@@ -2,10 +2,12 @@
 // All logic lives in read_run_app.cpp, which the host tests run against the fake HAL.
 #include <avr/avr_mcu_section.h>
 
+#include "simavr_mcu_tag.hpp"
 #include "hal/hal.hpp"
 #include "read_run_app.hpp"
 
 // simavr reads the part, clock and supply voltages from this tag (the virtual bench).
+// simavr_mcu_tag.hpp (shared with gather_store) makes the C header's tags survive C++.
 AVR_MCU(F_CPU, "atmega2560");
 AVR_MCU_VOLTAGES(5000, 5000, 5000);
 
