@@ -57,6 +57,6 @@ print_firmware_sizes() {
     local elf="$THRUSTCAL_ROOT/build/avr/firmware/$img/$img.elf"
     [ -f "$elf" ] || die "missing $elf"
     printf '%-13s ' "$img"
-    avr-size --format=avr --mcu=atmega2560 "$elf" | awk '/^Program:/{p=$2" B flash ("$4")"} /^Data:/{d=$2" B static SRAM ("$4")"} END{print p", "d}'
+    avr-size --format=avr --mcu=atmega2560 "$elf" | awk '/^Program:/{p=$2" B flash "$4" Full)"} /^Data:/{d=$2" B static SRAM "$4" Full)"} END{print p", "d}'
   done
 }
