@@ -29,8 +29,10 @@ namespace hal {
 
 void Uart::init(uint32_t baud) {
   const uint16_t ubrr = static_cast<uint16_t>((F_CPU + 4 * baud) / (8 * baud) - 1);
-  UCSR0B = 0;
-  UCSR0A = _BV(U2X0);
+  // No "UCSR0B = 0" first: simavr 1.6 clears UDRE0 when TXEN0 is written 0 and only sets it
+  // again after a byte went out, so the first transmit would wait forever. Read-modify-write
+  // of UCSR0A for the same reason (UDRE0 is read-only on the chip).
+  UCSR0A = static_cast<uint8_t>((UCSR0A & ~_BV(MPCM0)) | _BV(U2X0));
   UBRR0 = ubrr;
   UCSR0C = _BV(UCSZ01) | _BV(UCSZ00);  // 8 data bits, no parity, 1 stop bit
   g_rx_head = 0;
