@@ -1,0 +1,215 @@
+// Force model v2: thrust follows the effective motor voltage, not the PWM.
+//
+// Why: the thesis's option 2.1 interpolates PWM linearly in battery voltage between two
+// measured curves. Its own table 5.1 shows (PWM - ~1097 us) * V_bus constant within ~1 % at
+// 300 g: a DC motor turning a propeller reaches a steady speed that depends only on the mean
+// voltage across its windings, duty * V_bus. PWM-per-volt is a hyperbola, not a line, so
+// option 2.1 drifts off away from its two calibration voltages. v2 models that directly:
+//
+//   drive = (pwm - start) * V_bus        [us*mV; stored in units of 512 us*mV]
+//   force = curve(drive)                 [monotone, one curve for every voltage]
+//
+// Per motor (ModelV2, ~108 bytes of SRAM):
+// - start_q4_us: the ESC's start threshold (where force leaves zero), 1/16 us;
+// - a monotone force curve in drive: up to 32 knots evenly spaced in FORCE (knot k at force
+//   (k + 1) * step_dg, the origin (0, 0) implicit). Evenly spaced in force because the run
+//   time goes force -> PWM: the knot index is a multiplication by a precomputed reciprocal of
+//   the step, no search and no division; and the error budget is relative to the commanded
+//   force, which uniform force steps serve evenly over 100-450 g (x(F) ~ F^0.55 is smooth
+//   there: linear interpolation over a 28 g step costs < 0.1 % in force);
+// - the battery sag the monitor saw on the bench at each knot (10 mV units) and the resting
+//   voltage, used to predict the bus voltage at a commanded operating point that differs
+//   from the present one (command steps), see forceToPwmV2(..., force_now_dg).
+//
+// Run time (forceToPwmV2): no float, no division. The bus voltage filter (BusVoltageFilter)
+// keeps the filtered millivolts AND their reciprocal (Q28), updated once per frame by one
+// Newton step (two 16x16 multiplications); the rare large jump re-seeds it with one 32/16
+// division. Per motor: three 16x16->32 multiplications (knot position, interpolation,
+// drive * reciprocal) and two more when a sag prediction is asked for.
+// Divisions, counted: per frame 0 (steady) or 1 (BusVoltageFilter re-seed after a jump of
+// more than 1/128); per motor 0. headroomDg / forceForPwmDg (status, not per frame) use one
+// 32/32 division each. Fitting (gather_store, once) uses 32/32 divisions freely.
+//
+// Fitting on the board (ModelV2Fitter): one sweep of (pwm_us, force_dg, vbat_mv) samples as
+// gather_store records them, integer maths, 8 bytes per sample of work space (128 samples:
+// 1 KB). The start threshold comes from the sweep's shape without assuming an exponent: for
+// any power law F ~ (pwm - s)^a the PWMs at forces F, 2F, 4F satisfy
+// (p2 - s)^2 = (p1 - s)(p3 - s), so s = p1 - (p2 - p1)^2 / (p3 - 2 p2 + p1); the median over
+// 15 such triples in the lower half of the sweep is taken (sag-corrected by iteration).
+// A second sweep at another voltage (refine) measures s directly and exactly, without any
+// power law: for each force both sweeps must give the same drive,
+// (pA - s) VA = (pB - s) VB  =>  s = (pA VA - pB VB) / (VA - VB); the median over the knots
+// replaces s, and both sweeps' drives are averaged into the knots.
+#pragma once
+#include <stdint.h>
+
+#include "thrustcal/force_pwm.hpp"
+
+namespace tc {
+
+constexpr uint8_t kV2MaxKnots = 32;
+constexpr uint16_t kDriveUnitUsMv = 512;   // one stored drive unit = 512 us*mV
+constexpr uint8_t kV2SagUnitMv = 10;       // sag table unit
+constexpr uint16_t kV2MinStepDg = 66;      // 2^22 / step must fit 16 bits
+constexpr uint32_t kRecipOne = 1ul << 28;  // reciprocal scale: recip_q28 = 2^28 / mV
+
+struct ModelV2 {
+  // Stored fields (record_v2.hpp serializes exactly these).
+  uint16_t start_q4_us = 0;   // ESC start threshold, 1/16 us; 0 = no model
+  uint16_t step_dg = 0;       // force between knots, decigrams
+  uint8_t knots = 0;          // knots used, 2..32; knot k is at force (k + 1) * step_dg
+  uint8_t flags = 0;          // kV2Refined when a second sweep set the start threshold
+  uint16_t rest_mv = 0;       // monitor reading at zero force in the (first) sweep
+  uint16_t second_mv = 0;     // resting reading of the refining sweep; 0 = single sweep
+  uint16_t drive_512usmv[kV2MaxKnots] = {};  // drive at each knot, non-decreasing, > 0
+  uint8_t sag_10mv[kV2MaxKnots] = {};        // rest_mv minus the reading at each knot
+
+  // Derived by finalize() (not stored).
+  uint16_t inv_step_q22 = 0;  // round(2^22 / step_dg)
+  uint16_t rest_recip_q28 = 0;  // 2^28 / rest_mv: the voltage used when the bus reading is bad
+
+  bool isPresent() const { return start_q4_us != 0 && knots != 0; }
+  uint16_t maxForceDg() const { return static_cast<uint16_t>(knots * step_dg); }
+  // Checks the stored fields and computes the derived ones. False (model cleared) when a
+  // field is out of range: start outside 800..1800 us, step < kV2MinStepDg, knots outside
+  // 2..32, rest_mv / second_mv outside 6000..17500 (second_mv may be 0), drive not
+  // increasing (a knot lower than the one before, or the first knot 0).
+  bool finalize();
+  void clear();
+};
+
+enum : uint8_t { kV2Refined = 1u << 0 };
+
+// Battery reading filter: first-order IIR, y += (x - y) / 2^shift per frame (default 1/8),
+// exact in steady state (the accumulator keeps the fraction), plus the reciprocal of y for
+// division-free PWM. Samples outside 6000..17500 mV are ignored (the last good value stays)
+// and counted; until the first good sample isValid() is false.
+struct BusVoltageFilter {
+  uint32_t acc = 0;          // y * 2^shift
+  uint16_t mv = 0;           // filtered millivolts
+  uint16_t recip_q28 = 0;    // 2^28 / mv (within 1 LSB after the first update in steady state)
+  uint8_t shift = 3;         // alpha = 1 / 2^shift, 0..6
+  uint8_t rejected = 0;      // samples ignored as insane (saturates at 255)
+  uint8_t reseeds = 0;       // divisions spent on big jumps (saturates at 255)
+
+  bool isValid() const { return mv != 0; }
+  // Starts at `mv_now` (one division). An insane value leaves the filter invalid.
+  void reset(uint16_t mv_now);
+  // One frame. First good sample after an invalid state resets to it.
+  void update(uint16_t sample_mv);
+};
+
+// Force (decigrams) -> PWM at the filtered bus voltage, fixed point. Defined behaviour:
+//   no model                          -> pwm_min, kNotCalibrated
+//   force 0                           -> pwm_min, kStopped
+//   bus filter not valid              -> uses the model's rest_mv, kVoltageInvalid
+//   force above the curve's last knot -> PWM at the last knot, kSaturated
+//   PWM above pwm_max (not enough voltage for that force) -> pwm_max, kSaturated
+//   PWM below pwm_min                 -> pwm_min, kClamped
+ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
+                            const ForcePwmLimits& limits = ForcePwmLimits());
+// Same, but predicts the bus voltage at the commanded force from the bench sag:
+// V_cmd = V_now + sag(force_now_dg) - sag(force_dg), force_now_dg being what this motor
+// produces now (its last command). Use it on command steps; in steady state it equals the
+// plain call.
+ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
+                            uint16_t force_now_dg, const ForcePwmLimits& limits = ForcePwmLimits());
+inline ForcePwmResult forceGramsToPwmV2(const ModelV2& model, uint16_t force_g,
+                                        const BusVoltageFilter& bus,
+                                        const ForcePwmLimits& limits = ForcePwmLimits()) {
+  return forceToPwmV2(model, force_g > 6553 ? 65535u : static_cast<uint16_t>(force_g * 10u), bus,
+                      limits);
+}
+
+// The model's force (decigrams) at a PWM and bus voltage: inverse of forceToPwmV2 (one
+// division). 0 below the start threshold or without a model; capped at maxForceDg().
+uint16_t forceForPwmDg(const ModelV2& model, uint16_t pwm_us, uint16_t vbus_mv);
+// Headroom for the status command: the largest force reachable at `vbus_mv` with the ESC at
+// limits.pwm_max_us (capped at the curve's end). 0 without a model.
+uint16_t headroomDg(const ModelV2& model, uint16_t vbus_mv,
+                    const ForcePwmLimits& limits = ForcePwmLimits());
+
+// ---- Fitting -------------------------------------------------------------------------------
+
+struct SweepPointV2 {
+  uint16_t pwm_us;
+  int16_t force_dg;  // thrust positive
+  uint16_t vbat_mv;  // monitor reading at that step, as recorded (not sag-compensated)
+};
+
+enum class FitV2Status : uint8_t {
+  kOk = 0,
+  kTooFewSamples,    // fewer than 8 samples
+  kNoForce,          // the sweep never reached 2 * kV2MinStepDg (13.2 g): motor not spinning?
+  kBadVoltage,       // a sample's vbat_mv outside 6000..17500: monitor not connected
+  kStartNotFound,    // no usable force triple / voltage pair: sweep too coarse or too short
+  kVoltagesTooClose, // refine: the two sweeps' resting voltages differ by < 500 mV
+  kNoModel,          // refine: the model to refine is absent
+};
+
+const char* fitV2StatusText(FitV2Status status);
+
+struct FitV2Report {
+  FitV2Status status = FitV2Status::kTooFewSamples;
+  uint16_t samples_used = 0;
+  uint16_t violations = 0;     // samples the monotone fit moved
+  int16_t max_force_dg = 0;    // largest fitted force of this sweep
+  uint16_t start_q4_us = 0;    // start threshold found
+  uint8_t estimates = 0;       // triples (fit) or knots (refine) behind the median
+  uint16_t rest_mv = 0;        // this sweep's resting reading
+};
+
+class ModelV2FitterBase {
+ public:
+  void reset() { count_ = 0; }
+  // False when full (the sample is dropped).
+  bool add(uint16_t pwm_us, int16_t force_dg, uint16_t vbat_mv);
+  uint16_t size() const { return count_; }
+  uint16_t capacity() const { return capacity_; }
+  const SweepPointV2& sample(uint16_t i) const { return samples_[i]; }
+  // Fits `out` from the samples (one sweep). On any status but kOk `out` is cleared.
+  // The samples are reordered and smoothed in place.
+  FitV2Report fit(ModelV2& out);
+  // Treats the samples as a second sweep at another voltage and refines `model` (start
+  // threshold from both, knots averaged). On failure `model` is left unchanged.
+  FitV2Report refine(ModelV2& model);
+
+ protected:
+  ModelV2FitterBase(SweepPointV2* samples, uint16_t* weights, uint16_t capacity)
+      : samples_(samples), weights_(weights), capacity_(capacity) {}
+
+ private:
+  FitV2Report prepare();  // sort, check, monotone fit, rest voltage
+  SweepPointV2* samples_;
+  uint16_t* weights_;     // monotone-fit work space
+  uint16_t capacity_;
+  uint16_t count_ = 0;
+};
+
+template <uint16_t MaxSamples>
+class ModelV2Fitter : public ModelV2FitterBase {
+  static_assert(MaxSamples >= 8 && MaxSamples <= 512, "8..512 samples");
+
+ public:
+  ModelV2Fitter() : ModelV2FitterBase(samples_storage_, weight_storage_, MaxSamples) {}
+  ModelV2Fitter(const ModelV2Fitter&) = delete;
+  ModelV2Fitter& operator=(const ModelV2Fitter&) = delete;
+
+ private:
+  SweepPointV2 samples_storage_[MaxSamples];
+  uint16_t weight_storage_[MaxSamples];
+};
+
+#if !defined(__AVR__)
+// Host only (model lab export): fills `out` from a curve given in double precision.
+// Points (drive_usv[i], force_g[i]) with drive = (pwm - start) * V in us*V, ascending; dense
+// points are best (the curve is resampled linearly onto the knots). sag_mv[i] (may be null)
+// is the monitor drop at force_g[i]. Returns false (out cleared) when the points are fewer
+// than 2, not ascending, the largest force is below 13.2 g, or a field is out of range
+// (see ModelV2::finalize).
+bool modelV2FromCurve(ModelV2& out, double start_us, const double* drive_usv,
+                      const double* force_g, uint16_t count, double rest_mv,
+                      const double* sag_mv = nullptr, double second_mv = 0.0);
+#endif
+
+}  // namespace tc

@@ -1,0 +1,583 @@
+// Force model v2: see model_v2.hpp for the physics, the fixed-point formats and the division
+// count. Every multiplication below states its bound; `int` is 16 bits on the AVR, so every
+// product that can exceed 16 bits is cast to 32 bits first.
+#include "thrustcal/model_v2.hpp"
+
+namespace tc {
+
+namespace {
+
+constexpr uint16_t kSaneMinMv = 6000;
+constexpr uint16_t kSaneMaxMv = 17500;
+constexpr uint16_t kStartMinQ4 = 800u * 16u;
+constexpr uint16_t kStartMaxQ4 = 1800u * 16u;
+constexpr int32_t kNewtonLimit = 1l << 21;  // |e| above: re-seed by division (jump > 1/128)
+
+bool saneMv(uint16_t mv) { return mv >= kSaneMinMv && mv <= kSaneMaxMv; }
+
+// Where a force falls between the knots: segment index (0 = between the origin and knot 0)
+// and the fraction inside it (Q16). force_dg must be <= maxForceDg().
+struct KnotPos {
+  uint8_t index;
+  uint16_t frac_q16;
+};
+
+inline KnotPos knotPos(const ModelV2& m, uint16_t force_dg) {
+  // force_dg <= knots * step, inv ~ 2^22 / step: product <= 32 * 2^22 * (1 + 1/step) < 2^28.
+  const uint32_t pos = static_cast<uint32_t>(force_dg) * m.inv_step_q22;
+  KnotPos p;
+  p.index = static_cast<uint8_t>(pos >> 22);
+  p.frac_q16 = static_cast<uint16_t>(pos >> 6);
+  return p;
+}
+
+inline uint16_t driveAt(const ModelV2& m, KnotPos p) {
+  if (p.index >= m.knots) return m.drive_512usmv[m.knots - 1];
+  const uint16_t lo = p.index ? m.drive_512usmv[p.index - 1] : 0;
+  const uint16_t hi = m.drive_512usmv[p.index];
+  // (hi - lo) < 2^16, frac < 2^16: product + 2^15 < 2^32.
+  return static_cast<uint16_t>(
+      lo + ((static_cast<uint32_t>(hi - lo) * p.frac_q16 + 0x8000u) >> 16));
+}
+
+// Sag in mV at a knot position, linear between knots (origin: 0).
+inline int16_t sagAt(const ModelV2& m, KnotPos p) {
+  if (p.index >= m.knots) return static_cast<int16_t>(m.sag_10mv[m.knots - 1] * kV2SagUnitMv);
+  const int16_t lo = p.index ? m.sag_10mv[p.index - 1] : 0;
+  const int16_t hi = m.sag_10mv[p.index];
+  // |hi - lo| <= 255, frac < 2^16: |product| < 2^24.
+  const int32_t d = static_cast<int32_t>(hi - lo) * p.frac_q16;
+  const int32_t sag_q4 = static_cast<int32_t>(lo) * 16 + (d >> 12);  // 1/16 of 10 mV
+  return static_cast<int16_t>((sag_q4 * kV2SagUnitMv + 8) >> 4);
+}
+
+uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flags) {
+  const uint16_t max_dg = m.maxForceDg();
+  if (force_dg > max_dg) {
+    flags |= kSaturated;
+    return max_dg;
+  }
+  return force_dg;
+}
+
+ForcePwmResult finishPwm(const ModelV2& m, uint32_t duty_q4, uint8_t flags,
+                         const ForcePwmLimits& limits) {
+  const uint32_t pwm_q4 = m.start_q4_us + duty_q4;
+  const uint32_t pwm_us = (pwm_q4 + 8u) >> 4;
+  ForcePwmResult r;
+  r.flags = flags;
+  if (pwm_us > limits.pwm_max_us) {
+    r.pwm_us = limits.pwm_max_us;
+    r.flags |= kSaturated;
+  } else if (pwm_us < limits.pwm_min_us) {
+    r.pwm_us = limits.pwm_min_us;
+    r.flags |= kClamped;
+  } else {
+    r.pwm_us = static_cast<uint16_t>(pwm_us);
+  }
+  return r;
+}
+
+}  // namespace
+
+// ---- ModelV2 -------------------------------------------------------------------------------
+
+void ModelV2::clear() { *this = ModelV2(); }
+
+bool ModelV2::finalize() {
+  inv_step_q22 = 0;
+  rest_recip_q28 = 0;
+  bool ok = start_q4_us >= kStartMinQ4 && start_q4_us <= kStartMaxQ4 &&
+            step_dg >= kV2MinStepDg && knots >= 2 && knots <= kV2MaxKnots &&
+            static_cast<uint32_t>(knots) * step_dg <= 65535u && saneMv(rest_mv) &&
+            (second_mv == 0 || saneMv(second_mv));
+  if (ok) {
+    ok = drive_512usmv[0] > 0;
+    for (uint8_t k = 1; ok && k < knots; ++k) ok = drive_512usmv[k] >= drive_512usmv[k - 1];
+  }
+  if (!ok) {
+    clear();
+    return false;
+  }
+  for (uint8_t k = knots; k < kV2MaxKnots; ++k) {
+    drive_512usmv[k] = 0;
+    sag_10mv[k] = 0;
+  }
+  inv_step_q22 = static_cast<uint16_t>(((1ul << 22) + step_dg / 2) / step_dg);
+  rest_recip_q28 = static_cast<uint16_t>(kRecipOne / rest_mv);
+  return true;
+}
+
+// ---- BusVoltageFilter ----------------------------------------------------------------------
+
+void BusVoltageFilter::reset(uint16_t mv_now) {
+  if (shift > 6) shift = 6;
+  if (!saneMv(mv_now)) {
+    acc = 0;
+    mv = 0;
+    recip_q28 = 0;
+    return;
+  }
+  acc = static_cast<uint32_t>(mv_now) << shift;
+  mv = mv_now;
+  recip_q28 = static_cast<uint16_t>(kRecipOne / mv_now);  // the one division
+}
+
+void BusVoltageFilter::update(uint16_t sample_mv) {
+  if (!saneMv(sample_mv)) {
+    if (rejected != 255) ++rejected;
+    return;
+  }
+  if (!isValid()) {
+    reset(sample_mv);
+    return;
+  }
+  acc = acc - (acc >> shift) + sample_mv;
+  mv = static_cast<uint16_t>(shift ? (acc + (1ul << (shift - 1))) >> shift : acc);
+  // Newton step on r = 2^28 / mv: e = 2^28 - mv * r, r += r * e / 2^28.
+  // mv * r <= 17500 * 44739 < 2^30.
+  const int32_t e = static_cast<int32_t>(kRecipOne - static_cast<uint32_t>(mv) * recip_q28);
+  if (e > kNewtonLimit || e < -kNewtonLimit) {
+    recip_q28 = static_cast<uint16_t>(kRecipOne / mv);
+    if (reseeds != 255) ++reseeds;
+    return;
+  }
+  // |e >> 7| <= 2^14, r < 2^16: |product| < 2^30.
+  const int32_t corr = (static_cast<int32_t>(static_cast<int16_t>(e >> 7)) * recip_q28) >> 21;
+  recip_q28 = static_cast<uint16_t>(static_cast<int32_t>(recip_q28) + corr);
+}
+
+// ---- Run time ------------------------------------------------------------------------------
+
+ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
+                            const ForcePwmLimits& limits) {
+  if (!model.isPresent()) return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
+  if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
+  uint8_t flags = 0;
+  uint16_t recip = bus.recip_q28;
+  if (!bus.isValid()) {
+    recip = model.rest_recip_q28;
+    flags |= kVoltageInvalid;
+  }
+  const uint16_t drive = driveAt(model, knotPos(model, clampForce(model, force_dg, flags)));
+  // drive <= 34180 (1000 us * 17.5 V), recip <= 44739 (6 V): product + 2^14 < 2^31.
+  const uint32_t duty_q4 = (static_cast<uint32_t>(drive) * recip + (1ul << 14)) >> 15;
+  return finishPwm(model, duty_q4, flags, limits);
+}
+
+ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
+                            uint16_t force_now_dg, const ForcePwmLimits& limits) {
+  if (!model.isPresent()) return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
+  if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
+  uint8_t flags = 0;
+  uint16_t recip = bus.recip_q28;
+  if (!bus.isValid()) {
+    recip = model.rest_recip_q28;
+    flags |= kVoltageInvalid;
+  }
+  const KnotPos p = knotPos(model, clampForce(model, force_dg, flags));
+  const uint16_t drive = driveAt(model, p);
+  int32_t duty_q4 = static_cast<int32_t>((static_cast<uint32_t>(drive) * recip + (1ul << 14)) >> 15);
+  if (force_now_dg != force_dg) {
+    uint8_t ignored = 0;
+    const KnotPos now = knotPos(model, clampForce(model, force_now_dg, ignored));
+    // Extra drop expected at the command: d = sag(cmd) - sag(now), |d| <= 2550 mV.
+    const int16_t d_mv = static_cast<int16_t>(sagAt(model, p) - sagAt(model, now));
+    // delta = d / V in Q16 = d * recip / 2^12; |d * recip| < 2550 * 44739 < 2^27.
+    int32_t delta = (static_cast<int32_t>(d_mv) * recip) >> 12;
+    if (delta > 16384) delta = 16384;    // a predicted change of more than 25 % is not sag
+    if (delta < -16384) delta = -16384;
+    // duty / (1 - delta) ~ duty * (1 + delta + delta^2): error delta^3 (< 0.01 % at 5 %).
+    const int32_t factor = delta + ((delta * delta) >> 16);  // |delta^2| <= 2^28
+    // duty_q4 < 2^16, |factor| < 2^15: |product| < 2^31.
+    duty_q4 += (duty_q4 * factor) >> 16;
+    if (duty_q4 < 0) duty_q4 = 0;
+  }
+  return finishPwm(model, static_cast<uint32_t>(duty_q4), flags, limits);
+}
+
+uint16_t forceForPwmDg(const ModelV2& model, uint16_t pwm_us, uint16_t vbus_mv) {
+  if (!model.isPresent() || vbus_mv == 0) return 0;
+  if (pwm_us > 4000) pwm_us = 4000;  // keeps (pwm - start) * mV below 2^32
+  const uint32_t pwm_q4 = static_cast<uint32_t>(pwm_us) << 4;
+  if (pwm_q4 <= model.start_q4_us) return 0;
+  // (pwm - start) in 1/16 us times mV, / (16 * 512): < 64000 * 65536 < 2^32.
+  const uint32_t drive = ((pwm_q4 - model.start_q4_us) * vbus_mv) >> 13;
+  uint8_t k = 0;
+  while (k < model.knots && model.drive_512usmv[k] < drive) ++k;
+  if (k == model.knots) return model.maxForceDg();
+  const uint16_t lo = k ? model.drive_512usmv[k - 1] : 0;
+  const uint16_t hi = model.drive_512usmv[k];
+  const uint32_t base = static_cast<uint32_t>(k) * model.step_dg;
+  if (hi == lo) return static_cast<uint16_t>(base + model.step_dg);
+  // (drive - lo) < 2^16, step < 2^15: product < 2^31. The one division.
+  return static_cast<uint16_t>(base + ((drive - lo) * model.step_dg + (hi - lo) / 2) / (hi - lo));
+}
+
+uint16_t headroomDg(const ModelV2& model, uint16_t vbus_mv, const ForcePwmLimits& limits) {
+  return forceForPwmDg(model, limits.pwm_max_us, vbus_mv);
+}
+
+// ---- Fitting -------------------------------------------------------------------------------
+
+const char* fitV2StatusText(FitV2Status status) {
+  switch (status) {
+    case FitV2Status::kOk: return "ok";
+    case FitV2Status::kTooFewSamples: return "too few samples: sweep at least 8 PWM steps";
+    case FitV2Status::kNoForce:
+      return "no force: the sweep never reached 13.2 g (motor not spinning or cell not tared?)";
+    case FitV2Status::kBadVoltage:
+      return "battery reading outside 6-17.5 V: check the monitor wiring";
+    case FitV2Status::kStartNotFound:
+      return "start threshold not found: sweep finer (<= 10 us steps) from 1000 us to full force";
+    case FitV2Status::kVoltagesTooClose:
+      return "second sweep within 0.5 V of the first: refine needs another voltage";
+    case FitV2Status::kNoModel: return "no model to refine: fit a first sweep";
+  }
+  return "unknown";
+}
+
+bool ModelV2FitterBase::add(uint16_t pwm_us, int16_t force_dg, uint16_t vbat_mv) {
+  if (count_ >= capacity_) return false;
+  samples_[count_].pwm_us = pwm_us;
+  samples_[count_].force_dg = force_dg;
+  samples_[count_].vbat_mv = vbat_mv;
+  ++count_;
+  return true;
+}
+
+namespace {
+
+// PWM (1/16 us) and reading where the fitted (monotone) force first reaches force_dg,
+// linear between the two samples around it. False above the sweep's largest force.
+struct SweepAt {
+  int32_t pwm_q4;
+  int32_t vbat_mv;
+};
+
+bool sweepAt(const SweepPointV2* s, uint16_t n, int32_t force_dg, SweepAt& out) {
+  uint16_t j = 0;
+  while (j < n && s[j].force_dg < force_dg) ++j;
+  if (j == n) return false;
+  if (j == 0 || s[j].force_dg == s[j - 1].force_dg) {
+    out.pwm_q4 = static_cast<int32_t>(s[j].pwm_us) * 16;
+    out.vbat_mv = s[j].vbat_mv;
+    return true;
+  }
+  const int32_t df = s[j].force_dg - s[j - 1].force_dg;  // > 0
+  const int32_t num = force_dg - s[j - 1].force_dg;       // 1..df
+  const int32_t dp = (static_cast<int32_t>(s[j].pwm_us) - s[j - 1].pwm_us) * 16;
+  const int32_t dv = static_cast<int32_t>(s[j].vbat_mv) - s[j - 1].vbat_mv;
+  out.pwm_q4 = static_cast<int32_t>(s[j - 1].pwm_us) * 16 + (dp * num + df / 2) / df;
+  out.vbat_mv = s[j - 1].vbat_mv + (dv * num) / df;
+  return true;
+}
+
+// Drive (512 us*mV) of a sweep point with start s; at least 1 (0 is the origin).
+uint16_t driveOf(int32_t pwm_q4, int32_t vbat_mv, int32_t start_q4) {
+  const int32_t span = pwm_q4 - start_q4;
+  if (span <= 0) return 1;
+  const uint32_t d = (static_cast<uint32_t>(span) * static_cast<uint32_t>(vbat_mv)) >> 13;
+  if (d < 1) return 1;
+  return d > 65535u ? 65535u : static_cast<uint16_t>(d);
+}
+
+template <class T>
+void insertionSort(T* a, uint8_t n) {
+  for (uint8_t i = 1; i < n; ++i) {
+    const T v = a[i];
+    uint8_t j = i;
+    while (j > 0 && a[j - 1] > v) {
+      a[j] = a[j - 1];
+      --j;
+    }
+    a[j] = v;
+  }
+}
+
+}  // namespace
+
+FitV2Report ModelV2FitterBase::prepare() {
+  FitV2Report rep;
+  const uint16_t n = count_;
+  rep.samples_used = n;
+  if (n < 8) {
+    rep.status = FitV2Status::kTooFewSamples;
+    return rep;
+  }
+  for (uint16_t i = 0; i < n; ++i) {
+    if (!saneMv(samples_[i].vbat_mv)) {
+      rep.status = FitV2Status::kBadVoltage;
+      return rep;
+    }
+  }
+  // Sort by PWM (a sweep is ascending already: linear time then).
+  for (uint16_t i = 1; i < n; ++i) {
+    const SweepPointV2 v = samples_[i];
+    uint16_t j = i;
+    while (j > 0 && samples_[j - 1].pwm_us > v.pwm_us) {
+      samples_[j] = samples_[j - 1];
+      --j;
+    }
+    samples_[j] = v;
+  }
+  // Monotone (non-decreasing) force in PWM: pool adjacent violators, in place. A block
+  // [b, e] keeps its mean in samples_[b].force_dg and its size in weights_[b] and weights_[e].
+  for (uint16_t j = 0; j < n; ++j) {
+    uint16_t b = j;
+    int32_t mean = samples_[j].force_dg;
+    uint16_t size = 1;
+    while (b > 0) {
+      const uint16_t prev_size = weights_[b - 1];
+      const uint16_t pb = static_cast<uint16_t>(b - prev_size);
+      const int32_t prev_mean = samples_[pb].force_dg;
+      if (prev_mean <= mean) break;
+      const int32_t total = static_cast<int32_t>(size) + prev_size;
+      const int32_t sum = prev_mean * prev_size + mean * size;
+      mean = (sum >= 0 ? sum + total / 2 : sum - total / 2) / total;
+      size = static_cast<uint16_t>(size + prev_size);
+      b = pb;
+      ++rep.violations;
+    }
+    samples_[b].force_dg = static_cast<int16_t>(mean);
+    weights_[b] = size;
+    weights_[b + size - 1] = size;
+  }
+  for (int32_t e = static_cast<int32_t>(n) - 1; e >= 0;) {
+    const uint16_t size = weights_[e];
+    const int32_t b = e - size + 1;
+    const int16_t mean = samples_[b].force_dg;
+    for (int32_t k = b; k <= e; ++k) samples_[k].force_dg = mean;
+    e = b - 1;
+  }
+  rep.max_force_dg = samples_[n - 1].force_dg;
+  if (rep.max_force_dg < static_cast<int16_t>(2 * kV2MinStepDg)) {
+    rep.status = FitV2Status::kNoForce;
+    return rep;
+  }
+  // Resting reading: mean over the samples below 1/64 of the largest force (the motor barely
+  // turns there: no sag yet); the first sample if none.
+  const int16_t quiet_dg = static_cast<int16_t>(rep.max_force_dg / 64);
+  uint32_t sum_mv = 0;
+  uint16_t quiet = 0;
+  for (uint16_t i = 0; i < n && samples_[i].force_dg <= quiet_dg; ++i) {
+    sum_mv += samples_[i].vbat_mv;
+    ++quiet;
+  }
+  rep.rest_mv = quiet ? static_cast<uint16_t>((sum_mv + quiet / 2) / quiet) : samples_[0].vbat_mv;
+  rep.status = FitV2Status::kOk;
+  return rep;
+}
+
+FitV2Report ModelV2FitterBase::fit(ModelV2& out) {
+  out.clear();
+  FitV2Report rep = prepare();
+  if (rep.status != FitV2Status::kOk) return rep;
+  const uint16_t n = count_;
+  const int32_t fmax = rep.max_force_dg;
+
+  // Start threshold from force triples F, 2F, 4F (F = fmax * j / 128, j = 2..16): for a power
+  // law the PWMs satisfy (p2 - s)^2 = (p1 - s)(p3 - s). The sag makes V differ between the
+  // three points; the drive, not the PWM, is what is geometric, so the PWMs are rescaled to
+  // the middle point's voltage around the current estimate and the formula is iterated.
+  int16_t est[15];
+  uint8_t n_est = 0;
+  for (uint8_t j = 2; j <= 16; ++j) {
+    const int32_t f1 = fmax * j / 128;
+    if (f1 < 5) continue;
+    SweepAt a1, a2, a3;
+    if (!sweepAt(samples_, n, f1, a1) || !sweepAt(samples_, n, 2 * f1, a2) ||
+        !sweepAt(samples_, n, 4 * f1, a3))
+      continue;
+    int32_t s = 0;
+    bool ok = true;
+    bool first = true;
+    for (uint8_t it = 0; ok && it < 4; ++it) {
+      int32_t p1 = a1.pwm_q4, p2 = a2.pwm_q4, p3 = a3.pwm_q4;
+      if (!first) {
+        // (p - s) * V / V2: |p - s| < 2^15 (q4), V < 2^15: product < 2^30.
+        p1 = s + (p1 - s) * a1.vbat_mv / a2.vbat_mv;
+        p3 = s + (p3 - s) * a3.vbat_mv / a2.vbat_mv;
+      }
+      first = false;
+      const int32_t u = p2 - p1;
+      const int32_t w = p3 - p1;
+      const int32_t den = w - 2 * u;
+      if (u <= 0 || den <= 0) {
+        ok = false;
+        break;
+      }
+      s = p1 - (u * u + den / 2) / den;  // u < 2^15: u^2 < 2^30
+      if (s < kStartMinQ4 || s >= a1.pwm_q4) ok = false;
+    }
+    if (ok) est[n_est++] = static_cast<int16_t>(s);
+  }
+  rep.estimates = n_est;
+  if (n_est < 3) {
+    rep.status = FitV2Status::kStartNotFound;
+    return rep;
+  }
+  insertionSort(est, n_est);
+  const int32_t start_q4 = (n_est & 1) ? est[n_est / 2]
+                                       : (static_cast<int32_t>(est[n_est / 2 - 1]) + est[n_est / 2] + 1) / 2;
+
+  uint16_t step = static_cast<uint16_t>((fmax + kV2MaxKnots - 1) / kV2MaxKnots);
+  if (step < kV2MinStepDg) step = kV2MinStepDg;
+  uint8_t knots = static_cast<uint8_t>(fmax / step);
+  if (knots > kV2MaxKnots) knots = kV2MaxKnots;
+
+  ModelV2 m;
+  m.start_q4_us = static_cast<uint16_t>(start_q4);
+  m.step_dg = step;
+  m.knots = knots;
+  m.rest_mv = rep.rest_mv;
+  uint16_t prev = 1;
+  for (uint8_t k = 0; k < knots; ++k) {
+    SweepAt at;
+    sweepAt(samples_, n, static_cast<int32_t>(k + 1) * step, at);  // <= fmax: always found
+    uint16_t d = driveOf(at.pwm_q4, at.vbat_mv, start_q4);
+    if (d < prev) d = prev;
+    m.drive_512usmv[k] = d;
+    prev = d;
+    int32_t sag = (static_cast<int32_t>(rep.rest_mv) - at.vbat_mv + kV2SagUnitMv / 2) / kV2SagUnitMv;
+    m.sag_10mv[k] = static_cast<uint8_t>(sag < 0 ? 0 : (sag > 255 ? 255 : sag));
+  }
+  if (!m.finalize()) {
+    rep.status = FitV2Status::kStartNotFound;
+    return rep;
+  }
+  rep.start_q4_us = m.start_q4_us;
+  out = m;
+  return rep;
+}
+
+FitV2Report ModelV2FitterBase::refine(ModelV2& model) {
+  FitV2Report rep;
+  if (!model.isPresent()) {
+    rep.status = FitV2Status::kNoModel;
+    return rep;
+  }
+  rep = prepare();
+  if (rep.status != FitV2Status::kOk) return rep;
+  const int32_t gap = static_cast<int32_t>(rep.rest_mv) - model.rest_mv;
+  if (gap < 500 && gap > -500) {
+    rep.status = FitV2Status::kVoltagesTooClose;
+    return rep;
+  }
+  const uint16_t n = count_;
+  const int32_t s_old = model.start_q4_us;
+  // Direct start estimate per knot: (pA - s) VA = (pB - s) VB. Knots below 1/16 of the
+  // common range are skipped (flat force there: PWM poorly defined by force).
+  const int32_t common = rep.max_force_dg < static_cast<int32_t>(model.maxForceDg())
+                             ? rep.max_force_dg
+                             : static_cast<int32_t>(model.maxForceDg());
+  int16_t est[kV2MaxKnots];
+  uint8_t n_est = 0;
+  for (uint8_t k = 0; k < model.knots; ++k) {
+    const int32_t f = static_cast<int32_t>(k + 1) * model.step_dg;
+    if (f > common) break;
+    if (f * 16 < common) continue;
+    SweepAt b;
+    if (!sweepAt(samples_, n, f, b)) break;
+    const int32_t va = static_cast<int32_t>(model.rest_mv) - model.sag_10mv[k] * kV2SagUnitMv;
+    const int32_t den = va - b.vbat_mv;
+    if (den < 300 && den > -300) continue;
+    // All in 1/16 us * mV: drive * 8192 < 2^29, s * VA < 2^29, pB * VB < 2^29.
+    const int32_t xa = static_cast<int32_t>(model.drive_512usmv[k]) * 8192 + s_old * va;
+    const int32_t xb = b.pwm_q4 * b.vbat_mv;
+    const int32_t s = (xa - xb) / den;
+    if (s < kStartMinQ4 || s > kStartMaxQ4) continue;
+    est[n_est++] = static_cast<int16_t>(s);
+  }
+  rep.estimates = n_est;
+  if (n_est < 3) {
+    rep.status = FitV2Status::kStartNotFound;
+    return rep;
+  }
+  insertionSort(est, n_est);
+  const int32_t s_new = (n_est & 1) ? est[n_est / 2]
+                                    : (static_cast<int32_t>(est[n_est / 2 - 1]) + est[n_est / 2] + 1) / 2;
+
+  ModelV2 m = model;
+  m.start_q4_us = static_cast<uint16_t>(s_new);
+  uint16_t prev = 1;
+  for (uint8_t k = 0; k < model.knots; ++k) {
+    const int32_t f = static_cast<int32_t>(k + 1) * model.step_dg;
+    const int32_t va = static_cast<int32_t>(model.rest_mv) - model.sag_10mv[k] * kV2SagUnitMv;
+    // Sweep A's drive moved to the new start: + (s_old - s_new) * VA; |.| < 2^15 * 2^15.
+    int32_t d = static_cast<int32_t>(model.drive_512usmv[k]) + (((s_old - s_new) * va) >> 13);
+    SweepAt b;
+    if (f <= rep.max_force_dg && sweepAt(samples_, n, f, b))
+      d = (d + driveOf(b.pwm_q4, b.vbat_mv, s_new) + 1) / 2;
+    if (d < prev) d = prev;
+    if (d > 65535) d = 65535;
+    m.drive_512usmv[k] = static_cast<uint16_t>(d);
+    prev = static_cast<uint16_t>(d);
+  }
+  m.second_mv = rep.rest_mv;
+  m.flags = static_cast<uint8_t>(m.flags | kV2Refined);
+  if (!m.finalize()) {
+    rep.status = FitV2Status::kStartNotFound;
+    return rep;
+  }
+  rep.start_q4_us = m.start_q4_us;
+  model = m;
+  return rep;
+}
+
+// ---- Host entry (model lab export) ---------------------------------------------------------
+
+#if !defined(__AVR__)
+bool modelV2FromCurve(ModelV2& out, double start_us, const double* drive_usv,
+                      const double* force_g, uint16_t count, double rest_mv,
+                      const double* sag_mv, double second_mv) {
+  out.clear();
+  if (count < 2 || drive_usv == nullptr || force_g == nullptr) return false;
+  for (uint16_t i = 1; i < count; ++i) {
+    if (!(drive_usv[i] >= drive_usv[i - 1]) || !(force_g[i] >= force_g[i - 1])) return false;
+  }
+  const double fmax_dg = force_g[count - 1] * 10.0;
+  if (!(fmax_dg >= 2.0 * kV2MinStepDg) || !(fmax_dg <= 65535.0)) return false;
+  const uint16_t fmax = static_cast<uint16_t>(fmax_dg);
+  uint16_t step = static_cast<uint16_t>((fmax + kV2MaxKnots - 1) / kV2MaxKnots);
+  if (step < kV2MinStepDg) step = kV2MinStepDg;
+  uint8_t knots = static_cast<uint8_t>(fmax / step);
+  if (knots > kV2MaxKnots) knots = kV2MaxKnots;
+  if (!(start_us > 0.0 && start_us < 4000.0) || !(rest_mv > 0.0 && rest_mv < 65535.0) ||
+      !(second_mv >= 0.0 && second_mv < 65535.0))
+    return false;
+  ModelV2 m;
+  m.start_q4_us = static_cast<uint16_t>(start_us * 16.0 + 0.5);
+  m.step_dg = step;
+  m.knots = knots;
+  m.rest_mv = static_cast<uint16_t>(rest_mv + 0.5);
+  m.second_mv = static_cast<uint16_t>(second_mv + 0.5);
+  m.flags = m.second_mv ? kV2Refined : 0;
+  uint16_t i = 1;
+  for (uint8_t k = 0; k < knots; ++k) {
+    const double f = (k + 1) * step / 10.0;
+    // Origin (0, 0) before the first point if the points start above zero force.
+    double d = 0.0, sag = 0.0;
+    if (f <= force_g[0]) {
+      const double t = force_g[0] > 0.0 ? f / force_g[0] : 1.0;
+      d = drive_usv[0] * t;
+      sag = sag_mv ? sag_mv[0] * t : 0.0;
+    } else {
+      while (i < count - 1 && force_g[i] < f) ++i;
+      const double df = force_g[i] - force_g[i - 1];
+      const double t = df > 0.0 ? (f - force_g[i - 1]) / df : 1.0;
+      d = drive_usv[i - 1] + t * (drive_usv[i] - drive_usv[i - 1]);
+      sag = sag_mv ? sag_mv[i - 1] + t * (sag_mv[i] - sag_mv[i - 1]) : 0.0;
+    }
+    const double units = d * 1000.0 / kDriveUnitUsMv + 0.5;
+    m.drive_512usmv[k] = units >= 65535.0 ? 65535 : (units < 1.0 ? 1 : static_cast<uint16_t>(units));
+    const double s10 = sag / kV2SagUnitMv + 0.5;
+    m.sag_10mv[k] = s10 >= 255.0 ? 255 : (s10 < 0.0 ? 0 : static_cast<uint8_t>(s10));
+  }
+  if (!m.finalize()) return false;
+  out = m;
+  return true;
+}
+#endif
+
+}  // namespace tc

@@ -1,0 +1,86 @@
+// v2 record image <-> ModelV2 (layout table in record_v2.hpp). Byte by byte, little endian,
+// never a memcpy of the struct: the AVR and the host agree by construction.
+#include "thrustcal/record_v2.hpp"
+
+namespace tc {
+
+namespace {
+
+void putU16(uint8_t* p, uint16_t v) {
+  p[0] = static_cast<uint8_t>(v & 0xFF);
+  p[1] = static_cast<uint8_t>(v >> 8);
+}
+
+uint16_t getU16(const uint8_t* p) {
+  return static_cast<uint16_t>(p[0] | (static_cast<uint16_t>(p[1]) << 8));
+}
+
+constexpr uint16_t kDriveOffset = 14;
+constexpr uint16_t kSagOffset = kDriveOffset + 2 * kV2MaxKnots;
+static_assert(kSagOffset + kV2MaxKnots == kRecordV2CrcOffset, "layout table and code disagree");
+
+}  // namespace
+
+void serializeModelV2(const ModelV2& model, uint16_t sequence, uint8_t* image) {
+  image[0] = kLayoutVersion2;
+  image[1] = kRecordV2Magic;
+  putU16(image + kRecordV2SeqOffset, sequence);
+  image[4] = model.knots;
+  image[5] = model.flags;
+  putU16(image + 6, model.start_q4_us);
+  putU16(image + 8, model.step_dg);
+  putU16(image + 10, model.rest_mv);
+  putU16(image + 12, model.second_mv);
+  for (uint8_t k = 0; k < kV2MaxKnots; ++k) {
+    const bool used = k < model.knots;
+    putU16(image + kDriveOffset + 2 * k, used ? model.drive_512usmv[k] : 0);
+    image[kSagOffset + k] = used ? model.sag_10mv[k] : 0;
+  }
+  putU16(image + kRecordV2CrcOffset, crc16CcittFalse(image, kRecordV2CrcOffset));
+}
+
+DecodeStatus parseModelV2(const uint8_t* image, ModelV2& out, uint16_t& sequence) {
+  out.clear();
+  sequence = 0;
+  if (image[0] == 0xFF) return DecodeStatus::kErased;
+  if (image[0] != kLayoutVersion2 || image[1] != kRecordV2Magic) return DecodeStatus::kBadVersion;
+  if (crc16CcittFalse(image, kRecordV2CrcOffset) != getU16(image + kRecordV2CrcOffset))
+    return DecodeStatus::kBadCrc;
+  ModelV2 m;
+  m.knots = image[4];
+  m.flags = image[5];
+  m.start_q4_us = getU16(image + 6);
+  m.step_dg = getU16(image + 8);
+  m.rest_mv = getU16(image + 10);
+  m.second_mv = getU16(image + 12);
+  for (uint8_t k = 0; k < kV2MaxKnots; ++k) {
+    m.drive_512usmv[k] = getU16(image + kDriveOffset + 2 * k);
+    m.sag_10mv[k] = image[kSagOffset + k];
+  }
+  if (!m.finalize()) return DecodeStatus::kBadContent;
+  out = m;
+  sequence = getU16(image + kRecordV2SeqOffset);
+  return DecodeStatus::kOk;
+}
+
+const char* writeV2StatusText(WriteV2Status status) {
+  switch (status) {
+    case WriteV2Status::kWritten: return "written";
+    case WriteV2Status::kUnchanged: return "unchanged (already stored)";
+    case WriteV2Status::kInvalidModel: return "invalid model: nothing written (fit it again)";
+    case WriteV2Status::kVerifyFailed:
+      return "read-back failed: EEPROM worn? the previous calibration is kept";
+  }
+  return "unknown";
+}
+
+const char* slotLayoutText(SlotLayout layout) {
+  switch (layout) {
+    case SlotLayout::kNone: return "none";
+    case SlotLayout::kThesisV1: return "v1 (thesis)";
+    case SlotLayout::kModelV2: return "v2";
+  }
+  return "unknown";
+}
+
+}  // namespace tc
