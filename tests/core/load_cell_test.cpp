@@ -109,6 +109,7 @@ TEST(LoadCell, CalibrateSpanScalesTheSlopeAroundTheEmptyReading) {
   EXPECT_EQ(cell.weightGrams(500), empty_weight);
   EXPECT_EQ(cell.weightGrams(300), empty_weight + 200);
   EXPECT_FALSE(cell.isTared()) << "the old tare point no longer reads zero: tare again";
+  EXPECT_EQ(cell.forceMilligrams(500), cell.lineMilligrams(500)) << "untared force is the plain line";
   cell.tare(500);
   EXPECT_EQ(cell.forceGrams(550), 50);
 }
