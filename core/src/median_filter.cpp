@@ -37,6 +37,24 @@ uint16_t upperBound(const uint16_t* sorted, uint16_t n, uint16_t v) {
   return lo;
 }
 
+// Moves [first + 1, last] to [first, last - 1]. Pointer loops compile to auto-increment
+// loads and stores on avr-gcc: about 15 cycles per element, ~10 % faster than indexed loops
+// (measured with tests/core/avr_cycles.sh).
+void shiftLeft(uint16_t* first, uint16_t* last) {
+  while (first < last) {
+    *first = first[1];
+    ++first;
+  }
+}
+
+// Moves [first, last - 1] to [first + 1, last].
+void shiftRight(uint16_t* first, uint16_t* last) {
+  while (last > first) {
+    *last = last[-1];
+    --last;
+  }
+}
+
 }  // namespace
 
 void MedianFilterBase::reset() {
@@ -48,8 +66,8 @@ void MedianFilterBase::push(uint16_t sample) {
   if (count_ < window_) {
     // Filling up: head_ stays 0, the ring is written in order.
     ring_[count_] = sample;
-    uint16_t pos = upperBound(sorted_, count_, sample);
-    for (uint16_t i = count_; i > pos; --i) sorted_[i] = sorted_[i - 1];
+    const uint16_t pos = upperBound(sorted_, count_, sample);
+    shiftRight(sorted_ + pos, sorted_ + count_);
     sorted_[pos] = sample;
     ++count_;
     return;
@@ -66,12 +84,12 @@ void MedianFilterBase::push(uint16_t sample) {
     // The new sample goes to the right: shift (out, dest) one to the left.
     const uint16_t dest = upperBound(sorted_, count_, sample);  // > out
     const uint16_t last = static_cast<uint16_t>(dest - 1);
-    for (uint16_t i = out; i < last; ++i) sorted_[i] = sorted_[i + 1];
+    shiftLeft(sorted_ + out, sorted_ + last);
     sorted_[last] = sample;
   } else {
     // The new sample goes to the left: shift [dest, out) one to the right.
     const uint16_t dest = upperBound(sorted_, out, sample);
-    for (uint16_t i = out; i > dest; --i) sorted_[i] = sorted_[i - 1];
+    shiftRight(sorted_ + dest, sorted_ + out);
     sorted_[dest] = sample;
   }
 }

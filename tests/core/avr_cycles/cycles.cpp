@@ -1,0 +1,69 @@
+// AVR cycle benchmark for core/ (run by tests/core/avr_cycles.sh in simavr; prints over UART0).
+#include <avr/io.h>
+#include <avr/interrupt.h>
+#include <avr/sleep.h>
+#include <stdio.h>
+#include "thrustcal/median_filter.hpp"
+#include "thrustcal/force_pwm.hpp"
+#include "thrustcal/curve_builder.hpp"
+#include "thrustcal/eeprom_codec.hpp"
+
+static int uart_putchar(char c, FILE*) { while (!(UCSR0A & (1 << UDRE0))) {} UDR0 = c; return 0; }
+static FILE out_stream;
+static volatile uint16_t sink;
+
+static inline void start() { TCCR1A = 0; TCCR1B = 0; TCNT1 = 0; TIFR1 = 1 << TOV1; TCCR1B = 1; }  // clk/1
+static inline uint16_t stop() { uint16_t t = TCNT1; TCCR1B = 0; return t; }
+
+tc::MedianFilter<201> med;
+tc::MotorCalibration cal;
+tc::CurveBuilder<351> builder;
+struct Ram { static uint8_t b[1024]; static uint8_t readByte(uint16_t a) { return b[a]; } static void updateByte(uint16_t a, uint8_t v) { b[a] = v; } };
+uint8_t Ram::b[1024];
+
+int main() {
+  UCSR0B = 1 << TXEN0; UBRR0 = 8;
+  fdev_setup_stream(&out_stream, uart_putchar, nullptr, _FDEV_SETUP_WRITE);
+  stdout = &out_stream;
+  // median 201: fill, then random pushes; then worst case (oldest at one end, new at the other)
+  uint16_t x = 1;
+  for (uint16_t i = 0; i < 201; ++i) { x = x * 25173u + 13849u; med.push(x >> 6); }
+  uint32_t total = 0; uint16_t worst = 0;
+  for (uint16_t i = 0; i < 1000; ++i) {
+    x = x * 25173u + 13849u; uint16_t s = x >> 6;
+    start(); med.push(s); uint16_t t = stop();
+    total += t; if (t > worst) worst = t;
+  }
+  printf("median201 push random: mean %lu max %u cycles\n", total / 1000, worst);
+  med.reset();
+  for (uint16_t i = 0; i < 201; ++i) med.push(i);  // ascending: oldest is the smallest
+  worst = 0;
+  for (uint16_t i = 0; i < 201; ++i) { start(); med.push(1000 + i); uint16_t t = stop(); if (t > worst) worst = t; }
+  start(); sink = med.median(); uint16_t tm = stop();
+  printf("median201 push worst (oldest min, new max): %u cycles; median(): %u\n", worst, tm);
+
+  // curve build: 351 samples 1000..1700 step 2, quadratic force
+  start(); // prescaler 64 for the long one
+  TCCR1B = 3;
+  for (uint16_t p = 1000; p <= 1700; p += 2) {
+    int32_t d = p > 1080 ? (int32_t)(p - 1080) : 0;
+    builder.add(p, (int16_t)(d * d * 5000 / 360000));
+  }
+  tc::BuildReport rep = builder.build(cal.first);
+  uint16_t tb = stop();
+  cal.first.start_mv = 12000;
+  printf("curve build 351 samples: status %u, %lu cycles (+-64)\n", (unsigned)rep.status, (uint32_t)tb * 64);
+  // second curve: copy shifted
+  cal.second = cal.first; cal.second.start_mv = 11000; cal.second.pwm_at_1g_us += 50; cal.second.finalize();
+  worst = 0; total = 0;
+  for (uint16_t f = 1; f <= 500; ++f) {
+    start(); tc::ForcePwmResult r = tc::forceToPwm(cal, f, 11437); uint16_t t = stop();
+    sink = r.pwm_us; total += t; if (t > worst) worst = t;
+  }
+  printf("forceToPwm two curves: mean %lu max %u cycles\n", total / 500, worst);
+  TCCR1B = 3; TCNT1 = 0; tc::writeRecord<Ram>(0, cal); uint16_t tw = stop();
+  TCCR1B = 3; TCNT1 = 0; tc::MotorCalibration back; tc::DecodeStatus st = tc::readRecord<Ram>(0, back); uint16_t tr = stop();
+  printf("record encode %lu, decode %lu cycles (+-64), status %u\n", (uint32_t)tw * 64, (uint32_t)tr * 64, (unsigned)st);
+  while (!(UCSR0A & (1 << TXC0))) {}
+  cli(); sleep_enable(); sleep_cpu();
+}
