@@ -19,7 +19,8 @@ struct BatteryConfig {
   uint16_t max_sane_mv = 17500;    // above: sensor fault or wrong divider
 };
 
-// Full scale in millivolts of a divider R1 (top) / R2 (bottom) at a 5 V ADC reference.
+// Full scale in millivolts of a divider R1 (top) / R2 (bottom) at a 5 V ADC reference,
+// rounded to nearest: 100k/47k -> 15638. r2 == 0 -> 0 (not a divider); saturates at 65535.
 uint16_t dividerFullScaleMillivolts(uint32_t r1_ohm, uint32_t r2_ohm, uint16_t vref_mv = 5000);
 
 // Sag offsets: offset_mv[i] is how much lower the monitor read in PWM bin i than in bin 0.

@@ -39,8 +39,10 @@ class LoadCell {
   // changes nothing) if known_weight_g is not in 1..overload_g.
   bool calibrateWeight(uint16_t counts, int16_t known_weight_g);
   // Span: `counts_loaded` was read with `known_weight_g` more on the plate than `counts_empty`.
-  // Scales the slope. Returns false (changes nothing) if the change is under 10 counts or the
-  // resulting slope is outside 0.25..3 g/count.
+  // Scales the slope, pivoting the line at counts_empty (the empty plate keeps its reading),
+  // and drops the tare (isTared() false: tare again). Returns false (changes nothing) if
+  // known_weight_g is not in 1..overload_g, the reading fell by under 10 counts (or rose),
+  // or the resulting slope is outside 0.25..3 g/count.
   bool calibrateSpan(uint16_t counts_empty, uint16_t counts_loaded, int16_t known_weight_g);
   // Zerolize: afterwards forceMilligrams(counts) == 0.
   void tare(uint16_t counts);
@@ -48,7 +50,8 @@ class LoadCell {
   // Phase 2: upward force since tare, thrust positive.
   int32_t forceMilligrams(uint16_t counts) const;
   int16_t forceGrams(uint16_t counts) const;  // rounded to nearest
-  // Overload / rail check for one (median) reading.
+  // Overload / rail check for one (median) reading: kImplausible within rail_margin_counts of
+  // 0 or adc_max; kOverload when |weightGrams| or, once tared, |forceGrams| exceeds overload_g.
   LoadCellStatus check(uint16_t counts) const;
 
   const LoadCellConfig& config() const { return config_; }
