@@ -369,6 +369,7 @@ void ReadRunApp::handleLine(char* line) {
     if (mode_ == Mode::kLiftoff) return;  // its progress lines follow; prompt at the end
   } else if (fw::equalsP(verb, TC_PSTR("stream"))) {
     commandStream(tokens, count);
+    if (stream_) return;  // no prompt: the next line is a CSV row, and must start clean
   } else if (fw::equalsP(verb, TC_PSTR("rate"))) {
     commandRate(tokens, count);
   } else {
