@@ -133,7 +133,7 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
     return;
   }
   acc = acc - (acc >> shift) + sample_mv;
-  mv = static_cast<uint16_t>(shift ? (acc + (1ul << (shift - 1))) >> shift : acc);
+  mv = static_cast<uint16_t>(acc >> shift);  // floor: exactly the input in steady state
   // Newton step on r = 2^28 / mv: e = 2^28 - mv * r, r += r * e / 2^28.
   // mv * r <= 17500 * 44739 < 2^30.
   const int32_t e = static_cast<int32_t>(kRecipOne - static_cast<uint32_t>(mv) * recip_q28);
@@ -249,7 +249,8 @@ bool ModelV2FitterBase::add(uint16_t pwm_us, int16_t force_dg, uint16_t vbat_mv)
 namespace {
 
 // PWM (1/16 us) and reading where the fitted (monotone) force first reaches force_dg,
-// linear between the two samples around it. False above the sweep's largest force.
+// linear between the two samples around it. False above the sweep's largest force and below
+// the first sample's force (a sweep that starts with the motor already pushing).
 struct SweepAt {
   int32_t pwm_q4;
   int32_t vbat_mv;
@@ -258,7 +259,7 @@ struct SweepAt {
 bool sweepAt(const SweepPointV2* s, uint16_t n, int32_t force_dg, SweepAt& out) {
   uint16_t j = 0;
   while (j < n && s[j].force_dg < force_dg) ++j;
-  if (j == n) return false;
+  if (j == n || (j == 0 && s[0].force_dg > force_dg)) return false;
   if (j == 0 || s[j].force_dg == s[j - 1].force_dg) {
     out.pwm_q4 = static_cast<int32_t>(s[j].pwm_us) * 16;
     out.vbat_mv = s[j].vbat_mv;
@@ -421,10 +422,11 @@ FitV2Report ModelV2FitterBase::fit(ModelV2& out) {
   const int32_t start_q4 = (n_est & 1) ? est[n_est / 2]
                                        : (static_cast<int32_t>(est[n_est / 2 - 1]) + est[n_est / 2] + 1) / 2;
 
-  uint16_t step = static_cast<uint16_t>((fmax + kV2MaxKnots - 1) / kV2MaxKnots);
+  // Floor of fmax / 32: all 32 knots used, the last one at or below the largest force.
+  uint16_t step = static_cast<uint16_t>(fmax / kV2MaxKnots);
   if (step < kV2MinStepDg) step = kV2MinStepDg;
-  uint8_t knots = static_cast<uint8_t>(fmax / step);
-  if (knots > kV2MaxKnots) knots = kV2MaxKnots;
+  const int32_t n_knots = fmax / step;
+  const uint8_t knots = static_cast<uint8_t>(n_knots > kV2MaxKnots ? kV2MaxKnots : n_knots);
 
   ModelV2 m;
   m.start_q4_us = static_cast<uint16_t>(start_q4);
@@ -434,7 +436,10 @@ FitV2Report ModelV2FitterBase::fit(ModelV2& out) {
   uint16_t prev = 1;
   for (uint8_t k = 0; k < knots; ++k) {
     SweepAt at;
-    sweepAt(samples_, n, static_cast<int32_t>(k + 1) * step, at);  // <= fmax: always found
+    if (!sweepAt(samples_, n, static_cast<int32_t>(k + 1) * step, at)) {
+      rep.status = FitV2Status::kStartNotFound;  // the sweep did not start below the first knot
+      return rep;
+    }
     uint16_t d = driveOf(at.pwm_q4, at.vbat_mv, start_q4);
     if (d < prev) d = prev;
     m.drive_512usmv[k] = d;
@@ -539,10 +544,10 @@ bool modelV2FromCurve(ModelV2& out, double start_us, const double* drive_usv,
   const double fmax_dg = force_g[count - 1] * 10.0;
   if (!(fmax_dg >= 2.0 * kV2MinStepDg) || !(fmax_dg <= 65535.0)) return false;
   const uint16_t fmax = static_cast<uint16_t>(fmax_dg);
-  uint16_t step = static_cast<uint16_t>((fmax + kV2MaxKnots - 1) / kV2MaxKnots);
+  uint16_t step = static_cast<uint16_t>(fmax / kV2MaxKnots);
   if (step < kV2MinStepDg) step = kV2MinStepDg;
-  uint8_t knots = static_cast<uint8_t>(fmax / step);
-  if (knots > kV2MaxKnots) knots = kV2MaxKnots;
+  const uint16_t n_knots = static_cast<uint16_t>(fmax / step);
+  const uint8_t knots = static_cast<uint8_t>(n_knots > kV2MaxKnots ? kV2MaxKnots : n_knots);
   if (!(start_us > 0.0 && start_us < 4000.0) || !(rest_mv > 0.0 && rest_mv < 65535.0) ||
       !(second_mv >= 0.0 && second_mv < 65535.0))
     return false;

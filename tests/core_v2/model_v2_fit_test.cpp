@@ -1,0 +1,298 @@
+// Model v2 fitting: one sweep (and a refining second sweep) as gather_store records them ->
+// ModelV2, checked against the synthetic motor that produced the sweep.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "synthetic_motor.hpp"
+#include "thrustcal/model_v2.hpp"
+
+using tc_test::GridError;
+using tc_test::Recording;
+using tc_test::SyntheticMotor;
+
+namespace {
+
+using Fitter = tc::ModelV2Fitter<128>;
+
+GridError v2GridError(const SyntheticMotor& motor, const tc::ModelV2& model, double v_lo = 9.9,
+                      double v_hi = 12.6) {
+  return tc_test::gridError(
+      motor,
+      [&](double f_g, uint16_t mv) {
+        tc::BusVoltageFilter bus;
+        bus.reset(mv);
+        return static_cast<double>(
+            tc::forceToPwmV2(model, static_cast<uint16_t>(std::lround(f_g * 10)), bus).pwm_us);
+      },
+      v_lo, v_hi);
+}
+
+struct FitCase {
+  const char* name;
+  double exponent;
+  double start_us;
+  double source_r_ohm;
+  bool quantize;
+  double noise_g;
+};
+
+const FitCase kFitCases[] = {
+    {"a1.8 start1097 stiff exact", 1.8, 1097, 0.00, false, 0.0},
+    {"a1.8 start1097 sag quantized", 1.8, 1097, 0.05, true, 0.0},
+    {"a1.6 start1097 sag quantized", 1.6, 1097, 0.05, true, 0.0},
+    {"a2.0 start1097 sag quantized", 2.0, 1097, 0.05, true, 0.0},
+    {"a1.8 start1080 sag quantized noisy", 1.8, 1080, 0.05, true, 0.6},
+    {"a1.7 start1120 strong sag quantized noisy", 1.7, 1120, 0.10, true, 0.6},
+};
+
+}  // namespace
+
+TEST(ModelV2Fit, OneSweepAt12V4PredictsForceWithin1PercentRmsAnd3PercentMaxFrom9V9To12V6) {
+  for (const FitCase& c : kFitCases) {
+    SCOPED_TRACE(c.name);
+    // given: a motor swept once at 12.4 V, recorded like gather_store records it
+    SyntheticMotor motor;
+    motor.exponent = c.exponent;
+    motor.start_us = c.start_us;
+    motor.source_r_ohm = c.source_r_ohm;
+    Recording rec;
+    rec.quantize = c.quantize;
+    rec.force_noise_g = c.noise_g;
+    Fitter fitter;
+    tc_test::recordSweep(motor, 12.4, fitter, rec);
+    // when
+    tc::ModelV2 model;
+    const tc::FitV2Report rep = fitter.fit(model);
+    // then
+    ASSERT_EQ(rep.status, tc::FitV2Status::kOk) << tc::fitV2StatusText(rep.status);
+    EXPECT_NEAR(model.start_q4_us / 16.0, c.start_us, 3.0);
+    EXPECT_GE(rep.estimates, 10);
+    const GridError g = v2GridError(motor, model);
+    EXPECT_LE(g.rms_pct, 1.0);
+    EXPECT_LE(g.max_pct, 3.0);
+    RecordProperty(std::string("rms_pct_") + c.name, std::to_string(g.rms_pct));
+  }
+}
+
+TEST(ModelV2Fit, SecondSweepAt10V5MeasuresTheStartThresholdWithinOneMicrosecond) {
+  for (const FitCase& c : kFitCases) {
+    SCOPED_TRACE(c.name);
+    // given: a first sweep at 12.4 V fitted, then a second sweep at 10.5 V
+    SyntheticMotor motor;
+    motor.exponent = c.exponent;
+    motor.start_us = c.start_us;
+    motor.source_r_ohm = c.source_r_ohm;
+    Recording rec;
+    rec.quantize = c.quantize;
+    rec.force_noise_g = c.noise_g;
+    Fitter fitter;
+    tc_test::recordSweep(motor, 12.4, fitter, rec);
+    tc::ModelV2 model;
+    ASSERT_EQ(fitter.fit(model).status, tc::FitV2Status::kOk);
+    const double single_start_us = model.start_q4_us / 16.0;
+    rec.seed = 777;
+    tc_test::recordSweep(motor, 10.5, fitter, rec);
+    // when
+    const tc::FitV2Report rep = fitter.refine(model);
+    // then
+    ASSERT_EQ(rep.status, tc::FitV2Status::kOk) << tc::fitV2StatusText(rep.status);
+    std::printf("%-45s start single %.2f refined %.2f truth %.0f (%d knots)\n", c.name,
+                single_start_us, model.start_q4_us / 16.0, c.start_us, rep.estimates);
+    EXPECT_NEAR(model.start_q4_us / 16.0, c.start_us, 1.0);
+    EXPECT_TRUE(model.flags & tc::kV2Refined);
+    EXPECT_NEAR(model.second_mv, 10500, 60);
+    const GridError g = v2GridError(motor, model);
+    EXPECT_LE(g.rms_pct, 1.0);
+    EXPECT_LE(g.max_pct, 3.0);
+  }
+}
+
+TEST(ModelV2Fit, ResamplesTheCurveOntoAtMost32KnotsEvenlySpacedInForce) {
+  struct Row {
+    double full_at_9v9_g;
+    uint16_t expect_step_min_dg, expect_step_max_dg;
+    uint8_t expect_knots_min;
+  };
+  const Row rows[] = {
+      {600.0, 250, 330, 31},  // ~900 g at 12.4 V: 32 knots of ~28 g
+      {90.0, 66, 66, 15},     // a small motor: the minimum step, fewer knots
+  };
+  for (const Row& r : rows) {
+    SCOPED_TRACE(r.full_at_9v9_g);
+    SyntheticMotor motor;
+    motor.full_at_9v9_g = r.full_at_9v9_g;
+    Fitter fitter;
+    tc_test::recordSweep(motor, 12.4, fitter, Recording{false, 0.0, 1});
+    tc::ModelV2 model;
+    ASSERT_EQ(fitter.fit(model).status, tc::FitV2Status::kOk);
+    EXPECT_GE(model.step_dg, r.expect_step_min_dg);
+    EXPECT_LE(model.step_dg, r.expect_step_max_dg);
+    EXPECT_GE(model.knots, r.expect_knots_min);
+    EXPECT_LE(model.knots, tc::kV2MaxKnots);
+    for (uint8_t k = 1; k < model.knots; ++k)
+      EXPECT_GE(model.drive_512usmv[k], model.drive_512usmv[k - 1]) << "knot " << int(k);
+  }
+}
+
+TEST(ModelV2Fit, RecordsTheBenchSagAtEachKnotAndTheRestingVoltage) {
+  // given: a soft bench source, 0.1 ohm
+  SyntheticMotor motor;
+  motor.source_r_ohm = 0.1;
+  Fitter fitter;
+  tc_test::recordSweep(motor, 12.4, fitter, Recording{false, 0.0, 1});
+  // when
+  tc::ModelV2 model;
+  ASSERT_EQ(fitter.fit(model).status, tc::FitV2Status::kOk);
+  // then: rest voltage and sag = R * I(F) at a low, a middle and the top knot
+  EXPECT_NEAR(model.rest_mv, 12400, 5);
+  for (uint8_t k : {uint8_t(3), uint8_t(15), uint8_t(model.knots - 1)}) {
+    const double f_g = (k + 1) * model.step_dg / 10.0;
+    const double sag_mv = 1000.0 * motor.source_r_ohm * motor.currentA(f_g);
+    EXPECT_NEAR(model.sag_10mv[k] * 10.0, sag_mv, 10.0) << "knot " << int(k);
+  }
+}
+
+TEST(ModelV2Fit, NonMonotoneNoisySweepGivesANonDecreasingCurve) {
+  // given: heavy force noise (+-3 g) that makes the raw sweep go backwards in places
+  SyntheticMotor motor;
+  Fitter fitter;
+  tc_test::recordSweep(motor, 12.4, fitter, Recording{true, 3.0, 99}, 5);
+  // when
+  tc::ModelV2 model;
+  const tc::FitV2Report rep = fitter.fit(model);
+  // then
+  ASSERT_EQ(rep.status, tc::FitV2Status::kOk);
+  EXPECT_GT(rep.violations, 0);
+  for (uint8_t k = 1; k < model.knots; ++k)
+    EXPECT_GE(model.drive_512usmv[k], model.drive_512usmv[k - 1]);
+  for (uint16_t i = 1; i < fitter.size(); ++i)
+    EXPECT_GE(fitter.sample(i).force_dg, fitter.sample(i - 1).force_dg);
+}
+
+TEST(ModelV2Fit, AcceptsSamplesInAnyOrder) {
+  SyntheticMotor motor;
+  Fitter ascending, shuffled;
+  tc_test::recordSweep(motor, 12.4, ascending, Recording{false, 0.0, 1});
+  // a descending sweep of the same points
+  for (int i = ascending.size() - 1; i >= 0; --i)
+    shuffled.add(ascending.sample(i).pwm_us, ascending.sample(i).force_dg, ascending.sample(i).vbat_mv);
+  tc::ModelV2 a, b;
+  ASSERT_EQ(ascending.fit(a).status, tc::FitV2Status::kOk);
+  ASSERT_EQ(shuffled.fit(b).status, tc::FitV2Status::kOk);
+  EXPECT_EQ(a.start_q4_us, b.start_q4_us);
+  for (uint8_t k = 0; k < a.knots; ++k) EXPECT_EQ(a.drive_512usmv[k], b.drive_512usmv[k]);
+}
+
+TEST(ModelV2Fit, RefusesSweepsItCannotFitAndClearsTheModel) {
+  struct Row {
+    const char* name;
+    std::vector<tc::SweepPointV2> samples;
+    tc::FitV2Status expect;
+  };
+  std::vector<tc::SweepPointV2> flat, low_battery, short_sweep;
+  for (uint16_t p = 1000; p <= 2000; p += 20) {
+    flat.push_back({p, 3, 12000});                                    // motor never spins
+    low_battery.push_back({p, static_cast<int16_t>(p - 1000), 3000});  // monitor unplugged
+  }
+  for (uint16_t p = 1000; p < 1070; p += 10) short_sweep.push_back({p, 100, 12000});
+  const Row rows[] = {
+      {"7 samples", short_sweep, tc::FitV2Status::kTooFewSamples},
+      {"no force", flat, tc::FitV2Status::kNoForce},
+      {"monitor reads 3 V", low_battery, tc::FitV2Status::kBadVoltage},
+  };
+  for (const Row& r : rows) {
+    SCOPED_TRACE(r.name);
+    Fitter fitter;
+    for (const auto& s : r.samples) fitter.add(s.pwm_us, s.force_dg, s.vbat_mv);
+    tc::ModelV2 model;
+    model.start_q4_us = 1;  // garbage that must be cleared
+    model.knots = 3;
+    EXPECT_EQ(fitter.fit(model).status, r.expect);
+    EXPECT_FALSE(model.isPresent());
+    EXPECT_STRNE(tc::fitV2StatusText(r.expect), "unknown");
+  }
+}
+
+TEST(ModelV2Fit, SweepWhoseShapePointsToAStartBelow800UsIsRefused) {
+  // given: force ~ (pwm - 700 us)^2, already 100 g at 1000 us: no ESC starts at 700 us
+  Fitter fitter;
+  for (uint16_t p = 1000; p <= 2000; p += 10) {
+    const double x = (p - 700.0) / 100.0;
+    fitter.add(p, static_cast<int16_t>(100.0 * x * x / 9.0 * 10.0), 12000);
+  }
+  // when
+  tc::ModelV2 model;
+  const tc::FitV2Report rep = fitter.fit(model);
+  // then
+  EXPECT_EQ(rep.status, tc::FitV2Status::kStartNotFound);
+  EXPECT_FALSE(model.isPresent());
+}
+
+TEST(ModelV2Fit, RefineRefusesAndKeepsTheModelWhenItCannotRefine) {
+  SyntheticMotor motor;
+  Fitter fitter;
+  tc_test::recordSweep(motor, 12.4, fitter, Recording{});
+  tc::ModelV2 model;
+  ASSERT_EQ(fitter.fit(model).status, tc::FitV2Status::kOk);
+  const tc::ModelV2 before = model;
+  // second sweep only 0.3 V lower
+  tc_test::recordSweep(motor, 12.1, fitter, Recording{});
+  EXPECT_EQ(fitter.refine(model).status, tc::FitV2Status::kVoltagesTooClose);
+  EXPECT_EQ(model.start_q4_us, before.start_q4_us);
+  EXPECT_EQ(model.flags, before.flags);
+  for (uint8_t k = 0; k < model.knots; ++k) EXPECT_EQ(model.drive_512usmv[k], before.drive_512usmv[k]);
+  // no model to refine
+  tc::ModelV2 empty;
+  tc_test::recordSweep(motor, 10.5, fitter, Recording{});
+  EXPECT_EQ(fitter.refine(empty).status, tc::FitV2Status::kNoModel);
+}
+
+TEST(ModelV2Fit, FitterRefusesSamplesBeyondItsCapacity) {
+  tc::ModelV2Fitter<8> fitter;
+  for (uint16_t i = 0; i < 8; ++i) EXPECT_TRUE(fitter.add(1000 + i, 0, 12000));
+  EXPECT_FALSE(fitter.add(1100, 0, 12000));
+  EXPECT_EQ(fitter.size(), 8);
+  static_assert(sizeof(tc::ModelV2Fitter<128>) <= 1024 + 3 * sizeof(void*) + 8,
+                "fit work space: 8 bytes per sample (1 KB for 128) plus a small header");
+}
+
+TEST(ModelV2FromCurve, LabCurveInDoublesFlysWithin0p3PercentOfTheTruth) {
+  // given: the exact curve of a motor, densely sampled, as the model lab would export it
+  SyntheticMotor motor;
+  std::vector<double> drive, force, sag;
+  for (int i = 1; i <= 400; ++i) {
+    const double d_usv = i * 25.0;  // (pwm - start) * V in us*V
+    drive.push_back(d_usv);
+    force.push_back(motor.k() * std::pow(d_usv / motor.span_us, motor.exponent));
+    sag.push_back(20.0 + i);
+  }
+  // when
+  tc::ModelV2 model;
+  ASSERT_TRUE(tc::modelV2FromCurve(model, motor.start_us, drive.data(), force.data(),
+                                   static_cast<uint16_t>(drive.size()), 12400.0, sag.data(), 10500.0));
+  // then
+  EXPECT_EQ(model.start_q4_us, 1097 * 16);
+  EXPECT_EQ(model.knots, 32);
+  EXPECT_EQ(model.rest_mv, 12400);
+  EXPECT_EQ(model.second_mv, 10500);
+  EXPECT_TRUE(model.flags & tc::kV2Refined);
+  const GridError g = v2GridError(motor, model);
+  EXPECT_LE(g.rms_pct, 0.3);
+  EXPECT_LE(g.max_pct, 1.0);
+}
+
+TEST(ModelV2FromCurve, RefusesCurvesItCannotStore) {
+  const double d_ok[] = {100.0, 5000.0}, f_ok[] = {1.0, 500.0};
+  const double d_down[] = {5000.0, 100.0}, f_small[] = {1.0, 10.0};
+  tc::ModelV2 model;
+  EXPECT_TRUE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_ok, 2, 12000.0));
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_ok, 1, 12000.0)) << "one point";
+  EXPECT_FALSE(model.isPresent());
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_down, f_ok, 2, 12000.0)) << "descending";
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_small, 2, 12000.0)) << "10 g max";
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 300.0, d_ok, f_ok, 2, 12000.0)) << "start 300 us";
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_ok, 2, 3000.0)) << "rest 3 V";
+}
