@@ -1,0 +1,641 @@
+// gather_store console against the fake HAL and a simple plant (plant.hpp): the thesis
+// workflow (cal, tare, sweep, store 1, store 2, show), the CSV stream, the aborts and the
+// rejection of bad input.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "gather_store_app.hpp"
+#include "hal/fake.hpp"
+#include "hal/hal.hpp"
+#include "plant.hpp"
+#include "thrustcal/eeprom_codec.hpp"
+
+namespace {
+
+// The EEPROM seen through the codec's Storage interface, for decoding what was stored.
+struct FakeStorage {
+  static uint8_t readByte(uint16_t addr) { return hal::fake::eeprom()[addr]; }
+  static void updateByte(uint16_t addr, uint8_t value) { hal::fake::eeprom()[addr] = value; }
+};
+
+std::vector<std::string> splitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::string line;
+  for (char c : text) {
+    if (c == '\n') {
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      lines.push_back(line);
+      line.clear();
+    } else {
+      line.push_back(c);
+    }
+  }
+  if (!line.empty()) lines.push_back(line);
+  return lines;
+}
+
+bool startsWith(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
+
+int countLinesStartingWith(const std::string& text, const char* prefix) {
+  int n = 0;
+  for (const auto& line : splitLines(text)) n += startsWith(line, prefix) ? 1 : 0;
+  return n;
+}
+
+class GatherStore : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    hal::fake::reset();
+    hal::Esc::init();
+    plant_.attach();
+    app_ = std::make_unique<gs::GatherStoreApp>();
+    app_->begin();
+    banner_ = hal::fake::takeOutput();
+  }
+  void TearDown() override { hal::fake::reset(); }
+
+  // Types `line` + CR and lets the app handle it; returns everything printed meanwhile
+  // (echo, response, next prompt).
+  std::string run(const std::string& line) {
+    hal::fake::takeOutput();
+    hal::fake::feedInput(line + "\r");
+    hal::fake::setTimeLimitMs(hal::fake::nowMs() + 600000);  // no command may hang
+    while (!app_->poll()) hal::Clock::sleepUntilInterrupt();
+    hal::fake::setTimeLimitMs(0);
+    return hal::fake::takeOutput();
+  }
+
+  // The response without the echoed command line and the trailing prompt.
+  static std::vector<std::string> responseLines(const std::string& out) {
+    std::vector<std::string> lines = splitLines(out);
+    if (!lines.empty()) lines.erase(lines.begin());                       // echo
+    if (!lines.empty() && lines.back() == "gs> ") lines.pop_back();       // prompt
+    return lines;
+  }
+
+  void calibrateAndTare() {
+    ASSERT_NE(run("cal 95").find("calibrated"), std::string::npos);
+  }
+
+  std::string sweep() { return run("sweep"); }
+
+  std::vector<uint8_t> eepromSnapshot() const {
+    return std::vector<uint8_t>(hal::fake::eeprom(), hal::fake::eeprom() + hal::Eeprom::kSize);
+  }
+
+  gs_test::Plant plant_;
+  std::unique_ptr<gs::GatherStoreApp> app_;
+  std::string banner_;
+};
+
+// ------------------------------------------------------------------------------------------
+// Start-up
+
+TEST_F(GatherStore, StartArmsAllFourEscsAtOneThousandAndShowsThePrompt) {
+  for (uint8_t ch = 0; ch < hal::kEscChannels; ++ch) EXPECT_EQ(hal::fake::pulseUs(ch), 1000u);
+  EXPECT_NE(banner_.find("gather_store"), std::string::npos);
+  EXPECT_NE(banner_.find("help"), std::string::npos);
+  EXPECT_EQ(banner_.substr(banner_.size() - 4), "gs> ");
+}
+
+TEST_F(GatherStore, HelpListsEveryCommand) {
+  const std::string out = run("help");
+  for (const char* cmd : {"help", "motor N", "plate G", "weigh", "tare", "cal W", "span W",
+                          "range MIN MAX", "step US", "settle MS", "sweep", "store 1", "store 2",
+                          "show", "erase", "status"}) {
+    EXPECT_NE(out.find(std::string("  ") + cmd), std::string::npos) << cmd;
+  }
+}
+
+// ------------------------------------------------------------------------------------------
+// The thesis workflow
+
+TEST_F(GatherStore, WeighReportsTheMotorWeightAfterCalibration) {
+  // given: thesis phase 1 with the known motor + propeller weight
+  run("cal 95");
+  // when
+  const std::string out = run("weigh");
+  // then: the same counts read as the known weight, force 0 after the automatic zerolize
+  EXPECT_NE(out.find("weight 95 g"), std::string::npos) << out;
+  EXPECT_NE(out.find("force 0.0 g"), std::string::npos) << out;
+}
+
+TEST_F(GatherStore, SweepWithoutTareIsRefusedAndTheMotorStaysStopped) {
+  const std::string out = run("sweep");
+  const auto lines = responseLines(out);
+  ASSERT_EQ(lines.size(), 1u) << out;
+  EXPECT_TRUE(startsWith(lines[0], "error: a sweep needs a tare first")) << out;
+  EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+  EXPECT_FALSE(app_->lastSweep().valid);
+}
+
+TEST_F(GatherStore, SweepRightAfterStartWaitsForTheEscToArm) {
+  // given: tared at once, well within the 2 s arming time
+  run("tare");
+  std::vector<std::pair<uint32_t, uint16_t>> first_pulse;  // first tick above 1000 us
+  hal::fake::setTickHook([&](uint32_t now) {
+    plant_.tick();
+    if (first_pulse.empty() && hal::Esc::pulseUs(0) > 1000) first_pulse.push_back({now, 0});
+  });
+  // when
+  const std::string out = sweep();
+  // then
+  EXPECT_NE(out.find("# arming the ESC"), std::string::npos);
+  ASSERT_EQ(first_pulse.size(), 1u);
+  EXPECT_GE(first_pulse[0].first, static_cast<uint32_t>(gs::kArmMs));
+}
+
+TEST_F(GatherStore, SweepStreamsAValidCsvWithCommentsOnly) {
+  // given
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  // when
+  const std::string out = sweep();
+  // then: after the echoed command, every line is the header, a CSV row or a "# " comment
+  std::vector<std::string> lines = responseLines(out);
+  const std::regex row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),(\d+\.\d{3}),0,1$)");
+  int headers = 0;
+  std::vector<int> pwms;
+  std::vector<double> times;
+  for (const auto& line : lines) {
+    std::smatch m;
+    if (line == "pwm_us,force_g,vbat_v,t_s,motor,dir") {
+      ++headers;
+      EXPECT_TRUE(pwms.empty()) << "header after data";
+    } else if (std::regex_match(line, m, row)) {
+      pwms.push_back(std::stoi(m[1]));
+      times.push_back(std::stod(m[4]));
+    } else {
+      EXPECT_TRUE(startsWith(line, "# ")) << "not CSV, not a comment: '" << line << "'";
+    }
+  }
+  EXPECT_EQ(headers, 1);
+  ASSERT_EQ(pwms.size(), 81u);  // 1000..1800 step 10
+  for (size_t i = 0; i < pwms.size(); ++i) EXPECT_EQ(pwms[i], 1000 + 10 * static_cast<int>(i));
+  for (size_t i = 1; i < times.size(); ++i) EXPECT_GE(times[i] - times[i - 1], 0.200 - 1e-9);
+  EXPECT_GE(countLinesStartingWith(out, "# "), 8);  // start, progress, summary
+  EXPECT_NE(out.find("# done: 81 samples"), std::string::npos);
+  EXPECT_NE(out.find("violations 0"), std::string::npos);
+  EXPECT_EQ(hal::fake::pulseUs(0), 1000u);  // motor stopped at the end
+}
+
+TEST_F(GatherStore, SweepRowsFollowThePlant) {
+  // given
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  // when
+  const std::string out = sweep();
+  // then: force within 1.5 g of the plant's steady state (0.75 g per count, the median
+  // rejects the spikes), battery within 25 mV of what the plant's monitor reads (one count
+  // is 15.3 mV; the thesis map() truncates, the pin voltage rounds)
+  const std::regex row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),.*$)");
+  int rows = 0;
+  for (const auto& line : splitLines(out)) {
+    std::smatch m;
+    if (!std::regex_match(line, m, row)) continue;
+    ++rows;
+    const double pwm = std::stod(m[1]);
+    const double thrust = plant_.steadyThrust(pwm);
+    EXPECT_NEAR(std::stod(m[2]), thrust, 1.5) << line;
+    const double vbat = plant_.vbat_v - plant_.sag_v_at_full * thrust / plant_.full_g;
+    EXPECT_NEAR(std::stod(m[3]), vbat, 0.025) << line;
+  }
+  EXPECT_EQ(rows, 81);
+}
+
+TEST_F(GatherStore, WholeWorkflowStoresTwoCurvesThatDecodeAndMatchThePlant) {
+  // given: motor 2, first sweep on a full pack
+  hal::fake::advanceMs(gs::kArmMs);
+  plant_.slot = 2;
+  run("motor 2");
+  calibrateAndTare();
+  ASSERT_NE(sweep().find("# next: store 1"), std::string::npos);
+  // when: store 1, then a second sweep at 11.1 V, store 2
+  const std::string stored1 = run("store 1");
+  tc::MotorCalibration after_first;
+  ASSERT_EQ(tc::readRecord<FakeStorage>(2, after_first), tc::DecodeStatus::kOk);
+  EXPECT_FALSE(after_first.hasSecondCurve());
+  const gs_test::Plant full_pack = plant_;
+
+  plant_.vbat_v = 11.1;
+  hal::fake::advanceMs(2000);  // the propeller runs down while the user swaps the pack
+  ASSERT_NE(run("tare").find("tared"), std::string::npos);
+  ASSERT_NE(sweep().find("# done"), std::string::npos);
+  const std::string stored2 = run("store 2");
+  const std::string shown = run("show");
+
+  // then
+  EXPECT_TRUE(startsWith(responseLines(stored1)[0], "stored curve 1 of motor 2")) << stored1;
+  EXPECT_TRUE(startsWith(responseLines(stored2)[0], "stored curve 2 of motor 2")) << stored2;
+  tc::MotorCalibration cal;
+  ASSERT_EQ(tc::readRecord<FakeStorage>(2, cal), tc::DecodeStatus::kOk);
+  ASSERT_TRUE(cal.hasSecondCurve());
+  // Start voltages: the first 40 us bin, motor not yet producing thrust: the open-circuit
+  // voltage within two ADC counts (2 * 15.3 mV).
+  EXPECT_NEAR(cal.first.start_mv, 12600, 31);
+  EXPECT_NEAR(cal.second.start_mv, 11100, 31);
+  // Curves: within 3 us of the plant's inverse from 10 g to 500 g (and to the second
+  // curve's own maximum); measured worst 1.0 us (curve 1) and 1.5 us (curve 2), reported as
+  // test properties. Error budget: half an ADC count (0.375 g) is up to 1.7 us where the
+  // curve is steepest (10 g), linear interpolation between 10 us steps of a parabola < 1 us,
+  // and the 200 ms settle leaves e^-6.7 of the 30 ms lag.
+  EXPECT_EQ(cal.first.maxGrams(), 500u);
+  double worst_us[2] = {0, 0};
+  for (uint16_t g = 10; g <= 500; g += 5) {
+    EXPECT_NEAR(cal.first.pwmForGrams(g), full_pack.pwmFor(g), 3.0) << g << " g, curve 1";
+    worst_us[0] = std::max(worst_us[0], std::abs(cal.first.pwmForGrams(g) - full_pack.pwmFor(g)));
+  }
+  EXPECT_GE(cal.second.maxGrams(), 460u);  // 600 g * (11.1 / 12.6)^2 = 466 g at 1800 us
+  for (uint16_t g = 10; g <= cal.second.maxGrams(); g += 5) {
+    EXPECT_NEAR(cal.second.pwmForGrams(g), plant_.pwmFor(g), 3.0) << g << " g, curve 2";
+    worst_us[1] = std::max(worst_us[1], std::abs(cal.second.pwmForGrams(g) - plant_.pwmFor(g)));
+  }
+  RecordProperty("curve1_worst_error_us", std::to_string(worst_us[0]));
+  RecordProperty("curve2_worst_error_us", std::to_string(worst_us[1]));
+  // Sag offsets: bin 0 is 0 and they grow with the PWM, as the plant's sag does.
+  EXPECT_EQ(cal.sag.base_pwm_us, 1000u);
+  EXPECT_EQ(cal.sag.offset_mv[0], 0);
+  for (uint8_t i = 1; i < tc::kSagBins; ++i) EXPECT_GE(cal.sag.offset_mv[i], cal.sag.offset_mv[i - 1]);
+  // Bin 12 holds 1480..1800 us: the mean plant sag there is 0.5 V * mean(x^2) = 311 mV.
+  EXPECT_NEAR(cal.sag.offset_mv[12], 311, 30);
+  // show reports both curves
+  EXPECT_NE(shown.find("calibrated, two curves"), std::string::npos) << shown;
+  EXPECT_NE(shown.find("curve 1: start 12.5"), std::string::npos) << shown;
+  EXPECT_NE(shown.find("curve 2: start 11.0"), std::string::npos) << shown;
+  EXPECT_NE(shown.find("sag offsets"), std::string::npos) << shown;
+  // other slots untouched
+  for (uint8_t slot : {0, 1, 3}) {
+    tc::MotorCalibration other;
+    EXPECT_EQ(tc::readRecord<FakeStorage>(slot, other), tc::DecodeStatus::kErased) << int(slot);
+  }
+}
+
+TEST_F(GatherStore, StoreOneAgainKeepsTheSecondCurve) {
+  // given: both curves stored
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  sweep();
+  run("store 1");
+  plant_.vbat_v = 11.1;
+  hal::fake::advanceMs(2000);  // the propeller runs down while the user swaps the pack
+  run("tare");
+  sweep();
+  run("store 2");
+  tc::MotorCalibration before;
+  ASSERT_EQ(tc::readRecord<FakeStorage>(0, before), tc::DecodeStatus::kOk);
+  // when: a new first curve on a fresh pack
+  plant_.vbat_v = 12.4;
+  hal::fake::advanceMs(2000);
+  run("tare");
+  sweep();
+  const std::string out = run("store 1");
+  // then
+  EXPECT_NE(out.find("curve 2 kept"), std::string::npos) << out;
+  tc::MotorCalibration after;
+  ASSERT_EQ(tc::readRecord<FakeStorage>(0, after), tc::DecodeStatus::kOk);
+  EXPECT_EQ(after.second.start_mv, before.second.start_mv);
+  EXPECT_EQ(after.second.pwm_at_1g_us, before.second.pwm_at_1g_us);
+  EXPECT_NEAR(after.first.start_mv, 12400, 31);
+}
+
+TEST_F(GatherStore, ShowOfAnErasedSlotSaysNotCalibrated) {
+  const auto lines = responseLines(run("show"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], "motor 0 (EEPROM 0..1023): not calibrated: erased (never calibrated)");
+}
+
+TEST_F(GatherStore, EraseMarksTheSlotNotCalibratedAndSaysSo) {
+  // given
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  sweep();
+  run("store 1");
+  // when
+  const auto lines = responseLines(run("erase"));
+  // then
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_TRUE(startsWith(lines[0], "erased motor 0 (EEPROM 0..1023): not calibrated")) << lines[0];
+  tc::MotorCalibration cal;
+  EXPECT_EQ(tc::readRecord<FakeStorage>(0, cal), tc::DecodeStatus::kErased);
+}
+
+TEST_F(GatherStore, StatusShowsSettingsLiveReadingsAndTheLastSweep) {
+  run("motor 1");
+  run("step 20");
+  const std::string out = run("status");
+  EXPECT_NE(out.find("motor 1 (ESC D7"), std::string::npos) << out;
+  EXPECT_NE(out.find("range 1000..1800 us, step 20 us, settle 200 ms"), std::string::npos) << out;
+  EXPECT_NE(out.find("not tared"), std::string::npos) << out;
+  EXPECT_NE(out.find("battery 12.5"), std::string::npos) << out;
+  EXPECT_NE(out.find("last sweep: none kept"), std::string::npos) << out;
+}
+
+TEST_F(GatherStore, SettingsChangeTheSweep) {
+  // given
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  run("range 1100 1700");
+  run("step 20");
+  run("settle 50");
+  // when
+  const uint32_t t0 = hal::fake::nowMs();
+  const std::string out = sweep();
+  const uint32_t took = hal::fake::nowMs() - t0;
+  // then: 31 rows 1100..1700, about 31 * 50 ms of settling
+  EXPECT_NE(out.find("\r\n1100,"), std::string::npos);
+  EXPECT_NE(out.find("\r\n1700,"), std::string::npos);
+  EXPECT_EQ(out.find("\r\n1720,"), std::string::npos);
+  EXPECT_NE(out.find("# done: 31 samples"), std::string::npos) << out;
+  EXPECT_GE(took, 31u * 50u);
+  EXPECT_LT(took, 31u * 50u + 200u);
+}
+
+TEST_F(GatherStore, SpanCalibratesTheGainFromAKnownWeight) {
+  // given: an amplifier with 1.5 g per count instead of the thesis's 0.75
+  plant_.g_per_count = 1.5;
+  plant_.base_counts = 400.0;
+  run("tare");
+  plant_.extra_weight_g = 300.0;
+  hal::fake::advanceMs(50);
+  // when
+  const std::string out = run("span 300");
+  // then: 300 g lowered the reading by 200 counts
+  EXPECT_NE(out.find("span: 1.500000 g per count"), std::string::npos) << out;
+  EXPECT_EQ(app_->loadCell().config().slope_ug_per_count, 1500000);
+  EXPECT_FALSE(app_->loadCell().isTared());  // "remove the weight, then tare"
+}
+
+TEST_F(GatherStore, SpanWithoutAWeightOnThePlateIsRefusedAndChangesNothing) {
+  run("tare");
+  const auto lines = responseLines(run("span 300"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_TRUE(startsWith(lines[0], "error: the reading moved from")) << lines[0];
+  EXPECT_EQ(app_->loadCell().config().slope_ug_per_count, 750000);
+  EXPECT_TRUE(app_->loadCell().isTared());
+}
+
+// ------------------------------------------------------------------------------------------
+// Aborts
+
+TEST_F(GatherStore, AnyKeyDuringTheSweepStopsTheMotorAtOnce) {
+  // given: a sweep under way, a key arriving at a known time
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  const uint32_t key_at = hal::fake::nowMs() + 5000;  // mid-sweep (about 1240 us)
+  hal::fake::feedInputAt(key_at, "x");
+  std::vector<std::pair<uint32_t, uint16_t>> pulses;
+  hal::fake::setTickHook([&](uint32_t now) {
+    plant_.tick();
+    pulses.push_back({now, hal::Esc::pulseUs(0)});
+  });
+  // when
+  const std::string out = sweep();
+  // then: the motor ran when the key arrived, and was stopped within that same millisecond
+  // (no simulated time passed between the key and the 1000 us pulse)
+  ASSERT_FALSE(pulses.empty());
+  EXPECT_EQ(pulses.back().first, key_at);
+  EXPECT_GT(pulses.back().second, 1000u);
+  EXPECT_EQ(hal::fake::nowMs(), key_at);
+  hal::fake::advanceMs(5);
+  for (size_t i = pulses.size() - 5; i < pulses.size(); ++i) EXPECT_EQ(pulses[i].second, 1000u);
+  EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+  EXPECT_NE(out.find("# aborted: key pressed; motor stopped (1000 us)"), std::string::npos) << out;
+  EXPECT_EQ(out.find("unknown command"), std::string::npos);  // the key is not a command
+  EXPECT_EQ(app_->lastSweepEnd(), gs::SweepEnd::kKey);
+  EXPECT_FALSE(app_->lastSweep().valid);
+  // nothing to store
+  EXPECT_TRUE(startsWith(responseLines(run("store 1"))[0], "error: nothing to store"));
+}
+
+TEST_F(GatherStore, AKeyDuringTheAbortedSweepDoesNotLeakIntoTheNextCommand) {
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  hal::fake::feedInputAt(hal::fake::nowMs() + 3000, "tare");
+  sweep();
+  // when: the next command typed
+  const auto lines = responseLines(run("status"));
+  // then: it is "status", not "tarestatus"
+  ASSERT_FALSE(lines.empty());
+  EXPECT_TRUE(startsWith(lines[0], "motor 0")) << lines[0];
+}
+
+TEST_F(GatherStore, LoadCellOverloadAbortsTheSweep) {
+  // given: a cell spanned to 1.5 g per count and a motor pulling up to 1200 g
+  plant_.g_per_count = 1.5;
+  plant_.full_g = 1200.0;
+  plant_.base_counts = 250.0;
+  hal::fake::advanceMs(gs::kArmMs);
+  run("tare");
+  plant_.extra_weight_g = 150.0;
+  ASSERT_NE(run("span 150").find("span: 1.500000 g per count"), std::string::npos);
+  plant_.extra_weight_g = 0.0;
+  calibrateAndTare();
+  // when
+  const std::string out = sweep();
+  // then: stopped near the PWM where the thrust crosses 950 g (plant: 1721 us)
+  EXPECT_EQ(app_->lastSweepEnd(), gs::SweepEnd::kOverload);
+  EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+  EXPECT_NE(out.find("# aborted: load cell overload, force 9"), std::string::npos) << out;
+  EXPECT_NE(out.find("\r\n1720,"), std::string::npos);
+  EXPECT_EQ(out.find("\r\n1730,"), std::string::npos);
+  EXPECT_FALSE(app_->lastSweep().valid);
+}
+
+TEST_F(GatherStore, ReadingAtTheAdcRailAbortsTheSweep) {
+  // given: an amplifier offset that saturates A0 once the thrust passes about 470 g
+  plant_.base_counts = 400.0;
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  // when
+  const std::string out = sweep();
+  // then
+  EXPECT_EQ(app_->lastSweepEnd(), gs::SweepEnd::kImplausible);
+  EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+  EXPECT_NE(out.find("# aborted: load cell reads 10"), std::string::npos) << out;
+  EXPECT_NE(out.find("(ADC rail)"), std::string::npos) << out;
+  EXPECT_FALSE(app_->lastSweep().valid);
+}
+
+TEST_F(GatherStore, TareAtTheAdcRailIsRefused) {
+  plant_.base_counts = 0.0;
+  plant_.spike_counts = 0;
+  const auto lines = responseLines(run("tare"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_TRUE(startsWith(lines[0], "error: load cell reads 0 counts (ADC rail)")) << lines[0];
+  EXPECT_FALSE(app_->loadCell().isTared());
+}
+
+TEST_F(GatherStore, BatteryReadingOutsideTheSaneRangeAbortsTheSweep) {
+  plant_.vbat_v = 4.0;  // divider unplugged or a flat pack
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  const std::string out = sweep();
+  EXPECT_EQ(app_->lastSweepEnd(), gs::SweepEnd::kBattery);
+  EXPECT_NE(out.find("# aborted: battery reads 4.005 V, outside 6.000 V..17.500 V"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+}
+
+TEST_F(GatherStore, AbortLinesKeepTheCapturedLogACsvWithComments) {
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  hal::fake::feedInputAt(hal::fake::nowMs() + 2000, "q");
+  for (const auto& line : responseLines(sweep())) {
+    const bool csv = std::regex_match(line, std::regex(R"(^[0-9a-z_,.\-]+$)"));
+    EXPECT_TRUE(csv || startsWith(line, "# ")) << line;
+  }
+}
+
+// ------------------------------------------------------------------------------------------
+// Bad input: one "error: " line, nothing changes
+
+struct BadInputRow {
+  const char* input;
+  const char* error_start;
+};
+
+TEST_F(GatherStore, BadInputGetsOneErrorLineAndChangesNothing) {
+  const std::string too_long(fw::kLineMax + 1, 'm');
+  const BadInputRow rows[] = {
+      {"foo", "error: unknown command 'foo'; type help"},
+      {"Sweep", "error: unknown command 'Sweep'"},
+      {"motor", "error: usage: motor N"},
+      {"motor 4", "error: motor slot must be a whole number in 0..3, got '4'"},
+      {"motor -1", "error: motor slot must be a whole number in 0..3, got '-1'"},
+      {"motor one", "error: motor slot must be a whole number in 0..3, got 'one'"},
+      {"motor 1 2", "error: usage: motor N"},
+      {"plate 501", "error: plate weight in g must be a whole number in 0..500"},
+      {"cal 0", "error: known weight in g must be a whole number in 1..950"},
+      {"cal 951", "error: known weight in g must be a whole number in 1..950"},
+      {"span 2000", "error: known weight in g must be a whole number in 1..950"},
+      {"range 900 1800", "error: range MIN in us must be a whole number in 1000..1999"},
+      {"range 1500 1200", "error: range MAX in us must be a whole number in 1501..2000"},
+      {"range 1000", "error: usage: range MIN MAX"},
+      {"step 0", "error: step in us must be a whole number in 1..100"},
+      {"step 4", "error: a step of 4 us makes 201 steps, at most 161 fit"},
+      {"step 2.5", "error: step in us must be a whole number in 1..100, got '2.5'"},
+      {"settle -1", "error: settle time in ms must be a whole number in 0..10000"},
+      {"settle 10001", "error: settle time in ms must be a whole number in 0..10000"},
+      {"store", "error: usage: store 1 | store 2"},
+      {"store 3", "error: curve number must be a whole number in 1..2, got '3'"},
+      {"store 1", "error: nothing to store: run a complete sweep first"},
+      {"sweep now", "error: sweep takes no arguments"},
+      {"erase all", "error: erase takes no arguments"},
+      {too_long.c_str(), "error: line longer than 48 characters, ignored; nothing changed"},
+  };
+  for (const auto& row : rows) {
+    const gs::Settings before = app_->settings();
+    const std::vector<uint8_t> eeprom_before = eepromSnapshot();
+    const uint16_t pulse_before = hal::fake::pulseUs(before.slot);
+    const std::string out = run(row.input);
+    const auto lines = responseLines(out);
+    ASSERT_EQ(lines.size(), 1u) << row.input << " -> " << out;
+    EXPECT_TRUE(startsWith(lines[0], row.error_start)) << row.input << " -> " << lines[0];
+    const gs::Settings after = app_->settings();
+    EXPECT_EQ(after.slot, before.slot) << row.input;
+    EXPECT_EQ(after.plate_g, before.plate_g) << row.input;
+    EXPECT_EQ(after.pwm_min_us, before.pwm_min_us) << row.input;
+    EXPECT_EQ(after.pwm_max_us, before.pwm_max_us) << row.input;
+    EXPECT_EQ(after.step_us, before.step_us) << row.input;
+    EXPECT_EQ(after.settle_ms, before.settle_ms) << row.input;
+    EXPECT_EQ(eepromSnapshot(), eeprom_before) << row.input;
+    EXPECT_EQ(hal::fake::pulseUs(before.slot), pulse_before) << row.input;
+  }
+}
+
+TEST_F(GatherStore, RangeThatNeedsMoreSamplesThanTheBufferIsRefusedWithTheStepThatFits) {
+  // given: step 5 fits the default range exactly (161 samples)
+  ASSERT_NE(run("step 5").find("161 steps"), std::string::npos);
+  // when: a range of 1000 us at 5 us would be 201 samples
+  const auto lines = responseLines(run("range 1000 2000"));
+  // then
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], "error: that range is 201 steps of 5 us, at most 161 fit: set a step of "
+                      "at least 7 us first; nothing changed");
+  EXPECT_EQ(app_->settings().pwm_max_us, 1800u);
+  // and the suggested step does fit
+  run("step 7");
+  EXPECT_NE(run("range 1000 2000").find("range 1000..2000 us, 143 steps"), std::string::npos);
+}
+
+TEST_F(GatherStore, ErrorsInsideACommandLeaveTheLoadCellAlone) {
+  // given: tared
+  run("tare");
+  const int32_t calibration_before = app_->loadCell().calibrationMilligrams();
+  // when: a rejected calibration
+  run("cal 0");
+  // then
+  EXPECT_EQ(app_->loadCell().calibrationMilligrams(), calibration_before);
+  EXPECT_TRUE(app_->loadCell().isTared());
+}
+
+TEST_F(GatherStore, StoreTwoIntoAnUncalibratedSlotIsRefused) {
+  // given: a good sweep but nothing stored yet
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  sweep();
+  hal::fake::resetEepromWrites();
+  // when
+  const auto lines = responseLines(run("store 2"));
+  // then
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0],
+            "error: motor 0 has no first curve (erased (never calibrated)): store 1 first; "
+            "nothing changed");
+  EXPECT_EQ(hal::fake::eepromWrites(), 0u);
+}
+
+TEST_F(GatherStore, StoreTwoAtTheSameVoltageAsCurveOneIsRefused) {
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  sweep();
+  run("store 1");
+  sweep();  // same pack, same voltage
+  const std::vector<uint8_t> before = eepromSnapshot();
+  const auto lines = responseLines(run("store 2"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_TRUE(startsWith(lines[0], "error: this sweep started at 12.5")) << lines[0];
+  EXPECT_NE(lines[0].find("sweep again at another battery voltage"), std::string::npos);
+  EXPECT_EQ(eepromSnapshot(), before);
+}
+
+TEST_F(GatherStore, StoreIntoAnotherSlotThanTheSweptOneIsRefused) {
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  sweep();
+  run("motor 3");
+  const auto lines = responseLines(run("store 1"));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0],
+            "error: the last sweep was on motor 0 but motor 3 is selected: type motor 0 or "
+            "sweep again; nothing changed");
+  EXPECT_EQ(hal::fake::eepromWrites(), 0u);
+}
+
+TEST_F(GatherStore, StoreOverwritesOnlyTheChangedBytes) {
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  sweep();
+  run("store 1");
+  const uint32_t first_writes = hal::fake::eepromWrites();
+  hal::fake::resetEepromWrites();
+  run("store 1");  // the same sweep again
+  EXPECT_GT(first_writes, 500u);
+  EXPECT_EQ(hal::fake::eepromWrites(), 0u);
+}
+
+TEST_F(GatherStore, EmptyLinesOnlyRepeatThePrompt) {
+  const std::string out = run("");
+  EXPECT_EQ(out, "\r\ngs> ");
+}
+
+}  // namespace
