@@ -120,6 +120,8 @@ class Actuator {
   double motor_current_a_ = 0.0;
   double bus_current_a_ = 0.0;
   double winding_temp_c_ = 20.0;
+  double last_bus_v_ = 0.0;  // picks the conduction branch in busLoad()
+  double d4_ = 0.0, d5_ = 0.0;  // D^4, D^5
 };
 
 }  // namespace plant

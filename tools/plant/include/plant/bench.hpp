@@ -65,7 +65,8 @@ class Bench {
   // Steady state of the whole bench at a pulse (actuator + source + wiring, no time stepping;
   // winding at its present temperature, source in its present state).
   OperatingPoint steadyState(double pulse_us) const;
-  // Pulse for a thrust on this bench (bisection over steadyState()); full_us if unreachable.
+  // Lowest pulse giving thrust_g on this bench (bisection over steadyState() on the rising part
+  // of the curve: past a supply's current limit thrust falls again); full_us if unreachable.
   double pulseForThrust_us(double thrust_g) const;
 
  private:

@@ -95,9 +95,10 @@ std::optional<Preset> findPreset(const std::string& name);
 // Like findPreset but throws std::invalid_argument listing the known names.
 ActuatorParams presetParams(const std::string& name);
 
-// A real part out of the box: Kv, winding R, I0, C_T, C_P, D and inertia each scaled by
-// (1 + spread * N(0,1)), N clamped to +-3 sigma (D and the C_T/C_P get spread/2: moulded props
-// are more consistent than wound motors). Deterministic: same (params, seed, spread), same
+// A real part out of the box: Kv, winding R, I0, rotor and propeller inertia and the ESC's
+// resistance each scaled by (1 + spread * N(0,1)), N clamped to +-3 sigma; C_T and C_P get
+// spread/2 and D spread/4 (moulded props are more consistent than wound motors); the ESC's
+// start_us moves by N(0, 4 us * spread / 0.03). The name gets "#seed" appended. Deterministic: same (params, seed, spread), same
 // result on every machine. spread 0 returns the params unchanged. Typical spread: 0.03.
 ActuatorParams makeVaried(const ActuatorParams& base, uint64_t seed, double spread = 0.03);
 

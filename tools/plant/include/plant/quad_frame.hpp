@@ -64,6 +64,9 @@ class QuadFrame {
 
   QuadState state() const;
   double busVoltage_v() const { return bus_v_; }
+  // Largest tilt since construction (a frame with unequal motors lifts off crooked: the weak
+  // corner stays down while the others rise, until all four ropes are taut).
+  double maxTilt_deg() const { return max_tilt_deg_; }
   // Corner i position in body axes (x, y), metres.
   double motorX_m(int motor) const { return pos_x_[motor]; }
   double motorY_m(int motor) const { return pos_y_[motor]; }
@@ -85,6 +88,8 @@ class QuadFrame {
   double t_s_ = 0.0;
   double z_ = 0.0, vz_ = 0.0, roll_ = 0.0, roll_rate_ = 0.0, pitch_ = 0.0, pitch_rate_ = 0.0;
   double bus_v_ = 0.0, bus_current_a_ = 0.0;
+  double max_tilt_deg_ = 0.0;
+  double min_cos_tilt_ = 1.0;
 };
 
 }  // namespace plant
