@@ -31,9 +31,86 @@ void sayMotor(uint8_t index) {
   fw::printUint(index);
 }
 
-void sayRecordStatus(tc::DecodeStatus status) {
+void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
+
+// Why a motor is not armed: the decode status; for a v2 slot both copies' reasons.
+void sayRecordStatus(const Motor& m) {
   say(TC_PSTR("not calibrated: "));
-  hal::Uart::print(tc::decodeStatusText(status));
+  if (m.layout != tc::SlotLayout::kModelV2) {
+    hal::Uart::print(tc::decodeStatusText(m.record));
+    return;
+  }
+  say(TC_PSTR("v2 record, both copies bad ("));
+  for (uint8_t copy = 0; copy < 2; ++copy) {
+    if (copy) say(TC_PSTR(", "));
+    sayCopy(copy);
+    say(TC_PSTR(" "));
+    hal::Uart::print(tc::decodeStatusText(m.v2_copy_status[copy]));
+  }
+  say(TC_PSTR(")"));
+}
+
+// Grams (floor) of a force in decigrams.
+uint16_t gramsFromDg(uint16_t force_dg) { return static_cast<uint16_t>(force_dg / 10u); }
+
+// Start-up line of a v1 slot (the thesis record), after "motor N: ok".
+void sayV1Summary(const tc::MotorCalibration& cal) {
+  say(TC_PSTR(", V1 "));
+  sayVolts(cal.first.start_mv);
+  say(TC_PSTR(", V2 "));
+  if (cal.hasSecondCurve()) {
+    sayVolts(cal.second.start_mv);
+  } else {
+    say(TC_PSTR("none (single curve, no voltage compensation)"));
+  }
+  say(TC_PSTR(", max "));
+  fw::printUint(reachableGrams(cal));
+  say(TC_PSTR(" g, model v1 (thesis option 2.1)"));
+}
+
+// Start-up line of a v2 slot, after "motor N: ok": start threshold, the force reachable at
+// the sweep's resting voltage, the refining sweep's voltage, and a damaged other copy.
+void sayV2Summary(const Motor& m) {
+  const tc::ModelV2& v2 = m.model.v2();
+  say(TC_PSTR(", model v2 (effective voltage), start "));
+  fw::printFixed(static_cast<int32_t>((static_cast<uint32_t>(v2.start_q4_us) * 10u + 8u) >> 4), 1);
+  say(TC_PSTR(" us, max "));
+  fw::printUint(gramsFromDg(tc::headroomDg(v2, v2.rest_mv)));
+  say(TC_PSTR(" g at "));
+  sayVolts(v2.rest_mv);
+  if (v2.second_mv != 0) {
+    say(TC_PSTR(", refined at "));
+    sayVolts(v2.second_mv);
+  }
+  const uint8_t other = static_cast<uint8_t>(m.v2_copy ^ 1u);
+  const tc::DecodeStatus other_status = m.v2_copy_status[other];
+  if (other_status != tc::DecodeStatus::kOk && other_status != tc::DecodeStatus::kErased) {
+    say(TC_PSTR("; warning: "));
+    sayCopy(other);
+    say(TC_PSTR(" "));
+    hal::Uart::print(tc::decodeStatusText(other_status));
+    say(TC_PSTR(", flying "));
+    sayCopy(m.v2_copy);
+    say(TC_PSTR(" - recalibrate to restore the spare copy"));
+  }
+}
+
+// Mean of the middle two of four readings (one spike either way is ignored), through the
+// thesis map() at half-count resolution: equal readings give exactly map(reading).
+uint16_t middleTwoMillivolts(const uint16_t* counts, const tc::BatteryConfig& config) {
+  uint16_t sum = 0;
+  uint16_t lo = 0xFFFF;
+  uint16_t hi = 0;
+  for (uint8_t k = 0; k < 4; ++k) {
+    const uint16_t c = counts[k] < config.adc_max_counts ? counts[k] : config.adc_max_counts;
+    sum = static_cast<uint16_t>(sum + c);
+    if (c < lo) lo = c;
+    if (c > hi) hi = c;
+  }
+  const uint16_t middle_two = static_cast<uint16_t>(sum - lo - hi);  // <= 2 * 1023
+  if (config.adc_max_counts == 0) return 0;
+  return static_cast<uint16_t>(static_cast<uint32_t>(middle_two) * config.full_scale_mv /
+                               (2u * config.adc_max_counts));
 }
 
 // Flags of one controller result in words, comma separated; "none" when clear.
@@ -80,27 +157,37 @@ uint8_t ReadRunApp::loadCalibration() {
   uint8_t calibrated = 0;
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
-    m.record = tc::readRecord<hal::Eeprom>(i, m.cal);
+    // The loader fills the v1 calibration in place; a v2 model goes through this copy
+    // (112 bytes of stack, start-up only) into the same storage.
+    tc::ModelV2 v2;
+    const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(i, v2, m.model.resetToV1());
+    m.layout = load.layout;
+    // Neither layout recognized: copy A's status is that of the version byte at the slot
+    // start (erased or unknown), which both layouts share; the loader's "most telling copy"
+    // would report stale v1 bytes at copy B's offset instead.
+    m.record = load.layout == tc::SlotLayout::kNone ? load.v2.copy_status[0] : load.status;
+    m.v2_copy = load.v2.copy;
+    m.v2_copy_status[0] = load.v2.copy_status[0];
+    m.v2_copy_status[1] = load.v2.copy_status[1];
+    if (load.layout == tc::SlotLayout::kModelV2 && load.status == tc::DecodeStatus::kOk) {
+      m.model.setV2(v2);
+    }
     m.force_g = 0;
     m.pwm_us = kStopPwmUs;
+    m.seen_force_acc = 0;
     m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
     sayMotor(i);
     say(TC_PSTR(": "));
     if (m.isArmable()) {
       ++calibrated;
-      say(TC_PSTR("ok, V1 "));
-      sayVolts(m.cal.first.start_mv);
-      say(TC_PSTR(", V2 "));
-      if (m.cal.hasSecondCurve()) {
-        sayVolts(m.cal.second.start_mv);
+      say(TC_PSTR("ok"));
+      if (m.fliesV2()) {
+        sayV2Summary(m);
       } else {
-        say(TC_PSTR("none (single curve, no voltage compensation)"));
+        sayV1Summary(m.model.v1());
       }
-      say(TC_PSTR(", max "));
-      fw::printUint(reachableGrams(m.cal));
-      say(TC_PSTR(" g"));
     } else {
-      sayRecordStatus(m.record);
+      sayRecordStatus(m);
       say(TC_PSTR(" - refusing to arm; recalibrate it with gather_store"));
     }
     fw::newline();
@@ -127,6 +214,7 @@ void ReadRunApp::arm() {
   if (frame_hz_ < hal::kEscMinFrameHz || frame_hz_ > hal::kEscMaxFrameHz) {
     frame_hz_ = hal::kEscDefaultFrameHz;
   }
+  setFilterShift(frame_hz_);
   stream_every_frames_ = static_cast<uint8_t>(frame_hz_ / kStreamLinesPerSecond);
   const uint32_t start_ms = hal::Clock::millis();
   scheduleFrames(start_ms);
@@ -226,11 +314,66 @@ bool ReadRunApp::frameDue(uint32_t now_ms) const {
   return static_cast<int32_t>(now_ms - next_frame_ms_) >= 0;
 }
 
+// v1 and status: the thesis median of 101. v2: this frame's four readings (middle two) into
+// the bus voltage filter, every frame; an insane reading is skipped by the filter (it keeps
+// the last good value) and flagged on the v2 motors' results.
 void ReadRunApp::sampleBattery() {
+  static_assert(kBatterySamplesPerFrame == 4, "middleTwoMillivolts takes four readings");
+  uint16_t counts[kBatterySamplesPerFrame];
   for (uint8_t k = 0; k < kBatterySamplesPerFrame; ++k) {
-    battery_counts_.push(hal::Adc::readCounts(hal::kAdcBattery));
+    counts[k] = hal::Adc::readCounts(hal::kAdcBattery);
+    battery_counts_.push(counts[k]);
   }
   battery_mv_ = monitor_.millivoltsFromCounts(battery_counts_.median());
+  const uint16_t frame_mv = middleTwoMillivolts(counts, monitor_.config());
+  bus_sample_sane_ = monitor_.isSane(frame_mv);
+  bus_.update(frame_mv);
+}
+
+// Filter constant per frame rate: 1/8 at 50-99 Hz, 1/16 at 100-199, 1/32 at 200-399, 1/64 at
+// 400 Hz, so the time constant stays about 150 ms. A change re-seeds the filter at its value
+// (one division) and rescales the motors' seen forces.
+void ReadRunApp::setFilterShift(uint16_t frame_hz) {
+  uint8_t shift = 3;
+  for (uint16_t hz = 100; hz <= frame_hz && shift < 6; hz = static_cast<uint16_t>(hz * 2)) ++shift;
+  if (shift == bus_.shift) return;
+  const uint8_t old_shift = bus_.shift;
+  bus_.shift = shift;
+  if (bus_.isValid()) bus_.reset(bus_.mv);
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    motors_[i].seen_force_acc = (motors_[i].seen_force_acc >> old_shift) << shift;
+  }
+}
+
+// One motor's pulse for this frame from its model. Integer only; no division on the v2 path.
+void ReadRunApp::flyMotor(Motor& m) {
+  if (!m.isArmable()) {
+    m.force_g = 0;
+    m.pwm_us = kStopPwmUs;
+    m.flags = tc::kNotCalibrated;
+    m.vbat_mv = battery_mv_;
+    return;
+  }
+  if (m.fliesV2()) {
+    const uint16_t force_dg = static_cast<uint16_t>(m.force_g * 10u);  // <= 5000
+    // The filtered voltage reflects the sag of the filtered force: predict the step to the
+    // command from the bench sag (equal in steady state, then the plain model).
+    const uint16_t seen_dg = static_cast<uint16_t>(m.seen_force_acc >> bus_.shift);
+    tc::ForcePwmResult result = tc::forceToPwmV2(m.model.v2(), force_dg, bus_, seen_dg);
+    if (!bus_sample_sane_) result.flags |= tc::kVoltageInvalid;  // flying the last good value
+    m.seen_force_acc = m.seen_force_acc - (m.seen_force_acc >> bus_.shift) + force_dg;
+    m.pwm_us = result.pwm_us;
+    m.flags = result.flags;
+    m.vbat_mv = bus_.mv;
+    return;
+  }
+  // Thesis fig. 6.9: the reading sags under this motor's load; add the offset of the PWM it
+  // was last sent.
+  const tc::MotorCalibration& cal = m.model.v1();
+  m.vbat_mv = monitor_.compensatedMillivolts(battery_mv_, m.pwm_us, cal.sag);
+  const tc::ForcePwmResult result = tc::forceToPwm(cal, m.force_g, m.vbat_mv);
+  m.pwm_us = result.pwm_us;
+  m.flags = result.flags;
 }
 
 void ReadRunApp::frame(uint32_t now_ms) {
@@ -248,21 +391,8 @@ void ReadRunApp::frame(uint32_t now_ms) {
   if (mode_ == Mode::kLiftoff) updateLiftoff(now_ms);
   sampleBattery();
   for (uint8_t i = 0; i < kMotors; ++i) {
-    Motor& m = motors_[i];
-    if (!m.isArmable()) {
-      m.force_g = 0;
-      m.pwm_us = kStopPwmUs;
-      m.flags = tc::kNotCalibrated;
-      m.vbat_mv = battery_mv_;
-    } else {
-      // Thesis fig. 6.9: the reading sags under this motor's load; add the offset of the
-      // PWM it was last sent.
-      m.vbat_mv = monitor_.compensatedMillivolts(battery_mv_, m.pwm_us, m.cal.sag);
-      const tc::ForcePwmResult result = tc::forceToPwm(m.cal, m.force_g, m.vbat_mv);
-      m.pwm_us = result.pwm_us;
-      m.flags = result.flags;
-    }
-    hal::Esc::writePulse(i, m.pwm_us);
+    flyMotor(motors_[i]);
+    hal::Esc::writePulse(i, motors_[i].pwm_us);
   }
 
   if (mode_ == Mode::kLiftoff) {
@@ -384,7 +514,7 @@ void ReadRunApp::commandHelp() {
   sayLine(TC_PSTR("f G            all calibrated motors to G grams (0..500)"));
   sayLine(TC_PSTR("f N G          motor N (0..3) to G grams"));
   sayLine(TC_PSTR("stop           all motors to 0 g (1000 us)"));
-  sayLine(TC_PSTR("status         per motor: force, pwm, flags, compensated battery"));
+  sayLine(TC_PSTR("status         per motor: force, pwm, battery, model, flags; v2: headroom"));
   sayLine(TC_PSTR("liftoff G [RAMP_MS] [HOLD_MS]  ramp all four 0->G g (default 2000 ms),"));
   sayLine(TC_PSTR("               hold (default 5000 ms), stop; any key aborts"));
   sayLine(TC_PSTR("stream on|off  CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s"));
@@ -399,7 +529,7 @@ bool ReadRunApp::requireArmable(uint8_t index) {
   say(TC_PSTR("error: "));
   sayMotor(index);
   say(TC_PSTR(" is "));
-  sayRecordStatus(m.record);
+  sayRecordStatus(m);
   sayLine(TC_PSTR("; it stays at 1000 us - recalibrate it with gather_store"));
   return false;
 }
@@ -437,7 +567,7 @@ void ReadRunApp::commandForce(char** tokens, uint8_t count) {
       say(TC_PSTR("warning: "));
       sayMotor(i);
       say(TC_PSTR(" "));
-      sayRecordStatus(m.record);
+      sayRecordStatus(m);
       sayLine(TC_PSTR("; held at 1000 us"));
     }
   }
@@ -449,12 +579,13 @@ void ReadRunApp::commandStop() {
 }
 
 void ReadRunApp::commandStatus() {
+  bool any_v2 = false;
   for (uint8_t i = 0; i < kMotors; ++i) {
     const Motor& m = motors_[i];
     sayMotor(i);
     say(TC_PSTR(": "));
     if (!m.isArmable()) {
-      sayRecordStatus(m.record);
+      sayRecordStatus(m);
       say(TC_PSTR("; held at "));
       fw::printUint(m.pwm_us);
       sayLine(TC_PSTR(" us"));
@@ -465,8 +596,27 @@ void ReadRunApp::commandStatus() {
     fw::printUint(m.pwm_us);
     say(TC_PSTR(" us, battery "));
     sayVolts(m.vbat_mv);
-    say(TC_PSTR(" compensated, flags: "));
+    if (m.fliesV2()) {
+      any_v2 = true;
+      // Headroom: the most this motor reaches at the present (filtered) voltage with the
+      // ESC at its maximum pulse. One division: status only, never per frame.
+      say(TC_PSTR(" filtered, headroom "));
+      fw::printUint(gramsFromDg(tc::headroomDg(m.model.v2(), bus_.isValid() ? bus_.mv
+                                                                            : m.model.v2().rest_mv)));
+      say(TC_PSTR(" g, model v2, flags: "));
+    } else {
+      say(TC_PSTR(" compensated, flags: "));
+    }
     sayFlags(m.flags);
+    fw::newline();
+  }
+  if (any_v2) {
+    say(TC_PSTR("bus filter "));
+    sayVolts(bus_.mv);
+    say(TC_PSTR(" (v2 motors: 1/"));
+    fw::printUint(1u << bus_.shift);
+    say(TC_PSTR(" per frame), readings rejected "));
+    fw::printUint(bus_.rejected);
     fw::newline();
   }
   say(TC_PSTR("battery "));
@@ -497,7 +647,7 @@ void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
       say(TC_PSTR("error: liftoff needs all four motors calibrated; "));
       sayMotor(i);
       say(TC_PSTR(" is "));
-      sayRecordStatus(motors_[i].record);
+      sayRecordStatus(motors_[i]);
       sayLine(TC_PSTR("; recalibrate it with gather_store"));
       return;
     }
@@ -551,6 +701,7 @@ void ReadRunApp::commandRate(char** tokens, uint8_t count) {
     return;
   }
   frame_hz_ = static_cast<uint16_t>(hz);
+  setFilterShift(frame_hz_);
   stream_every_frames_ = static_cast<uint8_t>(frame_hz_ / kStreamLinesPerSecond);
   scheduleFrames(hal::Clock::millis());
   say(TC_PSTR("frame rate "));

@@ -3,24 +3,35 @@
 // Flow (main.cpp): hardware init -> banner -> loadCalibration() (H.2: the four EEPROM
 // records, read once into per-motor structs) -> arm() (1000 us for 2 s) -> runOnce() forever,
 // sleeping until the next interrupt between passes. Every ESC frame each motor's force command
-// (grams) becomes a PWM through the Force-PWM controller (H.3, thesis option 2.1) at the
-// battery voltage read now, sag-compensated with that motor's offsets and last PWM (sec. 6.2).
+// (grams) becomes a PWM through the model its slot holds:
+//  - layout v1 (the thesis record, the baseline): the Force-PWM controller (H.3, option 2.1)
+//    at the median battery reading, sag-compensated with that motor's offsets and last PWM
+//    (sec. 6.2);
+//  - layout v2 (thrustcal/model_v2.hpp): force is a curve in effective motor voltage
+//    (pwm - start) * V_bus; PWM = start + drive(F) / V at the bus voltage filter (this frame's
+//    reading, first-order IIR with a time constant of about 150 ms at every frame rate), the
+//    bench sag of the step from the force the reading reflects to the command predicted.
+//    Force beyond what the present voltage reaches saturates at the ESC maximum (flag
+//    "saturated"); status shows each v2 motor's headroom.
+// The slot loader (thrustcal/record_v2.hpp, tc::loadSlot) tells the layouts apart; a v2 slot
+// keeps two copies and flies the newest valid one.
 //
 // Safety rules, all enforced here:
-//  - a motor without a valid record (erased, bad version, bad CRC, bad content) is never
-//    armed: it is held at 1000 us and every command to it is refused;
+//  - a motor without a valid record (erased, bad version, bad CRC, bad content; for v2: both
+//    copies bad) is never armed: it is held at 1000 us and every command to it is refused;
 //  - failsafe: while any motor is commanded above 0 g, 500 ms without a complete command line
 //    (any line, even an empty or rejected one, is a keep-alive) stops all motors;
 //  - the lift-off sequence is its own command source (no failsafe while it runs), and any
 //    received byte aborts it and stops the motors.
 //
-// The per-frame path (battery sample, compensation, controller, ESC write) is integer only.
+// The per-frame path (battery samples, voltage filter, both models, ESC write) is integer
+// only; the image links no floating-point routine at all.
 // Host tests drive the same class against the fake HAL.
 //
-// Measured on the ATmega2560 image in simavr 1.6 (cycles the CPU was awake, four calibrated
-// motors): armed and stopped 3.8 % CPU; four motors running at 50 Hz 5.6 %, at 400 Hz 26.6 %;
-// peak stack about 170 bytes; static SRAM 5199 bytes (this object 4999: 4 x 1122 motors, 414
-// battery median).
+// Measured on the ATmega2560 image in simavr 1.6 before v2 (cycles the CPU was awake, four
+// calibrated v1 motors): armed and stopped 3.8 % CPU; four motors running at 50 Hz 5.6 %, at
+// 400 Hz 26.6 %; peak stack about 170 bytes. Static SRAM: see README / the final figures in
+// the commit log (avr-size): a slot costs the same for v1 or v2 (SlotModel is a union).
 #pragma once
 #include <stdint.h>
 
@@ -30,7 +41,10 @@
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/median_filter.hpp"
+#include "thrustcal/model_v2.hpp"
 #include "thrustcal/motor_calibration.hpp"
+#include "thrustcal/record_v2.hpp"
+#include "slot_model.hpp"
 
 namespace rr {
 
@@ -42,26 +56,33 @@ constexpr uint16_t kFailsafeMs = 500;       // no command line this long while r
 constexpr uint16_t kStopPwmUs = 1000;       // ESC "motor off" pulse
 constexpr uint16_t kForceMaxG = tc::kCurveGrams;
 constexpr uint16_t kBatteryWindow = 101;    // thesis: median of 101 readings
-constexpr uint8_t kBatterySamplesPerFrame = 4;
+constexpr uint8_t kBatterySamplesPerFrame = 4;  // v2 filter input: mean of the middle two
 constexpr uint16_t kLiftoffDefaultRampMs = 2000;
 constexpr uint16_t kLiftoffDefaultHoldMs = 5000;
 constexpr uint16_t kLiftoffMaxMs = 60000;
 constexpr uint16_t kLiftoffProgressMs = 500;  // one "# " progress line this often
 constexpr uint8_t kStreamLinesPerSecond = 10;
 
-// One motor as the thesis's motor_struct: the constants from EEPROM plus the controller's
+// One motor as the thesis's motor_struct: the model loaded from EEPROM plus the controller's
 // run-time state.
 struct Motor {
-  tc::MotorCalibration cal;
-  tc::DecodeStatus record = tc::DecodeStatus::kErased;
+  SlotModel model;                               // v1 calibration or model v2 (a union)
+  tc::SlotLayout layout = tc::SlotLayout::kNone; // what the slot holds
+  tc::DecodeStatus record = tc::DecodeStatus::kErased;  // kOk: `model` is loaded and flown
+  uint8_t v2_copy = tc::kNoCopy;                 // v2: copy flown (0 = A, 1 = B)
+  tc::DecodeStatus v2_copy_status[2] = {tc::DecodeStatus::kErased, tc::DecodeStatus::kErased};
   uint16_t force_g = 0;             // commanded force
   uint16_t pwm_us = kStopPwmUs;     // last pulse written to the ESC
-  uint16_t vbat_mv = 0;             // sag-compensated battery used for that pulse
+  uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
+                                    // v2 the bus filter's value
   uint8_t flags = 0;                // tc::ForcePwmFlag bits of that pulse
+  // v2: the commanded force filtered like the bus voltage (decigrams << filter shift), i.e.
+  // the force whose sag the filtered voltage reflects.
+  uint32_t seen_force_acc = 0;
 
   bool isArmable() const { return record == tc::DecodeStatus::kOk; }
+  bool fliesV2() const { return isArmable() && model.holdsV2(); }
 };
-
 enum class Mode : uint8_t {
   kBoot,     // before arm()
   kArming,   // 1000 us on every ESC, input ignored
@@ -88,6 +109,13 @@ class ReadRunApp {
   Mode mode() const { return mode_; }
   bool isRunning() const;               // any motor commanded above 0 g
   uint16_t batteryMv() const { return battery_mv_; }  // median reading, uncompensated
+  // v2 motors' voltage: this frame's reading through the IIR filter, and its reciprocal.
+  const tc::BusVoltageFilter& busFilter() const { return bus_; }
+  bool busSampleSane() const { return bus_sample_sane_; }  // this frame's reading was usable
+  // v2: the force (decigrams) the filtered voltage reflects for motor `index`.
+  uint16_t seenForceDg(uint8_t index) const {
+    return static_cast<uint16_t>(motors_[index].seen_force_acc >> bus_.shift);
+  }
   bool isStreaming() const { return stream_; }
   uint32_t failsafeTrips() const { return failsafe_trips_; }
 
@@ -112,12 +140,16 @@ class ReadRunApp {
   bool frameDue(uint32_t now_ms) const;
   void frame(uint32_t now_ms);
   void sampleBattery();
+  void setFilterShift(uint16_t frame_hz);
+  void flyMotor(Motor& m);
   void streamLine(uint32_t now_ms);
   void prompt();
 
   Motor motors_[kMotors];
   tc::MedianFilter<kBatteryWindow> battery_counts_;
   tc::BatteryMonitor monitor_;
+  tc::BusVoltageFilter bus_;
+  bool bus_sample_sane_ = false;
   fw::LineReader line_;
   Mode mode_ = Mode::kBoot;
   uint16_t battery_mv_ = 0;
