@@ -46,6 +46,8 @@ class Console {
   void onLine(std::function<void(const std::string&)> listener) {
     line_listeners_.push_back(std::move(listener));
   }
+  // Removes every line listener (call before the state a listener captured goes away).
+  void clearLineListeners() { line_listeners_.clear(); }
   // The last `n` lines of output (the unfinished one included), for error messages.
   std::string tail(std::size_t n = 20) const;
   // Output not yet consumed by expect()/command().

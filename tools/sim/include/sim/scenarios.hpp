@@ -1,0 +1,142 @@
+// The virtual bench scenarios behind `thrustcal sim gather|liftoff` (and the HIL tests):
+// the real firmware images on a simulated board wired to the plant model.
+//
+// gather:  gather_store on the thesis bench (plant::Bench: one motor on the load-cell plate).
+//          Per motor: motor K, plate 60, cal W (W = motor + propeller weight), sweep on a full
+//          3S LiPo -> store 1, swap the power for a bench supply at another voltage (or drain
+//          the pack) -> tare, sweep -> store 2, show. The EEPROM image is kept across motors.
+//          The stored curves are decoded with the core codec and compared with the plant's true
+//          steady-state thrust at each stored PWM (power source as at the start of that sweep).
+// liftoff: read_run on the tethered quad (plant::QuadFrame, four varied motors, one LiPo):
+//          "liftoff G RAMP HOLD"; thrust, moments and tilt are logged; the hold phase is
+//          summarized. Uncalibrated = every slot holds the reference slot's record, so all four
+//          ESCs get the same PWM (what one generic curve gives).
+#pragma once
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "plant/params.hpp"
+#include "thrustcal/motor_calibration.hpp"
+
+namespace sim {
+
+// Progress messages (one line each, no newline); default: stderr.
+using ProgressFn = std::function<void(const std::string&)>;
+
+// ---- gather ---------------------------------------------------------------------------------
+
+enum class SecondCurveSource { kBenchSupply, kDrainedPack };
+
+struct GatherOptions {
+  std::string elf_path;                 // gather_store.elf
+  std::string preset = "kv1100_9x4.7";
+  std::vector<uint64_t> seeds = {1};    // one varied motor per seed ...
+  std::vector<int> slots = {0};         // ... calibrated into this slot (same length)
+  double variation = 0.03;              // plant::makeVaried spread
+  std::vector<uint8_t> eeprom;          // starting image (empty: erased)
+  int pwm_min_us = 1000, pwm_max_us = 1800, step_us = 10, settle_ms = 200;
+  SecondCurveSource second = SecondCurveSource::kBenchSupply;
+  double supply_v = 10.0;               // bench supply for curve 2 (6.32 A limit)
+  double drained_soc = 0.25;            // pack state of charge for curve 2 when drained
+  double band_min_g = 10.0;             // calibrated band for the error: band_min_g ..
+  double band_top_frac = 0.95;          //   band_top_frac * the curve's heaviest gram
+  std::string log_dir;                  // sweep CSVs and curve tables go here ("" = none)
+  ProgressFn progress;
+};
+
+struct CurveCheck {
+  double start_v = 0;          // as stored
+  int max_g = 0;               // heaviest gram the stored curve reaches
+  double band_lo_g = 0, band_hi_g = 0;
+  double error_max_g = 0;      // |true thrust at stored PWM - gram| over the band
+  double error_rms_g = 0;
+  double error_max_pct = 0;    // relative to the gram, grams >= 50 only
+  int samples = 0;             // CSV rows of the sweep
+  double sweep_simulated_s = 0, sweep_wall_s = 0;
+  std::string csv_path;        // the streamed sweep (with plant columns)
+};
+
+struct GatherMotorResult {
+  int slot = 0;
+  uint64_t seed = 0;
+  double mount_weight_g = 0;   // what `cal` was told
+  CurveCheck curve1, curve2;
+  std::string second_source;   // "bench supply 10.0 V" / "drained pack 25 %"
+  std::vector<std::string> show;  // `show` output lines
+  std::string curves_csv_path;
+};
+
+struct GatherResult {
+  std::vector<GatherMotorResult> motors;
+  std::vector<uint8_t> eeprom;
+  double curve_error_max_g = 0;  // worst over all motors and both curves
+  double simulated_s = 0, wall_s = 0, realtime_factor = 0;
+  double sweep_realtime_factor = 0;  // simulated / wall during sweeps only
+  nlohmann::json toJson() const;
+};
+
+GatherResult runGather(const GatherOptions& options);
+
+// ---- liftoff --------------------------------------------------------------------------------
+
+struct LiftoffOptions {
+  std::string elf_path;                       // read_run.elf
+  std::vector<uint8_t> eeprom;                // calibrated image (from gather)
+  std::string preset = "kv1100_9x4.7";
+  std::array<uint64_t, 4> seeds = {1, 2, 3, 4};  // the same seeds as at gather, per slot
+  double variation = 0.03;
+  double force_g = 300.0;                     // per motor
+  int ramp_ms = 2000, hold_ms = 5000;
+  double lipo_soc = 1.0;                      // pack at take-off
+  bool uncalibrated = false;
+  int reference_slot = 0;                     // uncalibrated: whose record all four use
+  double settle_s = 1.0;                      // hold time skipped before averaging
+  double sample_period_s = 0.01;              // CSV time step
+  std::string csv_path;                       // "" = no CSV
+  ProgressFn progress;
+};
+
+struct LiftoffSample {
+  double t_s;
+  std::array<double, 4> thrust_g, pwm_us;
+  double roll_deg, pitch_deg, tilt_deg, height_m, roll_moment_nm, pitch_moment_nm, bus_v;
+};
+
+struct LiftoffResult {
+  std::string mode;                       // "calibrated" / "uncalibrated"
+  double force_g = 0;
+  std::array<double, 4> hold_thrust_g{};  // mean over the hold (after settle_s)
+  std::array<double, 4> hold_pwm_us{};
+  double thrust_spread_pct = 0;           // (max - min) / mean of hold_thrust_g
+  double force_error_rms_pct = 0;         // rms over motors of (thrust - command) / command
+  double max_tilt_deg = 0, hold_tilt_deg = 0;
+  double hold_roll_moment_nm = 0, hold_pitch_moment_nm = 0;
+  double hold_bus_v = 0;
+  std::vector<std::string> calibration_report;  // read_run's boot lines about the slots
+  std::vector<LiftoffSample> samples;
+  double simulated_s = 0, wall_s = 0, realtime_factor = 0;
+  std::string csv_path;
+  nlohmann::json toJson() const;
+};
+
+LiftoffResult runLiftoff(const LiftoffOptions& options);
+
+// ---- shared helpers -------------------------------------------------------------------------
+
+// Decodes one slot of an EEPROM image with the firmware's codec. Returns the status text
+// ("ok", "erased", ...) and fills `out` when ok.
+std::string decodeSlot(const std::vector<uint8_t>& eeprom, int slot, tc::MotorCalibration& out);
+// Copies slot `from`'s 1024-byte record over slot `to` (CRC included: the copy is valid).
+void copySlot(std::vector<uint8_t>& eeprom, int from, int to);
+// The varied motor for a seed (plant::makeVaried on the preset).
+plant::ActuatorParams motorForSeed(const std::string& preset, uint64_t seed, double variation);
+// Writes `lines` to stderr with a "sim: " prefix (default progress).
+void stderrProgress(const std::string& line);
+
+}  // namespace sim

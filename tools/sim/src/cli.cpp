@@ -1,0 +1,317 @@
+// `thrustcal sim gather|liftoff|console`.
+#include "sim/cli.hpp"
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include "sim/board.hpp"
+#include "sim/intel_hex.hpp"
+#include "sim/pty_bridge.hpp"
+#include "sim/rigs.hpp"
+#include "sim/scenarios.hpp"
+
+namespace sim {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Where the AVR images are by default: $THRUSTCAL_AVR_BUILD_DIR, else <source>/build/avr.
+std::string defaultElf(const std::string& name) {
+  std::vector<fs::path> dirs;
+  if (const char* env = std::getenv("THRUSTCAL_AVR_BUILD_DIR")) dirs.emplace_back(env);
+  dirs.emplace_back((fs::path(THRUSTCAL_SOURCE_DIR) / "build" / "avr").lexically_normal());
+  for (const auto& d : dirs)
+    for (const auto& p : {d / "firmware" / name / (name + ".elf"), d / "firmware" / (name + ".elf")})
+      if (fs::exists(p)) return p.string();
+  return (dirs.back() / "firmware" / name / (name + ".elf")).string();
+}
+
+std::vector<uint8_t> loadEepromOrErased(const std::string& path, bool must_exist) {
+  if (path.empty() || (!must_exist && !fs::exists(path)))
+    return std::vector<uint8_t>(kEepromBytes, 0xFF);
+  return readIntelHexFile(path, kEepromBytes);
+}
+
+void writeJson(const std::string& path, const nlohmann::json& j) {
+  if (path.empty()) return;
+  if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
+  std::ofstream out(path, std::ios::trunc);
+  if (!out) throw std::runtime_error(fmt::format("{}: cannot write the JSON result", path));
+  out << j.dump(2) << "\n";
+}
+
+// Runs `body`, turning any exception into a message on stderr and exit code 1.
+template <class F>
+void guarded(F&& body) {
+  try {
+    body();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "thrustcal sim: error: {}\n", e.what());
+    std::exit(1);
+  }
+}
+
+std::atomic<bool> g_stop{false};
+extern "C" void onSignal(int) { g_stop = true; }
+
+void addGather(CLI::App& sim) {
+  auto* cmd = sim.add_subcommand(
+      "gather",
+      "Calibrate simulated motors with the real gather_store image on the thesis bench:\n"
+      "motor K, plate 60, cal W (motor + propeller weight), sweep on a full 3S LiPo -> store 1,\n"
+      "sweep on a bench supply (or a drained pack) -> store 2, show. Saves the EEPROM as Intel\n"
+      "HEX and reports the stored curves against the plant's true steady-state thrust.");
+  auto o = std::make_shared<GatherOptions>();
+  auto eeprom = std::make_shared<std::string>();
+  auto json = std::make_shared<std::string>();
+  auto second = std::make_shared<std::string>("supply");
+  auto range = std::make_shared<std::vector<int>>();
+  o->elf_path = defaultElf("gather_store");
+  cmd->add_option("--elf", o->elf_path, "gather_store ELF image")->capture_default_str();
+  cmd->add_option("--preset", o->preset, "motor + propeller preset (see thrustcal plant)")
+      ->capture_default_str();
+  cmd->add_option("--seed,--seeds", o->seeds,
+                  "varied motor per seed; several seeds calibrate several slots")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--slot,--slots", o->slots, "EEPROM slot / ESC output per seed (0..3); "
+                                               "default 0, 1, 2, ... in seed order")
+      ->delimiter(',');
+  cmd->add_option("--variation", o->variation, "part-to-part spread (relative sigma)")
+      ->capture_default_str();
+  cmd->add_option("--eeprom", *eeprom,
+                  "Intel HEX EEPROM image: read if it exists (other slots are kept), written "
+                  "after the run (avrdude -U eeprom:w:FILE:i puts it on a real board)");
+  cmd->add_option("--log-dir", o->log_dir,
+                  "write gather_slotK_curve{1,2}.csv (the streamed sweeps + plant columns) and "
+                  "gather_slotK_curves.csv (stored vs true PWM per gram)");
+  cmd->add_option("--json", *json, "results as JSON (calibration.curve_error_max_g, sim.*)");
+  cmd->add_option("--range", *range, "sweep PWM range MIN MAX in us")->expected(2);
+  cmd->add_option("--step", o->step_us, "sweep step in us")->capture_default_str();
+  cmd->add_option("--settle", o->settle_ms, "settle time per step in ms")->capture_default_str();
+  cmd->add_option("--second", *second, "curve 2 source: supply (bench supply) or drained (pack)")
+      ->check(CLI::IsMember({"supply", "drained"}))
+      ->capture_default_str();
+  cmd->add_option("--supply-v", o->supply_v, "bench supply voltage for curve 2")
+      ->capture_default_str();
+  cmd->add_option("--drained-soc", o->drained_soc, "pack charge (0..1) for --second drained")
+      ->capture_default_str();
+  cmd->callback([=] {
+    guarded([&] {
+      GatherOptions opt = *o;
+      if (range->size() == 2) {
+        opt.pwm_min_us = (*range)[0];
+        opt.pwm_max_us = (*range)[1];
+      }
+      if (opt.slots.empty() || (opt.slots.size() == 1 && opt.seeds.size() > 1 && opt.slots[0] == 0)) {
+        opt.slots.clear();
+        for (std::size_t i = 0; i < opt.seeds.size(); ++i) opt.slots.push_back(static_cast<int>(i));
+      }
+      opt.second = *second == "drained" ? SecondCurveSource::kDrainedPack
+                                        : SecondCurveSource::kBenchSupply;
+      opt.eeprom = loadEepromOrErased(*eeprom, false);
+      const GatherResult r = runGather(opt);
+      if (!eeprom->empty()) {
+        writeIntelHexFile(*eeprom, r.eeprom);
+        stderrProgress(fmt::format("EEPROM saved: {}", *eeprom));
+      }
+      nlohmann::json j = r.toJson();
+      j["scenario"] = "gather";
+      j["preset"] = opt.preset;
+      j["eeprom"] = *eeprom;
+      writeJson(*json, j);
+      fmt::print("calibration: max error of the stored curves vs the plant {:.2f} g\n",
+                 r.curve_error_max_g);
+      for (const auto& m : r.motors)
+        fmt::print("  slot {} (seed {}): curve 1 {:.3f} V 1..{} g err max {:.2f} g rms {:.2f} g; "
+                   "curve 2 {:.3f} V 1..{} g err max {:.2f} g rms {:.2f} g\n",
+                   m.slot, m.seed, m.curve1.start_v, m.curve1.max_g, m.curve1.error_max_g,
+                   m.curve1.error_rms_g, m.curve2.start_v, m.curve2.max_g, m.curve2.error_max_g,
+                   m.curve2.error_rms_g);
+      fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time ({:.1f}x during "
+                 "sweeps)\n",
+                 r.simulated_s, r.wall_s, r.realtime_factor, r.sweep_realtime_factor);
+    });
+  });
+}
+
+void addLiftoff(CLI::App& sim) {
+  auto* cmd = sim.add_subcommand(
+      "liftoff",
+      "Fly the thesis's tethered lift-off with the real read_run image: four varied motors on a\n"
+      "quad frame tied to the floor, one LiPo, 'liftoff G RAMP HOLD', no attitude controller.\n"
+      "calibrated: each slot's own record; uncalibrated: the reference slot's record in all\n"
+      "four slots, so every ESC gets the same PWM (one generic curve). Reports per-motor thrust\n"
+      "in the hold, their spread, the force error, moments and tilt.");
+  auto o = std::make_shared<LiftoffOptions>();
+  auto eeprom = std::make_shared<std::string>();
+  auto json = std::make_shared<std::string>();
+  auto out_dir = std::make_shared<std::string>();
+  auto mode = std::make_shared<std::string>("both");
+  auto uncal = std::make_shared<bool>(false);
+  auto seeds = std::make_shared<std::vector<uint64_t>>(std::vector<uint64_t>{1, 2, 3, 4});
+  o->elf_path = defaultElf("read_run");
+  cmd->add_option("--elf", o->elf_path, "read_run ELF image")->capture_default_str();
+  cmd->add_option("--eeprom", *eeprom, "Intel HEX EEPROM image with the four calibrated slots")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--seeds", *seeds, "the four motors' seeds, slot 0..3 (as given to gather)")
+      ->delimiter(',')
+      ->expected(4)
+      ->capture_default_str();
+  cmd->add_option("--preset", o->preset, "motor + propeller preset")->capture_default_str();
+  cmd->add_option("--variation", o->variation, "part-to-part spread (same as at gather)")
+      ->capture_default_str();
+  cmd->add_option("--force", o->force_g, "force per motor in g")->capture_default_str();
+  cmd->add_option("--ramp-ms", o->ramp_ms, "ramp time")->capture_default_str();
+  cmd->add_option("--hold-ms", o->hold_ms, "hold time")->capture_default_str();
+  cmd->add_option("--soc", o->lipo_soc, "LiPo state of charge at take-off (0..1)")
+      ->capture_default_str();
+  cmd->add_option("--mode", *mode, "calibrated, uncalibrated or both")
+      ->check(CLI::IsMember({"calibrated", "uncalibrated", "both"}))
+      ->capture_default_str();
+  cmd->add_flag("--uncalibrated", *uncal, "same as --mode uncalibrated");
+  cmd->add_option("--reference-slot", o->reference_slot,
+                  "uncalibrated: the slot whose record all four motors use")
+      ->capture_default_str();
+  cmd->add_option("--out-dir", *out_dir,
+                  "write liftoff_calibrated.csv / liftoff_uncalibrated.csv (10 ms time series)");
+  cmd->add_option("--json", *json,
+                  "results as JSON: liftoff.<mode>.{thrust_spread_pct,force_error_rms_pct,...}, "
+                  "sim.realtime_factor");
+  cmd->callback([=] {
+    guarded([&] {
+      std::vector<std::string> modes;
+      const std::string m = *uncal ? "uncalibrated" : *mode;
+      if (m == "both") modes = {"calibrated", "uncalibrated"};
+      else modes = {m};
+      if (!out_dir->empty()) fs::create_directories(*out_dir);
+      nlohmann::json j;
+      j["scenario"] = "liftoff";
+      double sim_s = 0, wall_s = 0;
+      for (const auto& mm : modes) {
+        LiftoffOptions opt = *o;
+        for (int i = 0; i < 4; ++i) opt.seeds[i] = (*seeds)[i];
+        opt.eeprom = loadEepromOrErased(*eeprom, true);
+        opt.uncalibrated = mm == "uncalibrated";
+        if (!out_dir->empty())
+          opt.csv_path = (fs::path(*out_dir) / fmt::format("liftoff_{}.csv", mm)).string();
+        const LiftoffResult r = runLiftoff(opt);
+        j["liftoff"][mm] = r.toJson();
+        sim_s += r.simulated_s;
+        wall_s += r.wall_s;
+        fmt::print("liftoff {}: thrust {:.1f} {:.1f} {:.1f} {:.1f} g for {:.0f} g: spread {:.2f} %, "
+                   "rms error {:.2f} %, tilt {:.2f} deg (max {:.2f})\n",
+                   mm, r.hold_thrust_g[0], r.hold_thrust_g[1], r.hold_thrust_g[2],
+                   r.hold_thrust_g[3], r.force_g, r.thrust_spread_pct, r.force_error_rms_pct,
+                   r.hold_tilt_deg, r.max_tilt_deg);
+      }
+      j["sim"] = {{"realtime_factor", wall_s > 0 ? sim_s / wall_s : 0},
+                  {"simulated_s", sim_s},
+                  {"wall_s", wall_s}};
+      writeJson(*json, j);
+      fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time\n", sim_s, wall_s,
+                 wall_s > 0 ? sim_s / wall_s : 0);
+    });
+  });
+}
+
+void addConsole(CLI::App& sim) {
+  auto* cmd = sim.add_subcommand(
+      "console",
+      "The simulated board on a pseudo-terminal: open the printed /dev/pts/N with\n"
+      "'screen /dev/pts/N 115200' or 'picocom -b 115200 /dev/pts/N' and type as on the real\n"
+      "board. gather_store gets the thesis bench (motor on the load cell), read_run the tethered\n"
+      "quad. Ctrl-C ends it and saves the EEPROM back to --eeprom.");
+  auto elf = std::make_shared<std::string>(defaultElf("gather_store"));
+  auto eeprom = std::make_shared<std::string>();
+  auto rig = std::make_shared<std::string>("auto");
+  auto preset = std::make_shared<std::string>("kv1100_9x4.7");
+  auto seeds = std::make_shared<std::vector<uint64_t>>(std::vector<uint64_t>{1, 2, 3, 4});
+  auto speed = std::make_shared<double>(1.0);
+  auto duration = std::make_shared<double>(0.0);
+  auto read_only = std::make_shared<bool>(false);
+  auto slot = std::make_shared<int>(0);
+  cmd->add_option("--elf", *elf, "firmware ELF image")->capture_default_str();
+  cmd->add_option("--eeprom", *eeprom, "Intel HEX EEPROM image (loaded if it exists, saved at exit)");
+  cmd->add_option("--rig", *rig, "bench, quad or auto (bench for gather_store, quad otherwise)")
+      ->check(CLI::IsMember({"auto", "bench", "quad"}))
+      ->capture_default_str();
+  cmd->add_option("--preset", *preset, "motor + propeller preset")->capture_default_str();
+  cmd->add_option("--slot", *slot, "bench: the ESC output (0..3) the motor is wired to; select "
+                                   "it with 'motor N' in gather_store")
+      ->check(CLI::Range(0, 3))
+      ->capture_default_str();
+  cmd->add_option("--seeds", *seeds, "motor seeds (bench: the first; quad: slot 0..3)")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--speed", *speed, "simulated seconds per wall second (0: as fast as possible)")
+      ->capture_default_str();
+  cmd->add_option("--duration", *duration, "stop after this many simulated seconds (0: Ctrl-C)")
+      ->capture_default_str();
+  cmd->add_flag("--read-only", *read_only, "do not write the EEPROM back");
+  cmd->callback([=] {
+    guarded([&] {
+      std::string which = *rig;
+      if (which == "auto")
+        which = fs::path(*elf).filename().string().find("gather") != std::string::npos ? "bench"
+                                                                                       : "quad";
+      const auto image = loadEepromOrErased(*eeprom, false);
+      std::unique_ptr<BenchRig> bench;
+      std::unique_ptr<QuadRig> quad;
+      Board* board = nullptr;
+      if (which == "bench") {
+        plant::BenchParams p = plant::BenchParams::thesis(*preset);
+        p.actuator = motorForSeed(*preset, seeds->at(0), 0.03);
+        bench = std::make_unique<BenchRig>(*elf, p, *slot);
+        board = &bench->board;
+      } else {
+        std::array<plant::ActuatorParams, 4> motors;
+        for (int i = 0; i < 4; ++i)
+          motors[i] = motorForSeed(*preset, seeds->size() > static_cast<std::size_t>(i) ? (*seeds)[i] : i + 1, 0.03);
+        plant::QuadFrameParams qp;
+        quad = std::make_unique<QuadRig>(*elf, qp, motors);
+        board = &quad->board;
+      }
+      board->setEeprom(image);
+      PtyBridge pty(*board);
+      fmt::print("simulated board ({}, {} rig) on {}\n", fs::path(*elf).filename().string(), which,
+                 pty.path());
+      fmt::print("open it with:  screen {} 115200   or   picocom -b 115200 {}\n", pty.path(),
+                 pty.path());
+      fmt::print("Ctrl-C here ends the simulation{}.\n",
+                 *read_only || eeprom->empty() ? "" : " and saves the EEPROM to " + *eeprom);
+      std::fflush(stdout);
+      std::signal(SIGINT, onSignal);
+      std::signal(SIGTERM, onSignal);
+      pty.run(*speed, *duration, g_stop);
+      if (!*read_only && !eeprom->empty()) {
+        writeIntelHexFile(*eeprom, board->eeprom());
+        fmt::print("EEPROM saved: {}\n", *eeprom);
+      }
+      fmt::print("{:.1f} s simulated, {:.1f}x real time\n", board->simulatedSeconds(),
+                 board->realtimeFactor());
+    });
+  });
+}
+
+}  // namespace
+
+void registerCommands(CLI::App& app) {
+  auto* sim = app.add_subcommand(
+      "sim",
+      "The virtual bench: the real firmware images in a simulated ATmega2560 (simavr) wired to\n"
+      "the plant model. Deterministic (simulated time only; same seed, same result).");
+  sim->require_subcommand(1);
+  addGather(*sim);
+  addLiftoff(*sim);
+  addConsole(*sim);
+}
+
+}  // namespace sim

@@ -1,0 +1,311 @@
+// `thrustcal sim gather`: gather_store on the simulated thesis bench.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "plant/bench.hpp"
+#include "sim/board.hpp"
+#include "sim/console.hpp"
+#include "sim/rigs.hpp"
+#include "sim/scenarios.hpp"
+
+namespace sim {
+
+BenchRig::BenchRig(const std::string& elf, const plant::BenchParams& params, int esc_slot)
+    : board(elf), bench(params), slot(esc_slot) {
+  bench.loadCell().settle(bench.downForce_g());
+  board.addPulseListener([this](int ch, double width_us, double t_s) {
+    if (ch == slot) bench.setPulse(width_us, t_s);
+  });
+  board.setAdcSource([this](int ch) { return ch <= 1 ? bench.adcMillivolts(ch) : 0.0; });
+  board.setTickHook([this](double t_s) {
+    bench.step(t_s - last_t);
+    last_t = t_s;
+  });
+}
+
+namespace {
+
+// Sends a command and fails loudly when the firmware answers with an error line.
+std::vector<std::string> mustCommand(Console& con, const std::string& line, double budget_s = 10) {
+  auto lines = con.command(line, budget_s);
+  for (const auto& l : lines)
+    if (l.rfind("error:", 0) == 0)
+      throw std::runtime_error(fmt::format("gather_store rejected \"{}\": {}\nlast lines:\n{}",
+                                           line, l, con.tail()));
+  return lines;
+}
+
+std::string fmtCsvNumber(double v, int decimals) { return fmt::format("{:.{}f}", v, decimals); }
+
+// The plant's steady-state thrust at every whole PWM 1000..2000 us on a frozen bench (power
+// source and winding temperature as when the snapshot was taken): stored PWMs are whole
+// microseconds, so the thrust at a stored PWM is an exact lookup.
+struct TruthTable {
+  static constexpr int kLo = 1000, kHi = 2000;
+  std::vector<double> thrust_g;
+  explicit TruthTable(const plant::Bench& bench) {
+    thrust_g.reserve(kHi - kLo + 1);
+    for (int p = kLo; p <= kHi; ++p) thrust_g.push_back(bench.steadyState(p).thrust_g);
+  }
+  double thrustAt(int pwm_us) const {
+    return thrust_g[static_cast<std::size_t>(std::clamp(pwm_us, kLo, kHi) - kLo)];
+  }
+  // Smallest PWM (interpolated) whose thrust reaches `grams`; NaN when out of reach.
+  double pwmFor(double grams) const {
+    for (std::size_t i = 1; i < thrust_g.size(); ++i)
+      if (thrust_g[i] >= grams && thrust_g[i - 1] < grams)
+        return kLo + (i - 1) + (grams - thrust_g[i - 1]) / (thrust_g[i] - thrust_g[i - 1]);
+    return std::nan("");
+  }
+};
+
+std::string truePwm(const TruthTable& t, double grams) {
+  const double p = t.pwmFor(grams);
+  return std::isnan(p) ? std::string() : fmt::format("{:.1f}", p);
+}
+
+// Error of a stored curve against the truth.
+void checkCurve(const tc::ThesisCurve& curve, const TruthTable& truth, const GatherOptions& o,
+                CurveCheck& out) {
+  out.start_v = curve.start_mv / 1000.0;
+  out.max_g = curve.maxGrams();
+  out.band_lo_g = o.band_min_g;
+  out.band_hi_g = std::floor(o.band_top_frac * out.max_g);
+  double sum2 = 0;
+  int n = 0;
+  out.error_max_g = 0;
+  out.error_max_pct = 0;
+  for (int g = static_cast<int>(out.band_lo_g); g <= static_cast<int>(out.band_hi_g); ++g) {
+    const double thrust = truth.thrustAt(curve.pwmForGrams(static_cast<uint16_t>(g)));
+    const double err = std::fabs(thrust - g);
+    out.error_max_g = std::max(out.error_max_g, err);
+    if (g >= 50) out.error_max_pct = std::max(out.error_max_pct, 100.0 * err / g);
+    sum2 += err * err;
+    ++n;
+  }
+  out.error_rms_g = n > 0 ? std::sqrt(sum2 / n) : 0;
+}
+
+struct SweepCapture {
+  std::ofstream csv;
+  int rows = 0;
+  bool active = false;
+};
+
+CurveCheck runSweep(BenchRig& rig, Console& con, const GatherOptions& o, int slot, int curve_no,
+                    const ProgressFn& progress, plant::Bench& truth_out) {
+  CurveCheck check;
+  SweepCapture cap;
+  if (!o.log_dir.empty()) {
+    check.csv_path =
+        (std::filesystem::path(o.log_dir) / fmt::format("gather_slot{}_curve{}.csv", slot, curve_no))
+            .string();
+    cap.csv.open(check.csv_path, std::ios::trunc);
+    if (!cap.csv)
+      throw std::runtime_error(fmt::format("{}: cannot write the sweep log; check --log-dir",
+                                           check.csv_path));
+    cap.csv << fmt::format(
+        "# thrustcal sim gather: slot {} curve {}, streamed by gather_store (first six columns);\n"
+        "# current_a, rpm, temp_c, true_force_g: the plant at the moment the row was printed\n",
+        slot, curve_no);
+  }
+  cap.active = true;
+  struct ListenerGuard {
+    Console& con;
+    ~ListenerGuard() { con.clearLineListeners(); }
+  } guard{con};
+  con.onLine([&cap, &rig, &progress](const std::string& line) {
+    if (!cap.active) return;
+    if (line.rfind("# ", 0) == 0) {
+      if (progress) progress(line.substr(2));
+      if (cap.csv) cap.csv << line << "\n";
+    } else if (line.rfind("pwm_us,", 0) == 0) {
+      if (cap.csv) cap.csv << line << ",current_a,rpm,temp_c,true_force_g\n";
+    } else if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) {
+      ++cap.rows;
+      if (cap.csv) {
+        const auto& a = rig.bench.actuator();
+        cap.csv << line << "," << fmtCsvNumber(rig.bench.busCurrent_a(), 3) << ","
+                << fmtCsvNumber(a.rpm(), 0) << "," << fmtCsvNumber(a.windingTemp_c(), 2) << ","
+                << fmtCsvNumber(a.thrust_g(), 1) << "\n";
+      }
+    }
+  });
+  truth_out = rig.bench;  // the truth: this bench as the sweep starts
+  const int steps = (o.pwm_max_us - o.pwm_min_us) / o.step_us + 1;
+  const double budget_s = steps * (o.settle_ms / 1000.0 + 0.25) + 15.0;
+  const double sim0 = rig.board.simulatedSeconds(), wall0 = rig.board.wallSeconds();
+  auto lines = con.command("sweep", budget_s);
+  cap.active = false;
+  check.sweep_simulated_s = rig.board.simulatedSeconds() - sim0;
+  check.sweep_wall_s = rig.board.wallSeconds() - wall0;
+  check.samples = cap.rows;
+  bool done = false;
+  for (const auto& l : lines) {
+    if (l.rfind("error:", 0) == 0)
+      throw std::runtime_error(fmt::format("sweep on slot {} refused: {}", slot, l));
+    if (l.rfind("# done:", 0) == 0) done = true;
+  }
+  if (!done)
+    throw std::runtime_error(fmt::format("sweep on slot {} did not complete; last lines:\n{}",
+                                         slot, con.tail()));
+  return check;
+}
+
+}  // namespace
+
+GatherResult runGather(const GatherOptions& o) {
+  const ProgressFn progress = o.progress ? o.progress : ProgressFn(stderrProgress);
+  if (o.seeds.size() != o.slots.size())
+    throw std::invalid_argument(fmt::format("{} seeds but {} slots: give one seed per slot",
+                                            o.seeds.size(), o.slots.size()));
+  if (!o.log_dir.empty()) std::filesystem::create_directories(o.log_dir);
+  GatherResult result;
+  result.eeprom = o.eeprom.empty() ? std::vector<uint8_t>(kEepromBytes, 0xFF) : o.eeprom;
+  double sweep_sim = 0, sweep_wall = 0;
+
+  for (std::size_t m = 0; m < o.seeds.size(); ++m) {
+    GatherMotorResult mr;
+    mr.slot = o.slots[m];
+    mr.seed = o.seeds[m];
+    if (mr.slot < 0 || mr.slot > 3)
+      throw std::invalid_argument(fmt::format("slot {} is not 0..3", mr.slot));
+    plant::BenchParams params = plant::BenchParams::thesis(o.preset);
+    params.actuator = motorForSeed(o.preset, mr.seed, o.variation);
+    params.load_cell.seed = mr.seed * 1000003ULL + 17;
+    params.battery_sensor.seed = mr.seed * 1000003ULL + 29;
+    auto rig = std::make_unique<BenchRig>(o.elf_path, params, mr.slot);
+    rig->board.setEeprom(result.eeprom);
+    Console con(rig->board, "gs> ");
+    progress(fmt::format("slot {}: motor seed {} ({}), gather_store booting", mr.slot, mr.seed,
+                         o.preset));
+    con.waitPrompt(10.0);
+
+    mr.mount_weight_g = std::round(params.actuator.mountWeight_g());
+    mustCommand(con, fmt::format("motor {}", mr.slot));
+    mustCommand(con, fmt::format("plate {}", static_cast<int>(std::lround(params.load_cell.plate_g))));
+    mustCommand(con, fmt::format("range {} {}", o.pwm_min_us, o.pwm_max_us));
+    mustCommand(con, fmt::format("step {}", o.step_us));
+    mustCommand(con, fmt::format("settle {}", o.settle_ms));
+    auto cal = mustCommand(con, fmt::format("cal {}", static_cast<int>(mr.mount_weight_g)), 15);
+    progress(fmt::format("slot {}: cal {} g: {}", mr.slot, mr.mount_weight_g,
+                         cal.empty() ? "" : cal.back()));
+
+    // Curve 1: full LiPo.
+    plant::Bench truth1 = rig->bench;
+    progress(fmt::format("slot {}: curve 1 sweep on the LiPo ({:.2f} V resting)", mr.slot,
+                         rig->bench.restingVoltage_v()));
+    mr.curve1 = runSweep(*rig, con, o, mr.slot, 1, progress, truth1);
+    mustCommand(con, "store 1");
+
+    // Curve 2: another voltage.
+    if (o.second == SecondCurveSource::kBenchSupply) {
+      rig->bench.power() = plant::PowerSource(plant::BatteryParams::benchSupply(o.supply_v));
+      mr.second_source = fmt::format("bench supply {:.2f} V, 6.32 A limit", o.supply_v);
+    } else {
+      rig->bench.power().setSoc(o.drained_soc);
+      mr.second_source = fmt::format("drained pack, {:.0f} % charge", o.drained_soc * 100);
+    }
+    // Tare only once the propeller stands still (it coasts for seconds on its own drag), as a
+    // person at the bench would wait.
+    if (!rig->board.runUntil([&] { return rig->bench.actuator().rpm() < 20.0; },
+                             secondsToCycles(30.0)))
+      throw std::runtime_error(fmt::format("slot {}: the propeller still turns 30 s after the "
+                                           "sweep ({:.0f} rpm)", mr.slot, rig->bench.actuator().rpm()));
+    rig->board.runFor(0.5);
+    mustCommand(con, "tare", 15);
+    plant::Bench truth2 = rig->bench;
+    progress(fmt::format("slot {}: curve 2 sweep on the {}", mr.slot, mr.second_source));
+    mr.curve2 = runSweep(*rig, con, o, mr.slot, 2, progress, truth2);
+    mustCommand(con, "store 2");
+    mr.show = mustCommand(con, "show");
+    result.eeprom = rig->board.eeprom();
+
+    // Compare the stored curves with the plant.
+    tc::MotorCalibration calib;
+    const std::string status = decodeSlot(result.eeprom, mr.slot, calib);
+    if (status != "ok" || !calib.hasSecondCurve())
+      throw std::runtime_error(fmt::format(
+          "slot {}: the EEPROM record after store 1/2 decodes as '{}'{}; show said:\n{}", mr.slot,
+          status, calib.hasSecondCurve() ? "" : " without a second curve", con.tail()));
+    const double s1 = mr.curve1.sweep_simulated_s, w1 = mr.curve1.sweep_wall_s;
+    const double s2 = mr.curve2.sweep_simulated_s, w2 = mr.curve2.sweep_wall_s;
+    const TruthTable table1(truth1), table2(truth2);
+    checkCurve(calib.first, table1, o, mr.curve1);
+    mr.curve1.sweep_simulated_s = s1;
+    mr.curve1.sweep_wall_s = w1;
+    checkCurve(calib.second, table2, o, mr.curve2);
+    mr.curve2.sweep_simulated_s = s2;
+    mr.curve2.sweep_wall_s = w2;
+    sweep_sim += s1 + s2;
+    sweep_wall += w1 + w2;
+    result.curve_error_max_g =
+        std::max({result.curve_error_max_g, mr.curve1.error_max_g, mr.curve2.error_max_g});
+    progress(fmt::format(
+        "slot {}: stored curve 1 ({:.3f} V, 1..{} g) max error {:.1f} g, curve 2 ({:.3f} V, "
+        "1..{} g) max error {:.1f} g",
+        mr.slot, mr.curve1.start_v, mr.curve1.max_g, mr.curve1.error_max_g, mr.curve2.start_v,
+        mr.curve2.max_g, mr.curve2.error_max_g));
+
+    if (!o.log_dir.empty()) {
+      mr.curves_csv_path =
+          (std::filesystem::path(o.log_dir) / fmt::format("gather_slot{}_curves.csv", mr.slot))
+              .string();
+      std::ofstream out(mr.curves_csv_path, std::ios::trunc);
+      out << "# stored curves (PWM per gram, from EEPROM) and the plant's true PWM for the same "
+             "thrust at each sweep's starting conditions\n";
+      out << "force_g,curve1_pwm_us,curve2_pwm_us,true1_pwm_us,true2_pwm_us\n";
+      const int top = std::max(calib.first.maxGrams(), calib.second.maxGrams());
+      for (int g = 1; g <= top; ++g) {
+        auto stored = [g](const tc::ThesisCurve& c) {
+          return g <= c.maxGrams() ? std::to_string(c.pwmForGrams(static_cast<uint16_t>(g))) : "";
+        };
+        out << g << "," << stored(calib.first) << "," << stored(calib.second) << ","
+            << truePwm(table1, g) << "," << truePwm(table2, g) << "\n";
+      }
+    }
+    result.simulated_s += rig->board.simulatedSeconds();
+    result.wall_s += rig->board.wallSeconds();
+    result.motors.push_back(std::move(mr));
+  }
+  result.realtime_factor = result.wall_s > 0 ? result.simulated_s / result.wall_s : 0;
+  result.sweep_realtime_factor = sweep_wall > 0 ? sweep_sim / sweep_wall : 0;
+  return result;
+}
+
+namespace {
+nlohmann::json curveJson(const CurveCheck& c) {
+  return {{"start_v", c.start_v},           {"max_g", c.max_g},
+          {"band_g", {c.band_lo_g, c.band_hi_g}}, {"error_max_g", c.error_max_g},
+          {"error_rms_g", c.error_rms_g},   {"error_max_pct_above_50g", c.error_max_pct},
+          {"samples", c.samples},           {"sweep_simulated_s", c.sweep_simulated_s},
+          {"sweep_wall_s", c.sweep_wall_s}, {"csv", c.csv_path}};
+}
+}  // namespace
+
+nlohmann::json GatherResult::toJson() const {
+  nlohmann::json motors_json = nlohmann::json::array();
+  for (const auto& m : motors)
+    motors_json.push_back({{"slot", m.slot},
+                           {"seed", m.seed},
+                           {"mount_weight_g", m.mount_weight_g},
+                           {"curve1", curveJson(m.curve1)},
+                           {"curve2", curveJson(m.curve2)},
+                           {"second_source", m.second_source},
+                           {"curves_csv", m.curves_csv_path},
+                           {"show", m.show}});
+  return {{"calibration", {{"curve_error_max_g", curve_error_max_g}, {"motors", motors_json}}},
+          {"sim",
+           {{"realtime_factor", realtime_factor},
+            {"sweep_realtime_factor", sweep_realtime_factor},
+            {"simulated_s", simulated_s},
+            {"wall_s", wall_s}}}};
+}
+
+}  // namespace sim

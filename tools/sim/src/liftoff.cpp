@@ -1,0 +1,195 @@
+// `thrustcal sim liftoff`: read_run on the tethered quad frame.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <memory>
+
+#include "plant/quad_frame.hpp"
+#include "plant/sensors.hpp"
+#include "sim/board.hpp"
+#include "sim/console.hpp"
+#include "sim/rigs.hpp"
+#include "sim/scenarios.hpp"
+
+namespace sim {
+
+QuadRig::QuadRig(const std::string& elf, const plant::QuadFrameParams& params,
+                 const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s)
+    : board(elf), quad(params, motors), vsense(plant::BatterySensorParams{}),
+      sample_every(std::max<int>(1, static_cast<int>(std::lround(sample_period_s * 1000)))) {
+  board.addPulseListener(
+      [this](int ch, double width_us, double t_s) { quad.setPulse(ch, width_us, t_s); });
+  board.setAdcSource([this](int ch) { return ch == 1 ? vsense.adcMillivolts() : 0.0; });
+  vsense.settle(quad.power().restingVoltage_v());
+  board.setTickHook([this](double t_s) {
+    const double dt = t_s - last_t;
+    last_t = t_s;
+    quad.step(dt);
+    vsense.step(dt, quad.busVoltage_v());
+    if (recording && ++tick % sample_every == 0) {
+      const plant::QuadState st = quad.state();
+      LiftoffSample s{};
+      s.t_s = t_s;
+      s.thrust_g = st.thrust_g;
+      for (int i = 0; i < 4; ++i) s.pwm_us[i] = board.escPulseUs(i);
+      s.roll_deg = st.roll_deg;
+      s.pitch_deg = st.pitch_deg;
+      s.tilt_deg = st.tilt_deg;
+      s.height_m = st.height_m;
+      s.roll_moment_nm = st.roll_moment_nm;
+      s.pitch_moment_nm = st.pitch_moment_nm;
+      s.bus_v = st.bus_v;
+      samples.push_back(s);
+    }
+  });
+}
+
+std::vector<std::string> bootReadRun(Console& con) {
+  // banner, calibration report, 2 s arming, "armed", prompt
+  return con.waitPrompt(10.0);
+}
+
+LiftoffResult runLiftoff(const LiftoffOptions& o) {
+  const ProgressFn progress = o.progress ? o.progress : ProgressFn(stderrProgress);
+  LiftoffResult r;
+  r.mode = o.uncalibrated ? "uncalibrated" : "calibrated";
+  r.force_g = o.force_g;
+  std::vector<uint8_t> eeprom = o.eeprom;
+  if (eeprom.size() != kEepromBytes)
+    throw std::invalid_argument(fmt::format("liftoff needs a {}-byte EEPROM image, got {} bytes",
+                                            kEepromBytes, eeprom.size()));
+  if (o.uncalibrated) {
+    tc::MotorCalibration ref;
+    const std::string status = decodeSlot(eeprom, o.reference_slot, ref);
+    if (status != "ok")
+      throw std::invalid_argument(fmt::format(
+          "uncalibrated mode copies slot {}'s record to all four, but it is '{}'; calibrate it "
+          "first (thrustcal sim gather)",
+          o.reference_slot, status));
+    for (int s = 0; s < 4; ++s) copySlot(eeprom, o.reference_slot, s);
+  }
+
+  plant::QuadFrameParams qp;
+  qp.power = plant::BatteryParams::lipo3s(o.lipo_soc);
+  std::array<plant::ActuatorParams, 4> motors;
+  for (int i = 0; i < 4; ++i) motors[i] = motorForSeed(o.preset, o.seeds[i], o.variation);
+  auto rig = std::make_unique<QuadRig>(o.elf_path, qp, motors, o.sample_period_s);
+  rig->board.setEeprom(eeprom);
+  Console con(rig->board, "rr> ");
+  progress(fmt::format("liftoff ({}): read_run booting, seeds {} {} {} {}", r.mode, o.seeds[0],
+                       o.seeds[1], o.seeds[2], o.seeds[3]));
+  for (const auto& line : bootReadRun(con))
+    if (line.rfind("motor ", 0) == 0 || line.rfind("calibrated motors", 0) == 0)
+      r.calibration_report.push_back(line);
+
+  double t_hold = -1, t_done = -1;
+  con.onLine([&](const std::string& line) {
+    if (line.rfind("# hold", 0) == 0) t_hold = rig->board.timeS();
+    if (line.rfind("# liftoff done", 0) == 0) t_done = rig->board.timeS();
+    if (line.rfind("# t ", 0) == 0) progress(fmt::format("liftoff ({}): {}", r.mode, line.substr(2)));
+  });
+  rig->recording = true;
+  const double t_cmd = rig->board.timeS();
+  con.send(fmt::format("liftoff {} {} {}", static_cast<int>(std::lround(o.force_g)), o.ramp_ms,
+                       o.hold_ms));
+  con.expect("^# liftoff (done|aborted)", (o.ramp_ms + o.hold_ms) / 1000.0 + 5.0);
+  con.waitPrompt(1.0);
+  rig->board.runFor(0.5);  // spin-down
+  rig->recording = false;
+  con.clearLineListeners();
+  if (t_done < 0)
+    throw std::runtime_error(fmt::format("read_run did not finish the lift-off; last lines:\n{}",
+                                         con.tail()));
+  if (t_hold < 0) t_hold = t_cmd + o.ramp_ms / 1000.0;
+
+  // Hold-phase summary.
+  const double from = t_hold + o.settle_s, to = t_done - 0.02;
+  int n = 0;
+  double tilt_sum = 0, roll_m = 0, pitch_m = 0, bus = 0;
+  for (const auto& s : rig->samples) {
+    r.max_tilt_deg = std::max(r.max_tilt_deg, s.tilt_deg);
+    if (s.t_s < from || s.t_s > to) continue;
+    for (int i = 0; i < 4; ++i) {
+      r.hold_thrust_g[i] += s.thrust_g[i];
+      r.hold_pwm_us[i] += s.pwm_us[i];
+    }
+    tilt_sum += s.tilt_deg;
+    roll_m += s.roll_moment_nm;
+    pitch_m += s.pitch_moment_nm;
+    bus += s.bus_v;
+    ++n;
+  }
+  if (n == 0)
+    throw std::runtime_error(fmt::format(
+        "the hold phase ({:.2f}..{:.2f} s) has no samples: hold longer than --settle", from, to));
+  double mean = 0, lo = 1e9, hi = -1e9, err2 = 0;
+  for (int i = 0; i < 4; ++i) {
+    r.hold_thrust_g[i] /= n;
+    r.hold_pwm_us[i] /= n;
+    mean += r.hold_thrust_g[i] / 4;
+    lo = std::min(lo, r.hold_thrust_g[i]);
+    hi = std::max(hi, r.hold_thrust_g[i]);
+    const double e = (r.hold_thrust_g[i] - o.force_g) / o.force_g * 100.0;
+    err2 += e * e / 4;
+  }
+  r.thrust_spread_pct = mean > 0 ? (hi - lo) / mean * 100.0 : 0;
+  r.force_error_rms_pct = std::sqrt(err2);
+  r.hold_tilt_deg = tilt_sum / n;
+  r.hold_roll_moment_nm = roll_m / n;
+  r.hold_pitch_moment_nm = pitch_m / n;
+  r.hold_bus_v = bus / n;
+  r.samples = std::move(rig->samples);
+  r.simulated_s = rig->board.simulatedSeconds();
+  r.wall_s = rig->board.wallSeconds();
+  r.realtime_factor = rig->board.realtimeFactor();
+
+  if (!o.csv_path.empty()) {
+    r.csv_path = o.csv_path;
+    std::ofstream out(o.csv_path, std::ios::trunc);
+    if (!out)
+      throw std::runtime_error(fmt::format("{}: cannot write the time series; check the path",
+                                           o.csv_path));
+    out << fmt::format(
+        "# thrustcal sim liftoff ({}): read_run, liftoff {} g ramp {} ms hold {} ms; t_s from "
+        "the command; hold from {:.3f} s\n",
+        r.mode, o.force_g, o.ramp_ms, o.hold_ms, t_hold - t_cmd);
+    out << "t_s,thrust0_g,thrust1_g,thrust2_g,thrust3_g,pwm0_us,pwm1_us,pwm2_us,pwm3_us,roll_deg,"
+           "pitch_deg,tilt_deg,height_m,roll_moment_nm,pitch_moment_nm,bus_v\n";
+    for (const auto& s : r.samples) {
+      out << fmt::format("{:.3f}", s.t_s - t_cmd);
+      for (double v : s.thrust_g) out << fmt::format(",{:.2f}", v);
+      for (double v : s.pwm_us) out << fmt::format(",{:.1f}", v);
+      out << fmt::format(",{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.3f}\n", s.roll_deg,
+                         s.pitch_deg, s.tilt_deg, s.height_m, s.roll_moment_nm, s.pitch_moment_nm,
+                         s.bus_v);
+    }
+  }
+  progress(fmt::format(
+      "liftoff ({}): hold thrust {:.1f} {:.1f} {:.1f} {:.1f} g (command {:.0f} g): spread "
+      "{:.2f} %, rms error {:.2f} %, tilt {:.2f} deg",
+      r.mode, r.hold_thrust_g[0], r.hold_thrust_g[1], r.hold_thrust_g[2], r.hold_thrust_g[3],
+      o.force_g, r.thrust_spread_pct, r.force_error_rms_pct, r.hold_tilt_deg));
+  return r;
+}
+
+nlohmann::json LiftoffResult::toJson() const {
+  return {{"force_g", force_g},
+          {"hold_thrust_g", hold_thrust_g},
+          {"hold_pwm_us", hold_pwm_us},
+          {"thrust_spread_pct", thrust_spread_pct},
+          {"force_error_rms_pct", force_error_rms_pct},
+          {"hold_tilt_deg", hold_tilt_deg},
+          {"max_tilt_deg", max_tilt_deg},
+          {"hold_roll_moment_nm", hold_roll_moment_nm},
+          {"hold_pitch_moment_nm", hold_pitch_moment_nm},
+          {"hold_bus_v", hold_bus_v},
+          {"calibration_report", calibration_report},
+          {"csv", csv_path},
+          {"simulated_s", simulated_s},
+          {"wall_s", wall_s},
+          {"realtime_factor", realtime_factor}};
+}
+
+}  // namespace sim
