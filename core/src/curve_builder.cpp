@@ -135,8 +135,9 @@ BuildReport CurveBuilderBase::build(ForceCurveBase& out) {
       const SweepSample& lo = samples_[reach - 1];
       const SweepSample& hi = samples_[reach];
       const uint32_t above = static_cast<uint32_t>(target_dg - lo.force_dg);        // < 2^16
-      const uint32_t span_us = static_cast<uint32_t>(hi.pwm_us - lo.pwm_us);       // < 2^16
-      const uint32_t span_dg = static_cast<uint32_t>(hi.force_dg - lo.force_dg);   // > 0
+      const uint32_t span_us = static_cast<uint32_t>(hi.pwm_us) - lo.pwm_us;       // < 2^16
+      // int32 before subtracting: on AVR int16 - int16 is a 16-bit int and could wrap.
+      const uint32_t span_dg = static_cast<uint32_t>(static_cast<int32_t>(hi.force_dg) - lo.force_dg);
       const uint32_t num = above * span_us;
       uint32_t add = num / span_dg;
       if (2u * (num % span_dg) >= span_dg) ++add;

@@ -13,4 +13,4 @@ avr-g++ -mmcu=atmega2560 -DF_CPU=16000000UL -Os -std=gnu++14 -fno-exceptions -fn
   "$root"/core/src/median_filter.cpp "$root"/core/src/force_pwm.cpp "$root"/core/src/force_curve.cpp \
   "$root"/core/src/curve_builder.cpp "$root"/core/src/eeprom_codec.cpp "$root"/core/src/crc16.cpp \
   "$root"/core/src/motor_calibration.cpp -Wl,-u,vfprintf -lprintf_min -o "$out/cycles.elf"
-timeout 120 simavr -m atmega2560 -f 16000000 "$out/cycles.elf" 2>&1 | grep -a cycles | sed 's/\x1b\[[0-9;]*m//g'
+timeout 120 simavr -m atmega2560 -f 16000000 "$out/cycles.elf" 2>&1 | grep -a -e cycles -e check | sed 's/\x1b\[[0-9;]*m//g'

@@ -326,4 +326,21 @@ TEST(CurveBuilder, ForceAlreadyAboveOneGramAtTheFirstSampleStartsThere) {
   EXPECT_EQ(curve.pwmForGrams(15), 1300);
 }
 
+TEST(CurveBuilder, ForceSpanWiderThanInt16InterpolatesWithoutOverflow) {
+  // given two samples 40000 dg apart (wider than a 16-bit int, which is AVR's int)
+  CurveBuilder<4> builder;
+  builder.add(1000, -20000);
+  builder.add(1100, 20000);
+  ForceCurve<2000> curve;
+  // when
+  const BuildReport report = builder.build(curve);
+  curve.start_mv = 12000;
+  // then 1 g is at 1000 + 20010 * 100 / 40000 = 1050.0 us and 2000 g at the top
+  ASSERT_EQ(report.status, BuildStatus::kOk);
+  EXPECT_EQ(curve.maxGrams(), 2000);
+  EXPECT_EQ(curve.pwmForGrams(1), 1050);
+  EXPECT_EQ(curve.pwmForGrams(1000), 1075);
+  EXPECT_EQ(curve.pwmForGrams(2000), 1100);
+}
+
 }  // namespace

@@ -62,8 +62,16 @@ int main() {
   }
   printf("forceToPwm two curves: mean %lu max %u cycles\n", total / 500, worst);
   TCCR1B = 3; TCNT1 = 0; tc::writeRecord<Ram>(0, cal); uint16_t tw = stop();
-  TCCR1B = 3; TCNT1 = 0; tc::MotorCalibration back; tc::DecodeStatus st = tc::readRecord<Ram>(0, back); uint16_t tr = stop();
+  TCCR1B = 3; TCNT1 = 0; static tc::MotorCalibration back; tc::DecodeStatus st = tc::readRecord<Ram>(0, back); uint16_t tr = stop();
   printf("record encode %lu, decode %lu cycles (+-64), status %u\n", (uint32_t)tw * 64, (uint32_t)tr * 64, (unsigned)st);
+  // correctness on AVR's 16-bit int: a force span wider than int16 (expect 1050 1053 1053)
+  builder.reset();
+  builder.add(1000, -20000);
+  builder.add(1100, 20000);
+  static tc::ForceCurve<100> wide;
+  builder.build(wide);
+  wide.start_mv = 12000;
+  printf("wide span check (cycles test): %u %u %u\n", wide.pwmForGrams(1), wide.pwmForGrams(100), wide.pwmForGrams(2000));
   while (!(UCSR0A & (1 << TXC0))) {}
   cli(); sleep_enable(); sleep_cpu();
 }
