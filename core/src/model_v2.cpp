@@ -17,42 +17,49 @@ bool saneMv(uint16_t mv) { return mv >= kSaneMinMv && mv <= kSaneMaxMv; }
 
 // Where a force falls between the knots: segment index (0 = between the origin and knot 0)
 // and the fraction inside it (Q16). force_dg must be <= maxForceDg().
+// AVR note: avr-gcc -Os turns 32-bit shifts by a constant that is not a multiple of 8 into
+// loops (~6 cycles per bit), so every shift on the per-frame path is by 8, 16 or 24, or is a
+// 16-bit shift.
 struct KnotPos {
   uint8_t index;
   uint16_t frac_q16;
 };
 
-inline KnotPos knotPos(const ModelV2& m, uint16_t force_dg) {
-  // force_dg <= knots * step, inv ~ 2^22 / step: product <= 32 * 2^22 * (1 + 1/step) < 2^28.
-  const uint32_t pos = static_cast<uint32_t>(force_dg) * m.inv_step_q22;
+#define TC_INLINE __attribute__((always_inline)) inline
+
+TC_INLINE KnotPos knotPos(const ModelV2& m, uint16_t force_dg) {
+  // force_dg <= knots * step, inv ~ 2^22 / step: product <= 32 * 2^22 * (1 + 1/step) < 2^28;
+  // times 4 (two additions, no shift loop) < 2^30: index in the top byte, fraction below.
+  uint32_t pos = static_cast<uint32_t>(force_dg) * m.inv_step_q22;
+  pos += pos;
+  pos += pos;
   KnotPos p;
-  p.index = static_cast<uint8_t>(pos >> 22);
-  p.frac_q16 = static_cast<uint16_t>(pos >> 6);
+  p.index = static_cast<uint8_t>(pos >> 24);
+  p.frac_q16 = static_cast<uint16_t>(pos >> 8);
   return p;
 }
 
-inline uint16_t driveAt(const ModelV2& m, KnotPos p) {
+TC_INLINE uint16_t driveAt(const ModelV2& m, KnotPos p) {
   if (p.index >= m.knots) return m.drive_512usmv[m.knots - 1];
   const uint16_t lo = p.index ? m.drive_512usmv[p.index - 1] : 0;
   const uint16_t hi = m.drive_512usmv[p.index];
   // (hi - lo) < 2^16, frac < 2^16: product + 2^15 < 2^32.
   return static_cast<uint16_t>(
-      lo + ((static_cast<uint32_t>(hi - lo) * p.frac_q16 + 0x8000u) >> 16));
+      lo + ((static_cast<uint32_t>(static_cast<uint16_t>(hi - lo)) * p.frac_q16 + 0x8000u) >> 16));
 }
 
-// Sag in mV at a knot position, linear between knots (origin: 0).
-inline int16_t sagAt(const ModelV2& m, KnotPos p) {
-  if (p.index >= m.knots) return static_cast<int16_t>(m.sag_10mv[m.knots - 1] * kV2SagUnitMv);
-  const int16_t lo = p.index ? m.sag_10mv[p.index - 1] : 0;
-  const int16_t hi = m.sag_10mv[p.index];
+// Sag at a knot position in 1/256 of 10 mV, linear between knots (origin: 0).
+inline int32_t sagAtQ8(const ModelV2& m, KnotPos p) {
+  if (p.index >= m.knots) return static_cast<int32_t>(m.sag_10mv[m.knots - 1]) << 8;
+  const uint8_t lo = p.index ? m.sag_10mv[p.index - 1] : 0;
+  const uint8_t hi = m.sag_10mv[p.index];
   // |hi - lo| <= 255, frac < 2^16: |product| < 2^24.
-  const int32_t d = static_cast<int32_t>(hi - lo) * p.frac_q16;
-  const int32_t sag_q4 = static_cast<int32_t>(lo) * 16 + (d >> 12);  // 1/16 of 10 mV
-  return static_cast<int16_t>((sag_q4 * kV2SagUnitMv + 8) >> 4);
+  const int32_t d = static_cast<int32_t>(static_cast<int16_t>(hi) - lo) * p.frac_q16;
+  return (static_cast<int32_t>(lo) << 8) + (d >> 8);
 }
 
-uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flags) {
-  const uint16_t max_dg = m.maxForceDg();
+TC_INLINE uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flags) {
+  const uint16_t max_dg = m.max_force_dg;
   if (force_dg > max_dg) {
     flags |= kSaturated;
     return max_dg;
@@ -60,10 +67,17 @@ uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flags) {
   return force_dg;
 }
 
-ForcePwmResult finishPwm(const ModelV2& m, uint32_t duty_q4, uint8_t flags,
-                         const ForcePwmLimits& limits) {
-  const uint32_t pwm_q4 = m.start_q4_us + duty_q4;
-  const uint32_t pwm_us = (pwm_q4 + 8u) >> 4;
+// drive (512 us*mV) * recip (2^28 / mV) / 2^16 = duty in 1/8 us.
+// drive < 2^16, recip <= 44739 (6 V): product < 2^32; the result < 44739.
+TC_INLINE uint16_t dutyQ3(uint16_t drive, uint16_t recip) {
+  return static_cast<uint16_t>((static_cast<uint32_t>(drive) * recip + 0x8000u) >> 16);
+}
+
+TC_INLINE ForcePwmResult finishPwm(const ModelV2& m, uint16_t duty_q3, uint8_t flags,
+                                   const ForcePwmLimits& limits) {
+  // start <= 1800 us (14400 in 1/8 us) + duty < 44739: fits 16 bits.
+  const uint16_t pwm_q3 = static_cast<uint16_t>(m.start_q3_us + duty_q3);
+  const uint16_t pwm_us = static_cast<uint16_t>((pwm_q3 + 4u) >> 3);
   ForcePwmResult r;
   r.flags = flags;
   if (pwm_us > limits.pwm_max_us) {
@@ -73,7 +87,7 @@ ForcePwmResult finishPwm(const ModelV2& m, uint32_t duty_q4, uint8_t flags,
     r.pwm_us = limits.pwm_min_us;
     r.flags |= kClamped;
   } else {
-    r.pwm_us = static_cast<uint16_t>(pwm_us);
+    r.pwm_us = pwm_us;
   }
   return r;
 }
@@ -87,6 +101,8 @@ void ModelV2::clear() { *this = ModelV2(); }
 bool ModelV2::finalize() {
   inv_step_q22 = 0;
   rest_recip_q28 = 0;
+  max_force_dg = 0;
+  start_q3_us = 0;
   bool ok = start_q4_us >= kStartMinQ4 && start_q4_us <= kStartMaxQ4 &&
             step_dg >= kV2MinStepDg && knots >= 2 && knots <= kV2MaxKnots &&
             static_cast<uint32_t>(knots) * step_dg <= 65535u && saneMv(rest_mv) &&
@@ -104,6 +120,8 @@ bool ModelV2::finalize() {
     sag_10mv[k] = 0;
   }
   inv_step_q22 = static_cast<uint16_t>(((1ul << 22) + step_dg / 2) / step_dg);
+  max_force_dg = static_cast<uint16_t>(knots * step_dg);
+  start_q3_us = static_cast<uint16_t>((start_q4_us + 1u) >> 1);
   rest_recip_q28 = static_cast<uint16_t>(kRecipOne / rest_mv);
   return true;
 }
@@ -112,13 +130,12 @@ bool ModelV2::finalize() {
 
 void BusVoltageFilter::reset(uint16_t mv_now) {
   if (shift > 6) shift = 6;
+  rem = 0;
   if (!saneMv(mv_now)) {
-    acc = 0;
     mv = 0;
     recip_q28 = 0;
     return;
   }
-  acc = static_cast<uint32_t>(mv_now) << shift;
   mv = mv_now;
   recip_q28 = static_cast<uint16_t>(kRecipOne / mv_now);  // the one division
 }
@@ -132,8 +149,13 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
     reset(sample_mv);
     return;
   }
-  acc = acc - (acc >> shift) + sample_mv;
-  mv = static_cast<uint16_t>(acc >> shift);  // floor: exactly the input in steady state
+  // y = mv + rem / 2^s; y += (x - y) / 2^s  <=>  y * 2^s += x - floor(y): with
+  // t = rem + x - mv, the new y * 2^s = mv * 2^s + t. 16-bit only; |t| < 2^15.
+  const int16_t t = static_cast<int16_t>(rem + static_cast<int16_t>(sample_mv - mv));
+  const int16_t step = static_cast<int16_t>(t >> shift);  // floor
+  rem = static_cast<uint8_t>(t - step * static_cast<int16_t>(1 << shift));
+  if (step == 0) return;  // steady: the reciprocal is still right
+  mv = static_cast<uint16_t>(mv + step);
   // Newton step on r = 2^28 / mv: e = 2^28 - mv * r, r += r * e / 2^28.
   // mv * r <= 17500 * 44739 < 2^30.
   const int32_t e = static_cast<int32_t>(kRecipOne - static_cast<uint32_t>(mv) * recip_q28);
@@ -142,27 +164,42 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
     if (reseeds != 255) ++reseeds;
     return;
   }
-  // |e >> 7| <= 2^14, r < 2^16: |product| < 2^30.
-  const int32_t corr = (static_cast<int32_t>(static_cast<int16_t>(e >> 7)) * recip_q28) >> 21;
-  recip_q28 = static_cast<uint16_t>(static_cast<int32_t>(recip_q28) + corr);
+  // r * e / 2^28 = ((e / 2^8) * r / 2^16) / 2^4: |e / 2^8| <= 2^13, r < 2^16: |product| < 2^29.
+  const int16_t e8 = static_cast<int16_t>(e >> 8);
+  const int16_t corr = static_cast<int16_t>((static_cast<int32_t>(e8) * recip_q28) >> 16);
+  recip_q28 = static_cast<uint16_t>(recip_q28 + (corr >> 4));
 }
 
 // ---- Run time ------------------------------------------------------------------------------
 
+namespace {
+
+// The per-motor path, inlined into both entry points.
+TC_INLINE ForcePwmResult pwmFor(const ModelV2& model,
+                                                            uint16_t force_dg, uint16_t recip,
+                                                            uint8_t flags,
+                                                            const ForcePwmLimits& limits) {
+  if (model.knots == 0 || model.start_q4_us == 0)
+    return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
+  if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
+  if (flags & kVoltageInvalid) recip = model.rest_recip_q28;
+  const uint16_t drive = driveAt(model, knotPos(model, clampForce(model, force_dg, flags)));
+  return finishPwm(model, dutyQ3(drive, recip), flags, limits);
+}
+
+}  // namespace
+
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
                             const ForcePwmLimits& limits) {
-  if (!model.isPresent()) return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
-  if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
-  uint8_t flags = 0;
-  uint16_t recip = bus.recip_q28;
-  if (!bus.isValid()) {
-    recip = model.rest_recip_q28;
-    flags |= kVoltageInvalid;
-  }
-  const uint16_t drive = driveAt(model, knotPos(model, clampForce(model, force_dg, flags)));
-  // drive <= 34180 (1000 us * 17.5 V), recip <= 44739 (6 V): product + 2^14 < 2^31.
-  const uint32_t duty_q4 = (static_cast<uint32_t>(drive) * recip + (1ul << 14)) >> 15;
-  return finishPwm(model, duty_q4, flags, limits);
+  return pwmFor(model, force_dg, bus.recip_q28, bus.isValid() ? 0 : kVoltageInvalid, limits);
+}
+
+void forceToPwmV2Frame(const ModelV2* models, const uint16_t* force_dg, uint8_t count,
+                       const BusVoltageFilter& bus, ForcePwmResult* out,
+                       const ForcePwmLimits& limits) {
+  const uint8_t flags = bus.isValid() ? 0 : kVoltageInvalid;
+  const uint16_t recip = bus.recip_q28;
+  for (uint8_t i = 0; i < count; ++i) out[i] = pwmFor(models[i], force_dg[i], recip, flags, limits);
 }
 
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
@@ -176,24 +213,26 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
     flags |= kVoltageInvalid;
   }
   const KnotPos p = knotPos(model, clampForce(model, force_dg, flags));
-  const uint16_t drive = driveAt(model, p);
-  int32_t duty_q4 = static_cast<int32_t>((static_cast<uint32_t>(drive) * recip + (1ul << 14)) >> 15);
+  uint16_t duty_q3 = dutyQ3(driveAt(model, p), recip);
   if (force_now_dg != force_dg) {
     uint8_t ignored = 0;
     const KnotPos now = knotPos(model, clampForce(model, force_now_dg, ignored));
-    // Extra drop expected at the command: d = sag(cmd) - sag(now), |d| <= 2550 mV.
-    const int16_t d_mv = static_cast<int16_t>(sagAt(model, p) - sagAt(model, now));
-    // delta = d / V in Q16 = d * recip / 2^12; |d * recip| < 2550 * 44739 < 2^27.
-    int32_t delta = (static_cast<int32_t>(d_mv) * recip) >> 12;
-    if (delta > 16384) delta = 16384;    // a predicted change of more than 25 % is not sag
+    // Extra drop expected at the command, mV: (sag(cmd) - sag(now)) * 10 / 256, clamped to
+    // +-2047 mV so that 16 * d fits 16 bits.
+    int32_t d_mv = ((sagAtQ8(model, p) - sagAtQ8(model, now)) * kV2SagUnitMv) >> 8;
+    if (d_mv > 2047) d_mv = 2047;
+    if (d_mv < -2047) d_mv = -2047;
+    // delta = d / V in Q16 = 16 d * recip / 2^16; |16 d * recip| < 2^15 * 2^16.
+    int32_t delta = (static_cast<int32_t>(static_cast<int16_t>(d_mv * 16)) * recip) >> 16;
+    if (delta > 16384) delta = 16384;  // a predicted change of more than 25 % is not sag
     if (delta < -16384) delta = -16384;
     // duty / (1 - delta) ~ duty * (1 + delta + delta^2): error delta^3 (< 0.01 % at 5 %).
-    const int32_t factor = delta + ((delta * delta) >> 16);  // |delta^2| <= 2^28
-    // duty_q4 < 2^16, |factor| < 2^15: |product| < 2^31.
-    duty_q4 += (duty_q4 * factor) >> 16;
-    if (duty_q4 < 0) duty_q4 = 0;
+    const int32_t factor = delta + ((delta * delta) >> 16);  // delta^2 <= 2^28; factor < 2^15
+    // duty < 2^16, |factor| < 2^15: |product| < 2^31.
+    const int32_t duty = duty_q3 + ((static_cast<int32_t>(duty_q3) * factor) >> 16);
+    duty_q3 = static_cast<uint16_t>(duty < 0 ? 0 : (duty > 65535 ? 65535 : duty));
   }
-  return finishPwm(model, static_cast<uint32_t>(duty_q4), flags, limits);
+  return finishPwm(model, duty_q3, flags, limits);
 }
 
 uint16_t forceForPwmDg(const ModelV2& model, uint16_t pwm_us, uint16_t vbus_mv) {

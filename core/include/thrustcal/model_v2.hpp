@@ -9,7 +9,7 @@
 //   drive = (pwm - start) * V_bus        [us*mV; stored in units of 512 us*mV]
 //   force = curve(drive)                 [monotone, one curve for every voltage]
 //
-// Per motor (ModelV2, ~108 bytes of SRAM):
+// Per motor (ModelV2, 116 bytes of SRAM; four motors 464 bytes):
 // - start_q4_us: the ESC's start threshold (where force leaves zero), 1/16 us;
 // - a monotone force curve in drive: up to 32 knots evenly spaced in FORCE (knot k at force
 //   (k + 1) * step_dg, the origin (0, 0) implicit). Evenly spaced in force because the run
@@ -65,11 +65,13 @@ struct ModelV2 {
   uint8_t sag_10mv[kV2MaxKnots] = {};        // rest_mv minus the reading at each knot
 
   // Derived by finalize() (not stored).
-  uint16_t inv_step_q22 = 0;  // round(2^22 / step_dg)
+  uint16_t inv_step_q22 = 0;  // round(2^22 / step_dg), < 2^16 as step >= kV2MinStepDg
   uint16_t rest_recip_q28 = 0;  // 2^28 / rest_mv: the voltage used when the bus reading is bad
+  uint16_t max_force_dg = 0;    // knots * step_dg
+  uint16_t start_q3_us = 0;     // start threshold in 1/8 us
 
   bool isPresent() const { return start_q4_us != 0 && knots != 0; }
-  uint16_t maxForceDg() const { return static_cast<uint16_t>(knots * step_dg); }
+  uint16_t maxForceDg() const { return max_force_dg; }
   // Checks the stored fields and computes the derived ones. False (model cleared) when a
   // field is out of range: start outside 800..1800 us, step < kV2MinStepDg, knots outside
   // 2..32, rest_mv / second_mv outside 6000..17500 (second_mv may be 0), drive not
@@ -81,21 +83,23 @@ struct ModelV2 {
 enum : uint8_t { kV2Refined = 1u << 0 };
 
 // Battery reading filter: first-order IIR, y += (x - y) / 2^shift per frame (default 1/8),
-// exact in steady state (the accumulator keeps the fraction), plus the reciprocal of y for
+// exact in steady state (`rem` keeps the fraction below 1 mV), plus the reciprocal of y for
 // division-free PWM. Samples outside 6000..17500 mV are ignored (the last good value stays)
 // and counted; until the first good sample isValid() is false.
 struct BusVoltageFilter {
-  uint32_t acc = 0;          // y * 2^shift
-  uint16_t mv = 0;           // filtered millivolts
-  uint16_t recip_q28 = 0;    // 2^28 / mv (within 1 LSB after the first update in steady state)
+  uint16_t mv = 0;           // filtered millivolts (floor of y)
+  uint8_t rem = 0;           // fraction of y below 1 mV, in 1/2^shift mV
   uint8_t shift = 3;         // alpha = 1 / 2^shift, 0..6
+  uint16_t recip_q28 = 0;    // 2^28 / mv (within 1 LSB after the first update in steady state)
   uint8_t rejected = 0;      // samples ignored as insane (saturates at 255)
   uint8_t reseeds = 0;       // divisions spent on big jumps (saturates at 255)
 
   bool isValid() const { return mv != 0; }
   // Starts at `mv_now` (one division). An insane value leaves the filter invalid.
   void reset(uint16_t mv_now);
-  // One frame. First good sample after an invalid state resets to it.
+  // One frame: 16-bit arithmetic for the IIR, and only when the filtered millivolts change,
+  // one Newton step (two 16x16 multiplications). First good sample after an invalid state
+  // resets to it.
   void update(uint16_t sample_mv);
 };
 
@@ -114,6 +118,12 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
 // plain call.
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
                             uint16_t force_now_dg, const ForcePwmLimits& limits = ForcePwmLimits());
+// One frame for several motors (read_run's four) at the same bus voltage: the same result
+// as forceToPwmV2 per motor, in one call (one prologue, no per-motor call overhead).
+// Update `bus` once per frame before.
+void forceToPwmV2Frame(const ModelV2* models, const uint16_t* force_dg, uint8_t count,
+                       const BusVoltageFilter& bus, ForcePwmResult* out,
+                       const ForcePwmLimits& limits);
 inline ForcePwmResult forceGramsToPwmV2(const ModelV2& model, uint16_t force_g,
                                         const BusVoltageFilter& bus,
                                         const ForcePwmLimits& limits = ForcePwmLimits()) {

@@ -1,0 +1,26 @@
+#!/bin/sh
+# Model v2 cycle counts on the ATmega2560, measured in simavr (libsimavr) on the real core/
+# code: the AVR program brackets each measured call with marker writes (GPIOR0), the host
+# program timestamps them with the simulated cycle counter. Needs avr-g++, g++ and
+# libsimavr-dev; not part of ctest (figures, not assertions).
+#   tests/core_v2/avr_cycles.sh
+set -eu
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+avr-g++ -mmcu=atmega2560 -DF_CPU=16000000UL -Os -std=gnu++14 -fno-exceptions -fno-rtti \
+  -fno-threadsafe-statics -ffunction-sections -fdata-sections -Wl,--gc-sections \
+  -I"$root/core/include" "$here/avr_cycles/v2_cycles.cpp" \
+  "$root"/core/src/model_v2.cpp "$root"/core/src/force_pwm.cpp "$root"/core/src/force_curve.cpp \
+  "$root"/core/src/curve_builder.cpp "$root"/core/src/motor_calibration.cpp \
+  "$root"/core/src/battery_monitor.cpp -o "$out/v2_cycles.elf"
+g++ -O2 -std=c++17 $(pkg-config --cflags simavr) "$here/avr_cycles/run_cycles.cpp" \
+  $(pkg-config --libs simavr) -lelf -o "$out/run_cycles"
+"$out/run_cycles" "$out/v2_cycles.elf"
+if command -v avr-objdump >/dev/null; then
+  if avr-objdump -d "$out/v2_cycles.elf" | grep -q -e '__addsf3' -e '__mulsf3' -e '__divsf3'; then
+    echo "float routines linked into the benchmark image"; exit 1
+  fi
+  echo "no float routines in the image (checked with avr-objdump)"
+fi
