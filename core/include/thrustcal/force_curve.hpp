@@ -72,8 +72,8 @@ class ForceCurve : public ForceCurveBase {
   }
 
  private:
-  uint8_t step_storage_[Grams - 1];
-  uint16_t checkpoint_storage_[(Grams - 1) / kCheckpointEvery + 1];
+  uint8_t step_storage_[Grams - 1u];
+  uint16_t checkpoint_storage_[(Grams - 1u) / kCheckpointEvery + 1u];
 };
 
 using ThesisCurve = ForceCurve<kCurveGrams>;
