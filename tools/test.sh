@@ -22,8 +22,8 @@ set -e
 
 say "core/ line coverage"
 cov_status=0
-cov_out=$(gcovr -r "$THRUSTCAL_ROOT" --filter "$THRUSTCAL_ROOT/core/" --object-directory build/host \
-  --print-summary --fail-under-line 90 -o build/host/coverage.txt 2>&1) || cov_status=$?
+cov_out=$(gcovr -r "$THRUSTCAL_ROOT" --filter "$THRUSTCAL_ROOT/core/" \
+  --print-summary --fail-under-line 90 -o build/host/coverage.txt build/host 2>&1) || cov_status=$?
 echo "$cov_out" | grep -E '^(lines|branches):' || echo "$cov_out"
 [ $cov_status -eq 0 ] || echo "error: core/ line coverage is below 90 % (details: build/host/coverage.txt)"
 
