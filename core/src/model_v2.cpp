@@ -27,10 +27,39 @@ struct KnotPos {
 
 #define TC_INLINE __attribute__((always_inline)) inline
 
+// 16 x 16 -> 32 bits, unsigned. On the AVR this is libgcc's __umulhisi3 without the call,
+// the return and the register shuffling around it (~18 instead of ~40 cycles): the
+// per-frame path does three per motor. Elsewhere a plain multiplication.
+TC_INLINE uint32_t mulU16(uint16_t a, uint16_t b) {
+#if defined(__AVR_HAVE_MUL__)
+  uint32_t r;
+  __asm__(
+      "mul  %A1, %A2\n\t"
+      "movw %A0, r0\n\t"
+      "mul  %B1, %B2\n\t"
+      "movw %C0, r0\n\t"
+      "mul  %A1, %B2\n\t"
+      "add  %B0, r0\n\t"
+      "adc  %C0, r1\n\t"
+      "clr  __zero_reg__\n\t"
+      "adc  %D0, __zero_reg__\n\t"
+      "mul  %B1, %A2\n\t"
+      "add  %B0, r0\n\t"
+      "adc  %C0, r1\n\t"
+      "clr  __zero_reg__\n\t"
+      "adc  %D0, __zero_reg__"
+      : "=&r"(r)
+      : "r"(a), "r"(b));
+  return r;
+#else
+  return static_cast<uint32_t>(a) * b;
+#endif
+}
+
 TC_INLINE KnotPos knotPos(const ModelV2& m, uint16_t force_dg) {
   // force_dg <= knots * step, inv ~ 2^22 / step: product <= 32 * 2^22 * (1 + 1/step) < 2^28;
-  // times 4 (two additions, no shift loop) < 2^30: index in the top byte, fraction below.
-  uint32_t pos = static_cast<uint32_t>(force_dg) * m.inv_step_q22;
+  // times 4 < 2^30: the index is the top byte, the fraction the two below.
+  uint32_t pos = mulU16(force_dg, m.inv_step_q22);
   pos += pos;
   pos += pos;
   KnotPos p;
@@ -45,17 +74,24 @@ TC_INLINE uint16_t driveAt(const ModelV2& m, KnotPos p) {
   const uint16_t hi = m.drive_512usmv[p.index];
   // (hi - lo) < 2^16, frac < 2^16: product + 2^15 < 2^32.
   return static_cast<uint16_t>(
-      lo + ((static_cast<uint32_t>(static_cast<uint16_t>(hi - lo)) * p.frac_q16 + 0x8000u) >> 16));
+      lo + ((mulU16(static_cast<uint16_t>(hi - lo), p.frac_q16) + 0x8000u) >> 16));
 }
 
-// Sag at a knot position in 1/256 of 10 mV, linear between knots (origin: 0).
-inline int32_t sagAtQ8(const ModelV2& m, KnotPos p) {
-  if (p.index >= m.knots) return static_cast<int32_t>(m.sag_10mv[m.knots - 1]) << 8;
+// (a * b) / 2^16 for a signed a, rounded toward zero: sign and magnitude around mulU16.
+TC_INLINE int16_t mulS16U16Hi(int16_t a, uint16_t b) {
+  if (a < 0) return static_cast<int16_t>(-static_cast<int16_t>(mulU16(static_cast<uint16_t>(-a), b) >> 16));
+  return static_cast<int16_t>(mulU16(static_cast<uint16_t>(a), b) >> 16);
+}
+
+// Sag at a knot position in 1/256 of 10 mV (< 2^16), linear between knots (origin: 0).
+TC_INLINE uint16_t sagAtQ8(const ModelV2& m, KnotPos p) {
+  if (p.index >= m.knots) return static_cast<uint16_t>(m.sag_10mv[m.knots - 1] << 8);
   const uint8_t lo = p.index ? m.sag_10mv[p.index - 1] : 0;
   const uint8_t hi = m.sag_10mv[p.index];
-  // |hi - lo| <= 255, frac < 2^16: |product| < 2^24.
-  const int32_t d = static_cast<int32_t>(static_cast<int16_t>(hi) - lo) * p.frac_q16;
-  return (static_cast<int32_t>(lo) << 8) + (d >> 8);
+  // (hi - lo) * 256 * frac / 2^16, computed as 2 * ((hi - lo) * 128 * frac / 2^16) so that
+  // the signed factor fits 16 bits: |hi - lo| * 128 < 2^15.
+  const int16_t d = mulS16U16Hi(static_cast<int16_t>((hi - lo) * 128), p.frac_q16);
+  return static_cast<uint16_t>((lo << 8) + 2 * d);
 }
 
 TC_INLINE uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flags) {
@@ -70,7 +106,7 @@ TC_INLINE uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flag
 // drive (512 us*mV) * recip (2^28 / mV) / 2^16 = duty in 1/8 us.
 // drive < 2^16, recip <= 44739 (6 V): product < 2^32; the result < 44739.
 TC_INLINE uint16_t dutyQ3(uint16_t drive, uint16_t recip) {
-  return static_cast<uint16_t>((static_cast<uint32_t>(drive) * recip + 0x8000u) >> 16);
+  return static_cast<uint16_t>((mulU16(drive, recip) + 0x8000u) >> 16);
 }
 
 TC_INLINE ForcePwmResult finishPwm(const ModelV2& m, uint16_t duty_q3, uint8_t flags,
@@ -158,7 +194,7 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
   mv = static_cast<uint16_t>(mv + step);
   // Newton step on r = 2^28 / mv: e = 2^28 - mv * r, r += r * e / 2^28.
   // mv * r <= 17500 * 44739 < 2^30.
-  const int32_t e = static_cast<int32_t>(kRecipOne - static_cast<uint32_t>(mv) * recip_q28);
+  const int32_t e = static_cast<int32_t>(kRecipOne - mulU16(mv, recip_q28));
   if (e > kNewtonLimit || e < -kNewtonLimit) {
     recip_q28 = static_cast<uint16_t>(kRecipOne / mv);
     if (reseeds != 255) ++reseeds;
@@ -166,8 +202,9 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
   }
   // r * e / 2^28 = ((e / 2^8) * r / 2^16) / 2^4: |e / 2^8| <= 2^13, r < 2^16: |product| < 2^29.
   const int16_t e8 = static_cast<int16_t>(e >> 8);
-  const int16_t corr = static_cast<int16_t>((static_cast<int32_t>(e8) * recip_q28) >> 16);
-  recip_q28 = static_cast<uint16_t>(recip_q28 + (corr >> 4));
+  const uint16_t mag = static_cast<uint16_t>(e8 < 0 ? -e8 : e8);
+  const uint16_t corr = static_cast<uint16_t>(static_cast<uint16_t>(mulU16(mag, recip_q28) >> 16) >> 4);
+  recip_q28 = static_cast<uint16_t>(e8 < 0 ? recip_q28 - corr : recip_q28 + corr);
 }
 
 // ---- Run time ------------------------------------------------------------------------------
@@ -179,7 +216,7 @@ TC_INLINE ForcePwmResult pwmFor(const ModelV2& model,
                                                             uint16_t force_dg, uint16_t recip,
                                                             uint8_t flags,
                                                             const ForcePwmLimits& limits) {
-  if (model.knots == 0 || model.start_q4_us == 0)
+  if (model.max_force_dg == 0)  // finalize() sets it for every valid model, clear() zeroes it
     return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
   if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
   if (flags & kVoltageInvalid) recip = model.rest_recip_q28;
@@ -219,17 +256,19 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
     const KnotPos now = knotPos(model, clampForce(model, force_now_dg, ignored));
     // Extra drop expected at the command, mV: (sag(cmd) - sag(now)) * 10 / 256, clamped to
     // +-2047 mV so that 16 * d fits 16 bits.
-    int32_t d_mv = ((sagAtQ8(model, p) - sagAtQ8(model, now)) * kV2SagUnitMv) >> 8;
+    int32_t d_mv = (static_cast<int32_t>(sagAtQ8(model, p)) - sagAtQ8(model, now)) * kV2SagUnitMv;
+    d_mv >>= 8;
     if (d_mv > 2047) d_mv = 2047;
     if (d_mv < -2047) d_mv = -2047;
-    // delta = d / V in Q16 = 16 d * recip / 2^16; |16 d * recip| < 2^15 * 2^16.
-    int32_t delta = (static_cast<int32_t>(static_cast<int16_t>(d_mv * 16)) * recip) >> 16;
+    // delta = d / V in Q16 = 16 d * recip / 2^16 (recip = 2^28 / mV).
+    int16_t delta = mulS16U16Hi(static_cast<int16_t>(d_mv * 16), recip);
     if (delta > 16384) delta = 16384;  // a predicted change of more than 25 % is not sag
     if (delta < -16384) delta = -16384;
     // duty / (1 - delta) ~ duty * (1 + delta + delta^2): error delta^3 (< 0.01 % at 5 %).
-    const int32_t factor = delta + ((delta * delta) >> 16);  // delta^2 <= 2^28; factor < 2^15
-    // duty < 2^16, |factor| < 2^15: |product| < 2^31.
-    const int32_t duty = duty_q3 + ((static_cast<int32_t>(duty_q3) * factor) >> 16);
+    const uint16_t mag = static_cast<uint16_t>(delta < 0 ? -delta : delta);
+    const int16_t factor = static_cast<int16_t>(delta + static_cast<int16_t>(mulU16(mag, mag) >> 16));
+    // duty * (1 + factor / 2^16); factor in -16384..20480.
+    const int32_t duty = static_cast<int32_t>(duty_q3) + mulS16U16Hi(factor, duty_q3);
     duty_q3 = static_cast<uint16_t>(duty < 0 ? 0 : (duty > 65535 ? 65535 : duty));
   }
   return finishPwm(model, duty_q3, flags, limits);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "synthetic_motor.hpp"
 #include "thrustcal/model_v2.hpp"
@@ -269,4 +270,44 @@ TEST(ForceToPwmV2, SagPredictionSendsTheSteadyStatePwmOnTheFirstFrameOfAStep) {
   EXPECT_LE(std::abs(predicted - steady), 2);
   // and in steady state (command == present force) both calls agree
   EXPECT_EQ(tc::forceToPwmV2(m, 4000, later, 4000).pwm_us, steady);
+}
+
+TEST(ForceToPwmV2, SagPredictionMatchesTheFormulaEvenWhereTheSagTableIsSteep) {
+  // given: a model whose sag jumps by 2 V between 60 g and 72.5 g (far steeper than any pack:
+  // up to 200 units of 10 mV between two knots) and the synthetic motor's curve
+  const SyntheticMotor motor;
+  std::vector<double> drive, force, sag;
+  for (int i = 1; i <= 200; ++i) {
+    const double f = i * 3.0;
+    force.push_back(f);
+    drive.push_back(motor.span_us * std::pow(f / motor.k(), 1.0 / motor.exponent));
+    sag.push_back(f < 60 ? 0.0 : (f < 72.5 ? (f - 60) * 160.0 : 2000.0));
+  }
+  tc::ModelV2 m;
+  ASSERT_TRUE(tc::modelV2FromCurve(m, motor.start_us, drive.data(), force.data(), 200, 12400.0,
+                                   sag.data()));
+  auto sagAt = [&](double f_dg) {  // the model's own table, linear, in mV
+    const double pos = f_dg / m.step_dg;
+    const int k = static_cast<int>(pos);
+    const double lo = k == 0 ? 0.0 : m.sag_10mv[k - 1] * 10.0;
+    const double hi = m.sag_10mv[k] * 10.0;
+    return lo + (pos - k) * (hi - lo);
+  };
+  const tc::BusVoltageFilter bus = busAt(12000);
+  int steep = 0;
+  for (uint8_t k = 1; k < m.knots; ++k) steep += m.sag_10mv[k] - m.sag_10mv[k - 1] > 127;
+  ASSERT_GT(steep, 0) << "the table must hold a jump of more than 127 units";
+  for (uint16_t now_dg : {100, 500, 650, 900, 1500}) {
+    for (uint16_t cmd_dg : {150, 620, 680, 700, 720, 800, 950, 2000}) {
+      SCOPED_TRACE(::testing::Message() << now_dg << " -> " << cmd_dg << " dg");
+      // when
+      const int plain = tc::forceToPwmV2(m, cmd_dg, bus).pwm_us;
+      const int predicted = tc::forceToPwmV2(m, cmd_dg, bus, now_dg).pwm_us;
+      // then: duty * (1 + delta + delta^2) with delta = (sag(cmd) - sag(now)) / V
+      const double delta = (sagAt(cmd_dg) - sagAt(now_dg)) / 12000.0;
+      const double duty = plain - m.start_q4_us / 16.0;
+      const double expect = m.start_q4_us / 16.0 + duty * (1.0 + delta + delta * delta);
+      EXPECT_NEAR(predicted, expect, 1.0);
+    }
+  }
 }
