@@ -603,7 +603,7 @@ void ReadRunApp::commandStatus() {
       say(TC_PSTR(" filtered, headroom "));
       fw::printUint(gramsFromDg(tc::headroomDg(m.model.v2(), bus_.isValid() ? bus_.mv
                                                                             : m.model.v2().rest_mv)));
-      say(TC_PSTR(" g, model v2, flags: "));
+      say(TC_PSTR(" g, flags: "));
     } else {
       say(TC_PSTR(" compensated, flags: "));
     }

@@ -3,166 +3,18 @@
 //
 // Seam: the test links read_run_app + fw_common + core + the fake HAL. Calibration records are
 // built from a simple plant with tc::CurveBuilder and written into the fake EEPROM with
-// tc::writeRecord<hal::Eeprom>, exactly as gather_store would store them.
+// tc::writeRecord<hal::Eeprom>, exactly as gather_store would store them (read_run_fixture.hpp).
+// Model v2 slots: test_read_run_v2.cpp.
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <memory>
 #include <regex>
-#include <sstream>
-#include <string>
-#include <vector>
 
-#include "hal/fake.hpp"
-#include "hal/hal.hpp"
-#include "read_run_app.hpp"
-#include "thrustcal/battery_monitor.hpp"
-#include "thrustcal/curve_builder.hpp"
-#include "thrustcal/eeprom_codec.hpp"
-#include "thrustcal/force_pwm.hpp"
-
-namespace fake = hal::fake;
+#include "read_run_fixture.hpp"
 
 namespace {
 
-// Battery readings the tests use, as ADC counts on A1 (thesis divider, 15.638 V full scale).
-constexpr uint16_t kCountsV1 = 740;  // first curve's start voltage (LiPo)
-constexpr uint16_t kCountsV2 = 820;  // second curve's start voltage
-
-uint16_t mvFromCounts(uint16_t counts) { return tc::BatteryMonitor().millivoltsFromCounts(counts); }
-
-// Plant: thrust follows the effective motor voltage duty * V (DESIGN.md), quadratically:
-//   F = k * ((pwm - 1080 us) / 1000 us * V)^2,  k in g/V^2 differs per motor.
-double plantForceG(double k, uint16_t pwm_us, uint16_t vbat_mv) {
-  if (pwm_us <= 1080) return 0.0;
-  const double x = (pwm_us - 1080) / 1000.0 * (vbat_mv / 1000.0);
-  return k * x * x;
-}
-
-// One sweep of the plant at a fixed battery voltage, turned into a force curve.
-void buildCurve(tc::ForceCurveBase& curve, double k, uint16_t vbat_mv) {
-  auto builder = std::make_unique<tc::CurveBuilder<128>>();
-  for (uint16_t pwm = 1000; pwm <= 2000; pwm += 10) {
-    builder->add(pwm, static_cast<int16_t>(std::lround(plantForceG(k, pwm, vbat_mv) * 10.0)));
-  }
-  const tc::BuildReport report = builder->build(curve);
-  ASSERT_EQ(report.status, tc::BuildStatus::kOk);
-  curve.start_mv = vbat_mv;
-}
-
-struct MotorSpec {
-  double k = 13.5;              // plant constant, g/V^2
-  bool second_curve = true;     // false: first curve only
-  int16_t sag_mv_per_bin = 0;   // sag offset of bin i = i * this
-};
-
-std::unique_ptr<tc::MotorCalibration> makeCalibration(const MotorSpec& spec) {
-  auto cal = std::make_unique<tc::MotorCalibration>();
-  buildCurve(cal->first, spec.k, mvFromCounts(kCountsV1));
-  if (spec.second_curve) buildCurve(cal->second, spec.k, mvFromCounts(kCountsV2));
-  cal->sag.base_pwm_us = 1000;
-  for (uint8_t i = 0; i < tc::kSagBins; ++i) {
-    cal->sag.offset_mv[i] = static_cast<int16_t>(i * spec.sag_mv_per_bin);
-  }
-  return cal;
-}
-
-void storeMotor(uint8_t slot, const MotorSpec& spec) {
-  auto cal = makeCalibration(spec);
-  tc::writeRecord<hal::Eeprom>(slot, *cal);
-}
-
-// What the EEPROM round trip gives the firmware (the sag table is stored in 10 mV units).
-std::unique_ptr<tc::MotorCalibration> storedCalibration(uint8_t slot) {
-  auto cal = std::make_unique<tc::MotorCalibration>();
-  EXPECT_EQ(tc::readRecord<hal::Eeprom>(slot, *cal), tc::DecodeStatus::kOk);
-  return cal;
-}
-
-// Thesis option 2.1 written out independently in floating point.
-double option21PwmUs(const tc::MotorCalibration& cal, uint16_t force_g, uint16_t vbat_mv) {
-  const double c1 = cal.first.pwmForGrams(force_g);
-  const double c2 = cal.second.pwmForGrams(force_g);
-  const double v1 = cal.first.start_mv;
-  const double v2 = cal.second.start_mv;
-  return c1 + (vbat_mv - v1) * (c2 - c1) / (v2 - v1);
-}
-
-std::string volts(uint16_t mv) {
-  char text[16];
-  std::snprintf(text, sizeof text, "%u.%03u", mv / 1000u, mv % 1000u);
-  return text;
-}
-
-std::vector<std::string> lines(const std::string& text) {
-  std::vector<std::string> out;
-  std::string line;
-  std::istringstream in(text);
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    out.push_back(line);
-  }
-  return out;
-}
-
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
-
-class ReadRun : public ::testing::Test {
- protected:
-  void SetUp() override {
-    fake::reset();
-    fake::setTimeLimitMs(120000);  // a wait that never ends fails the test instead of hanging
-    fake::setAdcCounts(hal::kAdcBattery, kCountsV1);
-  }
-
-  void TearDown() override { fake::setTickHook(nullptr); }
-
-  void storeFourMotors() {
-    storeMotor(0, {13.5, true, 0});
-    storeMotor(1, {12.0, true, 0});
-    storeMotor(2, {15.0, true, 0});
-    storeMotor(3, {14.0, true, 0});
-  }
-
-  // main.cpp's sequence up to the loop: init, banner, load, arm.
-  void boot() {
-    app_ = std::make_unique<rr::ReadRunApp>();
-    hal::Esc::init(hal::kEscDefaultFrameHz);
-    hal::Clock::init();
-    hal::Uart::init(115200);
-    hal::Adc::init();
-    app_->printBanner();
-    calibrated_ = app_->loadCalibration();
-    app_->arm();
-  }
-
-  // main.cpp's loop for `ms` simulated milliseconds. With keep_alive, an empty line every
-  // 200 ms stands in for a host that keeps the failsafe from tripping.
-  void runFor(uint32_t ms, bool keep_alive = false) {
-    const uint32_t end_ms = fake::nowMs() + ms;
-    app_->runOnce();
-    while (fake::nowMs() < end_ms) {
-      hal::Clock::sleepUntilInterrupt();
-      if (keep_alive && fake::nowMs() % 200 == 0) fake::feedInput("\n");
-      app_->runOnce();
-    }
-  }
-
-  // Sends one command line and lets the loop handle it and run two frames.
-  std::string command(const std::string& line, bool keep_alive = true) {
-    fake::takeOutput();
-    fake::feedInput(line + "\n");
-    runFor(50, keep_alive);
-    return fake::takeOutput();
-  }
-
-  uint16_t pulse(uint8_t motor) const { return fake::pulseUs(motor); }
-
-  std::unique_ptr<rr::ReadRunApp> app_;
-  uint8_t calibrated_ = 0;
-};
+using namespace rr_test;
+namespace fake = hal::fake;
 
 // ---------------------------------------------------------------------------------------------
 // Start-up
