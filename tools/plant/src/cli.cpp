@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -163,6 +164,41 @@ void cmdStep(const Options& o) {
              o.preset, o.supply_v, o.from_us, o.to_us, tau, tau_down);
 }
 
+void cmdSpeed(const Options& o) {
+  // Host cost of one 1 ms plant step (wall clock; informative, not a test).
+  Bench bench(BenchParams::thesis(o.preset));
+  bench.actuator().holdPulse(1500.0);
+  const int steps = 2'000'000;
+  double sink = 0.0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < steps; ++i) {
+    bench.step(0.001);
+    if ((i & 7) == 0) sink += bench.adcMillivolts(i & 1);
+  }
+  const auto t1 = std::chrono::steady_clock::now();
+  volatile double keep = sink;  // the ADC samples must not be optimized away
+  (void)keep;
+  std::array<ActuatorParams, 4> m;
+  m.fill(presetParams(o.preset));
+  QuadFrame quad(QuadFrameParams{}, m);
+  for (int i = 0; i < 4; ++i) quad.holdPulse(i, 1500.0);
+  const int qsteps = 500'000;
+  const auto t2 = std::chrono::steady_clock::now();
+  for (int i = 0; i < qsteps; ++i) quad.step(0.001);
+  const auto t3 = std::chrono::steady_clock::now();
+  const double bench_ns = std::chrono::duration<double, std::nano>(t1 - t0).count() / steps;
+  const double quad_ns = std::chrono::duration<double, std::nano>(t3 - t2).count() / qsteps;
+  if (o.json) {
+    fmt::print("{}\n", nlohmann::json{{"bench_step_ns", bench_ns}, {"quad_step_ns", quad_ns}}.dump(2));
+  } else {
+    fmt::print("Bench::step (1 ms, incl. 1 ADC sample per 8 steps): {:.0f} ns\n", bench_ns);
+    fmt::print("QuadFrame::step (1 ms, four actuators):             {:.0f} ns\n", quad_ns);
+    fmt::print("simulated {:.0f} s of bench in {:.3f} s of host time ({:.0f}x real time)\n",
+               steps * 0.001, std::chrono::duration<double>(t1 - t0).count(),
+               steps * 0.001 / std::chrono::duration<double>(t1 - t0).count());
+  }
+}
+
 }  // namespace
 
 void registerCommands(CLI::App& app) {
@@ -206,6 +242,11 @@ void registerCommands(CLI::App& app) {
   st->add_option("--to", opts->to_us, "PWM after the step, us")->capture_default_str();
   st->add_flag("--json", opts->json, "print JSON");
   st->callback([opts] { cmdStep(*opts); });
+
+  CLI::App* sp = plant->add_subcommand("speed", "Host time per plant step (wall clock)");
+  addPreset(sp, *opts);
+  sp->add_flag("--json", opts->json, "print JSON");
+  sp->callback([opts] { cmdSpeed(*opts); });
 }
 
 }  // namespace plant
