@@ -1,7 +1,8 @@
 // Host side of the cycle benchmark: runs v2_cycles.elf in libsimavr (ATmega2560, 16 MHz) and
-// timestamps the marker writes (GPIOR0/1/2) with avr->cycle. Prints per label: count, mean,
-// min and max cycles, net of the empty bracket's overhead.
-//   run_cycles path/to/v2_cycles.elf
+// timestamps the marker writes (GPIOR0/1) with avr->cycle. Prints per label: count, mean,
+// min and max cycles, net of the empty bracket's overhead. The result bytes the program
+// streams through GPIOR2 go to RESULTS_HEX (hex, 32 per line) for the AVR/host comparison.
+//   run_cycles path/to/v2_cycles.elf RESULTS_HEX
 #include <simavr/sim_avr.h>
 #include <simavr/sim_elf.h>
 #include <simavr/sim_io.h>
@@ -9,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <vector>
 
 namespace {
 
@@ -23,6 +25,7 @@ Stat stats[256];
 uint8_t label = 0;
 avr_cycle_count_t started = 0;
 bool done = false;
+std::vector<uint8_t> results;
 
 void onGpior0(avr_t* avr, avr_io_addr_t addr, uint8_t v, void*) {
   avr->data[addr] = v;
@@ -35,6 +38,8 @@ void onGpior0(avr_t* avr, avr_io_addr_t addr, uint8_t v, void*) {
     s.sum += d;
     if (d < s.min) s.min = d;
     if (d > s.max) s.max = d;
+  } else if (v == 3) {
+    done = true;
   }
 }
 void onGpior1(avr_t* avr, avr_io_addr_t addr, uint8_t v, void*) {
@@ -43,8 +48,7 @@ void onGpior1(avr_t* avr, avr_io_addr_t addr, uint8_t v, void*) {
 }
 void onGpior2(avr_t* avr, avr_io_addr_t addr, uint8_t v, void*) {
   avr->data[addr] = v;
-  if (v == 0xEE) done = true;
-  if (v == 0xE0) std::fprintf(stderr, "a model v2 fit failed on the AVR\n");
+  results.push_back(v);
 }
 
 const char* nameOf(int l) {
@@ -54,7 +58,7 @@ const char* nameOf(int l) {
     case 3: return "thesis option 2.1 frame (forceToPwm x4, no voltage filter)";
     case 4: return "v2 four-motor frame, one forceToPwmV2 call per motor";
     case 5: return "v2 bus voltage filter update alone";
-    case 10: case 11: case 12: case 13: return "v2 fit, one 101-sample sweep";
+    case 10: case 11: case 12: case 13: return "v2 fit on the AVR, one 101-sample sweep";
     case 20: return "v2 refine, one 101-sample sweep";
   }
   return "?";
@@ -63,8 +67,8 @@ const char* nameOf(int l) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: %s v2_cycles.elf\n", argv[0]);
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: %s v2_cycles.elf RESULTS_HEX\n", argv[0]);
     return 2;
   }
   elf_firmware_t fw;
@@ -94,6 +98,15 @@ int main(int argc, char** argv) {
                  static_cast<unsigned long long>(budget));
     return 1;
   }
+  FILE* hex = std::fopen(argv[2], "w");
+  if (!hex) {
+    std::fprintf(stderr, "cannot write %s\n", argv[2]);
+    return 1;
+  }
+  for (size_t i = 0; i < results.size(); ++i)
+    std::fprintf(hex, "%02x%s", results[i], ((i + 1) % 32) ? "" : "\n");
+  if (results.size() % 32) std::fprintf(hex, "\n");
+  std::fclose(hex);
   const uint64_t overhead = stats[0].n ? stats[0].min : 0;
   std::printf("ATmega2560 cycles (simavr, 16 MHz), net of %llu cycles of marker overhead:\n",
               static_cast<unsigned long long>(overhead));
