@@ -155,6 +155,7 @@ void ReadRunApp::printBanner() {
 
 uint8_t ReadRunApp::loadCalibration() {
   uint8_t calibrated = 0;
+  any_v2_ = false;
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
     // The loader fills the v1 calibration in place; a v2 model goes through this copy
@@ -171,6 +172,7 @@ uint8_t ReadRunApp::loadCalibration() {
     m.v2_copy_status[1] = load.v2.copy_status[1];
     if (load.layout == tc::SlotLayout::kModelV2 && load.status == tc::DecodeStatus::kOk) {
       m.model.setV2(v2);
+      any_v2_ = true;
     }
     m.force_g = 0;
     m.pwm_us = kStopPwmUs;
@@ -315,8 +317,9 @@ bool ReadRunApp::frameDue(uint32_t now_ms) const {
 }
 
 // v1 and status: the thesis median of 101. v2: this frame's four readings (middle two) into
-// the bus voltage filter, every frame; an insane reading is skipped by the filter (it keeps
-// the last good value) and flagged on the v2 motors' results.
+// the bus voltage filter, every frame while a v2 motor is loaded (a v1-only aircraft skips
+// its ~1400 cycles); an insane reading is skipped by the filter (it keeps the last good
+// value) and flagged on the v2 motors' results.
 void ReadRunApp::sampleBattery() {
   static_assert(kBatterySamplesPerFrame == 4, "middleTwoMillivolts takes four readings");
   uint16_t counts[kBatterySamplesPerFrame];
@@ -325,6 +328,7 @@ void ReadRunApp::sampleBattery() {
     battery_counts_.push(counts[k]);
   }
   battery_mv_ = monitor_.millivoltsFromCounts(battery_counts_.median());
+  if (!any_v2_) return;
   const uint16_t frame_mv = middleTwoMillivolts(counts, monitor_.config());
   bus_sample_sane_ = monitor_.isSane(frame_mv);
   bus_.update(frame_mv);
@@ -579,7 +583,6 @@ void ReadRunApp::commandStop() {
 }
 
 void ReadRunApp::commandStatus() {
-  bool any_v2 = false;
   for (uint8_t i = 0; i < kMotors; ++i) {
     const Motor& m = motors_[i];
     sayMotor(i);
@@ -597,7 +600,6 @@ void ReadRunApp::commandStatus() {
     say(TC_PSTR(" us, battery "));
     sayVolts(m.vbat_mv);
     if (m.fliesV2()) {
-      any_v2 = true;
       // Headroom: the most this motor reaches at the present (filtered) voltage with the
       // ESC at its maximum pulse. One division: status only, never per frame.
       say(TC_PSTR(" filtered, headroom "));
@@ -610,7 +612,7 @@ void ReadRunApp::commandStatus() {
     sayFlags(m.flags);
     fw::newline();
   }
-  if (any_v2) {
+  if (any_v2_) {
     say(TC_PSTR("bus filter "));
     sayVolts(bus_.mv);
     say(TC_PSTR(" (v2 motors: 1/"));

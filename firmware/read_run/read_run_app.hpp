@@ -148,8 +148,9 @@ class ReadRunApp {
   Motor motors_[kMotors];
   tc::MedianFilter<kBatteryWindow> battery_counts_;
   tc::BatteryMonitor monitor_;
-  tc::BusVoltageFilter bus_;
+  tc::BusVoltageFilter bus_;        // runs only while a slot flies v2 (any_v2_)
   bool bus_sample_sane_ = false;
+  bool any_v2_ = false;             // some slot holds a valid v2 model
   fw::LineReader line_;
   Mode mode_ = Mode::kBoot;
   uint16_t battery_mv_ = 0;
