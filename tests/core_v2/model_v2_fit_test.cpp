@@ -110,6 +110,51 @@ TEST(ModelV2Fit, SecondSweepAt10V5MeasuresTheStartThresholdWithinOneMicrosecond)
   }
 }
 
+TEST(ModelV2Fit, SecondSweepAtAHigherVoltageRefinesToo) {
+  // given: the first sweep on a tired pack (10.5 V), the second on a full one (12.4 V)
+  SyntheticMotor motor;
+  motor.start_us = 1105;
+  motor.source_r_ohm = 0.05;
+  Fitter fitter;
+  tc_test::recordSweep(motor, 10.5, fitter, Recording{});
+  tc::ModelV2 model;
+  ASSERT_EQ(fitter.fit(model).status, tc::FitV2Status::kOk);
+  tc_test::recordSweep(motor, 12.4, fitter, Recording{true, 0.0, 31});
+  // when
+  const tc::FitV2Report rep = fitter.refine(model);
+  // then: the curve keeps the first sweep's range, the start comes from both
+  ASSERT_EQ(rep.status, tc::FitV2Status::kOk);
+  EXPECT_NEAR(model.start_q4_us / 16.0, 1105.0, 1.0);
+  EXPECT_NEAR(model.rest_mv, 10500, 20);
+  EXPECT_NEAR(model.second_mv, 12400, 20);
+  const GridError g = v2GridError(motor, model);
+  EXPECT_LE(g.rms_pct, 1.0);
+  EXPECT_LE(g.max_pct, 3.0);
+}
+
+TEST(ModelV2Fit, CurrentLimitedBenchSupplyEndsTheCurveAtItsPlateau) {
+  // given: the thesis bench supply, limited to 6.32 A: the force plateaus near 495 g while
+  // the recorded voltage collapses
+  SyntheticMotor motor;
+  motor.current_limit_a = 6.32;
+  Fitter fitter;
+  tc_test::recordSweep(motor, 12.4, fitter, Recording{});
+  // when
+  tc::ModelV2 model;
+  const tc::FitV2Report rep = fitter.fit(model);
+  // then: the curve stops at the plateau; below it the model is as good as ever
+  ASSERT_EQ(rep.status, tc::FitV2Status::kOk);
+  const double plateau_g = 500.0 * std::pow(6.32 / 6.4, 2.0 / 3.0);
+  EXPECT_NEAR(rep.max_force_dg / 10.0, plateau_g, 2.0);
+  EXPECT_LE(model.maxForceDg() / 10.0, plateau_g);
+  const GridError g = v2GridError(motor, model);
+  EXPECT_LE(g.rms_pct, 1.0);
+  EXPECT_LE(g.max_pct, 3.0);
+  tc::BusVoltageFilter bus;
+  bus.reset(12600);
+  EXPECT_EQ(tc::forceToPwmV2(model, 5500, bus).flags, tc::kSaturated) << "550 g is beyond the curve";
+}
+
 TEST(ModelV2Fit, ResamplesTheCurveOntoAtMost32KnotsEvenlySpacedInForce) {
   struct Row {
     double full_at_9v9_g;

@@ -25,6 +25,7 @@ struct SyntheticMotor {
   double full_at_9v9_g = 600.0;
   double source_r_ohm = 0.0;  // bench sag; 0 = stiff source
   double i_500g_a = 6.4;
+  double current_limit_a = 0.0;  // bench supply current limit (thesis: 6.32 A); 0 = none
 
   double k() const { return full_at_9v9_g / std::pow(9.9, exponent); }
 
@@ -39,6 +40,8 @@ struct SyntheticMotor {
   double currentA(double force_g) const { return i_500g_a * std::pow(force_g / 500.0, 1.5); }
 
   // Bench operating point at a PWM from a resting source voltage: V = V_rest - R * I(F(V)).
+  // A current-limited supply folds its voltage back so that I stays at the limit: the force
+  // plateaus there while the recorded voltage collapses.
   void operatingPoint(double pwm_us, double rest_v, double& force_g, double& vbus_v) const {
     vbus_v = rest_v;
     for (int i = 0; i < 60; ++i) {
@@ -46,6 +49,10 @@ struct SyntheticMotor {
       vbus_v = rest_v - source_r_ohm * currentA(force_g);
     }
     force_g = forceG(pwm_us, vbus_v);
+    if (current_limit_a > 0.0 && currentA(force_g) > current_limit_a) {
+      force_g = 500.0 * std::pow(current_limit_a / i_500g_a, 2.0 / 3.0);
+      vbus_v = std::pow(force_g / k(), 1.0 / exponent) * span_us / (pwm_us - start_us);
+    }
   }
 
   // The PWM that truly gives `force_g` at `vbus_v` (for the ideal, continuous ESC).
