@@ -112,3 +112,40 @@ TEST(PlantFidelity, BenchSupplyFoldsBackAtItsCurrentLimitAndCapsThrust) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace plant;
+
+TEST(PlantFidelity, BenchDrivenByServoPulsesSettlesOnItsSteadyStateAndTheLoadCellShowsTheThrust) {
+  // given the thesis bench on a LiPo, driven like the firmware does: 50 Hz pulses, arm first
+  BenchParams bp = BenchParams::thesis();
+  bp.load_cell.noise_mv = 0.0;
+  bp.load_cell.vibration_frac = 0.0;
+  Bench bench(bp);
+  const int empty_counts = bench.readCounts(0);
+  double next = 0.0;
+  auto runWith = [&](double pulse_us, double seconds) {
+    const double end = bench.time_s() + seconds;
+    while (bench.time_s() < end) {
+      if (bench.time_s() >= next) {
+        bench.setPulse(pulse_us, next);
+        next += 0.02;
+      }
+      bench.step(0.001);
+    }
+  };
+  runWith(1000.0, 1.5);
+  ASSERT_TRUE(bench.actuator().isArmed());
+  // when it holds 1550 us for 3 s
+  runWith(1550.0, 3.0);
+  // then thrust and bus voltage equal the steady state of the whole bench (at the present
+  // winding temperature and state of charge)
+  const OperatingPoint ss = bench.steadyState(1550.0);
+  EXPECT_NEAR(bench.actuator().thrust_g(), ss.thrust_g, 0.01 * ss.thrust_g);
+  EXPECT_NEAR(bench.busVoltage_v(), ss.bus_v, 0.02);
+  // and the load cell rose by the thrust at 4/3 counts per gram
+  EXPECT_NEAR((bench.readCounts(0) - empty_counts) * 0.75, ss.thrust_g, 1.5);
+}
+
+}  // namespace

@@ -43,7 +43,7 @@ struct BatteryParams {
   double set_v = 12.0;
   double current_limit_a = 6.32;
   // Both: leads + distribution from the source to the ESC / monitor point.
-  double wiring_r_ohm = 0.030;
+  double wiring_r_ohm = 0.045;  // LiPo harness, connectors, distribution (fits thesis fig. 6.1)
 
   static BatteryParams lipo3s(double soc = 1.0);
   static BatteryParams benchSupply(double set_v, double current_limit_a = 6.32);
