@@ -70,8 +70,9 @@ TC_INLINE KnotPos knotPos(const ModelV2& m, uint16_t force_dg) {
 
 TC_INLINE uint16_t driveAt(const ModelV2& m, KnotPos p) {
   if (p.index >= m.knots) return m.drive_512usmv[m.knots - 1];
-  const uint16_t lo = p.index ? m.drive_512usmv[p.index - 1] : 0;
-  const uint16_t hi = m.drive_512usmv[p.index];
+  const uint16_t* const hi_p = m.drive_512usmv + p.index;
+  const uint16_t hi = *hi_p;
+  const uint16_t lo = p.index ? hi_p[-1] : 0;
   // (hi - lo) < 2^16, frac < 2^16: product + 2^15 < 2^32.
   return static_cast<uint16_t>(
       lo + ((mulU16(static_cast<uint16_t>(hi - lo), p.frac_q16) + 0x8000u) >> 16));
@@ -103,17 +104,21 @@ TC_INLINE uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flag
   return force_dg;
 }
 
-// drive (512 us*mV) * recip (2^28 / mV) / 2^16 = duty in 1/8 us.
-// drive < 2^16, recip <= 44739 (6 V): product < 2^32; the result < 44739.
-TC_INLINE uint16_t dutyQ3(uint16_t drive, uint16_t recip) {
-  return static_cast<uint16_t>((mulU16(drive, recip) + 0x8000u) >> 16);
+// 2^26 / mV from the filter's 2^28 / mV: once per frame. 2^26 / 6000 < 11185.
+TC_INLINE uint16_t recip26Of(uint16_t recip_q28) {
+  return static_cast<uint16_t>((recip_q28 + 2u) >> 2);
 }
 
-TC_INLINE ForcePwmResult finishPwm(const ModelV2& m, uint16_t duty_q3, uint8_t flags,
+// drive (512 us*mV) * recip26 (2^26 / mV) = (drive * 512 / mV) us * 2^17: the duty in 2^-17 us.
+// drive < 2^16, recip26 < 11185: product < 2^30.
+TC_INLINE uint32_t dutyQ17(uint16_t drive, uint16_t recip26) { return mulU16(drive, recip26); }
+
+TC_INLINE ForcePwmResult finishPwm(const ModelV2& m, uint32_t duty_q17, uint8_t flags,
                                    const ForcePwmLimits& limits) {
-  // start <= 1800 us (14400 in 1/8 us) + duty < 44739: fits 16 bits.
-  const uint16_t pwm_q3 = static_cast<uint16_t>(m.start_q3_us + duty_q3);
-  const uint16_t pwm_us = static_cast<uint16_t>((pwm_q3 + 4u) >> 3);
+  // start <= 1800 us (< 2^28 in 2^-17 us) + duty < 2^30 + 1/2 us to round: < 2^31. The
+  // shift by 17 is a byte move and one 16-bit shift.
+  const uint32_t pwm_q17 = m.start_q17_us + duty_q17 + 0x10000ul;
+  const uint16_t pwm_us = static_cast<uint16_t>(static_cast<uint16_t>(pwm_q17 >> 16) >> 1);
   ForcePwmResult r;
   r.flags = flags;
   if (pwm_us > limits.pwm_max_us) {
@@ -138,7 +143,7 @@ bool ModelV2::finalize() {
   inv_step_q22 = 0;
   rest_recip_q28 = 0;
   max_force_dg = 0;
-  start_q3_us = 0;
+  start_q17_us = 0;
   bool ok = start_q4_us >= kStartMinQ4 && start_q4_us <= kStartMaxQ4 &&
             step_dg >= kV2MinStepDg && knots >= 2 && knots <= kV2MaxKnots &&
             static_cast<uint32_t>(knots) * step_dg <= 65535u && saneMv(rest_mv) &&
@@ -157,7 +162,7 @@ bool ModelV2::finalize() {
   }
   inv_step_q22 = static_cast<uint16_t>(((1ul << 22) + step_dg / 2) / step_dg);
   max_force_dg = static_cast<uint16_t>(knots * step_dg);
-  start_q3_us = static_cast<uint16_t>((start_q4_us + 1u) >> 1);
+  start_q17_us = static_cast<uint32_t>(start_q4_us) << 13;
   rest_recip_q28 = static_cast<uint16_t>(kRecipOne / rest_mv);
   return true;
 }
@@ -189,7 +194,8 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
   // t = rem + x - mv, the new y * 2^s = mv * 2^s + t. 16-bit only; |t| < 2^15.
   const int16_t t = static_cast<int16_t>(rem + static_cast<int16_t>(sample_mv - mv));
   const int16_t step = static_cast<int16_t>(t >> shift);  // floor
-  rem = static_cast<uint8_t>(t - step * static_cast<int16_t>(1 << shift));
+  const uint8_t mask = static_cast<uint8_t>((1u << shift) - 1u);
+  rem = static_cast<uint8_t>(static_cast<uint8_t>(t) & mask);  // t - step * 2^shift
   if (step == 0) return;  // steady: the reciprocal is still right
   mv = static_cast<uint16_t>(mv + step);
   // Newton step on r = 2^28 / mv: e = 2^28 - mv * r, r += r * e / 2^28.
@@ -212,36 +218,35 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
 namespace {
 
 // The per-motor path, inlined into both entry points.
-TC_INLINE ForcePwmResult pwmFor(const ModelV2& model,
-                                                            uint16_t force_dg, uint16_t recip,
-                                                            uint8_t flags,
-                                                            const ForcePwmLimits& limits) {
+TC_INLINE ForcePwmResult pwmFor(const ModelV2& model, uint16_t force_dg, uint16_t recip26,
+                                uint8_t flags, const ForcePwmLimits& limits) {
   if (model.max_force_dg == 0)  // finalize() sets it for every valid model, clear() zeroes it
     return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
   if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
-  if (flags & kVoltageInvalid) recip = model.rest_recip_q28;
+  if (flags & kVoltageInvalid) recip26 = recip26Of(model.rest_recip_q28);
   const uint16_t drive = driveAt(model, knotPos(model, clampForce(model, force_dg, flags)));
-  return finishPwm(model, dutyQ3(drive, recip), flags, limits);
+  return finishPwm(model, dutyQ17(drive, recip26), flags, limits);
 }
 
 }  // namespace
 
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
                             const ForcePwmLimits& limits) {
-  return pwmFor(model, force_dg, bus.recip_q28, bus.isValid() ? 0 : kVoltageInvalid, limits);
+  return pwmFor(model, force_dg, recip26Of(bus.recip_q28), bus.isValid() ? 0 : kVoltageInvalid,
+                limits);
 }
 
 void forceToPwmV2Frame(const ModelV2* models, const uint16_t* force_dg, uint8_t count,
                        const BusVoltageFilter& bus, ForcePwmResult* out,
                        const ForcePwmLimits& limits) {
   const uint8_t flags = bus.isValid() ? 0 : kVoltageInvalid;
-  const uint16_t recip = bus.recip_q28;
-  for (uint8_t i = 0; i < count; ++i) out[i] = pwmFor(models[i], force_dg[i], recip, flags, limits);
+  const uint16_t recip26 = recip26Of(bus.recip_q28);
+  for (uint8_t i = 0; i < count; ++i) out[i] = pwmFor(models[i], force_dg[i], recip26, flags, limits);
 }
 
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
                             uint16_t force_now_dg, const ForcePwmLimits& limits) {
-  if (!model.isPresent()) return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
+  if (model.max_force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
   if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
   uint8_t flags = 0;
   uint16_t recip = bus.recip_q28;
@@ -250,7 +255,7 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
     flags |= kVoltageInvalid;
   }
   const KnotPos p = knotPos(model, clampForce(model, force_dg, flags));
-  uint16_t duty_q3 = dutyQ3(driveAt(model, p), recip);
+  uint32_t duty_q17 = dutyQ17(driveAt(model, p), recip26Of(recip));
   if (force_now_dg != force_dg) {
     uint8_t ignored = 0;
     const KnotPos now = knotPos(model, clampForce(model, force_now_dg, ignored));
@@ -267,11 +272,13 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
     // duty / (1 - delta) ~ duty * (1 + delta + delta^2): error delta^3 (< 0.01 % at 5 %).
     const uint16_t mag = static_cast<uint16_t>(delta < 0 ? -delta : delta);
     const int16_t factor = static_cast<int16_t>(delta + static_cast<int16_t>(mulU16(mag, mag) >> 16));
-    // duty * (1 + factor / 2^16); factor in -16384..20480.
-    const int32_t duty = static_cast<int32_t>(duty_q3) + mulS16U16Hi(factor, duty_q3);
-    duty_q3 = static_cast<uint16_t>(duty < 0 ? 0 : (duty > 65535 ? 65535 : duty));
+    // duty * (1 + factor / 2^16), factor in -16384..20480, on the duty in 1/8 us (< 2^16).
+    const uint16_t duty_q3 = static_cast<uint16_t>(duty_q17 >> 14);
+    const int32_t duty = static_cast<int32_t>(duty_q17) +
+                         static_cast<int32_t>(mulS16U16Hi(factor, duty_q3)) * 16384;
+    duty_q17 = duty < 0 ? 0u : static_cast<uint32_t>(duty);
   }
-  return finishPwm(model, duty_q3, flags, limits);
+  return finishPwm(model, duty_q17, flags, limits);
 }
 
 uint16_t forceForPwmDg(const ModelV2& model, uint16_t pwm_us, uint16_t vbus_mv) {

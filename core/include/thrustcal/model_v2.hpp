@@ -9,7 +9,7 @@
 //   drive = (pwm - start) * V_bus        [us*mV; stored in units of 512 us*mV]
 //   force = curve(drive)                 [monotone, one curve for every voltage]
 //
-// Per motor (ModelV2, 116 bytes of SRAM; four motors 464 bytes):
+// Per motor (ModelV2, 118 bytes of SRAM; four motors 472 bytes):
 // - start_q4_us: the ESC's start threshold (where force leaves zero), 1/16 us;
 // - a monotone force curve in drive: up to 32 knots evenly spaced in FORCE (knot k at force
 //   (k + 1) * step_dg, the origin (0, 0) implicit). Evenly spaced in force because the run
@@ -68,7 +68,7 @@ struct ModelV2 {
   uint16_t inv_step_q22 = 0;  // round(2^22 / step_dg), < 2^16 as step >= kV2MinStepDg
   uint16_t rest_recip_q28 = 0;  // 2^28 / rest_mv: the voltage used when the bus reading is bad
   uint16_t max_force_dg = 0;    // knots * step_dg
-  uint16_t start_q3_us = 0;     // start threshold in 1/8 us
+  uint32_t start_q17_us = 0;    // start threshold in 2^-17 us
 
   bool isPresent() const { return start_q4_us != 0 && knots != 0; }
   uint16_t maxForceDg() const { return max_force_dg; }
