@@ -1,0 +1,78 @@
+// Shared pieces of the HIL tests: where the real images are, and one calibrated EEPROM image
+// (four varied motors gathered with the real gather_store) cached per gather_store build.
+#pragma once
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "sim/board.hpp"
+#include "sim/intel_hex.hpp"
+#include "sim/scenarios.hpp"
+
+namespace hil {
+
+namespace fs = std::filesystem;
+
+inline std::string imagePath(const std::string& name) {
+  return (fs::path(THRUSTCAL_AVR_BUILD_DIR) / "firmware" / name / (name + ".elf")).string();
+}
+
+// GTEST_SKIP()s the calling test when an image is missing (the lead's test script builds them).
+#define HIL_REQUIRE_IMAGE(name)                                                                   \
+  do {                                                                                            \
+    if (!std::filesystem::exists(hil::imagePath(name)))                                           \
+      GTEST_SKIP() << "no AVR image " << hil::imagePath(name)                                     \
+                   << ": build the AVR tree first (tools/test.sh does; or cmake --preset avr && " \
+                      "cmake --build build/avr), or set THRUSTCAL_AVR_BUILD_DIR";                 \
+  } while (0)
+
+// The four motors of the HIL fleet (seeds) and the calibration settings used for them.
+constexpr std::array<uint64_t, 4> kFleetSeeds = {11, 12, 13, 14};
+
+inline sim::GatherOptions fleetGatherOptions() {
+  sim::GatherOptions o;
+  o.elf_path = imagePath("gather_store");
+  o.seeds.assign(kFleetSeeds.begin(), kFleetSeeds.end());
+  o.slots = {0, 1, 2, 3};
+  o.step_us = 10;
+  o.settle_ms = 500;  // the bench's 3rd-order low-pass settles to < 0.01 % (200 ms: ~1 %)
+  o.progress = [](const std::string&) {};
+  return o;
+}
+
+inline uint64_t fileHash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return std::hash<std::string>{}(s.str());
+}
+
+// EEPROM with all four fleet motors calibrated by the real gather_store. Gathered once per
+// gather_store build and cached next to the test binary (ctest runs each test in its own
+// process); a different image or a damaged cache file means a fresh gather.
+inline std::vector<uint8_t> fleetEeprom() {
+  const std::string elf = imagePath("gather_store");
+  const fs::path cache = fs::path(HIL_CACHE_DIR) /
+                         ("thrustcal_hil_fleet_" + std::to_string(fileHash(elf)) + ".hex");
+  if (fs::exists(cache)) {
+    try {
+      return sim::readIntelHexFile(cache.string(), sim::kEepromBytes);
+    } catch (const sim::HexError&) {
+    }
+  }
+  const sim::GatherResult r = sim::runGather(fleetGatherOptions());
+  const fs::path tmp = cache.string() + "." + std::to_string(::getpid());
+  sim::writeIntelHexFile(tmp.string(), r.eeprom);
+  fs::rename(tmp, cache);
+  return r.eeprom;
+}
+
+}  // namespace hil
