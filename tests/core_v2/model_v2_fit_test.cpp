@@ -341,3 +341,66 @@ TEST(ModelV2FromCurve, RefusesCurvesItCannotStore) {
   EXPECT_FALSE(tc::modelV2FromCurve(model, 300.0, d_ok, f_ok, 2, 12000.0)) << "start 300 us";
   EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_ok, 2, 3000.0)) << "rest 3 V";
 }
+
+TEST(ModelV2Fit, SweepThatStartsWithTheMotorAlreadyPushingIsRefused) {
+  // given: a sweep from 1250 us: the first sample already makes more than the first knot
+  SyntheticMotor motor;
+  Fitter fitter;
+  for (uint16_t p = 1250; p <= 2000; p += 10)
+    fitter.add(p, static_cast<int16_t>(std::lround(motor.forceG(p, 12.4) * 10)), 12400);
+  // when
+  tc::ModelV2 model;
+  const tc::FitV2Report rep = fitter.fit(model);
+  // then
+  EXPECT_EQ(rep.status, tc::FitV2Status::kStartNotFound);
+  EXPECT_FALSE(model.isPresent());
+}
+
+TEST(ModelV2Fit, RefineWithASecondSweepBelowTheFirstKnotKeepsTheModel) {
+  // given: a fitted model, and a second sweep that stops at 1200 us (13.5 g, below 28 g)
+  SyntheticMotor motor;
+  Fitter fitter;
+  tc_test::recordSweep(motor, 12.4, fitter, Recording{false, 0.0, 1});
+  tc::ModelV2 model;
+  ASSERT_EQ(fitter.fit(model).status, tc::FitV2Status::kOk);
+  const uint16_t start_before = model.start_q4_us;
+  fitter.reset();
+  for (uint16_t p = 1000; p <= 1200; p += 10)
+    fitter.add(p, static_cast<int16_t>(std::lround(motor.forceG(p, 10.5) * 10)), 10500);
+  // when
+  const tc::FitV2Report rep = fitter.refine(model);
+  // then
+  EXPECT_EQ(rep.status, tc::FitV2Status::kStartNotFound);
+  EXPECT_EQ(rep.estimates, 0);
+  EXPECT_EQ(model.start_q4_us, start_before);
+  EXPECT_FALSE(model.flags & tc::kV2Refined);
+}
+
+TEST(ModelV2Fit, EveryStatusHasItsOwnText) {
+  const tc::FitV2Status all[] = {tc::FitV2Status::kOk,           tc::FitV2Status::kTooFewSamples,
+                                 tc::FitV2Status::kNoForce,      tc::FitV2Status::kBadVoltage,
+                                 tc::FitV2Status::kStartNotFound, tc::FitV2Status::kVoltagesTooClose,
+                                 tc::FitV2Status::kNoModel};
+  for (auto a : all) {
+    EXPECT_STRNE(tc::fitV2StatusText(a), "unknown");
+    for (auto b : all)
+      if (a != b) {
+        EXPECT_STRNE(tc::fitV2StatusText(a), tc::fitV2StatusText(b));
+      }
+  }
+  EXPECT_STREQ(tc::fitV2StatusText(static_cast<tc::FitV2Status>(99)), "unknown");
+}
+
+TEST(ModelV2FromCurve, CurveStartingAboveZeroForceIsJoinedToTheOrigin) {
+  // given: points from 50 g up; the first knots lie between the origin and 50 g
+  const double drive[] = {2000.0, 6000.0, 9000.0};
+  const double force[] = {50.0, 300.0, 600.0};
+  tc::ModelV2 model;
+  ASSERT_TRUE(tc::modelV2FromCurve(model, 1100.0, drive, force, 3, 12000.0));
+  // then: knot 0 (18.7 g) sits on the straight line from the origin to (2000 us*V, 50 g)
+  const double knot0_g = model.step_dg / 10.0;
+  EXPECT_NEAR(model.drive_512usmv[0] * 512.0 / 1000.0, 2000.0 * knot0_g / 50.0, 1.0);
+  EXPECT_FALSE(tc::modelV2FromCurve(model, -5.0, drive, force, 3, 12000.0)) << "negative start";
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 1100.0, drive, force, 3, 12000.0, nullptr, -1.0))
+      << "negative second voltage";
+}

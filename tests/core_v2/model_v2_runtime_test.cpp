@@ -311,3 +311,23 @@ TEST(ForceToPwmV2, SagPredictionMatchesTheFormulaEvenWhereTheSagTableIsSteep) {
     }
   }
 }
+
+TEST(ForceToPwmV2, SagPredictionHandlesNoVoltageAndForcesBeyondTheCurve) {
+  SyntheticMotor motor;
+  motor.source_r_ohm = 0.1;
+  const tc::ModelV2 m = tc_test::fittedModel(motor, 12.4);
+  const tc::BusVoltageFilter invalid;
+  // no bus voltage: the rest voltage, flagged, like the plain call
+  const tc::ForcePwmResult r = tc::forceToPwmV2(m, 3000, invalid, 3000);
+  EXPECT_EQ(r.flags, tc::kVoltageInvalid);
+  EXPECT_EQ(r.pwm_us, tc::forceToPwmV2(m, 3000, invalid).pwm_us);
+  // from beyond the curve down to 300 g: the sag shrinks, so less PWM than in steady state
+  const tc::BusVoltageFilter bus = busAt(11000);
+  const tc::ForcePwmResult down = tc::forceToPwmV2(m, 3000, bus, 30000);
+  EXPECT_EQ(down.flags, 0);
+  EXPECT_LT(down.pwm_us, tc::forceToPwmV2(m, 3000, bus).pwm_us);
+  // up to beyond the curve: saturated like the plain call
+  EXPECT_EQ(tc::forceToPwmV2(m, 30000, bus, 1000).flags & tc::kSaturated, tc::kSaturated);
+  EXPECT_EQ(tc::forceToPwmV2(tc::ModelV2(), 3000, bus, 1000).flags, tc::kNotCalibrated);
+  EXPECT_EQ(tc::forceToPwmV2(m, 0, bus, 1000).flags, tc::kStopped);
+}

@@ -434,3 +434,23 @@ TEST_F(RecordV2, V1RecordWrittenOverV2WinsOnceCompleteAndV2SurvivesACutV1Write) 
   EXPECT_EQ(load.layout, tc::SlotLayout::kThesisV1);
   EXPECT_EQ(load.status, tc::DecodeStatus::kOk);
 }
+
+TEST(RecordV2Texts, EveryStatusAndLayoutHasItsOwnText) {
+  const tc::WriteV2Status writes[] = {tc::WriteV2Status::kWritten, tc::WriteV2Status::kUnchanged,
+                                      tc::WriteV2Status::kInvalidModel,
+                                      tc::WriteV2Status::kVerifyFailed};
+  for (auto a : writes)
+    for (auto b : writes)
+      if (a != b) {
+        EXPECT_STRNE(tc::writeV2StatusText(a), tc::writeV2StatusText(b));
+      }
+  const tc::SlotLayout layouts[] = {tc::SlotLayout::kNone, tc::SlotLayout::kThesisV1,
+                                    tc::SlotLayout::kModelV2};
+  for (auto a : layouts)
+    for (auto b : layouts)
+      if (a != b) {
+        EXPECT_STRNE(tc::slotLayoutText(a), tc::slotLayoutText(b));
+      }
+  EXPECT_STREQ(tc::writeV2StatusText(static_cast<tc::WriteV2Status>(99)), "unknown");
+  EXPECT_STREQ(tc::slotLayoutText(static_cast<tc::SlotLayout>(99)), "unknown");
+}
