@@ -21,14 +21,19 @@
 //   voltage, used to predict the bus voltage at a commanded operating point that differs
 //   from the present one (command steps), see forceToPwmV2(..., force_now_dg).
 //
-// Run time (forceToPwmV2): no float, no division. The bus voltage filter (BusVoltageFilter)
-// keeps the filtered millivolts AND their reciprocal (Q28), updated once per frame by one
-// Newton step (two 16x16 multiplications); the rare large jump re-seeds it with one 32/16
-// division. Per motor: three 16x16->32 multiplications (knot position, interpolation,
-// drive * reciprocal) and two more when a sag prediction is asked for.
-// Divisions, counted: per frame 0 (steady) or 1 (BusVoltageFilter re-seed after a jump of
-// more than 1/128); per motor 0. headroomDg / forceForPwmDg (status, not per frame) use one
-// 32/32 division each. Fitting (gather_store, once) uses 32/32 divisions freely.
+// Run time (forceToPwmV2, forceToPwmV2Frame): no float, no division. The bus voltage filter
+// (BusVoltageFilter) keeps the filtered millivolts AND their reciprocal (2^28 / mV), updated
+// by one Newton step (two 16x16 multiplications) in the frames where the filtered value
+// moves; a jump of more than 1/128 re-seeds it with one 32/16 division. Per motor: three
+// 16x16->32 multiplications (knot position, interpolation, drive * reciprocal; inline
+// hardware MULs on the AVR) and only byte-aligned shifts; six more multiplications when a
+// sag prediction is asked for (command steps).
+// Divisions, counted: per frame 0, or 1 after a jump (filter re-seed); per motor 0.
+// headroomDg / forceForPwmDg (status command, not per frame) use one 32/32 division each.
+// Fitting (gather_store, once per sweep) uses 32/32 divisions freely.
+// Measured on the ATmega2560 in simavr (tests/core_v2/avr_cycles.sh, avr-g++ -Os): filter
+// update + forceToPwmV2Frame for four motors 1209 cycles mean, 1246 max (thesis option 2.1,
+// forceToPwm x4: 8062 mean); fit of a 101-sample sweep ~0.5 M cycles (31 ms), refine 0.28 M.
 //
 // Fitting on the board (ModelV2Fitter): one sweep of (pwm_us, force_dg, vbat_mv) samples as
 // gather_store records them, integer maths, 8 bytes per sample of work space (128 samples:
