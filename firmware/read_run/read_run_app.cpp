@@ -518,7 +518,7 @@ void ReadRunApp::commandHelp() {
   sayLine(TC_PSTR("f G            all calibrated motors to G grams (0..500)"));
   sayLine(TC_PSTR("f N G          motor N (0..3) to G grams"));
   sayLine(TC_PSTR("stop           all motors to 0 g (1000 us)"));
-  sayLine(TC_PSTR("status         per motor: force, pwm, battery, model, flags; v2: headroom"));
+  sayLine(TC_PSTR("status         per motor: force, pwm, battery, flags; v2 motors: headroom"));
   sayLine(TC_PSTR("liftoff G [RAMP_MS] [HOLD_MS]  ramp all four 0->G g (default 2000 ms),"));
   sayLine(TC_PSTR("               hold (default 5000 ms), stop; any key aborts"));
   sayLine(TC_PSTR("stream on|off  CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s"));
