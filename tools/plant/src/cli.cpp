@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -27,8 +28,30 @@ struct Options {
 };
 
 void addPreset(CLI::App* cmd, Options& o) {
+  const CLI::Validator known_preset(
+      [](std::string& name) -> std::string {
+        if (findPreset(name)) return {};
+        std::string known;
+        for (const Preset& p : presets()) known += (known.empty() ? "" : ", ") + p.params.name;
+        return "unknown preset '" + name + "'; use one of: " + known;
+      },
+      "PRESET");
   cmd->add_option("--preset", o.preset, "actuator preset (see `thrustcal plant presets`)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(known_preset);
+}
+
+// Runs a command; any failure becomes a one-line message and exit code 1.
+template <class Fn>
+std::function<void()> guarded(Fn fn) {
+  return [fn] {
+    try {
+      fn();
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "thrustcal plant: {}\n", e.what());
+      throw CLI::RuntimeError(1);
+    }
+  };
 }
 
 void cmdPresets(const Options& o) {
@@ -65,7 +88,6 @@ void cmdCurve(const Options& o) {
   bp.env.temp_c = o.temp_c;
   bp.env.pressure_pa = o.pressure_pa;
   const Bench bench(bp);
-  const EscParams& e = bp.actuator.esc;
   nlohmann::json rows = nlohmann::json::array();
   if (!o.json) {
     if (o.lipo_soc >= 0.0) {
@@ -91,7 +113,6 @@ void cmdCurve(const Options& o) {
     }
   }
   if (o.json) fmt::print("{}\n", rows.dump(2));
-  (void)e;
 }
 
 void cmdTable51(const Options& o) {
@@ -209,7 +230,7 @@ void registerCommands(CLI::App& app) {
 
   CLI::App* pre = plant->add_subcommand("presets", "List the actuator presets");
   pre->add_flag("--json", opts->json, "print JSON");
-  pre->callback([opts] { cmdPresets(*opts); });
+  pre->callback(guarded([opts] { cmdPresets(*opts); }));
 
   CLI::App* curve = plant->add_subcommand(
       "curve", "Steady-state thrust / current / rpm vs PWM on the thesis bench");
@@ -222,18 +243,18 @@ void registerCommands(CLI::App& app) {
   curve->add_option("--temp", opts->temp_c, "air temperature, C")->capture_default_str();
   curve->add_option("--pressure", opts->pressure_pa, "air pressure, Pa")->capture_default_str();
   curve->add_flag("--json", opts->json, "print JSON rows");
-  curve->callback([opts] { cmdCurve(*opts); });
+  curve->callback(guarded([opts] { cmdCurve(*opts); }));
 
   CLI::App* t51 = plant->add_subcommand(
       "table51", "Fidelity: PWM for 300 g at 9.7..14 V, thesis table 5.1 vs model");
   addPreset(t51, *opts);
   t51->add_flag("--json", opts->json, "print JSON");
-  t51->callback([opts] { cmdTable51(*opts); });
+  t51->callback(guarded([opts] { cmdTable51(*opts); }));
 
   CLI::App* ds = plant->add_subcommand("datasheet", "Fidelity: the T-motor datasheet point vs model");
   addPreset(ds, *opts);
   ds->add_flag("--json", opts->json, "print JSON");
-  ds->callback([opts] { cmdDatasheet(*opts); });
+  ds->callback(guarded([opts] { cmdDatasheet(*opts); }));
 
   CLI::App* st = plant->add_subcommand("step", "Speed time constant for a PWM step");
   addPreset(st, *opts);
@@ -241,12 +262,12 @@ void registerCommands(CLI::App& app) {
   st->add_option("--from", opts->from_us, "PWM before the step, us")->capture_default_str();
   st->add_option("--to", opts->to_us, "PWM after the step, us")->capture_default_str();
   st->add_flag("--json", opts->json, "print JSON");
-  st->callback([opts] { cmdStep(*opts); });
+  st->callback(guarded([opts] { cmdStep(*opts); }));
 
   CLI::App* sp = plant->add_subcommand("speed", "Host time per plant step (wall clock)");
   addPreset(sp, *opts);
   sp->add_flag("--json", opts->json, "print JSON");
-  sp->callback([opts] { cmdSpeed(*opts); });
+  sp->callback(guarded([opts] { cmdSpeed(*opts); }));
 }
 
 }  // namespace plant
