@@ -98,6 +98,7 @@ void sayV2Summary(const Motor& m) {
 // Mean of the middle two of four readings (one spike either way is ignored), through the
 // thesis map() at half-count resolution: equal readings give exactly map(reading).
 uint16_t middleTwoMillivolts(const uint16_t* counts, const tc::BatteryConfig& config) {
+  if (config.adc_max_counts == 0) return 0;
   uint16_t sum = 0;
   uint16_t lo = 0xFFFF;
   uint16_t hi = 0;
@@ -108,7 +109,6 @@ uint16_t middleTwoMillivolts(const uint16_t* counts, const tc::BatteryConfig& co
     if (c > hi) hi = c;
   }
   const uint16_t middle_two = static_cast<uint16_t>(sum - lo - hi);  // <= 2 * 1023
-  if (config.adc_max_counts == 0) return 0;
   return static_cast<uint16_t>(static_cast<uint32_t>(middle_two) * config.full_scale_mv /
                                (2u * config.adc_max_counts));
 }
@@ -318,7 +318,7 @@ bool ReadRunApp::frameDue(uint32_t now_ms) const {
 
 // v1 and status: the thesis median of 101. v2: this frame's four readings (middle two) into
 // the bus voltage filter, every frame while a v2 motor is loaded (a v1-only aircraft skips
-// its ~1400 cycles); an insane reading is skipped by the filter (it keeps the last good
+// its ~900 cycles); an insane reading is skipped by the filter (it keeps the last good
 // value) and flagged on the v2 motors' results.
 void ReadRunApp::sampleBattery() {
   static_assert(kBatterySamplesPerFrame == 4, "middleTwoMillivolts takes four readings");
