@@ -259,24 +259,28 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
   if (force_now_dg != force_dg) {
     uint8_t ignored = 0;
     const KnotPos now = knotPos(model, clampForce(model, force_now_dg, ignored));
-    // Extra drop expected at the command, mV: (sag(cmd) - sag(now)) * 10 / 256, clamped to
-    // +-2047 mV so that 16 * d fits 16 bits.
-    int32_t d_mv = (static_cast<int32_t>(sagAtQ8(model, p)) - sagAtQ8(model, now)) * kV2SagUnitMv;
-    d_mv >>= 8;
-    if (d_mv > 2047) d_mv = 2047;
-    if (d_mv < -2047) d_mv = -2047;
-    // delta = d / V in Q16 = 16 d * recip / 2^16 (recip = 2^28 / mV).
-    int16_t delta = mulS16U16Hi(static_cast<int16_t>(d_mv * 16), recip);
+    // Extra drop expected at the command: d = sag(cmd) - sag(now), in 1/128 of 10 mV
+    // (|d| < 2^15). delta = d_mv / V in Q16 = d * (1.25 * 2^28 / mV) / 2^16: the factor
+    // 1.25 * recip fits 16 bits (< 55924 at 6 V).
+    const int16_t d_q7 = static_cast<int16_t>((sagAtQ8(model, p) >> 1) - (sagAtQ8(model, now) >> 1));
+    const uint16_t recip_x125 = static_cast<uint16_t>(recip + (recip >> 2));
+    int16_t delta = mulS16U16Hi(d_q7, recip_x125);
     if (delta > 16384) delta = 16384;  // a predicted change of more than 25 % is not sag
     if (delta < -16384) delta = -16384;
     // duty / (1 - delta) ~ duty * (1 + delta + delta^2): error delta^3 (< 0.01 % at 5 %).
     const uint16_t mag = static_cast<uint16_t>(delta < 0 ? -delta : delta);
     const int16_t factor = static_cast<int16_t>(delta + static_cast<int16_t>(mulU16(mag, mag) >> 16));
-    // duty * (1 + factor / 2^16), factor in -16384..20480, on the duty in 1/8 us (< 2^16).
-    const uint16_t duty_q3 = static_cast<uint16_t>(duty_q17 >> 14);
-    const int32_t duty = static_cast<int32_t>(duty_q17) +
-                         static_cast<int32_t>(mulS16U16Hi(factor, duty_q3)) * 16384;
-    duty_q17 = duty < 0 ? 0u : static_cast<uint32_t>(duty);
+    // duty * (1 + factor / 2^16), factor in -16384..20480. With duty = hi * 2^16 + lo:
+    // duty * factor / 2^16 = hi * factor + lo * factor / 2^16 (hi < 2^14): byte-aligned.
+    const uint16_t hi = static_cast<uint16_t>(duty_q17 >> 16);
+    const uint16_t lo = static_cast<uint16_t>(duty_q17);
+    const uint16_t fmag = static_cast<uint16_t>(factor < 0 ? -factor : factor);
+    const uint32_t corr = mulU16(hi, fmag) + (mulU16(lo, fmag) >> 16);
+    if (factor >= 0) {
+      duty_q17 += corr;
+    } else {
+      duty_q17 = corr > duty_q17 ? 0u : duty_q17 - corr;
+    }
   }
   return finishPwm(model, duty_q17, flags, limits);
 }
