@@ -1,0 +1,98 @@
+// The lab's force model: a base (a smooth monotone force curve, or the firmware's thesis model
+// evaluated through core/) plus named effects from a catalogue, plus user effects written as
+// expressions (`mul: EXPR`, `add: EXPR`). Fitted by least squares: the curve's coefficients
+// linearly (non-negative least squares keeps the curve monotone), every other parameter by
+// Levenberg-Marquardt on the residual that remains after the linear solve (variable projection).
+//
+//   drive   d = (pwm - start) / span                  [deadband: start fitted, else min pwm]
+//   x       = d * (V / V_ref)^gamma                   [voltage; V = vbat - R * I with sag]
+//   force   = offset + M * curve(x) + A               curve(x) = sum_j c_j S_j(x), c_j >= 0
+//   M       = product of the multiplicative effects   (motor, thermal, density, drift, mul:)
+//   A       = sum of the additive effects             (add:)
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lab/dataset.hpp"
+
+namespace lab {
+
+struct EffectInfo {
+  std::string name;
+  std::string physics;     // what it models, in plain words
+  std::string columns;     // columns it needs
+  std::string parameters;  // name [unit]: meaning
+};
+// The catalogue, in the order `effects` prints it.
+const std::vector<EffectInfo>& effectCatalogue();
+const EffectInfo* findEffect(const std::string& name);
+
+struct UserEffect {
+  bool multiplicative;  // mul: (factor on force) or add: (grams added)
+  std::string expression;
+};
+
+struct ModelSpec {
+  std::vector<std::string> effects;  // catalogue names, in order
+  std::vector<UserEffect> user;
+  bool has(const std::string& effect) const;
+  std::string text() const;  // "curve+deadband+voltage+mul: 1 + a*(temp_c-25)"
+};
+// SPEC: names joined with '+'; `mul: EXPR` or `add: EXPR` runs to the next ';' or the end.
+// Throws std::invalid_argument naming the unknown effect and listing the catalogue.
+ModelSpec parseSpec(const std::string& spec);
+// spec + more, checked the same way.
+ModelSpec combine(const ModelSpec& base, const ModelSpec& more);
+
+struct Param {
+  std::string name;
+  std::string unit;
+  std::string effect;
+  double value = 0;
+  double sigma = 0;  // one standard uncertainty from the Jacobian (NaN when not determined)
+};
+
+struct FitResult {
+  std::string model;
+  std::size_t n = 0;
+  int k = 0;             // fitted parameters (for the information criteria)
+  double rss = 0;        // g^2
+  double rmse_g = 0;
+  double max_g = 0;      // largest |residual|
+  double rmse_pct = 0;   // percent of the largest measured force
+  double max_pct = 0;
+  double aic = 0;
+  double bic = 0;
+  std::vector<double> predicted_g;
+  std::vector<double> residual_g;  // measured - predicted
+  std::vector<Param> params;
+  std::vector<std::string> warnings;
+};
+
+// A model bound to training data. Normalisation constants (PWM span, reference voltage,
+// temperature, density, time origin, motors) come from the training data so the fitted model
+// also predicts other data (held-out runs).
+class Model {
+ public:
+  Model(const ModelSpec& spec, const Dataset& train);
+  ~Model();
+  Model(const Model&) = delete;
+  Model& operator=(const Model&) = delete;
+
+  FitResult fit();
+  // Prediction of the fitted model on other data (same columns needed). NaN where it cannot.
+  std::vector<double> predict(const Dataset& data) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Fits `spec` on `data`.
+FitResult fitModel(const Dataset& data, const ModelSpec& spec);
+
+// Adds derived candidate columns: rho_kg_m3 (from temp_c and a pressure column).
+void addDerivedColumns(Dataset& data);
+
+}  // namespace lab

@@ -1,0 +1,327 @@
+#include "lab/cli.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "lab/analysis.hpp"
+#include "lab/dataset.hpp"
+#include "lab/generate.hpp"
+#include "lab/model.hpp"
+#include "lab/report.hpp"
+
+namespace lab {
+
+namespace {
+
+using nlohmann::json;
+
+struct Common {
+  std::vector<std::string> files;
+  std::vector<std::string> maps;
+  std::string model;
+  bool json_out = false;
+  std::string report_dir;
+  std::string holdout = "none";
+  bool no_motor_split = false;
+};
+
+void addCommon(CLI::App* cmd, Common& c) {
+  cmd->add_option("DATA", c.files,
+                  "measurement CSV files (project CSV, a captured gather_store log, RCbenchmark/Tyto "
+                  "export, or any CSV with --map); one or more runs per file")
+      ->required();
+  cmd->add_option("--model,-m", c.model,
+                  "model SPEC: effects joined with '+', e.g. curve+deadband+voltage, or thesis; "
+                  "user effects as 'mul: EXPR' / 'add: EXPR' (see `thrustcal lab effects`)")
+      ->required();
+  cmd->add_option("--map", c.maps,
+                  "column mapping TARGET=SOURCE[*K|/K|+K|-K...], repeatable, e.g. "
+                  "--map force_g=weight[g]/4 --map pwm_us=pwm --map vbat_v=vbat[V]");
+  cmd->add_option("--holdout", c.holdout,
+                  "validation: none, runs (fit without each run, predict it) or voltage (without "
+                  "each voltage level)")
+      ->capture_default_str();
+  cmd->add_option("--report", c.report_dir, "write plots (PNG+SVG) and report.md into this directory");
+  cmd->add_flag("--json", c.json_out, "print JSON instead of text");
+  cmd->add_flag("--no-motor-split", c.no_motor_split, "one run per file even with a motor column");
+}
+
+Dataset load(const Common& c) {
+  ReadOptions ro;
+  for (const auto& m : c.maps) ro.maps.push_back(parseColumnMap(m));
+  ro.split_by_motor = !c.no_motor_split;
+  Dataset d = readFiles(c.files, ro);
+  addDerivedColumns(d);
+  return d;
+}
+
+json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json paramsJson(const FitResult& f) {
+  json a = json::array();
+  for (const auto& p : f.params)
+    a.push_back({{"name", p.name}, {"unit", p.unit}, {"effect", p.effect}, {"value", num(p.value)},
+                 {"sigma", num(p.sigma)}});
+  return a;
+}
+
+json suspectsJson(const std::vector<Suspect>& vars, bool significant) {
+  json a = json::array();
+  for (const auto& s : vars) {
+    if (s.significant != significant) continue;
+    a.push_back({{"variable", s.variable}, {"score", num(s.score)}, {"effects", s.effects},
+                 {"p_value", num(s.p_value)}, {"advice", s.advice}});
+  }
+  return a;
+}
+
+std::string fmtSigma(const Param& p) {
+  if (!std::isfinite(p.sigma)) return fmt::format("{:.5g} {}", p.value, p.unit);
+  return fmt::format("{:.5g} ± {:.2g} {}", p.value, p.sigma, p.unit);
+}
+
+void printFit(const FitResult& f) {
+  std::printf("fit: RMSE %.3f g (%.2f %% of the largest force), max %.2f g (%.2f %%), %d parameters, BIC %.1f, AIC %.1f\n",
+              f.rmse_g, f.rmse_pct, f.max_g, f.max_pct, f.k, f.bic, f.aic);
+  std::printf("parameters:\n");
+  int curve = 0;
+  for (const auto& p : f.params) {
+    if (p.effect == "curve" && p.name != "offset_g") {
+      ++curve;
+      continue;
+    }
+    std::printf("  %-20s %-28s (%s)\n", p.name.c_str(), fmtSigma(p).c_str(), p.effect.c_str());
+  }
+  if (curve) std::printf("  + %d curve coefficients c1..c%d [g] (in --json)\n", curve, curve);
+  for (const auto& w : f.warnings) std::printf("  note: %s\n", w.c_str());
+}
+
+void printNotes(const Dataset& d) {
+  for (const auto& n : d.notes) std::fprintf(stderr, "note: %s\n", n.c_str());
+}
+
+std::string commandLine(const std::string& sub, const Common& c, const std::vector<std::string>& adds) {
+  std::string s = "thrustcal lab " + sub;
+  for (const auto& f : c.files) s += " " + f;
+  for (const auto& m : c.maps) s += " --map '" + m + "'";
+  s += " --model '" + c.model + "'";
+  for (const auto& a : adds) s += " --add '" + a + "'";
+  return s;
+}
+
+int runDiagnose(const Common& c) {
+  const Dataset data = load(c);
+  const ModelSpec spec = parseSpec(c.model);
+  const Diagnosis d = diagnose(data, spec, parseHoldout(c.holdout));
+  ReportFiles rep;
+  if (!c.report_dir.empty()) {
+    LadderStep step;
+    step.spec = spec;
+    step.fit = d.fit;
+    step.variables = d.variables;
+    step.holdout_rmse_g = d.holdout_rmse_g;
+    rep = writeReport(c.report_dir, data, {step}, commandLine("diagnose", c, {}));
+  }
+  if (c.json_out) {
+    json j = {{"model", d.fit.model}, {"rmse_g", num(d.fit.rmse_g)}, {"n", d.fit.n},
+              {"max_g", num(d.fit.max_g)}, {"rmse_pct", num(d.fit.rmse_pct)}, {"max_pct", num(d.fit.max_pct)},
+              {"k", d.fit.k}, {"aic", num(d.fit.aic)}, {"bic", num(d.fit.bic)}, {"runs", data.runs()},
+              {"params", paramsJson(d.fit)}, {"suspects", suspectsJson(d.variables, true)},
+              {"not_significant", suspectsJson(d.variables, false)}, {"warnings", d.fit.warnings}};
+    if (c.holdout != "none")
+      j["holdout"] = {{"kind", c.holdout}, {"groups", d.holdout_groups}, {"rmse_g", num(d.holdout_rmse_g)}};
+    if (!rep.page.empty()) j["report"] = {{"page", rep.page}, {"images", rep.images}};
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  printNotes(data);
+  std::printf("model %s on %zu samples in %zu run(s)\n", d.fit.model.c_str(), d.fit.n, data.runs());
+  printFit(d.fit);
+  if (c.holdout != "none")
+    std::printf("hold-out (%s, %d groups): RMSE %.3f g on data the fit did not see\n", c.holdout.c_str(),
+                d.holdout_groups, d.holdout_rmse_g);
+  std::printf("where it fails (variables ranked by how much of the residual they explain):\n");
+  int k = 0;
+  std::string first_effect;
+  for (const auto& s : d.variables) {
+    if (!s.significant) continue;
+    std::printf("  %d. %-16s score %.3f (p %.1e) -> %s\n     %s\n", ++k, s.variable.c_str(), s.score, s.p_value,
+                fmt::format("{}", fmt::join(s.effects, ", ")).c_str(), s.advice.c_str());
+    if (first_effect.empty() && !s.effects.empty()) first_effect = s.effects.front();
+  }
+  if (k == 0) std::printf("  nothing: no variable explains a significant part of the residual (it looks like noise)\n");
+  std::string quiet;
+  for (const auto& s : d.variables)
+    if (!s.significant) quiet += (quiet.empty() ? "" : ", ") + s.variable;
+  if (!quiet.empty()) std::printf("not significant: %s\n", quiet.c_str());
+  if (!first_effect.empty()) {
+    std::string files;
+    for (const auto& f : c.files) files += f + " ";
+    std::printf("next: thrustcal lab ladder %s--model '%s' --add '%s'\n", files.c_str(), c.model.c_str(),
+                first_effect.c_str());
+  }
+  if (!rep.page.empty()) {
+    std::printf("report: %s\n", rep.page.c_str());
+    for (const auto& i : rep.images) std::printf("  %s\n", i.c_str());
+  }
+  for (const auto& w : rep.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  return 0;
+}
+
+int runLadder(const Common& c, const std::vector<std::string>& adds) {
+  const Dataset data = load(c);
+  const ModelSpec spec = parseSpec(c.model);
+  for (const auto& a : adds) parseSpec(a);  // fail early on a typo
+  const auto steps = ladder(data, spec, adds, parseHoldout(c.holdout));
+  ReportFiles rep;
+  if (!c.report_dir.empty()) rep = writeReport(c.report_dir, data, steps, commandLine("ladder", c, adds));
+  if (c.json_out) {
+    json s = json::array();
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+      const auto& st = steps[i];
+      json j = {{"model", st.spec.text()}, {"added", st.added}, {"rmse_g", num(st.fit.rmse_g)},
+                {"max_g", num(st.fit.max_g)}, {"rmse_pct", num(st.fit.rmse_pct)}, {"n", st.fit.n},
+                {"k", st.fit.k}, {"aic", num(st.fit.aic)}, {"bic", num(st.fit.bic)},
+                {"delta_bic", i ? num(st.delta_bic) : json(nullptr)}, {"delta_aic", i ? num(st.delta_aic) : json(nullptr)},
+                {"earns", i ? json(st.earns) : json(nullptr)}, {"params", paramsJson(st.fit)},
+                {"suspects", suspectsJson(st.variables, true)}, {"warnings", st.fit.warnings}};
+      if (c.holdout != "none") j["holdout_rmse_g"] = num(st.holdout_rmse_g);
+      s.push_back(j);
+    }
+    json out = {{"steps", s}};
+    if (!rep.page.empty()) out["report"] = {{"page", rep.page}, {"images", rep.images}};
+    std::cout << out.dump(2) << "\n";
+    return 0;
+  }
+  printNotes(data);
+  std::printf("error ladder on %zu samples in %zu run(s); BIC = n ln(RSS/n) + k ln n, an effect earns its\n"
+              "parameters when BIC falls by more than 2\n\n", data.rows(), data.runs());
+  std::printf("%-4s %-34s %4s %10s %9s %8s %11s %9s  %s\n", "step", "model", "k", "RMSE g", "max g", "RMSE %",
+              "BIC", "dBIC", "verdict");
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const auto& st = steps[i];
+    const std::string name = i == 0 ? st.spec.text() : "+" + st.added;
+    std::printf("%-4zu %-34s %4d %10.3f %9.2f %8.2f %11.1f %9s  %s\n", i, name.c_str(), st.fit.k, st.fit.rmse_g,
+                st.fit.max_g, st.fit.rmse_pct, st.fit.bic, i ? fmt::format("{:.1f}", st.delta_bic).c_str() : "",
+                i ? (st.earns ? "earns its parameters" : "does NOT earn its parameters") : "start");
+    if (c.holdout != "none") std::printf("     hold-out (%s) RMSE %.3f g\n", c.holdout.c_str(), st.holdout_rmse_g);
+  }
+  const auto& last = steps.back();
+  std::printf("\nlast step, %s:\n", last.spec.text().c_str());
+  printFit(last.fit);
+  int k = 0;
+  for (const auto& s : last.variables) {
+    if (!s.significant || k >= 3) continue;
+    if (k++ == 0) std::printf("still in the residual:\n");
+    std::printf("  %-16s score %.3f -> %s\n", s.variable.c_str(), s.score, s.advice.c_str());
+  }
+  if (k == 0) std::printf("the residual of the last step depends on no logged variable: it looks like noise\n");
+  if (!rep.page.empty()) {
+    std::printf("report: %s\n", rep.page.c_str());
+    for (const auto& i : rep.images) std::printf("  %s\n", i.c_str());
+  }
+  for (const auto& w : rep.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  return 0;
+}
+
+std::string effectsText() {
+  std::string s = "Effects (a model SPEC joins them with '+', e.g. curve+deadband+voltage):\n";
+  for (const auto& e : effectCatalogue()) {
+    s += "\n  " + e.name + "\n";
+    s += "    physics:    " + e.physics + "\n";
+    s += "    columns:    " + e.columns + "\n";
+    s += "    parameters: " + e.parameters + "\n";
+  }
+  s += "\nData columns: pwm_us and force_g are required; t_s, motor, vbat_v, current_a, rpm, temp_c,\n"
+       "dir are known; any other numeric column is a candidate variable for the diagnosis.\n"
+       "RCbenchmark/Tyto exports are read as they are; other CSVs need --map, e.g. the Crazyflie data:\n"
+       "  --map force_g=weight[g]/4 --map pwm_us=pwm --map vbat_v=vbat[V]\n";
+  return s;
+}
+
+template <typename F>
+int guarded(F f) {
+  try {
+    return f();
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+  }
+  return 2;
+}
+
+}  // namespace
+
+void registerCommands(CLI::App& app) {
+  auto* lab = app.add_subcommand(
+      "lab",
+      "model lab: compare the force model with measurements, see where it fails, find the missing "
+      "effect, add it, watch the error fall");
+  lab->require_subcommand(1);
+  lab->footer(effectsText());
+
+  auto diag = std::make_shared<Common>();
+  auto* d = lab->add_subcommand("diagnose", "fit a model, then rank the variables that explain what it misses");
+  addCommon(d, *diag);
+  d->footer("Example: thrustcal lab diagnose sweep.csv --model curve+deadband --json\n"
+            "JSON: {\"rmse_g\": x, \"n\": N, \"suspects\": [{\"variable\": ..., \"score\": s, \"effects\": [...]}, ...]}");
+  d->callback([diag] {
+    const int rc = guarded([&] { return runDiagnose(*diag); });
+    if (rc) throw CLI::RuntimeError(rc);
+  });
+
+  auto lad = std::make_shared<Common>();
+  auto adds = std::make_shared<std::vector<std::string>>();
+  auto* l = lab->add_subcommand("ladder", "the error ladder: one step per added effect, with RMSE, max error and BIC");
+  addCommon(l, *lad);
+  l->add_option("--add,-a", *adds, "effect(s) to add, one step each (repeatable; a step may be a+b)")->required();
+  l->footer("Example: thrustcal lab ladder sweep.csv --model curve --add deadband --add voltage --report out/\n"
+            "JSON: {\"steps\": [{\"model\": ..., \"rmse_g\": x, \"bic\": b, ...}, ...]}");
+  l->callback([lad, adds] {
+    const int rc = guarded([&] { return runLadder(*lad, *adds); });
+    if (rc) throw CLI::RuntimeError(rc);
+  });
+
+  auto* e = lab->add_subcommand("effects", "document every effect: physics, columns, parameters with units");
+  e->callback([] { std::fputs(effectsText().c_str(), stdout); });
+
+  auto gen = std::make_shared<GenerateOptions>();
+  auto out = std::make_shared<std::string>();
+  auto* g = lab->add_subcommand("generate", "write a synthetic bench log from the plant model with a hidden effect");
+  std::string hidden_help = "hidden effect:";
+  for (const auto& h : hiddenEffects()) hidden_help += "\n  " + h.name + ": " + h.description;
+  g->add_option("--hidden", gen->hidden, hidden_help)->capture_default_str();
+  g->add_option("--noise-g", gen->noise_g, "load-cell noise, one standard deviation (g)")->capture_default_str();
+  g->add_option("--seed", gen->seed, "random seed (parts, noise)")->capture_default_str();
+  g->add_option("--preset", gen->preset, "plant preset (motor + propeller)")->capture_default_str();
+  g->add_option("--output,-o", *out, "CSV file to write (default: standard output)");
+  g->callback([gen, out] {
+    const int rc = guarded([&] {
+      std::vector<std::string> comments;
+      const Dataset d = generate(*gen, &comments);
+      const std::string csv = toCsv(d, comments);
+      if (out->empty()) {
+        std::fputs(csv.c_str(), stdout);
+      } else {
+        std::ofstream f(*out, std::ios::binary);
+        if (!f) throw std::runtime_error("cannot write " + *out);
+        f << csv;
+        std::fprintf(stderr, "wrote %s (%zu samples, %zu runs)\n", out->c_str(), d.rows(), d.runs());
+        for (std::size_t i = 1; i < comments.size(); ++i) std::fprintf(stderr, "  %s\n", comments[i].c_str());
+      }
+      return 0;
+    });
+    if (rc) throw CLI::RuntimeError(rc);
+  });
+}
+
+}  // namespace lab

@@ -1,0 +1,237 @@
+#include "lab/generate.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+
+#ifdef THRUSTCAL_LAB_HAVE_PLANT
+#include "plant/actuator.hpp"
+#include "plant/params.hpp"
+#include "plant/power_source.hpp"
+#include "plant/random.hpp"
+#endif
+
+namespace lab {
+
+namespace {
+
+const std::vector<HiddenEffectInfo> kHidden = {
+    {"none", "bench supply at four voltages, one motor, nothing hidden",
+     "curve+deadband+voltage", "", ""},
+    {"density",
+     "four runs at different air temperature and pressure (sea level to ~1500 m, 5-35 C), the "
+     "temperature also cycling +-15 K within each run (a climate box); temp_c and pressure_hpa logged",
+     "curve+deadband+voltage", "density", "rho_kg_m3"},
+    {"sag",
+     "a worn 3S LiPo (0.12 ohm) at four states of charge; vbat_v is the resting voltage "
+     "(logged before the load), current_a the pack current",
+     "curve+deadband+voltage", "sag", "current_a"},
+    {"motor", "four motors with 3 % part variation (Kv, R, I0, C_T, C_P, D), two voltages each",
+     "curve+deadband+voltage", "motor", "motor"},
+    {"drift",
+     "the load cell's zero creeps by 1.2 g per minute through an 18-minute session",
+     "curve+deadband+voltage", "drift", "t_s"},
+    {"plate",
+     "a deflector plate under the propeller at a height varied per point (plate_height_m): "
+     "ground effect, force x 1/(1 - (R/4z)^2); not in the catalogue",
+     "curve+deadband+voltage", "mul: 1/(1 - k/plate_height_m^2)", "plate_height_m"},
+};
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+}  // namespace
+
+const std::vector<HiddenEffectInfo>& hiddenEffects() { return kHidden; }
+
+#ifdef THRUSTCAL_LAB_HAVE_PLANT
+
+namespace {
+
+struct RunSetup {
+  int motor = 0;
+  plant::ActuatorParams params;
+  plant::BatteryParams battery;
+  double temp_c = 20.0;
+  double pressure_pa = 101325.0;
+  double temp_swing_k = 0.0;  // within-run sinusoid amplitude
+  double pause_before_s = 5.0;
+};
+
+struct Row {
+  double t_s, motor, pwm_us, force_g, vbat_v, current_a, rpm, temp_c, pressure_hpa, dir, plate_m;
+};
+
+}  // namespace
+
+Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
+  const HiddenEffectInfo* info = nullptr;
+  for (const auto& h : kHidden)
+    if (h.name == o.hidden) info = &h;
+  if (!info) {
+    std::string names;
+    for (const auto& h : kHidden) names += (names.empty() ? "" : ", ") + h.name;
+    throw std::invalid_argument("unknown hidden effect '" + o.hidden + "'; known: " + names);
+  }
+  if (!(o.noise_g >= 0)) throw std::invalid_argument("--noise-g must be >= 0");
+  const std::string& h = o.hidden;
+  const plant::ActuatorParams base = plant::presetParams(o.preset);
+  plant::Rng rng(o.seed * 7919 + 13);
+
+  std::vector<RunSetup> runs;
+  auto bench = [](double v) {
+    plant::BatteryParams b = plant::BatteryParams::benchSupply(v, 80.0);
+    b.wiring_r_ohm = 0.03;
+    return b;
+  };
+  const double volts[] = {10.2, 11.1, 12.0, 12.6};
+  if (h == "motor") {
+    for (int m = 0; m < 4; ++m) {
+      const plant::ActuatorParams p = plant::makeVaried(base, o.seed * 100 + static_cast<uint64_t>(m), 0.03);
+      for (double v : {10.8, 12.4}) {
+        RunSetup r;
+        r.motor = m;
+        r.params = p;
+        r.battery = bench(v);
+        runs.push_back(r);
+      }
+    }
+  } else if (h == "sag") {
+    for (double v : {12.5, 11.8, 11.2, 10.6}) {
+      RunSetup r;
+      r.params = base;
+      r.battery = plant::BatteryParams::lipo3s(plant::socForCellOcv(v / 3.0));
+      r.battery.r_internal_ohm = 0.12;
+      r.battery.r_polarization_ohm = 0.0;
+      r.battery.wiring_r_ohm = 0.03;
+      runs.push_back(r);
+    }
+  } else {
+    const double temps[] = {5, 35, 20, 12};
+    const double press[] = {1020e2, 1000e2, 900e2, 850e2};
+    for (int k = 0; k < 4; ++k) {
+      RunSetup r;
+      r.params = base;
+      // density runs share one voltage: sites and days differ, the bench supply does not
+      r.battery = bench(h == "density" ? 11.1 : volts[k]);
+      if (h == "density") {
+        r.temp_c = temps[k];
+        r.pressure_pa = press[k];
+        r.temp_swing_k = 15.0;
+      }
+      if (h == "drift") r.pause_before_s = 120.0;
+      runs.push_back(r);
+    }
+  }
+  const double settle_s = h == "drift" ? 2.0 : 0.5;
+  const double dt = 0.002;
+  const double creep_g_per_min = h == "drift" ? 1.2 : 0.0;
+
+  std::vector<Row> rows;
+  double clock = 0.0;
+  for (const auto& run : runs) {
+    plant::Environment env;
+    env.temp_c = run.temp_c;
+    env.pressure_pa = run.pressure_pa;
+    plant::Actuator act(run.params, env);
+    plant::PowerSource ps(run.battery);
+    std::vector<std::pair<double, double>> points;  // pulse, dir
+    for (double p = 1000; p <= 1900.0 + 1e-9; p += 25) points.emplace_back(p, 1.0);
+    for (double p = 1900; p >= 1000.0 - 1e-9; p -= 25) points.emplace_back(p, -1.0);
+    clock += run.pause_before_s;
+    const double run_start = clock;
+    for (const auto& [pulse, dir] : points) {
+      act.holdPulse(pulse);
+      double bus_current = 0, bus_v = 0;
+      for (double t = 0; t < settle_s - 1e-12; t += dt) {
+        const double now = clock + t;
+        if (run.temp_swing_k != 0) {
+          env.temp_c = run.temp_c + run.temp_swing_k * std::sin(2 * M_PI * (now - run_start) / 23.0);
+          act.setEnvironment(env);
+        }
+        act.setWindingTemp_c(25.0);  // thermal effect off: the winding stays at 25 C
+        bus_v = ps.solveBusVoltage(act.busLoad());
+        bus_current = act.step(dt, bus_v);
+        ps.step(dt, bus_current);
+      }
+      clock += settle_s;
+      Row r{};
+      r.t_s = clock;
+      r.motor = run.motor;
+      r.pwm_us = pulse;
+      double force = act.thrust_g();
+      const double plate = 0.08 + 0.42 * rng.uniform();
+      if (h == "plate") {
+        const double ratio = run.params.prop.diameter_m / 2 / (4 * plate);
+        force /= 1 - ratio * ratio;
+      }
+      force += creep_g_per_min * clock / 60.0;
+      r.force_g = force + (o.noise_g > 0 ? rng.normal(o.noise_g, 4.0) : 0.0);
+      r.vbat_v = h == "sag" ? ps.restingVoltage_v() : bus_v;
+      r.current_a = bus_current;
+      r.rpm = act.rpm();
+      r.temp_c = env.temp_c;
+      r.pressure_hpa = env.pressure_pa / 100.0;
+      r.dir = dir;
+      r.plate_m = plate;
+      rows.push_back(r);
+    }
+  }
+
+  Dataset d;
+  auto column = [&](const char* name, std::function<double(const Row&)> get) {
+    std::vector<double> v;
+    for (const auto& r : rows) v.push_back(get(r));
+    d.names.push_back(name);
+    d.columns.push_back(std::move(v));
+  };
+  std::vector<double> run_of_row;
+  for (std::size_t ri = 0; ri < runs.size(); ++ri)
+    for (std::size_t j = 0; j < rows.size() / runs.size(); ++j) run_of_row.push_back(static_cast<double>(ri));
+  d.names.push_back("run");
+  d.columns.push_back(run_of_row);
+  column("t_s", [](const Row& r) { return r.t_s; });
+  column("motor", [](const Row& r) { return r.motor; });
+  column("pwm_us", [](const Row& r) { return r.pwm_us; });
+  column("force_g", [](const Row& r) { return r.force_g; });
+  column("vbat_v", [](const Row& r) { return r.vbat_v; });
+  column("current_a", [](const Row& r) { return r.current_a; });
+  column("rpm", [](const Row& r) { return r.rpm; });
+  column("temp_c", [](const Row& r) { return r.temp_c; });
+  column("dir", [](const Row& r) { return r.dir; });
+  if (h == "density") column("pressure_hpa", [](const Row& r) { return r.pressure_hpa; });
+  if (h == "plate") column("plate_height_m", [](const Row& r) { return r.plate_m; });
+  // runs: one per (motor, setup)
+  int run = -1;
+  std::size_t k = 0;
+  for (std::size_t ri = 0; ri < runs.size(); ++ri) {
+    ++run;
+    d.run_labels.push_back(fmt::format("generated run {} motor {}", ri, runs[ri].motor));
+    const std::size_t per_run = rows.size() / runs.size();
+    for (std::size_t j = 0; j < per_run; ++j, ++k) d.run.push_back(run);
+  }
+  (void)kNaN;
+  if (comments) {
+    comments->push_back(fmt::format("thrustcal lab generate --hidden {} --noise-g {} --seed {} (plant preset {})",
+                                    h, o.noise_g, o.seed, o.preset));
+    comments->push_back("hidden effect: " + info->description);
+    if (!info->right_effect.empty())
+      comments->push_back(fmt::format("a model without it: {}; the effect that explains it: {}; "
+                                      "the variable to blame: {}",
+                                      info->start_model, info->right_effect, info->responsible));
+    comments->push_back(fmt::format("load-cell noise: {} g (one standard deviation)", o.noise_g));
+  }
+  return d;
+}
+
+#else
+
+Dataset generate(const GenerateOptions&, std::vector<std::string>*) {
+  throw std::runtime_error("this build has no plant model (tools/plant): cannot generate data");
+}
+
+#endif
+
+}  // namespace lab
