@@ -57,13 +57,23 @@ TC_INLINE uint32_t mulU16(uint16_t a, uint16_t b) {
 }
 
 TC_INLINE KnotPos knotPos(const ModelV2& m, uint16_t force_dg) {
-  // force_dg <= knots * step, inv ~ 2^22 / step: product <= 32 * 2^22 * (1 + 1/step) < 2^28;
-  // times 4 < 2^30: the index is the top byte, the fraction the two below.
-  uint32_t pos = mulU16(force_dg, m.inv_step_q22);
+  // In each run: force * inv ~ force * 2^22 / step, < 16 * 2^22 * (1 + 1/step) < 2^27 (or
+  // 32 * 2^22 for a single run); times 4 < 2^29: the index in the run is the top byte, the
+  // fraction the two below.
+  // One run only: split = the last knot and inv_coarse = 0, so force == split lands on
+  // index fine_knots == knots, which driveAt() reads as the last knot.
+  uint8_t base = 0;
+  uint16_t inv = m.inv_step_q22;
+  if (force_dg >= m.split_dg) {
+    force_dg = static_cast<uint16_t>(force_dg - m.split_dg);
+    inv = m.inv_coarse_q22;
+    base = m.fine_knots;
+  }
+  uint32_t pos = mulU16(force_dg, inv);
   pos += pos;
   pos += pos;
   KnotPos p;
-  p.index = static_cast<uint8_t>(pos >> 24);
+  p.index = static_cast<uint8_t>(base + static_cast<uint8_t>(pos >> 24));
   p.frac_q16 = static_cast<uint16_t>(pos >> 8);
   return p;
 }
@@ -141,13 +151,18 @@ void ModelV2::clear() { *this = ModelV2(); }
 
 bool ModelV2::finalize() {
   inv_step_q22 = 0;
+  inv_coarse_q22 = 0;
+  split_dg = 0;
   rest_recip_q28 = 0;
   max_force_dg = 0;
   start_q17_us = 0;
+  const bool coarse = fine_knots < knots;
+  const uint32_t split = static_cast<uint32_t>(fine_knots) * step_dg;
+  const uint32_t top = split + static_cast<uint32_t>(knots - fine_knots) * coarse_step_dg;
   bool ok = start_q4_us >= kStartMinQ4 && start_q4_us <= kStartMaxQ4 &&
-            step_dg >= kV2MinStepDg && knots >= 2 && knots <= kV2MaxKnots &&
-            static_cast<uint32_t>(knots) * step_dg <= 65535u && saneMv(rest_mv) &&
-            (second_mv == 0 || saneMv(second_mv));
+            step_dg >= kV2MinStepDg && knots >= 2 && knots <= kV2MaxKnots && fine_knots >= 1 &&
+            fine_knots <= knots && (coarse ? coarse_step_dg >= kV2MinStepDg : coarse_step_dg == 0) &&
+            top <= 65535u && saneMv(rest_mv) && (second_mv == 0 || saneMv(second_mv));
   if (ok) {
     ok = drive_512usmv[0] > 0;
     for (uint8_t k = 1; ok && k < knots; ++k) ok = drive_512usmv[k] >= drive_512usmv[k - 1];
@@ -161,10 +176,36 @@ bool ModelV2::finalize() {
     sag_10mv[k] = 0;
   }
   inv_step_q22 = static_cast<uint16_t>(((1ul << 22) + step_dg / 2) / step_dg);
-  max_force_dg = static_cast<uint16_t>(knots * step_dg);
+  if (coarse) inv_coarse_q22 = static_cast<uint16_t>(((1ul << 22) + coarse_step_dg / 2) / coarse_step_dg);
+  split_dg = static_cast<uint16_t>(split);
+  max_force_dg = static_cast<uint16_t>(top);
   start_q17_us = static_cast<uint32_t>(start_q4_us) << 13;
   rest_recip_q28 = static_cast<uint16_t>(kRecipOne / rest_mv);
   return true;
+}
+
+// Chooses the knot forces for a curve reaching fmax_dg (sets step, knots, fine_knots,
+// coarse step and split; knotForceDg() works before finalize()).
+static void placeKnots(ModelV2& m, uint16_t fmax_dg) {
+  // Two runs when the fine step (a quarter of the range in 16 knots) is at least the minimum.
+  const uint16_t fine = static_cast<uint16_t>(fmax_dg / 64);
+  if (fine >= kV2MinStepDg) {
+    m.step_dg = fine;
+    m.fine_knots = 16;
+    m.knots = kV2MaxKnots;
+    m.coarse_step_dg = static_cast<uint16_t>((fmax_dg - 16u * fine) / 16u);
+    m.split_dg = static_cast<uint16_t>(16u * fine);
+    return;
+  }
+  // One run: floor of fmax / 32, at least the minimum step; the last knot <= fmax.
+  uint16_t step = static_cast<uint16_t>(fmax_dg / kV2MaxKnots);
+  if (step < kV2MinStepDg) step = kV2MinStepDg;
+  const uint16_t n = static_cast<uint16_t>(fmax_dg / step);
+  m.step_dg = step;
+  m.knots = static_cast<uint8_t>(n > kV2MaxKnots ? kV2MaxKnots : n);
+  m.fine_knots = m.knots;
+  m.coarse_step_dg = 0;
+  m.split_dg = static_cast<uint16_t>(m.knots * step);
 }
 
 // ---- BusVoltageFilter ----------------------------------------------------------------------
@@ -297,10 +338,11 @@ uint16_t forceForPwmDg(const ModelV2& model, uint16_t pwm_us, uint16_t vbus_mv) 
   if (k == model.knots) return model.maxForceDg();
   const uint16_t lo = k ? model.drive_512usmv[k - 1] : 0;
   const uint16_t hi = model.drive_512usmv[k];
-  const uint32_t base = static_cast<uint32_t>(k) * model.step_dg;
-  if (hi == lo) return static_cast<uint16_t>(base + model.step_dg);
+  const uint32_t base = k ? model.knotForceDg(static_cast<uint8_t>(k - 1)) : 0;
+  const uint32_t step = model.knotForceDg(k) - base;
+  if (hi == lo) return static_cast<uint16_t>(base + step);
   // (drive - lo) < 2^16, step < 2^15: product < 2^31. The one division.
-  return static_cast<uint16_t>(base + ((drive - lo) * model.step_dg + (hi - lo) / 2) / (hi - lo));
+  return static_cast<uint16_t>(base + ((drive - lo) * step + (hi - lo) / 2) / (hi - lo));
 }
 
 uint16_t headroomDg(const ModelV2& model, uint16_t vbus_mv, const ForcePwmLimits& limits) {
@@ -515,21 +557,14 @@ FitV2Report ModelV2FitterBase::fit(ModelV2& out) {
   const int32_t start_q4 = (n_est & 1) ? est[n_est / 2]
                                        : (static_cast<int32_t>(est[n_est / 2 - 1]) + est[n_est / 2] + 1) / 2;
 
-  // Floor of fmax / 32: all 32 knots used, the last one at or below the largest force.
-  uint16_t step = static_cast<uint16_t>(fmax / kV2MaxKnots);
-  if (step < kV2MinStepDg) step = kV2MinStepDg;
-  const int32_t n_knots = fmax / step;
-  const uint8_t knots = static_cast<uint8_t>(n_knots > kV2MaxKnots ? kV2MaxKnots : n_knots);
-
   ModelV2 m;
+  placeKnots(m, static_cast<uint16_t>(fmax));
   m.start_q4_us = static_cast<uint16_t>(start_q4);
-  m.step_dg = step;
-  m.knots = knots;
   m.rest_mv = rep.rest_mv;
   uint16_t prev = 1;
-  for (uint8_t k = 0; k < knots; ++k) {
+  for (uint8_t k = 0; k < m.knots; ++k) {
     SweepAt at;
-    if (!sweepAt(samples_, n, static_cast<int32_t>(k + 1) * step, at)) {
+    if (!sweepAt(samples_, n, m.knotForceDg(k), at)) {
       rep.status = FitV2Status::kStartNotFound;  // the sweep did not start below the first knot
       return rep;
     }
@@ -572,7 +607,7 @@ FitV2Report ModelV2FitterBase::refine(ModelV2& model) {
   int16_t est[kV2MaxKnots];
   uint8_t n_est = 0;
   for (uint8_t k = 0; k < model.knots; ++k) {
-    const int32_t f = static_cast<int32_t>(k + 1) * model.step_dg;
+    const int32_t f = model.knotForceDg(k);
     if (f > common) break;
     if (f * 16 < common) continue;
     SweepAt b;
@@ -600,7 +635,7 @@ FitV2Report ModelV2FitterBase::refine(ModelV2& model) {
   m.start_q4_us = static_cast<uint16_t>(s_new);
   uint16_t prev = 1;
   for (uint8_t k = 0; k < model.knots; ++k) {
-    const int32_t f = static_cast<int32_t>(k + 1) * model.step_dg;
+    const int32_t f = model.knotForceDg(k);
     const int32_t va = static_cast<int32_t>(model.rest_mv) - model.sag_10mv[k] * kV2SagUnitMv;
     // Sweep A's drive moved to the new start: + (s_old - s_new) * VA; |.| < 2^15 * 2^15.
     int32_t d = static_cast<int32_t>(model.drive_512usmv[k]) + (((s_old - s_new) * va) >> 13);
@@ -637,23 +672,18 @@ bool modelV2FromCurve(ModelV2& out, double start_us, const double* drive_usv,
   const double fmax_dg = force_g[count - 1] * 10.0;
   if (!(fmax_dg >= 2.0 * kV2MinStepDg) || !(fmax_dg <= 65535.0)) return false;
   const uint16_t fmax = static_cast<uint16_t>(fmax_dg);
-  uint16_t step = static_cast<uint16_t>(fmax / kV2MaxKnots);
-  if (step < kV2MinStepDg) step = kV2MinStepDg;
-  const uint16_t n_knots = static_cast<uint16_t>(fmax / step);
-  const uint8_t knots = static_cast<uint8_t>(n_knots > kV2MaxKnots ? kV2MaxKnots : n_knots);
   if (!(start_us > 0.0 && start_us < 4000.0) || !(rest_mv > 0.0 && rest_mv < 65535.0) ||
       !(second_mv >= 0.0 && second_mv < 65535.0))
     return false;
   ModelV2 m;
+  placeKnots(m, fmax);
   m.start_q4_us = static_cast<uint16_t>(start_us * 16.0 + 0.5);
-  m.step_dg = step;
-  m.knots = knots;
   m.rest_mv = static_cast<uint16_t>(rest_mv + 0.5);
   m.second_mv = static_cast<uint16_t>(second_mv + 0.5);
   m.flags = m.second_mv ? kV2Refined : 0;
   uint16_t i = 1;
-  for (uint8_t k = 0; k < knots; ++k) {
-    const double f = (k + 1) * step / 10.0;
+  for (uint8_t k = 0; k < m.knots; ++k) {
+    const double f = m.knotForceDg(k) / 10.0;
     // Origin (0, 0) before the first point if the points start above zero force.
     double d = 0.0, sag = 0.0;
     if (f <= force_g[0]) {

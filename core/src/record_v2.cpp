@@ -15,7 +15,9 @@ uint16_t getU16(const uint8_t* p) {
   return static_cast<uint16_t>(p[0] | (static_cast<uint16_t>(p[1]) << 8));
 }
 
-constexpr uint16_t kDriveOffset = 14;
+constexpr uint16_t kFineKnotsOffset = 14;
+constexpr uint16_t kCoarseStepOffset = 15;
+constexpr uint16_t kDriveOffset = 17;
 constexpr uint16_t kSagOffset = kDriveOffset + 2 * kV2MaxKnots;
 static_assert(kSagOffset + kV2MaxKnots == kRecordV2CrcOffset, "layout table and code disagree");
 
@@ -31,6 +33,8 @@ void serializeModelV2(const ModelV2& model, uint16_t sequence, uint8_t* image) {
   putU16(image + 8, model.step_dg);
   putU16(image + 10, model.rest_mv);
   putU16(image + 12, model.second_mv);
+  image[kFineKnotsOffset] = model.fine_knots;
+  putU16(image + kCoarseStepOffset, model.coarse_step_dg);
   for (uint8_t k = 0; k < kV2MaxKnots; ++k) {
     const bool used = k < model.knots;
     putU16(image + kDriveOffset + 2 * k, used ? model.drive_512usmv[k] : 0);
@@ -53,6 +57,8 @@ DecodeStatus parseModelV2(const uint8_t* image, ModelV2& out, uint16_t& sequence
   m.step_dg = getU16(image + 8);
   m.rest_mv = getU16(image + 10);
   m.second_mv = getU16(image + 12);
+  m.fine_knots = image[kFineKnotsOffset];
+  m.coarse_step_dg = getU16(image + kCoarseStepOffset);
   for (uint8_t k = 0; k < kV2MaxKnots; ++k) {
     m.drive_512usmv[k] = getU16(image + kDriveOffset + 2 * k);
     m.sag_10mv[k] = image[kSagOffset + k];

@@ -158,30 +158,44 @@ TEST(ModelV2Fit, CurrentLimitedBenchSupplyEndsTheCurveAtItsPlateau) {
   EXPECT_EQ(tc::forceToPwmV2(model, 5500, bus).flags, tc::kSaturated) << "550 g is beyond the curve";
 }
 
-TEST(ModelV2Fit, ResamplesTheCurveOntoAtMost32KnotsEvenlySpacedInForce) {
+TEST(ModelV2Fit, PlacesSixteenFineKnotsBelowAQuarterOfTheRangeAndSixteenCoarseAbove) {
   struct Row {
+    const char* name;
     double full_at_9v9_g;
-    uint16_t expect_step_min_dg, expect_step_max_dg;
-    uint8_t expect_knots_min;
+    bool two_runs;
   };
   const Row rows[] = {
-      {600.0, 250, 330, 31},  // ~900 g at 12.4 V: 32 knots of ~28 g
-      {90.0, 66, 66, 15},     // a small motor: the minimum step, fewer knots
+      {"~900 g at 12.4 V: two runs", 600.0, true},
+      {"a small motor (~135 g): one run of the minimum step", 90.0, false},
   };
   for (const Row& r : rows) {
-    SCOPED_TRACE(r.full_at_9v9_g);
+    SCOPED_TRACE(r.name);
     SyntheticMotor motor;
     motor.full_at_9v9_g = r.full_at_9v9_g;
     Fitter fitter;
     tc_test::recordSweep(motor, 12.4, fitter, Recording{false, 0.0, 1});
     tc::ModelV2 model;
-    ASSERT_EQ(fitter.fit(model).status, tc::FitV2Status::kOk);
-    EXPECT_GE(model.step_dg, r.expect_step_min_dg);
-    EXPECT_LE(model.step_dg, r.expect_step_max_dg);
-    EXPECT_GE(model.knots, r.expect_knots_min);
-    EXPECT_LE(model.knots, tc::kV2MaxKnots);
-    for (uint8_t k = 1; k < model.knots; ++k)
+    const tc::FitV2Report rep = fitter.fit(model);
+    ASSERT_EQ(rep.status, tc::FitV2Status::kOk);
+    if (r.two_runs) {
+      EXPECT_EQ(model.knots, 32);
+      EXPECT_EQ(model.fine_knots, 16);
+      EXPECT_EQ(model.step_dg, rep.max_force_dg / 64);
+      EXPECT_NEAR(model.coarse_step_dg, 3 * model.step_dg, 2);
+      EXPECT_EQ(model.knotForceDg(15), 16 * model.step_dg);
+      EXPECT_EQ(model.knotForceDg(16), 16 * model.step_dg + model.coarse_step_dg);
+    } else {
+      EXPECT_EQ(model.step_dg, tc::kV2MinStepDg);
+      EXPECT_EQ(model.fine_knots, model.knots);
+      EXPECT_EQ(model.coarse_step_dg, 0);
+      EXPECT_GE(model.knots, 15);
+    }
+    EXPECT_LE(model.maxForceDg(), rep.max_force_dg) << "the last knot is a measured force";
+    EXPECT_GT(model.maxForceDg(), rep.max_force_dg - 2 * 16 * model.step_dg / 16 - 32);
+    for (uint8_t k = 1; k < model.knots; ++k) {
+      EXPECT_GT(model.knotForceDg(k), model.knotForceDg(k - 1)) << "knot " << int(k);
       EXPECT_GE(model.drive_512usmv[k], model.drive_512usmv[k - 1]) << "knot " << int(k);
+    }
   }
 }
 
@@ -196,8 +210,8 @@ TEST(ModelV2Fit, RecordsTheBenchSagAtEachKnotAndTheRestingVoltage) {
   ASSERT_EQ(fitter.fit(model).status, tc::FitV2Status::kOk);
   // then: rest voltage and sag = R * I(F) at a low, a middle and the top knot
   EXPECT_NEAR(model.rest_mv, 12400, 5);
-  for (uint8_t k : {uint8_t(3), uint8_t(15), uint8_t(model.knots - 1)}) {
-    const double f_g = (k + 1) * model.step_dg / 10.0;
+  for (uint8_t k : {uint8_t(3), uint8_t(15), uint8_t(20), uint8_t(model.knots - 1)}) {
+    const double f_g = model.knotForceDg(k) / 10.0;
     const double sag_mv = 1000.0 * motor.source_r_ohm * motor.currentA(f_g);
     EXPECT_NEAR(model.sag_10mv[k] * 10.0, sag_mv, 10.0) << "knot " << int(k);
   }

@@ -273,25 +273,28 @@ TEST(ForceToPwmV2, SagPredictionSendsTheSteadyStatePwmOnTheFirstFrameOfAStep) {
 }
 
 TEST(ForceToPwmV2, SagPredictionMatchesTheFormulaEvenWhereTheSagTableIsSteep) {
-  // given: a model whose sag jumps by 2 V between 60 g and 72.5 g (far steeper than any pack:
-  // up to 200 units of 10 mV between two knots) and the synthetic motor's curve
+  // given: a model whose sag jumps by 2 V between 60 g and 66 g (far steeper than any pack:
+  // more than 127 units of 10 mV between two knots) and the synthetic motor's curve
   const SyntheticMotor motor;
   std::vector<double> drive, force, sag;
   for (int i = 1; i <= 200; ++i) {
     const double f = i * 3.0;
     force.push_back(f);
     drive.push_back(motor.span_us * std::pow(f / motor.k(), 1.0 / motor.exponent));
-    sag.push_back(f < 60 ? 0.0 : (f < 72.5 ? (f - 60) * 160.0 : 2000.0));
+    sag.push_back(f < 60 ? 0.0 : (f < 66 ? (f - 60) * 333.0 : 2000.0));
   }
   tc::ModelV2 m;
   ASSERT_TRUE(tc::modelV2FromCurve(m, motor.start_us, drive.data(), force.data(), 200, 12400.0,
                                    sag.data()));
-  auto sagAt = [&](double f_dg) {  // the model's own table, linear, in mV
-    const double pos = f_dg / m.step_dg;
-    const int k = static_cast<int>(pos);
-    const double lo = k == 0 ? 0.0 : m.sag_10mv[k - 1] * 10.0;
-    const double hi = m.sag_10mv[k] * 10.0;
-    return lo + (pos - k) * (hi - lo);
+  auto sagAt = [&](double f_dg) {  // the model's own table, linear between knots, in mV
+    double f_lo = 0.0, s_lo = 0.0;
+    for (uint8_t k = 0; k < m.knots; ++k) {
+      const double f_hi = m.knotForceDg(k), s_hi = m.sag_10mv[k] * 10.0;
+      if (f_dg <= f_hi) return s_lo + (f_dg - f_lo) / (f_hi - f_lo) * (s_hi - s_lo);
+      f_lo = f_hi;
+      s_lo = s_hi;
+    }
+    return s_lo;
   };
   const tc::BusVoltageFilter bus = busAt(12000);
   int steep = 0;

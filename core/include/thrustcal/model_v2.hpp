@@ -9,14 +9,18 @@
 //   drive = (pwm - start) * V_bus        [us*mV; stored in units of 512 us*mV]
 //   force = curve(drive)                 [monotone, one curve for every voltage]
 //
-// Per motor (ModelV2, 118 bytes of SRAM; four motors 472 bytes):
+// Per motor (ModelV2, 123 bytes of SRAM on the AVR; four motors 492 bytes):
 // - start_q4_us: the ESC's start threshold (where force leaves zero), 1/16 us;
-// - a monotone force curve in drive: up to 32 knots evenly spaced in FORCE (knot k at force
-//   (k + 1) * step_dg, the origin (0, 0) implicit). Evenly spaced in force because the run
-//   time goes force -> PWM: the knot index is a multiplication by a precomputed reciprocal of
-//   the step, no search and no division; and the error budget is relative to the commanded
-//   force, which uniform force steps serve evenly over 100-450 g (x(F) ~ F^0.55 is smooth
-//   there: linear interpolation over a 28 g step costs < 0.1 % in force);
+// - a monotone force curve in drive: up to 32 knots placed by FORCE, the origin (0, 0)
+//   implicit, in two evenly spaced runs: 16 fine knots up to a quarter of the largest force,
+//   16 coarse knots (3x the step) above. By force, because the run time goes force -> PWM:
+//   the knot index is a multiplication by a precomputed reciprocal of the step, no search
+//   and no division. Two runs, because drive ~ force^0.5 bends hardest at the low end: with
+//   one even run of fmax / 32 (37 g on a 1.2 kg motor) linear interpolation alone cost up
+//   to 1.2 % of force at 100 g on the virtual bench's plant; fine steps there and coarse
+//   ones where the curve is straight keep every knot's error about equal (plant, two sweeps:
+//   0.32 % RMS / 1.41 % max with one run, 0.19 % / 0.85 % with two). Curves that end below
+//   422 g (fine step under kV2MinStepDg) get one even run;
 // - the battery sag the monitor saw on the bench at each knot (10 mV units) and the resting
 //   voltage, used to predict the bus voltage at a commanded operating point that differs
 //   from the present one (command steps), see forceToPwmV2(..., force_now_dg).
@@ -32,7 +36,7 @@
 // headroomDg / forceForPwmDg (status command, not per frame) use one 32/32 division each.
 // Fitting (gather_store, once per sweep) uses 32/32 divisions freely.
 // Measured on the ATmega2560 in simavr (tests/core_v2/avr_cycles.sh, avr-g++ -Os): filter
-// update + forceToPwmV2Frame for four motors 1209 cycles mean, 1246 max (thesis option 2.1,
+// update + forceToPwmV2Frame for four motors 1319 cycles mean, 1372 max (thesis option 2.1,
 // forceToPwm x4: 8062 mean); fit of a 101-sample sweep ~0.5 M cycles (31 ms), refine 0.28 M.
 //
 // Fitting on the board (ModelV2Fitter): one sweep of (pwm_us, force_dg, vbat_mv) samples as
@@ -65,8 +69,10 @@ constexpr uint32_t kRecipOne = 1ul << 28;  // reciprocal scale: recip_q28 = 2^28
 struct ModelV2 {
   // Stored fields (record_v2.hpp serializes exactly these).
   uint16_t start_q4_us = 0;   // ESC start threshold, 1/16 us; 0 = no model
-  uint16_t step_dg = 0;       // force between knots, decigrams
-  uint8_t knots = 0;          // knots used, 2..32; knot k is at force (k + 1) * step_dg
+  uint16_t step_dg = 0;       // force between the fine knots, decigrams
+  uint8_t knots = 0;          // knots used, 2..32
+  uint8_t fine_knots = 0;     // knots 0..fine_knots-1 at (k + 1) * step_dg; 1..knots
+  uint16_t coarse_step_dg = 0;  // force between the knots above; 0 when fine_knots == knots
   uint8_t flags = 0;          // kV2Refined when a second sweep set the start threshold
   uint16_t rest_mv = 0;       // monitor reading at zero force in the (first) sweep
   uint16_t second_mv = 0;     // resting reading of the refining sweep; 0 = single sweep
@@ -74,16 +80,23 @@ struct ModelV2 {
   uint8_t sag_10mv[kV2MaxKnots] = {};        // rest_mv minus the reading at each knot
 
   // Derived by finalize() (not stored).
-  uint16_t inv_step_q22 = 0;  // round(2^22 / step_dg), < 2^16 as step >= kV2MinStepDg
+  uint16_t inv_step_q22 = 0;    // round(2^22 / step_dg), < 2^16 as step >= kV2MinStepDg
+  uint16_t inv_coarse_q22 = 0;  // round(2^22 / coarse_step_dg), 0 without coarse knots
+  uint16_t split_dg = 0;        // fine_knots * step_dg: where the coarse knots begin
   uint16_t rest_recip_q28 = 0;  // 2^28 / rest_mv: the voltage used when the bus reading is bad
-  uint16_t max_force_dg = 0;    // knots * step_dg
+  uint16_t max_force_dg = 0;    // force of the last knot
   uint32_t start_q17_us = 0;    // start threshold in 2^-17 us
 
   bool isPresent() const { return start_q4_us != 0 && knots != 0; }
   uint16_t maxForceDg() const { return max_force_dg; }
+  // Force of knot k (0-based), decigrams.
+  uint16_t knotForceDg(uint8_t k) const {
+    return k < fine_knots ? static_cast<uint16_t>((k + 1) * step_dg)
+                          : static_cast<uint16_t>(split_dg + (k + 1 - fine_knots) * coarse_step_dg);
+  }
   // Checks the stored fields and computes the derived ones. False (model cleared) when a
-  // field is out of range: start outside 800..1800 us, step < kV2MinStepDg, knots outside
-  // 2..32, rest_mv / second_mv outside 6000..17500 (second_mv may be 0), drive not
+  // field is out of range: start outside 800..1800 us, a step < kV2MinStepDg (coarse: or
+  // not 0 without coarse knots), knots outside 2..32, fine_knots outside 1..knots, rest_mv / second_mv outside 6000..17500 (second_mv may be 0), drive not
   // increasing (a knot lower than the one before, or the first knot 0).
   bool finalize();
   void clear();

@@ -2,7 +2,7 @@
 // tells a v1 (thesis) record from a v2 one.
 //
 // Each motor slot (tc::slotAddress: 1024 bytes at 0/1024/2048/3072) holds TWO copies of the
-// v2 record: copy A at slot*1024, copy B at slot*1024 + 512. Layout of one copy (112 bytes,
+// v2 record: copy A at slot*1024, copy B at slot*1024 + 512. Layout of one copy (115 bytes,
 // little endian):
 //
 //   offset  size  field
@@ -12,16 +12,18 @@
 //        4     1  knots used (2..32)
 //        5     1  flags (bit 0: refined by a second sweep)
 //        6     2  ESC start threshold, 1/16 us
-//        8     2  force step between knots, decigrams
+//        8     2  force step between the fine knots, decigrams
 //       10     2  resting monitor reading of the sweep, mV
 //       12     2  resting reading of the second sweep, mV (0 = none)
-//       14    64  drive at each knot, 512 us*mV units (unused knots 0)
-//       78    32  monitor sag at each knot, 10 mV units (unused knots 0)
-//      110     2  CRC-16/CCITT-FALSE of bytes 0..109
+//       14     1  fine knots (1..knots)
+//       15     2  force step between the coarse knots above them, decigrams (0 = none)
+//       17    64  drive at each knot, 512 us*mV units (unused knots 0)
+//       81    32  monitor sag at each knot, 10 mV units (unused knots 0)
+//      113     2  CRC-16/CCITT-FALSE of bytes 0..112
 //
 // Power-fail safety: a write goes to the copy that is NOT the newest valid one, with the
-// newest sequence + 1, in this order: body (offsets 0-1, 4-109), then the sequence (2-3),
-// then the CRC (110-111). Until the last CRC byte lands, the copy being written either fails
+// newest sequence + 1, in this order: body (offsets 0-1, 4-112), then the sequence (2-3),
+// then the CRC (113-114). Until the last CRC byte lands, the copy being written either fails
 // its CRC or (CRC-16 collision, 1 in 65536) still carries its old, older sequence: the newest
 // valid copy, untouched, keeps winning. A power loss at any byte therefore leaves the old
 // or the new calibration, never none and never a mix. Exception, by construction: the first
@@ -45,7 +47,7 @@ namespace tc {
 
 constexpr uint8_t kLayoutVersion2 = 2;
 constexpr uint8_t kRecordV2Magic = 0x5C;
-constexpr uint16_t kRecordV2Bytes = 112;
+constexpr uint16_t kRecordV2Bytes = 115;
 constexpr uint16_t kRecordV2CopyOffset = 512;  // copy B, from the slot start
 constexpr uint16_t kRecordV2SeqOffset = 2;
 constexpr uint16_t kRecordV2CrcOffset = kRecordV2Bytes - 2;
@@ -53,7 +55,7 @@ constexpr uint8_t kNoCopy = 0xFF;
 static_assert(kRecordV2Bytes <= 256, "a v2 record must fit in 256 bytes");
 static_assert(kRecordV2Bytes <= kRecordV2CopyOffset, "copy A must end before copy B");
 static_assert(kRecordV2CopyOffset + kRecordV2Bytes <= kRecordBytes, "copy B must fit the slot");
-static_assert(14 + 3 * kV2MaxKnots + 2 == kRecordV2Bytes, "layout table and size disagree");
+static_assert(17 + 3 * kV2MaxKnots + 2 == kRecordV2Bytes, "layout table and size disagree");
 
 inline uint16_t copyAddressV2(uint8_t slot, uint8_t copy) {
   return static_cast<uint16_t>(slotAddress(slot) + (copy ? kRecordV2CopyOffset : 0));
