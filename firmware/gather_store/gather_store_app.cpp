@@ -151,22 +151,30 @@ bool GatherStoreApp::poll() {
   return true;
 }
 
+// "error: <cmd> takes no arguments; nothing changed" unless the command came alone.
+static bool alone(const char* cmd, uint8_t n) {
+  if (n == 1) return true;
+  say(TC_PSTR("error: "));
+  hal::Uart::print(cmd);
+  sayLine(TC_PSTR(" takes no arguments; nothing changed"));
+  return false;
+}
+
 void GatherStoreApp::execute(char* line) {
   char* args[kMaxTokens];
   const uint8_t n = fw::tokenize(line, args, kMaxTokens);
   if (n == 0) return;  // empty line: just a new prompt
   const char* cmd = args[0];
-  const bool no_args = (n == 1);
-  if (fw::equalsP(cmd, TC_PSTR("help")) && no_args) {
-    cmdHelp();
+  if (fw::equalsP(cmd, TC_PSTR("help"))) {
+    if (alone(cmd, n)) cmdHelp();
   } else if (fw::equalsP(cmd, TC_PSTR("motor"))) {
     cmdMotor(args, n);
   } else if (fw::equalsP(cmd, TC_PSTR("plate"))) {
     cmdPlate(args, n);
-  } else if (fw::equalsP(cmd, TC_PSTR("weigh")) && no_args) {
-    cmdWeigh();
-  } else if (fw::equalsP(cmd, TC_PSTR("tare")) && no_args) {
-    cmdTare();
+  } else if (fw::equalsP(cmd, TC_PSTR("weigh"))) {
+    if (alone(cmd, n)) cmdWeigh();
+  } else if (fw::equalsP(cmd, TC_PSTR("tare"))) {
+    if (alone(cmd, n)) cmdTare();
   } else if (fw::equalsP(cmd, TC_PSTR("cal"))) {
     cmdCal(args, n);
   } else if (fw::equalsP(cmd, TC_PSTR("span"))) {
@@ -177,23 +185,16 @@ void GatherStoreApp::execute(char* line) {
     cmdStep(args, n);
   } else if (fw::equalsP(cmd, TC_PSTR("settle"))) {
     cmdSettle(args, n);
-  } else if (fw::equalsP(cmd, TC_PSTR("sweep")) && no_args) {
-    cmdSweep();
+  } else if (fw::equalsP(cmd, TC_PSTR("sweep"))) {
+    if (alone(cmd, n)) cmdSweep();
   } else if (fw::equalsP(cmd, TC_PSTR("store"))) {
     cmdStore(args, n);
-  } else if (fw::equalsP(cmd, TC_PSTR("show")) && no_args) {
-    cmdShow();
-  } else if (fw::equalsP(cmd, TC_PSTR("erase")) && no_args) {
-    cmdErase();
-  } else if (fw::equalsP(cmd, TC_PSTR("status")) && no_args) {
-    cmdStatus();
-  } else if (fw::equalsP(cmd, TC_PSTR("help")) || fw::equalsP(cmd, TC_PSTR("weigh")) ||
-             fw::equalsP(cmd, TC_PSTR("tare")) || fw::equalsP(cmd, TC_PSTR("sweep")) ||
-             fw::equalsP(cmd, TC_PSTR("show")) || fw::equalsP(cmd, TC_PSTR("erase")) ||
-             fw::equalsP(cmd, TC_PSTR("status"))) {
-    say(TC_PSTR("error: "));
-    hal::Uart::print(cmd);
-    sayLine(TC_PSTR(" takes no arguments; nothing changed"));
+  } else if (fw::equalsP(cmd, TC_PSTR("show"))) {
+    if (alone(cmd, n)) cmdShow();
+  } else if (fw::equalsP(cmd, TC_PSTR("erase"))) {
+    if (alone(cmd, n)) cmdErase();
+  } else if (fw::equalsP(cmd, TC_PSTR("status"))) {
+    if (alone(cmd, n)) cmdStatus();
   } else {
     say(TC_PSTR("error: unknown command '"));
     hal::Uart::print(cmd);
@@ -507,6 +508,22 @@ void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
   sayLine(TC_PSTR("; motor stopped (1000 us), nothing kept: type sweep to start again"));
 }
 
+// pwm_us,force_g,vbat_v,t_s,motor,dir (dir 1: PWM rising)
+static void printCsvRow(uint16_t pwm_us, int16_t force_dg, uint16_t vbat_mv, uint32_t t_ms,
+                        uint8_t slot) {
+  fw::printUint(pwm_us);
+  hal::Uart::write(',');
+  fw::printFixed(force_dg, 1);
+  hal::Uart::write(',');
+  fw::printFixed(vbat_mv, 3);
+  hal::Uart::write(',');
+  fw::printFixed(static_cast<int32_t>(t_ms), 3);
+  hal::Uart::write(',');
+  fw::printUint(slot);
+  say(TC_PSTR(",1"));
+  fw::newline();
+}
+
 void GatherStoreApp::cmdSweep() {
   if (!cell_.isTared()) {
     sayLine(TC_PSTR("error: a sweep needs a tare first: with the motor mounted and stopped, "
@@ -547,50 +564,15 @@ void GatherStoreApp::cmdSweep() {
   const uint32_t start_ms = hal::Clock::millis();
   uint16_t pwm = settings_.pwm_min_us;
   int16_t max_force_dg = 0;
-  for (uint16_t i = 0; i < planned; ++i, pwm = static_cast<uint16_t>(pwm + settings_.step_us)) {
-    hal::Esc::writePulse(slot, pwm);
-    if (!waitOrAbort(settings_.settle_ms)) return;
-
-    uint16_t force_counts;
-    if (!readForceCounts(force_counts)) return;
-    const tc::LoadCellStatus cell_status = cell_.check(force_counts);
-    if (cell_status == tc::LoadCellStatus::kImplausible) {
-      abortSweep(SweepEnd::kImplausible, force_counts);
-      return;
-    }
-    const int32_t force_mg = cell_.forceMilligrams(force_counts);
-    if (cell_status == tc::LoadCellStatus::kOverload) {
-      abortSweep(SweepEnd::kOverload, static_cast<uint16_t>(cell_.forceGrams(force_counts)));
-      return;
-    }
-    uint16_t battery_counts;
-    if (!readBatteryCounts(battery_counts)) return;
-    const uint16_t vbat_mv = battery_.millivoltsFromCounts(battery_counts);
-    if (!battery_.isSane(vbat_mv)) {
-      abortSweep(SweepEnd::kBattery, vbat_mv);
-      return;
-    }
-    const uint32_t t_ms = hal::Clock::millis() - start_ms;
-
-    const int16_t force_dg = static_cast<int16_t>(divRound(force_mg, 100));
-    if (force_dg > max_force_dg) max_force_dg = force_dg;
+  for (uint16_t done = 1; done <= planned;
+       ++done, pwm = static_cast<uint16_t>(pwm + settings_.step_us)) {
+    int16_t force_dg;
+    uint16_t vbat_mv;
+    if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
     builder_.add(pwm, force_dg);
     sag_builder_.add(pwm, vbat_mv);
-
-    // pwm_us,force_g,vbat_v,t_s,motor,dir (dir 1: PWM rising)
-    fw::printUint(pwm);
-    hal::Uart::write(',');
-    fw::printFixed(force_dg, 1);
-    hal::Uart::write(',');
-    fw::printFixed(vbat_mv, 3);
-    hal::Uart::write(',');
-    fw::printFixed(static_cast<int32_t>(t_ms), 3);
-    hal::Uart::write(',');
-    fw::printUint(slot);
-    say(TC_PSTR(",1"));
-    fw::newline();
-
-    const uint16_t done = static_cast<uint16_t>(i + 1);
+    if (force_dg > max_force_dg) max_force_dg = force_dg;
+    printCsvRow(pwm, force_dg, vbat_mv, hal::Clock::millis() - start_ms, slot);
     if (done % kProgressEvery == 0 && done != planned) {
       say(TC_PSTR("# "));
       fw::printUint(done);
@@ -603,9 +585,38 @@ void GatherStoreApp::cmdSweep() {
   }
   stopMotor();
   last_end_ = SweepEnd::kDone;
-  const uint32_t elapsed_ms = hal::Clock::millis() - start_ms;
+  finishSweep(slot, hal::Clock::millis() - start_ms);
+}
 
-  // Filter functions: sag offsets and start voltage (fig. 6.9), then the force curve.
+bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {
+  hal::Esc::writePulse(settings_.slot, pwm_us);
+  if (!waitOrAbort(settings_.settle_ms)) return false;
+
+  uint16_t force_counts;
+  if (!readForceCounts(force_counts)) return false;
+  const tc::LoadCellStatus cell_status = cell_.check(force_counts);
+  if (cell_status == tc::LoadCellStatus::kImplausible) {
+    abortSweep(SweepEnd::kImplausible, force_counts);
+    return false;
+  }
+  if (cell_status == tc::LoadCellStatus::kOverload) {
+    abortSweep(SweepEnd::kOverload, static_cast<uint16_t>(cell_.forceGrams(force_counts)));
+    return false;
+  }
+  uint16_t battery_counts;
+  if (!readBatteryCounts(battery_counts)) return false;
+  vbat_mv = battery_.millivoltsFromCounts(battery_counts);
+  if (!battery_.isSane(vbat_mv)) {
+    abortSweep(SweepEnd::kBattery, vbat_mv);
+    return false;
+  }
+  force_dg = static_cast<int16_t>(divRound(cell_.forceMilligrams(force_counts), 100));
+  return true;
+}
+
+// Filter functions (fig. 6.9 and G.2): sag offsets and start voltage, then the force curve;
+// then the summary lines.
+void GatherStoreApp::finishSweep(uint8_t slot, uint32_t elapsed_ms) {
   uint16_t start_mv = 0;
   sweep_.sag = tc::SagTable();
   sag_builder_.build(sweep_.sag, start_mv);  // bin 0 holds the first step: cannot fail
@@ -626,9 +637,8 @@ void GatherStoreApp::cmdSweep() {
   say(TC_PSTR(", start voltage "));
   printVolts(start_mv);
   say(TC_PSTR(", sag in the top bin "));
-  printVolts(static_cast<uint16_t>(sweep_.sag.offset_mv[tc::kSagBins - 1] > 0
-                                       ? sweep_.sag.offset_mv[tc::kSagBins - 1]
-                                       : 0));
+  const int16_t top_sag_mv = sweep_.sag.offset_mv[tc::kSagBins - 1];
+  printVolts(static_cast<uint16_t>(top_sag_mv > 0 ? top_sag_mv : 0));
   fw::newline();
   if (sweep_.report.status != tc::BuildStatus::kOk) {
     say(TC_PSTR("# no curve: "));

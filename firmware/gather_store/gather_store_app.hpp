@@ -118,12 +118,16 @@ class GatherStoreApp {
 
   // Sweep parts.
   uint16_t plannedSamples() const;
+  // One step: pulse, settle, force and battery medians, checks. False: aborted (the motor
+  // is already at 1000 us and the reason printed).
+  bool measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv);
+  // Builds the curve and the sag table from the samples and prints the summary.
+  void finishSweep(uint8_t slot, uint32_t elapsed_ms);
   bool waitOrAbort(uint16_t ms);  // false: a key arrived (motor already stopped)
   bool readForceCounts(uint16_t& counts);  // false: a key arrived during the 201 readings
   bool readBatteryCounts(uint16_t& counts);
   void stopMotor();
   void abortSweep(SweepEnd why, uint16_t value);
-  void printSweepSummary();
 
   // Readings outside a sweep.
   uint16_t medianForceCounts();
