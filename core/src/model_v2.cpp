@@ -123,19 +123,24 @@ TC_INLINE uint16_t recip26Of(uint16_t recip_q28) {
 // drive < 2^16, recip26 < 11185: product < 2^30.
 TC_INLINE uint32_t dutyQ17(uint16_t drive, uint16_t recip26) { return mulU16(drive, recip26); }
 
+struct PwmRange {
+  uint16_t min_us;
+  uint16_t max_us;
+};
+
 TC_INLINE ForcePwmResult finishPwm(const ModelV2& m, uint32_t duty_q17, uint8_t flags,
-                                   const ForcePwmLimits& limits) {
+                                   PwmRange limits) {
   // start <= 1800 us (< 2^28 in 2^-17 us) + duty < 2^30 + 1/2 us to round: < 2^31. The
   // shift by 17 is a byte move and one 16-bit shift.
   const uint32_t pwm_q17 = m.start_q17_us + duty_q17 + 0x10000ul;
   const uint16_t pwm_us = static_cast<uint16_t>(static_cast<uint16_t>(pwm_q17 >> 16) >> 1);
   ForcePwmResult r;
   r.flags = flags;
-  if (pwm_us > limits.pwm_max_us) {
-    r.pwm_us = limits.pwm_max_us;
+  if (pwm_us > limits.max_us) {
+    r.pwm_us = limits.max_us;
     r.flags |= kSaturated;
-  } else if (pwm_us < limits.pwm_min_us) {
-    r.pwm_us = limits.pwm_min_us;
+  } else if (pwm_us < limits.min_us) {
+    r.pwm_us = limits.min_us;
     r.flags |= kClamped;
   } else {
     r.pwm_us = pwm_us;
@@ -260,10 +265,10 @@ namespace {
 
 // The per-motor path, inlined into both entry points.
 TC_INLINE ForcePwmResult pwmFor(const ModelV2& model, uint16_t force_dg, uint16_t recip26,
-                                uint8_t flags, const ForcePwmLimits& limits) {
+                                uint8_t flags, PwmRange limits) {
   if (model.max_force_dg == 0)  // finalize() sets it for every valid model, clear() zeroes it
-    return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
-  if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
+    return ForcePwmResult{limits.min_us, kNotCalibrated};
+  if (force_dg == 0) return ForcePwmResult{limits.min_us, kStopped};
   if (flags & kVoltageInvalid) recip26 = recip26Of(model.rest_recip_q28);
   const uint16_t drive = driveAt(model, knotPos(model, clampForce(model, force_dg, flags)));
   return finishPwm(model, dutyQ17(drive, recip26), flags, limits);
@@ -274,7 +279,7 @@ TC_INLINE ForcePwmResult pwmFor(const ModelV2& model, uint16_t force_dg, uint16_
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
                             const ForcePwmLimits& limits) {
   return pwmFor(model, force_dg, recip26Of(bus.recip_q28), bus.isValid() ? 0 : kVoltageInvalid,
-                limits);
+                PwmRange{limits.pwm_min_us, limits.pwm_max_us});
 }
 
 void forceToPwmV2Frame(const ModelV2* models, const uint16_t* force_dg, uint8_t count,
@@ -282,7 +287,8 @@ void forceToPwmV2Frame(const ModelV2* models, const uint16_t* force_dg, uint8_t 
                        const ForcePwmLimits& limits) {
   const uint8_t flags = bus.isValid() ? 0 : kVoltageInvalid;
   const uint16_t recip26 = recip26Of(bus.recip_q28);
-  for (uint8_t i = 0; i < count; ++i) out[i] = pwmFor(models[i], force_dg[i], recip26, flags, limits);
+  const PwmRange range{limits.pwm_min_us, limits.pwm_max_us};  // in registers, not reloaded
+  for (uint8_t i = 0; i < count; ++i) out[i] = pwmFor(models[i], force_dg[i], recip26, flags, range);
 }
 
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
@@ -323,7 +329,7 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
       duty_q17 = corr > duty_q17 ? 0u : duty_q17 - corr;
     }
   }
-  return finishPwm(model, duty_q17, flags, limits);
+  return finishPwm(model, duty_q17, flags, PwmRange{limits.pwm_min_us, limits.pwm_max_us});
 }
 
 uint16_t forceForPwmDg(const ModelV2& model, uint16_t pwm_us, uint16_t vbus_mv) {

@@ -36,7 +36,7 @@
 // headroomDg / forceForPwmDg (status command, not per frame) use one 32/32 division each.
 // Fitting (gather_store, once per sweep) uses 32/32 divisions freely.
 // Measured on the ATmega2560 in simavr (tests/core_v2/avr_cycles.sh, avr-g++ -Os): filter
-// update + forceToPwmV2Frame for four motors 1319 cycles mean, 1372 max (thesis option 2.1,
+// update + forceToPwmV2Frame for four motors 1242 cycles mean, 1290 max (thesis option 2.1,
 // forceToPwm x4: 8062 mean); fit of a 101-sample sweep ~0.5 M cycles (31 ms), refine 0.28 M.
 //
 // Fitting on the board (ModelV2Fitter): one sweep of (pwm_us, force_dg, vbat_mv) samples as
@@ -67,7 +67,9 @@ constexpr uint16_t kV2MinStepDg = 66;      // 2^22 / step must fit 16 bits
 constexpr uint32_t kRecipOne = 1ul << 28;  // reciprocal scale: recip_q28 = 2^28 / mV
 
 struct ModelV2 {
-  // Stored fields (record_v2.hpp serializes exactly these).
+  // Stored fields (record_v2.hpp serializes exactly these). Field order: everything the
+  // per-frame path reads lies within 63 bytes of the start (the AVR's ldd reach), the
+  // tables last.
   uint16_t start_q4_us = 0;   // ESC start threshold, 1/16 us; 0 = no model
   uint16_t step_dg = 0;       // force between the fine knots, decigrams
   uint8_t knots = 0;          // knots used, 2..32
@@ -76,8 +78,6 @@ struct ModelV2 {
   uint8_t flags = 0;          // kV2Refined when a second sweep set the start threshold
   uint16_t rest_mv = 0;       // monitor reading at zero force in the (first) sweep
   uint16_t second_mv = 0;     // resting reading of the refining sweep; 0 = single sweep
-  uint16_t drive_512usmv[kV2MaxKnots] = {};  // drive at each knot, non-decreasing, > 0
-  uint8_t sag_10mv[kV2MaxKnots] = {};        // rest_mv minus the reading at each knot
 
   // Derived by finalize() (not stored).
   uint16_t inv_step_q22 = 0;    // round(2^22 / step_dg), < 2^16 as step >= kV2MinStepDg
@@ -86,6 +86,10 @@ struct ModelV2 {
   uint16_t rest_recip_q28 = 0;  // 2^28 / rest_mv: the voltage used when the bus reading is bad
   uint16_t max_force_dg = 0;    // force of the last knot
   uint32_t start_q17_us = 0;    // start threshold in 2^-17 us
+
+  // Stored tables.
+  uint16_t drive_512usmv[kV2MaxKnots] = {};  // drive at each knot, non-decreasing, > 0
+  uint8_t sag_10mv[kV2MaxKnots] = {};        // rest_mv minus the reading at each knot
 
   bool isPresent() const { return start_q4_us != 0 && knots != 0; }
   uint16_t maxForceDg() const { return max_force_dg; }
@@ -96,8 +100,9 @@ struct ModelV2 {
   }
   // Checks the stored fields and computes the derived ones. False (model cleared) when a
   // field is out of range: start outside 800..1800 us, a step < kV2MinStepDg (coarse: or
-  // not 0 without coarse knots), knots outside 2..32, fine_knots outside 1..knots, rest_mv / second_mv outside 6000..17500 (second_mv may be 0), drive not
-  // increasing (a knot lower than the one before, or the first knot 0).
+  // not 0 without coarse knots), knots outside 2..32, fine_knots outside 1..knots,
+  // rest_mv / second_mv outside 6000..17500 (second_mv may be 0), drive not increasing (a
+  // knot lower than the one before, or the first knot 0).
   bool finalize();
   void clear();
 };
