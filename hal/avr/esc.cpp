@@ -61,14 +61,32 @@ void Esc::init(uint16_t frame_hz) {
 
 bool Esc::setFrameRate(uint16_t frame_hz) {
   if (frame_hz < kEscMinFrameHz || frame_hz > kEscMaxFrameHz) return false;
+  // Change between pulses: stopping a timer while its pin is high and restarting the frame
+  // would stretch that pulse. Every pin is low once both counters are past their largest
+  // compare value (at most one frame of waiting; none if a pulse fills the whole frame).
+  const uint16_t old_top = ICR4;
+  uint16_t last4 = OCR4A;
+  if (OCR4B > last4) last4 = OCR4B;
+  if (OCR4C > last4) last4 = OCR4C;
+  const uint16_t last1 = OCR1A;
+  if (last4 < old_top && last1 < old_top) {
+    while (TCNT4 <= last4 || TCNT1 <= last1) {
+    }
+  }
   g_frame_hz = frame_hz;
   const uint16_t top = topFor(frame_hz);
   ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
-    // Restart the frame: a counter above the new TOP would otherwise run on to 0xFFFF.
+    // Clock off, new TOP, clock on. Stopping the clock is also what makes simavr 1.6 re-read
+    // ICRn: it reconfigures a timer only when its clock source or mode changes. The counters
+    // restart at TOP so the next tick is BOTTOM and the new frame begins with a full pulse.
+    TCCR4B = _BV(WGM43) | _BV(WGM42);
+    TCCR1B = _BV(WGM13) | _BV(WGM12);
     ICR4 = top;
     ICR1 = top;
-    TCNT4 = 0;
-    TCNT1 = 0;
+    TCNT4 = top;
+    TCNT1 = top;
+    TCCR4B = _BV(WGM43) | _BV(WGM42) | _BV(CS41);
+    TCCR1B = _BV(WGM13) | _BV(WGM12) | _BV(CS11);
   }
   return true;
 }

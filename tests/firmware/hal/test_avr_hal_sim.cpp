@@ -20,12 +20,16 @@
 #include <memory>
 #include <regex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "thrustcal/eeprom_codec.hpp"
 
 #ifndef GATHER_STORE_ELF
 #define GATHER_STORE_ELF ""
+#endif
+#ifndef READ_RUN_ELF
+#define READ_RUN_ELF ""
 #endif
 
 namespace {
@@ -40,7 +44,7 @@ struct Pulse {
 
 class SimBoard {
  public:
-  explicit SimBoard(const char* elf_path) {
+  explicit SimBoard(const char* elf_path, std::string prompt = "gs> ") : prompt_(std::move(prompt)) {
     if (elf_read_firmware(elf_path, &firmware_) != 0) return;
     avr_ = avr_make_mcu_by_name("atmega2560");
     if (avr_ == nullptr) return;
@@ -103,8 +107,8 @@ class SimBoard {
   std::string command(const std::string& line, double budget_s = 2.0) {
     const size_t from = out_.size();
     send(line + "\r");
-    EXPECT_TRUE(runUntil("gs> ", budget_s, from)) << "no prompt after '" << line << "':\n"
-                                                   << out_.substr(from);
+    EXPECT_TRUE(runUntil(prompt_, budget_s, from)) << "no prompt after '" << line << "':\n"
+                                                    << out_.substr(from);
     return out_.substr(from);
   }
   void send(const std::string& bytes) {
@@ -115,6 +119,10 @@ class SimBoard {
   // Simulated time (s) at which output byte `index` was written to UDR0.
   double outputSeconds(size_t index) const { return out_cycles_.at(index) / kCpuHz; }
   const std::vector<Pulse>& pulses(int channel) const { return pulses_[channel]; }
+  double lastPeriodUs(int channel) const {
+    const auto& p = pulses_[channel];
+    return p.size() < 2 ? 0.0 : (p.back().rise - p[p.size() - 2].rise) * 1e6 / kCpuHz;
+  }
   double lastPulseUs(int channel) const {
     return pulses_[channel].empty() ? 0.0 : pulses_[channel].back().width_us;
   }
@@ -167,6 +175,7 @@ class SimBoard {
     }
   }
 
+  std::string prompt_;
   elf_firmware_t firmware_ = {};
   avr_t* avr_ = nullptr;
   avr_irq_t* uart_in_ = nullptr;
@@ -358,6 +367,39 @@ TEST_F(AvrHalSim, IdleFirmwareSleepsBetweenTicks) {
   const uint64_t steps = board_->runCycles(static_cast<avr_cycle_count_t>(1.0 * kCpuHz));
   RecordProperty("idle_steps_per_simulated_second", std::to_string(steps));
   EXPECT_LT(steps, 200000u);
+}
+
+// Esc::setFrameRate through the read_run image's "rate" command (gather_store keeps 50 Hz):
+// ICR changes on both timers and the counters restart, so every pin keeps its 1000 us pulse.
+struct RateRow {
+  int hz;
+  double period_us;
+};
+
+TEST(AvrHalSimFrameRate, RateChangesThePeriodOnAllFourPinsAndKeepsThePulse) {
+  const std::string path = READ_RUN_ELF;
+  if (path.empty() || !std::ifstream(path).good()) {
+    GTEST_SKIP() << "no AVR image at '" << path << "': build the AVR tree first";
+  }
+  SimBoard board(path.c_str(), "rr> ");
+  ASSERT_TRUE(board.ok());
+  board.adc_mv = [](int channel) { return channel == 1 ? 12000.0 * 47.0 / 147.0 : 1000.0; };
+  ASSERT_TRUE(board.runUntil("rr> ", 3.0)) << board.output();  // after the 2 s arming
+  for (const RateRow row : {RateRow{400, 2500.0}, RateRow{200, 5000.0}, RateRow{50, 20000.0}}) {
+    const std::string out = board.command("rate " + std::to_string(row.hz));
+    ASSERT_NE(out.find("frame rate " + std::to_string(row.hz) + " Hz"), std::string::npos) << out;
+    board.runCycles(static_cast<avr_cycle_count_t>(0.1 * kCpuHz));
+    for (int ch = 0; ch < 4; ++ch) {
+      EXPECT_NEAR(board.lastPeriodUs(ch), row.period_us, 0.2) << row.hz << " Hz, channel " << ch;
+      EXPECT_NEAR(board.lastPulseUs(ch), 1000.0, 0.2) << row.hz << " Hz, channel " << ch;
+    }
+  }
+  // and no pulse was stretched or cut while the frame changed under it
+  for (int ch = 0; ch < 4; ++ch) {
+    for (const auto& p : board.pulses(ch)) {
+      EXPECT_NEAR(p.width_us, 1000.0, 0.2) << "channel " << ch << " at " << p.rise / kCpuHz << " s";
+    }
+  }
 }
 
 }  // namespace
