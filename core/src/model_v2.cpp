@@ -96,13 +96,14 @@ TC_INLINE int16_t mulS16U16Hi(int16_t a, uint16_t b) {
 
 // Sag at a knot position in 1/256 of 10 mV (< 2^16), linear between knots (origin: 0).
 TC_INLINE uint16_t sagAtQ8(const ModelV2& m, KnotPos p) {
-  if (p.index >= m.knots) return static_cast<uint16_t>(m.sag_10mv[m.knots - 1] << 8);
+  // (uint16_t casts before the shifts: 255 << 8 does not fit the AVR's 16-bit int.)
+  if (p.index >= m.knots) return static_cast<uint16_t>(static_cast<uint16_t>(m.sag_10mv[m.knots - 1]) << 8);
   const uint8_t lo = p.index ? m.sag_10mv[p.index - 1] : 0;
   const uint8_t hi = m.sag_10mv[p.index];
   // (hi - lo) * 256 * frac / 2^16, computed as 2 * ((hi - lo) * 128 * frac / 2^16) so that
   // the signed factor fits 16 bits: |hi - lo| * 128 < 2^15.
   const int16_t d = mulS16U16Hi(static_cast<int16_t>((hi - lo) * 128), p.frac_q16);
-  return static_cast<uint16_t>((lo << 8) + 2 * d);
+  return static_cast<uint16_t>((static_cast<uint16_t>(lo) << 8) + 2 * d);
 }
 
 TC_INLINE uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flags) {
