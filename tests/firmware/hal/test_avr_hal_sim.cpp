@@ -248,24 +248,27 @@ TEST_F(AvrHalSim, UartReceivesAndEchoesACommand) {
   EXPECT_NE(out.find("motor 3 selected: ESC D11 (PB5, OC1A)"), std::string::npos) << out;
 }
 
-TEST_F(AvrHalSim, SweepDrivesTheSelectedPinAndReadsTheAdcOnTheMillisecondClock) {
-  // given: motor 1 (D7), three steps of 100 us, 100 ms settle
-  plant_.channel = 1;
-  board_->command("motor 1");
+class AvrHalSimSlot : public AvrHalSim, public ::testing::WithParamInterface<int> {};
+
+TEST_P(AvrHalSimSlot, SweepDrivesTheSelectedPinAndReadsTheAdcOnTheMillisecondClock) {
+  // given: motor N (D6, D7, D8, D11), three steps of 100 us, 100 ms settle
+  const int ch = GetParam();
+  plant_.channel = ch;
+  board_->command("motor " + std::to_string(ch));
   board_->command("range 1100 1300");
   board_->command("step 100");
   board_->command("settle 100");
   board_->runCycles(static_cast<avr_cycle_count_t>(2.0 * kCpuHz));  // past the arming time
   board_->command("tare");
-  const size_t pulses_before = board_->pulses(1).size();
+  const size_t pulses_before = board_->pulses(ch).size();
   // when
   const size_t out_from = board_->output().size();
   const std::string out = board_->command("sweep", 3.0);
   board_->runCycles(static_cast<avr_cycle_count_t>(0.05 * kCpuHz));
   // then: the pin carried exactly the swept widths, and 1000 us again at the end
   std::vector<double> widths;
-  for (size_t i = pulses_before; i < board_->pulses(1).size(); ++i) {
-    const double w = board_->pulses(1)[i].width_us;
+  for (size_t i = pulses_before; i < board_->pulses(ch).size(); ++i) {
+    const double w = board_->pulses(ch)[i].width_us;
     if (widths.empty() || std::fabs(widths.back() - w) > 0.5) widths.push_back(w);
   }
   std::string seen;
@@ -275,9 +278,14 @@ TEST_F(AvrHalSim, SweepDrivesTheSelectedPinAndReadsTheAdcOnTheMillisecondClock) 
   EXPECT_NEAR(widths[1], 1200.0, 0.2);
   EXPECT_NEAR(widths[2], 1300.0, 0.2);
   EXPECT_NEAR(widths[3], 1000.0, 0.2);
+  for (int other = 0; other < 4; ++other) {  // the other three ESCs stay at 1000 us
+    if (other == ch) continue;
+    for (const auto& p : board_->pulses(other)) EXPECT_NEAR(p.width_us, 1000.0, 0.2) << other;
+  }
   // CSV rows: force from A0 through the thesis line (1 count = 0.75 g, so 100 g = 133.3
   // counts reads 99.75 or 100.5 g), battery from A1, time from the millisecond clock.
-  const std::regex row(R"((\d+),(-?\d+\.\d),(\d+\.\d{3}),(\d+\.\d{3}),1,1)");
+  const std::regex row("(\\d+),(-?\\d+\\.\\d),(\\d+\\.\\d{3}),(\\d+\\.\\d{3})," +
+                       std::to_string(ch) + ",1");
   std::vector<double> force, vbat, t, printed_s;
   for (std::sregex_iterator it(out.begin(), out.end(), row), end; it != end; ++it) {
     force.push_back(std::stod((*it)[2]));
@@ -302,6 +310,8 @@ TEST_F(AvrHalSim, SweepDrivesTheSelectedPinAndReadsTheAdcOnTheMillisecondClock) 
     EXPECT_LT(real_dt, 0.100 + 0.050) << i;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(EachEscOutput, AvrHalSimSlot, ::testing::Values(0, 1, 2, 3));
 
 TEST_F(AvrHalSim, AKeyStopsTheMotorFromTheNextFrameOn) {
   // given: a slow sweep under way at 1300 us or more
