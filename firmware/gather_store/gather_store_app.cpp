@@ -537,6 +537,7 @@ void GatherStoreApp::cmdSweep() {
   }
   const uint8_t slot = settings_.slot;
   sweep_.valid = false;
+  if (!swallowLineFeed()) return;
   builder_.reset();
   sag_builder_.reset(settings_.pwm_min_us);
 
@@ -586,6 +587,19 @@ void GatherStoreApp::cmdSweep() {
   stopMotor();
   last_end_ = SweepEnd::kDone;
   finishSweep(slot, hal::Clock::millis() - start_ms);
+}
+
+bool GatherStoreApp::swallowLineFeed() {
+  // A terminal that ends lines with CR LF sends the LF right after the CR that completed
+  // "sweep" (87 us later at 115200 baud): it belongs to the command, it is not a key.
+  const uint32_t start = hal::Clock::millis();
+  while (!hal::Uart::available() && hal::Clock::millis() - start < kLineEndGraceMs) {
+    hal::Clock::sleepUntilInterrupt();
+  }
+  if (!hal::Uart::available()) return true;
+  if (hal::Uart::read() == '\n') return true;
+  abortSweep(SweepEnd::kKey, 0);  // something else: a key, the motor has not started
+  return false;
 }
 
 bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {

@@ -39,6 +39,7 @@ constexpr uint16_t kForceWindow = 201;     // thesis: median of 201 load-cell re
 constexpr uint16_t kBatteryWindow = 101;   // thesis: median of 101 battery readings
 constexpr uint16_t kMaxSweepSamples = 161; // 1000..1800 us in 5 us steps; default uses 81
 constexpr uint8_t kProgressEvery = 10;     // one "# " progress line per this many samples
+constexpr uint8_t kLineEndGraceMs = 3;     // an LF this soon after "sweep" CR is its line end
 
 // Accepted ranges of the settings (inclusive).
 constexpr uint16_t kPwmLowestUs = 1000;
@@ -118,6 +119,9 @@ class GatherStoreApp {
 
   // Sweep parts.
   uint16_t plannedSamples() const;
+  // Consumes the LF of a CR LF line end that arrives within kLineEndGraceMs. False: another
+  // byte came instead, which aborts the sweep before the motor starts.
+  bool swallowLineFeed();
   // One step: pulse, settle, force and battery medians, checks. False: aborted (the motor
   // is already at 1000 us and the reason printed).
   bool measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv);

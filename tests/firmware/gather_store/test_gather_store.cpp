@@ -415,6 +415,41 @@ TEST_F(GatherStore, AnyKeyDuringTheSweepStopsTheMotorAtOnce) {
   EXPECT_TRUE(startsWith(responseLines(run("store 1"))[0], "error: nothing to store"));
 }
 
+TEST_F(GatherStore, CrLfLineEndsDoNotAbortTheSweepTheyStart) {
+  // given: a terminal that sends CR LF
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  // when
+  hal::fake::takeOutput();
+  hal::fake::feedInput("sweep\r\n");
+  while (!app_->poll()) hal::Clock::sleepUntilInterrupt();
+  const std::string out = hal::fake::takeOutput();
+  // then
+  EXPECT_EQ(out.find("# aborted"), std::string::npos) << out;
+  EXPECT_NE(out.find("# done: 81 samples"), std::string::npos) << out;
+}
+
+TEST_F(GatherStore, CrLfLineEndArrivingALittleLaterStillDoesNotAbort) {
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  hal::fake::feedInputAt(hal::fake::nowMs() + 2, "\n");  // a slow link: LF 2 ms after CR
+  const std::string out = sweep();
+  EXPECT_EQ(out.find("# aborted"), std::string::npos) << out;
+  EXPECT_TRUE(app_->lastSweep().valid);
+}
+
+TEST_F(GatherStore, AKeyRightAfterSweepAbortsBeforeTheMotorStarts) {
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  hal::fake::setTickHook([&](uint32_t) {
+    plant_.tick();
+    EXPECT_EQ(hal::Esc::pulseUs(0), 1000u);
+  });
+  const std::string out = run("sweep\rx");
+  EXPECT_NE(out.find("# aborted: key pressed"), std::string::npos) << out;
+  EXPECT_EQ(out.find("pwm_us,"), std::string::npos) << out;
+}
+
 TEST_F(GatherStore, AKeyDuringTheAbortedSweepDoesNotLeakIntoTheNextCommand) {
   hal::fake::advanceMs(gs::kArmMs);
   calibrateAndTare();
