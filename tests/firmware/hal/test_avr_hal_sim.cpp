@@ -272,6 +272,7 @@ TEST_P(AvrHalSimSlot, SweepDrivesTheSelectedPinAndReadsTheAdcOnTheMillisecondClo
   std::vector<double> widths;
   for (size_t i = pulses_before; i < board_->pulses(ch).size(); ++i) {
     const double w = board_->pulses(ch)[i].width_us;
+    if (widths.empty() && std::fabs(w - 1000.0) < 0.5) continue;  // frames before step 1
     if (widths.empty() || std::fabs(widths.back() - w) > 0.5) widths.push_back(w);
   }
   std::string seen;
