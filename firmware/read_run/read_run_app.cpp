@@ -159,7 +159,7 @@ uint8_t ReadRunApp::loadCalibration() {
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
     // The loader fills the v1 calibration in place; a v2 model goes through this copy
-    // (117 bytes of stack, start-up only) into the same storage.
+    // (123 bytes of stack, start-up only) into the same storage.
     tc::ModelV2 v2;
     const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(i, v2, m.model.resetToV1());
     m.layout = load.layout;

@@ -35,7 +35,7 @@
 // Peak stack 705 bytes, at start-up inside tc::loadSlot (two v2 copies decoded); about 170 in
 // the loop. Static SRAM 5257 bytes (avr-size; 5199 before v2), this object 5045: four
 // Motor structs of 1131 bytes (the SlotModel union is the 1114-byte v1 calibration; a v2
-// model alone is 117), the 414-byte battery median and the bus filter.
+// model alone is 123), the 414-byte battery median and the bus filter.
 #pragma once
 #include <stdint.h>
 

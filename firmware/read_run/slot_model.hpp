@@ -1,6 +1,6 @@
 // The force model one motor slot flies, in one piece of SRAM: either the thesis calibration
 // (layout v1: two 500-gram curves and the sag table, 1114 bytes on the AVR, flown with option
-// 2.1) or model v2 (force in effective motor voltage, 117 bytes). A slot holds one or the
+// 2.1) or model v2 (force in effective motor voltage, 123 bytes). A slot holds one or the
 // other, never both, so the two share their storage (a union): four slots cost what four v1
 // calibrations cost, whatever mix of layouts the EEPROM holds.
 //
