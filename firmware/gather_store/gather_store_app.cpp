@@ -4,6 +4,7 @@
 
 #include "hal/hal.hpp"
 #include "thrustcal/force_pwm.hpp"
+#include "thrustcal/record_v2.hpp"
 
 namespace gs {
 
@@ -24,6 +25,33 @@ int32_t divRound(int32_t num, int32_t den) {
 }
 
 int32_t absolute(int32_t v) { return v < 0 ? -v : v; }
+
+// hal::Eeprom through the codecs' Storage interface, counting the bytes that change: the
+// physical writes (updateByte skips a byte that already holds the value).
+struct CountingEeprom {
+  static uint16_t written;
+  static uint8_t readByte(uint16_t addr) { return hal::Eeprom::readByte(addr); }
+  static void updateByte(uint16_t addr, uint8_t value) {
+    if (hal::Eeprom::readByte(addr) != value) ++written;
+    hal::Eeprom::updateByte(addr, value);
+  }
+};
+uint16_t CountingEeprom::written = 0;
+
+// "; wrote N bytes" + newline
+void sayWritten() {
+  say(TC_PSTR("; wrote "));
+  fw::printUint(CountingEeprom::written);
+  sayLine(CountingEeprom::written == 1 ? TC_PSTR(" byte") : TC_PSTR(" bytes"));
+}
+
+void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
+
+// 1/16 us -> "1083.4 us"
+void printQ4Us(uint16_t q4_us) {
+  fw::printFixed(static_cast<int32_t>((static_cast<uint32_t>(q4_us) * 10u + 8u) >> 4), 1);
+  say(TC_PSTR(" us"));
+}
 
 void printEscPin(uint8_t slot) {
   switch (slot) {
@@ -78,6 +106,31 @@ bool oneArg(char** args, uint8_t n, const char* usage_progmem, const char* what_
     return false;
   }
   return true;
+}
+
+// Why model v2 could not use a sweep (flash copies of tc::fitV2StatusText's reasons: the core's
+// texts are plain strings, which the AVR keeps in SRAM).
+void printFitProblem(tc::FitV2Status status) {
+  switch (status) {
+    case tc::FitV2Status::kOk: say(TC_PSTR("ok")); break;
+    case tc::FitV2Status::kTooFewSamples:
+      say(TC_PSTR("fewer than 8 PWM steps: widen the range or use a smaller step"));
+      break;
+    case tc::FitV2Status::kNoForce:
+      say(TC_PSTR("the force never reached 13.2 g: motor not spinning or cell not tared?"));
+      break;
+    case tc::FitV2Status::kBadVoltage:
+      say(TC_PSTR("a battery reading outside 6..17.5 V: check the monitor wiring on A1"));
+      break;
+    case tc::FitV2Status::kStartNotFound:
+      say(TC_PSTR("ESC start threshold not found: sweep from 1000 us to full force in "
+                  "steps of at most 10 us"));
+      break;
+    case tc::FitV2Status::kVoltagesTooClose:
+      say(TC_PSTR("the two sweeps rested within 0.5 V of each other"));
+      break;
+    case tc::FitV2Status::kNoModel: say(TC_PSTR("no model to refine")); break;
+  }
 }
 
 void printBuildProblem(tc::BuildStatus status) {
@@ -220,8 +273,10 @@ void GatherStoreApp::cmdHelp() {
   sayLine(TC_PSTR("  sweep         run the sweep, stream CSV; any key aborts (motor -> 1000 us)"));
   sayLine(TC_PSTR("  store 1       store the last sweep as curve 1 (+ start voltage, sag offsets)"));
   sayLine(TC_PSTR("  store 2       store the last sweep as curve 2 (another battery voltage)"));
-  sayLine(TC_PSTR("  show          what the selected slot's EEPROM record holds"));
-  sayLine(TC_PSTR("  erase         mark the selected slot not calibrated"));
+  sayLine(TC_PSTR("  store v2      fit model v2 (effective voltage) to the last sweep and store it;"));
+  sayLine(TC_PSTR("                a slot's v2 model from another voltage (>= 0.5 V) is refined"));
+  sayLine(TC_PSTR("  show          what the selected slot's EEPROM record holds (v1 or v2)"));
+  sayLine(TC_PSTR("  erase         mark the selected slot not calibrated (v1 and both v2 copies)"));
   sayLine(TC_PSTR("  status        settings, live force and battery, last sweep"));
 }
 
@@ -474,6 +529,7 @@ void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
   stopMotor();  // first, before any output
   last_end_ = why;
   sweep_.valid = false;
+  sweep_.complete = false;
   while (hal::Uart::available()) hal::Uart::read();  // the key that aborted is not a command
   reader_.clear();
   say(TC_PSTR("# aborted: "));
@@ -537,9 +593,11 @@ void GatherStoreApp::cmdSweep() {
   }
   const uint8_t slot = settings_.slot;
   sweep_.valid = false;
+  sweep_.complete = false;
   if (!swallowLineFeed()) return;
   builder_.reset();
   sag_builder_.reset(settings_.pwm_min_us);
+  fitter_.reset();
 
   say(TC_PSTR("# sweep motor "));
   fw::printUint(slot);
@@ -554,6 +612,11 @@ void GatherStoreApp::cmdSweep() {
   say(TC_PSTR(" ms, "));
   fw::printUint(planned);
   sayLine(TC_PSTR(" steps; any key aborts"));
+  if (planned > kMaxV2Samples) {
+    say(TC_PSTR("# note: model v2 keeps at most "));
+    fw::printUint(kMaxV2Samples);
+    sayLine(TC_PSTR(" steps: store v2 will refuse this sweep (store 1 and store 2 work)"));
+  }
 
   const uint32_t since_arm = hal::Clock::millis() - armed_at_ms_;
   if (since_arm < kArmMs) {
@@ -572,6 +635,7 @@ void GatherStoreApp::cmdSweep() {
     if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
     builder_.add(pwm, force_dg);
     sag_builder_.add(pwm, vbat_mv);
+    fitter_.add(pwm, force_dg, vbat_mv);  // false once full: store v2 then refuses the sweep
     if (force_dg > max_force_dg) max_force_dg = force_dg;
     printCsvRow(pwm, force_dg, vbat_mv, hal::Clock::millis() - start_ms, slot);
     if (done % kProgressEvery == 0 && done != planned) {
@@ -638,6 +702,7 @@ void GatherStoreApp::finishSweep(uint8_t slot, uint32_t elapsed_ms) {
   sweep_.samples = builder_.size();
   sweep_.report = builder_.build(sweep_.curve);
   sweep_.slot = slot;
+  sweep_.complete = true;
 
   say(TC_PSTR("# done: "));
   fw::printUint(sweep_.samples);
@@ -671,20 +736,16 @@ void GatherStoreApp::finishSweep(uint8_t slot, uint32_t elapsed_ms) {
   sayLine(TC_PSTR(" us"));
   say(TC_PSTR("# next: store 1 (first curve) or store 2 (second curve) for motor "));
   fw::printUint(slot);
-  fw::newline();
+  sayLine(TC_PSTR(", or store v2 (model v2)"));
 }
 
 // ---------------------------------------------------------------------------------------
 // EEPROM record (thesis "First or second?")
 
-void GatherStoreApp::cmdStore(char** args, uint8_t n) {
-  int32_t which;
-  if (!oneArg(args, n, TC_PSTR("store 1 | store 2"), TC_PSTR("curve number"), 1, 2, which))
-    return;
-  const uint8_t slot = settings_.slot;
-  if (!sweep_.valid) {
+bool GatherStoreApp::checkStoreSource(uint8_t slot) {
+  if (!sweep_.complete) {
     sayLine(TC_PSTR("error: nothing to store: run a complete sweep first"));
-    return;
+    return false;
   }
   if (sweep_.slot != slot) {
     say(TC_PSTR("error: the last sweep was on motor "));
@@ -694,14 +755,41 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
     say(TC_PSTR(" is selected: type motor "));
     fw::printUint(sweep_.slot);
     sayLine(TC_PSTR(" or sweep again; nothing changed"));
+    return false;
+  }
+  return true;
+}
+
+void GatherStoreApp::cmdStore(char** args, uint8_t n) {
+  if (n == 2 && fw::equalsP(args[1], TC_PSTR("v2"))) {
+    cmdStoreV2();
     return;
   }
+  int32_t which;
+  if (!oneArg(args, n, TC_PSTR("store 1 | store 2 | store v2"), TC_PSTR("curve number"), 1, 2,
+              which))
+    return;
+  const uint8_t slot = settings_.slot;
+  if (!checkStoreSource(slot)) return;
+  if (!sweep_.valid) {
+    say(TC_PSTR("error: the last sweep gave no thesis curve ("));
+    printBuildProblem(sweep_.report.status);  // ends the line
+    return;
+  }
+  const bool had_v2 = tc::probeSlotLayout<hal::Eeprom>(slot) == tc::SlotLayout::kModelV2;
   const tc::DecodeStatus before = tc::readRecord<hal::Eeprom>(slot, record_);
   if (which == 1) {
     if (before != tc::DecodeStatus::kOk) record_.clear();
     record_.first = sweep_.curve;
     record_.sag = sweep_.sag;
   } else {
+    if (had_v2) {
+      say(TC_PSTR("error: motor "));
+      fw::printUint(slot);
+      sayLine(TC_PSTR(" holds model v2, not a thesis curve 1: store 1 first (it replaces "
+                      "model v2), or store v2; nothing changed"));
+      return;
+    }
     if (before != tc::DecodeStatus::kOk) {
       say(TC_PSTR("error: motor "));
       fw::printUint(slot);
@@ -725,7 +813,8 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
     }
     record_.second = sweep_.curve;
   }
-  tc::writeRecord<hal::Eeprom>(slot, record_);
+  CountingEeprom::written = 0;
+  tc::writeRecord<CountingEeprom>(slot, record_);
   const tc::DecodeStatus after = tc::readRecord<hal::Eeprom>(slot, record_);
   if (after != tc::DecodeStatus::kOk) {
     say(TC_PSTR("error: read-back of motor "));
@@ -752,11 +841,200 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
     say(TC_PSTR(" us"));
     if (record_.hasSecondCurve()) say(TC_PSTR("; curve 2 kept"));
   }
+  if (had_v2) say(TC_PSTR("; replaced model v2 (the slot holds the thesis record now)"));
+  sayWritten();
+}
+
+// Model v2 (thrustcal/model_v2.hpp), fitted on the board; see the header for the rules.
+void GatherStoreApp::cmdStoreV2() {
+  const uint8_t slot = settings_.slot;
+  if (!checkStoreSource(slot)) return;
+  if (sweep_.samples > fitter_.capacity()) {
+    say(TC_PSTR("error: the last sweep has "));
+    fw::printUint(sweep_.samples);
+    say(TC_PSTR(" steps, model v2 keeps at most "));
+    fw::printUint(fitter_.capacity());
+    say(TC_PSTR(" (SRAM): set a step of at least "));
+    const uint16_t span_us = static_cast<uint16_t>(settings_.pwm_max_us - settings_.pwm_min_us);
+    fw::printUint(span_us / (fitter_.capacity() - 1u) + 1u);
+    sayLine(TC_PSTR(" us for this range and sweep again; nothing changed"));
+    return;
+  }
+  // What the slot holds now.
+  const tc::RecordV2Read now = tc::readModelV2<hal::Eeprom>(slot, model_);
+  const bool had_v2 = now.status == tc::DecodeStatus::kOk;
+  const bool had_v1 = !had_v2 && hal::Eeprom::readByte(tc::slotAddress(slot)) == tc::kLayoutVersion1;
+  const uint16_t old_rest_mv = model_.rest_mv;
+  const uint16_t old_second_mv = model_.second_mv;
+  const uint16_t old_start_q4 = model_.start_q4_us;
+  const bool old_refined = had_v2 && (model_.flags & tc::kV2Refined) != 0;
+
+  // This sweep alone (also gives its resting voltage).
+  tc::FitV2Report rep = fitter_.fit(model_);
+  if (rep.status == tc::FitV2Status::kTooFewSamples || rep.status == tc::FitV2Status::kNoForce ||
+      rep.status == tc::FitV2Status::kBadVoltage) {
+    say(TC_PSTR("error: model v2 cannot use the last sweep: "));
+    printFitProblem(rep.status);
+    sayLine(TC_PSTR("; nothing changed"));
+    return;
+  }
+  const uint16_t rest_mv = rep.rest_mv;
+  const bool near_first = absolute(static_cast<int32_t>(rest_mv) - old_rest_mv) < kV2MinVoltageGapMv;
+  const bool near_second =
+      absolute(static_cast<int32_t>(rest_mv) - old_second_mv) < kV2MinVoltageGapMv;
+  if (old_refined && near_second && !near_first) {
+    say(TC_PSTR("error: motor "));
+    fw::printUint(slot);
+    say(TC_PSTR(" already holds a model v2 refined by a sweep at "));
+    printVolts(old_second_mv);
+    say(TC_PSTR(", within 0.5 V of this one ("));
+    printVolts(rest_mv);
+    sayLine(TC_PSTR("): sweep at another voltage, or erase and store v2 to start over; "
+                    "nothing changed"));
+    return;
+  }
+  const bool refine = had_v2 && !near_first;
+  if (refine) {
+    tc::readModelV2<hal::Eeprom>(slot, model_);  // valid a moment ago
+    rep = fitter_.refine(model_);
+  }
+  if (rep.status != tc::FitV2Status::kOk) {
+    say(refine ? TC_PSTR("error: refining motor ") : TC_PSTR("error: fitting model v2 of motor "));
+    fw::printUint(slot);
+    say(TC_PSTR(" failed: "));
+    printFitProblem(rep.status);
+    sayLine(TC_PSTR("; check the sweep (range down to the ESC start, step 10 us); nothing changed"));
+    return;
+  }
+
+  CountingEeprom::written = 0;
+  const tc::RecordV2Write w = tc::writeModelV2<CountingEeprom>(slot, model_);
+  if (w.status == tc::WriteV2Status::kUnchanged) {
+    say(TC_PSTR("motor "));
+    fw::printUint(slot);
+    say(TC_PSTR(" already holds this model v2 ("));
+    sayCopy(w.copy);
+    say(TC_PSTR(", sequence "));
+    fw::printUint(w.sequence);
+    say(TC_PSTR("): nothing to write"));
+    sayWritten();
+    return;
+  }
+  if (w.status != tc::WriteV2Status::kWritten) {
+    say(TC_PSTR("error: storing model v2 of motor "));
+    fw::printUint(slot);
+    say(w.status == tc::WriteV2Status::kVerifyFailed
+            ? TC_PSTR(" failed: read-back of the copy just written is bad (EEPROM worn?); "
+                      "the previous copy is kept, try another slot")
+            : TC_PSTR(" failed: the model is out of range; sweep again"));
+    sayWritten();
+    return;
+  }
+  say(TC_PSTR("stored model v2 of motor "));
+  fw::printUint(slot);
+  say(TC_PSTR(" ("));
+  printRecordRange(slot);
+  say(TC_PSTR(", "));
+  sayCopy(w.copy);
+  say(TC_PSTR(", sequence "));
+  fw::printUint(w.sequence);
+  say(TC_PSTR("): "));
+  if (refine) {
+    say(TC_PSTR("refined with this sweep at "));
+    printVolts(rest_mv);
+    say(TC_PSTR(" (first sweep "));
+    printVolts(model_.rest_mv);
+    say(TC_PSTR("), start "));
+    printQ4Us(model_.start_q4_us);
+    say(TC_PSTR(" (was "));
+    printQ4Us(old_start_q4);
+    say(TC_PSTR(")"));
+  } else {
+    say(TC_PSTR("fitted from one sweep at "));
+    printVolts(rest_mv);
+    say(TC_PSTR(", start "));
+    printQ4Us(model_.start_q4_us);
+  }
+  say(TC_PSTR(", curve to "));
+  fw::printFixed(model_.maxForceDg(), 1);
+  say(TC_PSTR(" g in "));
+  fw::printUint(model_.knots);
+  say(TC_PSTR(" knots"));
+  if (had_v1) say(TC_PSTR("; replaced the thesis record"));
+  if (had_v2 && !refine) {
+    say(TC_PSTR("; replaced the model of a sweep at "));
+    printVolts(old_rest_mv);
+  }
+  sayWritten();
+  if (!refine) {
+    say(TC_PSTR("# next: sweep at another voltage (>= 0.5 V from "));
+    printVolts(rest_mv);
+    sayLine(TC_PSTR("), then store v2 to refine"));
+  }
+}
+
+void GatherStoreApp::showV2(uint8_t slot) {
+  const tc::RecordV2Read r = tc::readModelV2<hal::Eeprom>(slot, model_);
+  say(TC_PSTR("motor "));
+  fw::printUint(slot);
+  say(TC_PSTR(" ("));
+  printRecordRange(slot);
+  say(TC_PSTR("): "));
+  if (r.status != tc::DecodeStatus::kOk) {
+    say(TC_PSTR("not calibrated: v2 record, both copies bad ("));
+    for (uint8_t copy = 0; copy < 2; ++copy) {
+      if (copy) say(TC_PSTR(", "));
+      sayCopy(copy);
+      hal::Uart::write(' ');
+      hal::Uart::print(tc::decodeStatusText(r.copy_status[copy]));
+    }
+    sayLine(TC_PSTR(")"));
+    return;
+  }
+  say(TC_PSTR("calibrated, model v2 ("));
+  sayCopy(r.copy);
+  say(TC_PSTR(", sequence "));
+  fw::printUint(r.sequence);
+  say(TC_PSTR("; other copy "));
+  hal::Uart::print(tc::decodeStatusText(r.copy_status[r.copy ^ 1u]));
+  sayLine(TC_PSTR(")"));
+  say(TC_PSTR("model v2: start "));
+  printQ4Us(model_.start_q4_us);
+  say(TC_PSTR(", curve to "));
+  fw::printFixed(model_.maxForceDg(), 1);
+  say(TC_PSTR(" g in "));
+  fw::printUint(model_.knots);
+  say(TC_PSTR(" knots, first sweep at "));
+  printVolts(model_.rest_mv);
+  if (model_.second_mv != 0) {
+    say(TC_PSTR(", refined at "));
+    printVolts(model_.second_mv);
+  } else {
+    say(TC_PSTR(", single sweep (store v2 after a sweep at another voltage refines it)"));
+  }
+  fw::newline();
+  tc::BusVoltageFilter bus;
+  bus.reset(model_.rest_mv);
+  say(TC_PSTR("PWM at "));
+  printVolts(model_.rest_mv);
+  hal::Uart::write(':');
+  const uint16_t max_g = static_cast<uint16_t>(model_.maxForceDg() / 10u);
+  for (uint16_t grams = 10; grams <= max_g; grams = static_cast<uint16_t>(grams == 10 ? 100 : grams + 100)) {
+    hal::Uart::write(' ');
+    fw::printUint(grams);
+    say(TC_PSTR(" g "));
+    fw::printUint(tc::forceGramsToPwmV2(model_, grams, bus).pwm_us);
+    say(TC_PSTR(" us"));
+  }
   fw::newline();
 }
 
 void GatherStoreApp::cmdShow() {
   const uint8_t slot = settings_.slot;
+  if (tc::probeSlotLayout<hal::Eeprom>(slot) == tc::SlotLayout::kModelV2) {
+    showV2(slot);
+    return;
+  }
   const tc::DecodeStatus status = tc::readRecord<hal::Eeprom>(slot, record_);
   say(TC_PSTR("motor "));
   fw::printUint(slot);
@@ -789,12 +1067,16 @@ void GatherStoreApp::cmdShow() {
 
 void GatherStoreApp::cmdErase() {
   const uint8_t slot = settings_.slot;
-  tc::eraseRecord<hal::Eeprom>(slot);
+  CountingEeprom::written = 0;
+  // Both v2 copies' version bytes (copy B first); copy A's is the thesis record's too.
+  tc::eraseModelV2<CountingEeprom>(slot);
+  tc::eraseRecord<CountingEeprom>(slot);
   say(TC_PSTR("erased motor "));
   fw::printUint(slot);
   say(TC_PSTR(" ("));
   printRecordRange(slot);
-  sayLine(TC_PSTR("): not calibrated now, both curves and the sag offsets are gone"));
+  say(TC_PSTR("): not calibrated now, thesis curves, sag offsets and model v2 are gone"));
+  sayWritten();
 }
 
 void GatherStoreApp::cmdStatus() {
@@ -848,7 +1130,7 @@ void GatherStoreApp::cmdStatus() {
   fw::printFixed(sweep_.report.max_force_dg, 1);
   say(TC_PSTR(" g, curve 1.."));
   fw::printUint(sweep_.curve.maxGrams());
-  sayLine(TC_PSTR(" g (store 1 or store 2 saves it)"));
+  sayLine(TC_PSTR(" g (store 1, store 2 or store v2 saves it)"));
 }
 
 }  // namespace gs

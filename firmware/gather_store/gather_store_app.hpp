@@ -8,6 +8,23 @@
 // "first or second?": store the first curve with its start voltage and offsets, or the second
 // curve, in the slot's EEPROM record (read-modify-write).
 //
+// Beyond the thesis: `store v2` fits model v2 (thrustcal/model_v2.hpp: force as a curve in
+// effective motor voltage (pwm - start) * V_bus) from the same sweep ON THE BOARD and writes
+// it as the two-copy, power-fail-safe v2 record (thrustcal/record_v2.hpp). The sweep keeps
+// (pwm_us, force_dg, vbat_mv) of every step for it (kMaxV2Samples, 8 bytes each). What
+// `store v2` does depends on what the slot holds:
+//   - nothing, a thesis (v1) record, or a v2 model whose first sweep rested within 0.5 V of
+//     this one: the model fitted from this sweep alone replaces it;
+//   - a v2 model from a sweep at a clearly different resting voltage (>= 0.5 V apart): it is
+//     REFINED with this sweep (start threshold measured from both, knots averaged), so the
+//     thesis workflow "sweep on the LiPo, store v2, sweep at another voltage, store v2" ends
+//     with a refined model;
+//   - a model already refined by a sweep within 0.5 V of this one: refused (refining twice
+//     with the same voltage would count that sweep double); erase first to start over.
+// `store 1` / `store 2` onto a slot holding v2 replace it with the thesis record. Every
+// store and erase prints how many EEPROM bytes it physically wrote (bytes that already
+// hold their value are skipped).
+//
 // Console rules:
 //  - errors are one line starting "error: " that says what was wrong and what to do; a
 //    rejected command changes nothing;
@@ -29,6 +46,7 @@
 #include "thrustcal/force_curve.hpp"
 #include "thrustcal/load_cell.hpp"
 #include "thrustcal/median_filter.hpp"
+#include "thrustcal/model_v2.hpp"
 #include "thrustcal/motor_calibration.hpp"
 
 namespace gs {
@@ -38,6 +56,10 @@ constexpr uint16_t kArmMs = 2000;          // ESC sees 1000 us this long before 
 constexpr uint16_t kForceWindow = 201;     // thesis: median of 201 load-cell readings
 constexpr uint16_t kBatteryWindow = 101;   // thesis: median of 101 battery readings
 constexpr uint16_t kMaxSweepSamples = 161; // 1000..1800 us in 5 us steps; default uses 81
+// Samples model v2 keeps per sweep: 8 bytes each in SRAM (1 KB). A sweep with more steps
+// still measures and stores the thesis curves; `store v2` refuses it.
+constexpr uint16_t kMaxV2Samples = 128;
+constexpr uint16_t kV2MinVoltageGapMv = 500;  // refine needs resting voltages this far apart
 constexpr uint8_t kProgressEvery = 10;     // one "# " progress line per this many samples
 constexpr uint8_t kLineEndGraceMs = 3;     // an LF this soon after "sweep" CR is its line end
 
@@ -71,6 +93,7 @@ enum class SweepEnd : uint8_t {
 // What the last sweep left for `store`.
 struct SweepResult {
   bool valid = false;            // a completed sweep whose curve was built
+  bool complete = false;         // the sweep ran to its end (model v2 may still fit it)
   uint8_t slot = 0;              // the slot it was measured on
   uint16_t samples = 0;
   tc::BuildReport report;
@@ -113,7 +136,10 @@ class GatherStoreApp {
   void cmdSettle(char** args, uint8_t n);
   void cmdSweep();
   void cmdStore(char** args, uint8_t n);
+  void cmdStoreV2();
+  bool checkStoreSource(uint8_t slot);  // a complete sweep on the selected slot, else error
   void cmdShow();
+  void showV2(uint8_t slot);  // the slot holds a v2 record (valid or not)
   void cmdErase();
   void cmdStatus();
 
@@ -154,6 +180,8 @@ class GatherStoreApp {
   tc::CurveBuilder<kMaxSweepSamples> builder_;
   tc::SagBuilder sag_builder_;
   tc::MotorCalibration record_;  // read-modify-write buffer for store / show
+  tc::ModelV2Fitter<kMaxV2Samples> fitter_;  // the sweep's samples for model v2
+  tc::ModelV2 model_;            // store v2 / show: the model fitted, refined or read
 };
 
 }  // namespace gs
