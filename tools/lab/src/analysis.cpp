@@ -71,6 +71,9 @@ Advice adviceFor(const std::string& var, double mean, const ModelSpec& spec) {
   } else if (v == "run") {
     pick({"motor", "voltage", "drift"});
     a.words = "runs differ from each other: a per-run condition (motor, voltage, time) is not modelled; look at the next suspects";
+  } else if (v == "dpwm_us") {
+    pick({"lag"});
+    a.words = "residual follows the last PWM step (dpwm_us): the force lags the command (motor inertia, a slow load cell); add `lag`";
   } else if (v == "dir") {
     pick({"lag"});
     a.words = "up and down sweeps differ: the motor speed lags the command; add `lag`";
@@ -85,28 +88,28 @@ Advice adviceFor(const std::string& var, double mean, const ModelSpec& spec) {
   return a;
 }
 
-// R^2 and p-value of the residual regressed on X (with intercept in X) against the null design X0.
-void nestedTest(const Eigen::MatrixXd& X0, const Eigen::MatrixXd& X1, const Eigen::VectorXd& r,
-                double& score, double& p) {
-  const double n = static_cast<double>(r.size());
-  auto rssOf = [&](const Eigen::MatrixXd& X) {
-    const Eigen::VectorXd b = X.colPivHouseholderQr().solve(r);
-    return (r - X * b).squaredNorm();
-  };
-  const double rss0 = rssOf(X0);
-  const double rss1 = rssOf(X1);
-  const double q = static_cast<double>(X1.cols() - X0.cols());
-  const double dof = n - static_cast<double>(X1.cols());
-  // The fraction of the residual explained, penalised for the variable's degrees of freedom the
-  // way BIC is (1 - exp(dBIC / n)): a variable with many levels (run) does not outrank one
-  // with few (motor) that explains as much.
-  score = rss0 > 0 ? std::max(0.0, 1.0 - (rss1 / rss0) * std::exp(q * std::log(n) / n)) : 0.0;
-  if (dof <= 0 || q <= 0 || rss1 <= 0) {
-    p = rss1 <= 0 && rss0 > 0 ? 0.0 : 1.0;
-    return;
+// Catalogue effects that use this variable, in the order to try them.
+std::vector<std::string> trialsFor(const std::string& var, const ModelSpec& spec, const Dataset& data) {
+  const std::string v = lowerCopy(var);
+  std::vector<std::string> want;
+  if (v == "pwm_us") want = {"deadband"};
+  else if (v == "vbat_v") want = {"voltage"};
+  else if (v == "current_a") want = {spec.has("voltage") ? "sag" : "voltage+sag"};
+  else if (v == "t_s") want = {"drift", "lag"};
+  else if (v == "temp_c") want = {"thermal"};
+  else if (v == "rho_kg_m3") want = {"density"};  // pressure alone: probed (rho is the physics)
+  else if (v == "motor") want = {"motor"};
+  else if (v == "dir" || v == "dpwm_us") want = {"lag"};
+  std::vector<std::string> out;
+  for (const auto& w : want) {
+    const ModelSpec e = parseSpec(w);
+    bool fresh = false;
+    for (const auto& name : e.effects) fresh = fresh || !spec.has(name);
+    if (fresh && !(spec.has("thesis") && (w.find("voltage") != std::string::npos || w == "sag" || w == "deadband")))
+      out.push_back(w);
   }
-  const double F = ((rss0 - rss1) / q) / (rss1 / dof);
-  p = fSurvival(F, q, dof);
+  (void)data;
+  return out;
 }
 
 }  // namespace
@@ -119,94 +122,71 @@ bool isOutcome(const std::string& name) {
 std::vector<Suspect> rankVariables(const Dataset& data, const FitResult& fit, const ModelSpec& spec) {
   std::vector<std::pair<std::string, std::vector<double>>> candidates;
   for (std::size_t c = 0; c < data.names.size(); ++c)
-    if (data.names[c] != "force_g" && data.names[c] != "run") candidates.emplace_back(data.names[c], data.columns[c]);
-  if (data.runs() > 1) {
+    if (data.names[c] != "force_g") candidates.emplace_back(data.names[c], data.columns[c]);
+  Dataset work = data;
+  if (data.runs() > 1 && !data.has("run")) {
     std::vector<double> run(data.run.begin(), data.run.end());
+    work.set("run", run);
     candidates.emplace_back("run", run);
   }
-  const Eigen::Index n_all = static_cast<Eigen::Index>(data.rows());
-  double fscale = 0;
-  for (double v : fit.predicted_g)
-    if (std::isfinite(v)) fscale = std::max(fscale, std::abs(v));
-  if (fscale <= 0) fscale = 1;
-
+  const double n = static_cast<double>(fit.n);
   std::vector<Suspect> out;
   for (const auto& [name, z] : candidates) {
-    std::vector<Eigen::Index> rows;
-    for (Eigen::Index i = 0; i < n_all; ++i)
-      if (std::isfinite(z[static_cast<std::size_t>(i)]) && std::isfinite(fit.residual_g[static_cast<std::size_t>(i)]))
-        rows.push_back(i);
-    if (rows.size() < 12) continue;
     std::set<double> distinct;
-    bool integral = true;
+    bool integral = true, complete = true;
     double sum = 0;
-    for (auto i : rows) {
-      const double v = z[static_cast<std::size_t>(i)];
+    for (double v : z) {
+      if (!std::isfinite(v)) { complete = false; continue; }
       if (distinct.size() <= 17) distinct.insert(v);
       integral = integral && v == std::round(v);
       sum += v;
     }
-    if (distinct.size() < 2) continue;
-    const Eigen::Index n = static_cast<Eigen::Index>(rows.size());
-    const double mean = sum / static_cast<double>(n);
-    Eigen::VectorXd r(n), f(n), zz(n);
-    for (Eigen::Index k = 0; k < n; ++k) {
-      const auto i = static_cast<std::size_t>(rows[static_cast<std::size_t>(k)]);
-      r[k] = fit.residual_g[i];
-      f[k] = fit.predicted_g[i] / fscale;
-      zz[k] = z[i];
-    }
+    if (distinct.size() < 2 || !complete) continue;
     Suspect s;
     s.variable = name;
     s.outcome = isOutcome(name);
-    const bool categorical = (integral && distinct.size() <= 16) || distinct.size() <= 3;
-    s.categorical = categorical;
-    Eigen::MatrixXd X0(n, 2);
-    X0.col(0).setOnes();
-    X0.col(1) = f;
-    Eigen::MatrixXd X1;
-    if (categorical) {
-      // per level its own offset and its own gain on the predicted force
-      std::vector<double> levels(distinct.begin(), distinct.end());
-      const Eigen::Index g = static_cast<Eigen::Index>(levels.size());
-      if (n < 3 * g) continue;
-      X1.resize(n, 3 * g);
-      X1.setZero();
-      for (Eigen::Index k = 0; k < n; ++k) {
-        const auto li = std::lower_bound(levels.begin(), levels.end(), zz[k]) - levels.begin();
-        X1(k, li) = 1;
-        X1(k, g + li) = f[k];
-        X1(k, 2 * g + li) = f[k] * f[k];
-      }
-    } else {
-      double var = 0;
-      for (Eigen::Index k = 0; k < n; ++k) var += (zz[k] - mean) * (zz[k] - mean);
-      const double sd = std::sqrt(var / static_cast<double>(n));
-      if (!(sd > 0)) continue;
-      const Eigen::VectorXd u = (zz.array() - mean) / sd;
-      // additive (cubic in z) and multiplicative (force times quadratic in z) dependence
-      // r ~ A(z) + f B(z) + f^2 C(z): additive (cubic), multiplicative (quadratic) and a
-      // multiplicative part that grows with the force (linear)
-      X1.resize(n, 8);
-      X1.col(0).setOnes();
-      X1.col(1) = f;
-      X1.col(2) = u;
-      X1.col(3) = u.cwiseProduct(u);
-      X1.col(4) = X1.col(3).cwiseProduct(u);
-      X1.col(5) = f.cwiseProduct(u);
-      X1.col(6) = f.cwiseProduct(X1.col(3));
-      X1.col(7) = f.cwiseProduct(f).cwiseProduct(u);
-    }
-    nestedTest(X0, X1, r, s.score, s.p_value);
-    const Advice a = adviceFor(name, mean, spec);
+    s.categorical = (integral && distinct.size() <= 16) || distinct.size() <= 3;
+    const Advice a = adviceFor(name, sum / static_cast<double>(z.size()), spec);
     s.effects = a.effects;
     s.advice = a.words;
+    // The added-variable fit: refit the model with the effect this variable points to (or a
+    // generic factor in it) and see how much of the residual goes away.
+    std::vector<ModelSpec> trials;
+    for (const auto& t : trialsFor(name, spec, data)) trials.push_back(combine(spec, parseSpec(t)));
+    // pwm_us is the curve's own input: once the catalogue's PWM effects are in, a generic
+    // factor in it would only reshape the curve, so it is not probed.
+    if (lowerCopy(name) != "pwm_us") {
+      ModelSpec probe = spec;
+      probe.probes.push_back({name, s.categorical});
+      trials.push_back(probe);
+    }
+    bool done = s.outcome;  // the motor's response: not refitted, not ranked
+    for (const auto& t : trials) {
+      if (done) break;
+      try {
+        const FitResult r = fitModel(work, t, &fit.params);
+        if (!std::isfinite(r.rss)) continue;
+        const double dk = std::max(1, r.k - fit.k);
+        s.score = fit.rss > 0 ? std::max(0.0, 1.0 - (r.rss / fit.rss) * std::exp(dk * std::log(n) / n)) : 0.0;
+        const double dof = n - r.k;
+        if (r.rss > 0 && dof > 0 && fit.rss > r.rss)
+          s.p_value = fSurvival(((fit.rss - r.rss) / dk) / (r.rss / dof), dk, dof);
+        else
+          s.p_value = fit.rss > r.rss ? 0.0 : 1.0;
+        done = true;
+      } catch (const std::exception&) {
+        // this effect cannot be built on these data (a missing column): try the next
+      }
+    }
     out.push_back(s);
   }
   const double alpha = 1e-3 / std::max<std::size_t>(out.size(), 1);
   for (auto& s : out) s.significant = s.p_value < alpha && s.score >= 0.01 && !s.outcome;
+  // Physical variables first; `run` (which file or sweep) is a catch-all, listed after them.
   std::stable_sort(out.begin(), out.end(), [](const Suspect& a, const Suspect& b) {
     if (a.significant != b.significant) return a.significant;
+    const bool ar = a.variable == "run", br = b.variable == "run";
+    if (ar != br) return br;
     return a.score > b.score;
   });
   return out;
@@ -295,7 +275,7 @@ std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,
       spec = combine(spec, parseSpec(adds[s - 1]));
     }
     step.spec = spec;
-    step.fit = fitModel(data, spec);
+    step.fit = fitModel(data, spec, steps.empty() ? nullptr : &steps.back().fit.params);
     step.variables = rankVariables(data, step.fit, spec);
     step.holdout_rmse_g = holdoutRmse(data, spec, holdout);
     if (!steps.empty()) {

@@ -429,6 +429,15 @@ Dataset parseText(const std::string& text_in, const std::string& file, const Rea
       }
     }
     out.set(m.target, std::move(v));
+    // A mapping to a known column is a renaming: the source must not reappear as a candidate
+    // variable (the measured force above all).
+    static const std::set<std::string> kKnown = {"t_s", "motor", "pwm_us", "force_g", "vbat_v",
+                                                 "current_a", "rpm", "temp_c", "dir"};
+    if (kKnown.count(m.target) && out.names[static_cast<std::size_t>(src)] != m.target) {
+      out.notes.push_back(fmt::format("{}: column '{}' became {}", file, out.names[static_cast<std::size_t>(src)], m.target));
+      out.names.erase(out.names.begin() + src);
+      out.columns.erase(out.columns.begin() + src);
+    }
   }
 
   // 6. Required cells present.

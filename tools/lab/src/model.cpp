@@ -62,10 +62,10 @@ const std::vector<EffectInfo> kCatalogue = {
      "proportion to the time since the first sample.",
      "t_s", "drift_g_per_min [g/min]: offset change rate"},
     {"lag",
-     "First-order motor dynamics: the speed follows the command with a time constant, so up and "
-     "down sweeps differ (hysteresis). With t_s the drive is low-pass filtered per run; without "
-     "t_s but with dir, the up and down sweeps are shifted by a PWM hysteresis.",
-     "t_s (or dir)", "tau_s [s]: speed time constant | hyst_us [us]: half the up/down PWM shift"},
+     "First-order motor dynamics (and a slow load cell): the measured force follows the command "
+     "with a time constant, so up and down sweeps differ (hysteresis). The drive is low-pass "
+     "filtered per run in logging order, by t_s, or by sample count when there is no t_s.",
+     "t_s (optional)", "tau_s [s]: time constant | tau_samples [samples]: without t_s"},
     {"thermal",
      "Temperature of the motor: copper resistance +0.39 %/K and magnets -0.1 %/K change the "
      "force at a given command; a linear factor around the mean temperature.",
@@ -243,6 +243,17 @@ ModelSpec combine(const ModelSpec& base, const ModelSpec& more) {
 }
 
 void addDerivedColumns(Dataset& data) {
+  if (data.has("pwm_us") && !data.has("dpwm_us")) {
+    const auto& pwm = data.col("pwm_us");
+    std::vector<double> d(data.rows(), 0.0);
+    std::map<int, std::size_t> last;
+    for (std::size_t i = 0; i < data.rows(); ++i) {
+      auto it = last.find(data.run[i]);
+      if (it != last.end()) d[i] = pwm[i] - pwm[it->second];
+      last[data.run[i]] = i;
+    }
+    data.set("dpwm_us", std::move(d));
+  }
   double to_pa = 1;
   const int p = pressureColumn(data, to_pa);
   if (p >= 0 && data.has("temp_c") && !data.has("rho_kg_m3")) {
@@ -260,6 +271,7 @@ struct Model::Impl {
   struct ParamDef {
     std::string name, unit, effect;
     double init, scale, lo, hi;
+    double neutral = std::numeric_limits<double>::quiet_NaN();  // value that switches it off
   };
   struct UserExpr {
     bool mul;
@@ -282,6 +294,7 @@ struct Model::Impl {
     std::vector<int> motor_index;  // -1: not a training motor
     const std::vector<int>* run = nullptr;
     std::vector<std::vector<const std::vector<double>*>> user_columns;
+    std::vector<const std::vector<double>*> probe_columns;
     std::vector<double> thesis_start;  // per row: motor calibration index
   };
 
@@ -290,9 +303,10 @@ struct Model::Impl {
   std::vector<ParamDef> defs;
   std::vector<UserExpr> users;
   bool thesis = false;
-  int i_start = -1, i_gamma = -1, i_rsag = -1, i_sagrel = -1, i_tau = -1, i_hyst = -1,
+  bool lag_in_samples = false;
+  int i_start = -1, i_gamma = -1, i_rsag = -1, i_sagrel = -1, i_tau = -1,
       i_motor0 = -1, i_motorkv0 = -1, i_drift = -1, i_thermal = -1, i_beta = -1;
-  double pmin = 0, span = 1, vref = 1, t0 = 0, temp0 = 25, rho0 = 1.2, dir_mid = 0, xtop = 1;
+  double pmin = 0, span = 1, vref = 1, t0 = 0, temp0 = 25, rho0 = 1.2, xtop = 1;
   std::vector<double> knots;  // clamped B-spline knots of the curve on [0, 1]
   std::vector<long> motors;  // training motor ids, index 0 = reference
   std::vector<tc::MotorCalibration> cals;
@@ -320,8 +334,9 @@ struct Model::Impl {
   }
 
   int addParam(const std::string& name, const std::string& unit, const std::string& effect,
-               double init, double scale, double lo = -1e300, double hi = 1e300) {
-    defs.push_back({name, unit, effect, init, scale, lo, hi});
+               double init, double scale, double lo = -1e300, double hi = 1e300,
+               double neutral = 0.0) {
+    defs.push_back({name, unit, effect, init, scale, lo, hi, neutral});
     return static_cast<int>(defs.size()) - 1;
   }
 
@@ -363,10 +378,10 @@ struct Model::Impl {
           if (p.second > 0.03 * fmax) break;
           start = p.first;
         }
-        i_start = addParam("pwm_start_us", "us", e, start, 0.01 * span, pmin - 0.05 * span, pmax);
+        i_start = addParam("pwm_start_us", "us", e, start, 0.01 * span, pmin - 0.05 * span, pmax, kNaN);
       } else if (e == "voltage") {
         require(e, "vbat_v");
-        i_gamma = addParam("gamma", "1", e, 1.0, 0.1, 0.05, 5.0);
+        i_gamma = addParam("gamma", "1", e, 1.0, 0.1, 0.0, 5.0);
       } else if (e == "sag") {
         require(e, "vbat_v");
         if (usable(train, "current_a"))
@@ -375,13 +390,11 @@ struct Model::Impl {
           i_sagrel = addParam("sag_full", "1", e, 0.02, 0.02, 0.0, 0.9);
       } else if (e == "lag") {
         if (usable(train, "t_s")) {
-          i_tau = addParam("tau_s", "s", e, 0.05, 0.02, 1e-4, 100.0);
-        } else if (usable(train, "dir")) {
-          i_hyst = addParam("hyst_us", "us", e, 0.0, 0.005 * span);
-          const auto& d = train.col("dir");
-          dir_mid = (*std::min_element(d.begin(), d.end()) + *std::max_element(d.begin(), d.end())) / 2;
+          i_tau = addParam("tau_s", "s", e, 0.05, 0.02, 1e-4, 100.0, 1e-4);
         } else {
-          throw std::invalid_argument("effect `lag` needs t_s (time of each sample) or dir (sweep direction)");
+          // no time column: the rows are taken as equally spaced samples in logging order
+          lag_in_samples = true;
+          i_tau = addParam("tau_samples", "samples", e, 1.0, 0.5, 1e-3, 1000.0, 1e-3);
         }
       } else if (e == "motor") {
         require(e, "motor");
@@ -418,11 +431,12 @@ struct Model::Impl {
         double s = 0;
         for (double v : r) s += v;
         rho0 = s / static_cast<double>(r.size());
-        i_beta = addParam("beta", "1", e, 1.0, 0.2, -5.0, 5.0);
+        i_beta = addParam("beta", "1", e, 1.0, 0.2, -5.0, 5.0, 0.0);
         addParam("beta_drive", "1", e, 0.0, 0.2, -5.0, 5.0);
       }
     }
     for (const auto& u : spec.user) setupUser(u);
+    for (const auto& pr : spec.probes) setupProbe(pr);
     if (thesis) buildThesis();
     train_bound = bind(train);
     y = Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
@@ -452,6 +466,44 @@ struct Model::Impl {
       }
       for (int k = 0; k <= kSplineDegree; ++k) knots.push_back(1.0);
     }
+  }
+
+  struct ProbeDef {
+    std::string column;
+    bool categorical;
+    double mean = 0, sd = 1;
+    std::vector<double> levels;
+    int first_param = -1;
+  };
+  std::vector<ProbeDef> probes;
+
+  void setupProbe(const Probe& pr) {
+    if (!train.has(pr.column)) throw std::invalid_argument("probe: no column " + pr.column);
+    ProbeDef d;
+    d.column = pr.column;
+    d.categorical = pr.categorical;
+    const auto& z = train.col(pr.column);
+    if (pr.categorical) {
+      std::set<double> lv;
+      for (double v : z)
+        if (std::isfinite(v)) lv.insert(v);
+      d.levels.assign(lv.begin(), lv.end());
+      for (std::size_t k = 1; k < d.levels.size(); ++k) {
+        const int idx = addParam(fmt::format("gain_{}_{:g}", pr.column, d.levels[k]), "1", "probe", 0.0, 0.02, -0.9, 10.0);
+        if (k == 1) d.first_param = idx;
+      }
+    } else {
+      double s = 0, s2 = 0;
+      std::size_t n = 0;
+      for (double v : z)
+        if (std::isfinite(v)) { s += v; s2 += v * v; ++n; }
+      d.mean = n ? s / static_cast<double>(n) : 0;
+      d.sd = n ? std::sqrt(std::max(s2 / static_cast<double>(n) - d.mean * d.mean, 0.0)) : 1;
+      if (!(d.sd > 0)) d.sd = 1;
+      d.first_param = addParam(fmt::format("{}_lin", pr.column), "1/sd", "probe", 0.0, 0.01);
+      addParam(fmt::format("{}_quad", pr.column), "1/sd^2", "probe", 0.0, 0.01);
+    }
+    probes.push_back(d);
   }
 
   void setupUser(const UserEffect& u) {
@@ -637,6 +689,7 @@ struct Model::Impl {
         b.motor_index[i] = it == ids.end() ? -1 : static_cast<int>(it - ids.begin());
       }
     }
+    for (const auto& pd : probes) b.probe_columns.push_back(&d.col(pd.column));
     for (const auto& u : users) {
       std::vector<const std::vector<double>*> cols;
       for (const auto& c : u.columns) {
@@ -669,9 +722,8 @@ struct Model::Impl {
     return std::max(v, 1e-3 * vref);
   }
 
-  double pwmEffective(const Bound& b, const Eigen::VectorXd& th, std::size_t i) const {
+  double pwmEffective(const Bound& b, const Eigen::VectorXd&, std::size_t i) const {
     double pw = (*b.pwm)[i];
-    if (i_hyst >= 0 && b.dir) pw -= p(th, i_hyst) * (((*b.dir)[i] > dir_mid) ? 1.0 : -1.0);
     return pw;
   }
 
@@ -702,19 +754,21 @@ struct Model::Impl {
 
   // First-order low-pass per run in row order (the order the samples were logged).
   void lowPass(const Bound& b, double tau, std::vector<double>& x) const {
-    std::map<int, std::pair<std::size_t, double>> last;  // run -> (row, filtered)
+    std::vector<long> last_row;     // per run: last row seen (-1: none)
+    std::vector<double> last_x;
+    const bool by_time = !lag_in_samples && b.t;
     for (std::size_t i = 0; i < b.n; ++i) {
-      const int r = (*b.run)[i];
-      auto it = last.find(r);
-      if (it == last.end() || !b.t) {
-        last[r] = {i, x[i]};
-        continue;
+      const auto r = static_cast<std::size_t>(std::max((*b.run)[i], 0));
+      if (r >= last_row.size()) {
+        last_row.resize(r + 1, -1);
+        last_x.resize(r + 1, 0.0);
       }
-      const double dt = (*b.t)[i] - (*b.t)[it->second.first];
-      double xf = x[i];
-      if (dt > 0 && std::isfinite(dt)) xf = it->second.second + (1 - std::exp(-dt / tau)) * (x[i] - it->second.second);
-      it->second = {i, xf};
-      x[i] = xf;
+      if (last_row[r] >= 0) {
+        const double dt = by_time ? (*b.t)[i] - (*b.t)[static_cast<std::size_t>(last_row[r])] : 1.0;
+        if (dt > 0 && std::isfinite(dt)) x[i] = last_x[r] + (1 - std::exp(-dt / tau)) * (x[i] - last_x[r]);
+      }
+      last_row[r] = static_cast<long>(i);
+      last_x[r] = x[i];
     }
   }
 
@@ -733,6 +787,22 @@ struct Model::Impl {
         // (F ~ rho), at high drive the winding resistance lets the motor slow down
         const double beta = p(th, i_beta) + p(th, i_beta + 1) * std::clamp(x[i] / xtop, 0.0, 1.0);
         mul[r] *= std::pow(std::max((*b.rho)[i], 1e-6) / rho0, beta);
+      }
+    }
+    for (std::size_t pi = 0; pi < probes.size(); ++pi) {
+      const auto& pd = probes[pi];
+      const auto& z = *b.probe_columns[pi];
+      for (std::size_t i = 0; i < b.n; ++i) {
+        const auto r = static_cast<Eigen::Index>(i);
+        if (pd.first_param < 0 || !std::isfinite(z[i])) continue;
+        if (pd.categorical) {
+          const auto it = std::find(pd.levels.begin(), pd.levels.end(), z[i]);
+          const long li = it - pd.levels.begin();
+          if (it != pd.levels.end() && li > 0) mul[r] *= 1.0 + p(th, pd.first_param + static_cast<int>(li) - 1);
+        } else {
+          const double u = (z[i] - pd.mean) / pd.sd;
+          mul[r] *= 1.0 + th[pd.first_param] * u + th[pd.first_param + 1] * u * u;
+        }
       }
     }
     for (std::size_t u = 0; u < users.size(); ++u) {
@@ -828,7 +898,7 @@ struct Model::Impl {
     }
   };
 
-  FitResult fit() {
+  FitResult fit(const std::vector<Param>* warm) {
     FitResult r;
     r.model = spec.text();
     const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
@@ -850,18 +920,47 @@ struct Model::Impl {
     if (np > 0) {
       Eigen::VectorXd sc(np);
       for (Eigen::Index i = 0; i < np; ++i) sc[i] = defs[static_cast<std::size_t>(i)].scale;
-      for (Eigen::Index i = 0; i < np; ++i) defs[static_cast<std::size_t>(i)].init = theta[i];
-      Functor fn(this, theta, sc);
-      Eigen::LevenbergMarquardt<Functor> lm(fn);
-      lm.setMaxfev(400 * static_cast<int>(np + 1));
-      lm.setXtol(1e-10);
-      lm.setFtol(1e-12);
-      Eigen::VectorXd z = Eigen::VectorXd::Zero(np);
-      const auto status = lm.minimize(z);
-      if (status == Eigen::LevenbergMarquardtSpace::ImproperInputParameters)
-        r.warnings.push_back("the fit could not start (improper input)");
-      theta = fn.theta(z);
-      for (Eigen::Index i = 0; i < np; ++i) theta[i] = p(theta, static_cast<int>(i));
+      auto runLm = [&](const Eigen::VectorXd& start, double& rss) {
+        Functor fn(this, start, sc);
+        Eigen::LevenbergMarquardt<Functor> lm(fn);
+        lm.setMaxfev(200 * static_cast<int>(np + 1));
+        lm.setXtol(1e-8);
+        lm.setFtol(1e-9);
+        Eigen::VectorXd z = Eigen::VectorXd::Zero(np);
+        const auto status = lm.minimize(z);
+        if (status == Eigen::LevenbergMarquardtSpace::ImproperInputParameters)
+          r.warnings.push_back("the fit could not start (improper input)");
+        Eigen::VectorXd th = fn.theta(z);
+        for (Eigen::Index i = 0; i < np; ++i) th[i] = p(th, static_cast<int>(i));
+        Eigen::VectorXd c;
+        rss = (y - predictWith(train_bound, th, c, true, &y)).squaredNorm();
+        if (!std::isfinite(rss)) rss = std::numeric_limits<double>::infinity();
+        return th;
+      };
+      double rss_cold = 0;
+      Eigen::VectorXd best = runLm(theta, rss_cold);
+      if (warm && !warm->empty()) {
+        // Warm start from a smaller model's fit, the new parameters switched off: a model with
+        // an added effect then never fits worse than the one without it.
+        Eigen::VectorXd start = theta;
+        bool any = false;
+        for (Eigen::Index i = 0; i < np; ++i) {
+          const auto& d = defs[static_cast<std::size_t>(i)];
+          bool found = false;
+          for (const auto& w : *warm)
+            if (w.name == d.name && w.effect == d.effect && std::isfinite(w.value)) {
+              start[i] = w.value;
+              found = any = true;
+            }
+          if (!found && std::isfinite(d.neutral)) start[i] = d.neutral;
+        }
+        if (any || start != theta) {
+          double rss_warm = 0;
+          const Eigen::VectorXd th = runLm(start, rss_warm);
+          if (rss_warm < rss_cold) best = th;
+        }
+      }
+      theta = best;
     }
     const Eigen::VectorXd pred = predictWith(train_bound, theta, coef, true, &y);
     fitted = true;
@@ -954,12 +1053,12 @@ struct Model::Impl {
 
 Model::Model(const ModelSpec& spec, const Dataset& train) : impl_(std::make_unique<Impl>(spec, train)) {}
 Model::~Model() = default;
-FitResult Model::fit() { return impl_->fit(); }
+FitResult Model::fit(const std::vector<Param>* warm) { return impl_->fit(warm); }
 std::vector<double> Model::predict(const Dataset& data) const { return impl_->predict(data); }
 
-FitResult fitModel(const Dataset& data, const ModelSpec& spec) {
+FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm) {
   Model m(spec, data);
-  return m.fit();
+  return m.fit(warm);
 }
 
 }  // namespace lab

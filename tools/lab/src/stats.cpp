@@ -7,12 +7,21 @@ namespace lab {
 
 Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b,
                      const std::vector<bool>& nonneg) {
+  // Lawson-Hanson on the normal equations: the n x k matrix is touched once (A^T A, A^T b);
+  // the active-set iterations then solve k x k systems. Columns are scaled to unit norm first.
   const Eigen::Index n = A.cols();
+  Eigen::VectorXd scale(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double norm = A.col(j).norm();
+    scale[j] = norm > 0 ? 1.0 / norm : 0.0;
+  }
+  const Eigen::MatrixXd G = scale.asDiagonal() * (A.transpose() * A) * scale.asDiagonal();
+  const Eigen::VectorXd h = scale.asDiagonal() * (A.transpose() * b);
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
   std::vector<bool> passive(static_cast<std::size_t>(n), false);
+  auto usable = [&](Eigen::Index j) { return scale[j] > 0; };
   for (Eigen::Index j = 0; j < n; ++j)
-    if (!nonneg[static_cast<std::size_t>(j)] && A.col(j).squaredNorm() > 0)
-      passive[static_cast<std::size_t>(j)] = true;
+    if (!nonneg[static_cast<std::size_t>(j)] && usable(j)) passive[static_cast<std::size_t>(j)] = true;
 
   auto solvePassive = [&](Eigen::VectorXd& z) {
     std::vector<Eigen::Index> idx;
@@ -20,22 +29,29 @@ Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b,
       if (passive[static_cast<std::size_t>(j)]) idx.push_back(j);
     z = Eigen::VectorXd::Zero(n);
     if (idx.empty()) return;
-    Eigen::MatrixXd Ap(A.rows(), static_cast<Eigen::Index>(idx.size()));
-    for (std::size_t k = 0; k < idx.size(); ++k) Ap.col(static_cast<Eigen::Index>(k)) = A.col(idx[k]);
-    const Eigen::VectorXd zp = Ap.colPivHouseholderQr().solve(b);
-    for (std::size_t k = 0; k < idx.size(); ++k) z[idx[k]] = zp[static_cast<Eigen::Index>(k)];
+    const Eigen::Index m = static_cast<Eigen::Index>(idx.size());
+    Eigen::MatrixXd Gp(m, m);
+    Eigen::VectorXd hp(m);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      hp[a] = h[idx[static_cast<std::size_t>(a)]];
+      for (Eigen::Index c = 0; c < m; ++c) Gp(a, c) = G(idx[static_cast<std::size_t>(a)], idx[static_cast<std::size_t>(c)]);
+    }
+    // a tiny ridge keeps nearly collinear spline columns solvable
+    Gp.diagonal().array() += 1e-12;
+    const Eigen::VectorXd zp = Gp.ldlt().solve(hp);
+    for (Eigen::Index a = 0; a < m; ++a) z[idx[static_cast<std::size_t>(a)]] = zp[a];
   };
 
   Eigen::VectorXd z;
   solvePassive(z);
   x = z;
-  const double tol = 1e-10 * (A.norm() * b.norm() + 1e-300);
+  const double tol = 1e-12 * (h.norm() + 1e-300);
   for (int outer = 0; outer < 3 * n + 10; ++outer) {
-    const Eigen::VectorXd w = A.transpose() * (b - A * x);
+    const Eigen::VectorXd w = h - G * x;
     Eigen::Index best = -1;
     double best_w = tol;
     for (Eigen::Index j = 0; j < n; ++j) {
-      if (passive[static_cast<std::size_t>(j)] || A.col(j).squaredNorm() == 0) continue;
+      if (passive[static_cast<std::size_t>(j)] || !usable(j)) continue;
       if (w[j] > best_w) { best_w = w[j]; best = j; }
     }
     if (best < 0) break;
@@ -63,8 +79,10 @@ Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b,
       }
     }
   }
-  for (Eigen::Index j = 0; j < n; ++j)
+  for (Eigen::Index j = 0; j < n; ++j) {
     if (nonneg[static_cast<std::size_t>(j)] && x[j] < 0) x[j] = 0;
+    x[j] *= scale[j];
+  }
   return x;
 }
 

@@ -33,9 +33,18 @@ struct UserEffect {
   std::string expression;
 };
 
+// A generic multiplicative factor in one column, used by the diagnosis to ask "how much would
+// an effect in this variable help?": 1 + a*u + b*u^2 (u the standardised column), or a gain
+// per level for a categorical column.
+struct Probe {
+  std::string column;
+  bool categorical = false;
+};
+
 struct ModelSpec {
   std::vector<std::string> effects;  // catalogue names, in order
   std::vector<UserEffect> user;
+  std::vector<Probe> probes;
   bool has(const std::string& effect) const;
   std::string text() const;  // "curve+deadband+voltage+mul: 1 + a*(temp_c-25)"
 };
@@ -80,7 +89,9 @@ class Model {
   Model(const Model&) = delete;
   Model& operator=(const Model&) = delete;
 
-  FitResult fit();
+  // `warm`: parameters of a smaller model; the fit also starts from them (new effects switched
+  // off) and keeps the better of the two starts.
+  FitResult fit(const std::vector<Param>* warm = nullptr);
   // Prediction of the fitted model on other data (same columns needed). NaN where it cannot.
   std::vector<double> predict(const Dataset& data) const;
 
@@ -90,9 +101,10 @@ class Model {
 };
 
 // Fits `spec` on `data`.
-FitResult fitModel(const Dataset& data, const ModelSpec& spec);
+FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm = nullptr);
 
-// Adds derived candidate columns: rho_kg_m3 (from temp_c and a pressure column).
+// Adds derived candidate columns: rho_kg_m3 (from temp_c and a pressure column) and dpwm_us
+// (the PWM step from the previous sample of the same run: what a lag responds to).
 void addDerivedColumns(Dataset& data);
 
 }  // namespace lab
