@@ -42,8 +42,8 @@ inline sim::GatherOptions fleetGatherOptions() {
   o.elf_path = imagePath("gather_store");
   o.seeds.assign(kFleetSeeds.begin(), kFleetSeeds.end());
   o.slots = {0, 1, 2, 3};
-  o.step_us = 10;
-  o.settle_ms = 500;  // the bench's 3rd-order low-pass settles to < 0.01 % (200 ms: ~1 %)
+  // sweep 1040..1800 us in 10 us steps, 500 ms settling: the scenario defaults (see
+  // sim::GatherOptions for why they differ from gather_store's own 1000..1800 / 200 ms)
   o.progress = [](const std::string&) {};
   return o;
 }
@@ -55,13 +55,15 @@ inline uint64_t fileHash(const std::string& path) {
   return std::hash<std::string>{}(s.str());
 }
 
-// EEPROM with all four fleet motors calibrated by the real gather_store. Gathered once per
-// gather_store build and cached next to the test binary (ctest runs each test in its own
-// process); a different image or a damaged cache file means a fresh gather.
+// EEPROM with all four fleet motors calibrated by the real gather_store. Gathered once and
+// cached next to the test binary (ctest runs each test in its own process), keyed by the
+// gather_store image and this test binary (which holds the plant and the scenario settings):
+// a change to either, or a damaged cache file, means a fresh gather.
 inline std::vector<uint8_t> fleetEeprom() {
   const std::string elf = imagePath("gather_store");
+  const uint64_t key = fileHash(elf) * 31 + fileHash("/proc/self/exe");
   const fs::path cache = fs::path(HIL_CACHE_DIR) /
-                         ("thrustcal_hil_fleet_" + std::to_string(fileHash(elf)) + ".hex");
+                         ("thrustcal_hil_fleet_" + std::to_string(key) + ".hex");
   if (fs::exists(cache)) {
     try {
       return sim::readIntelHexFile(cache.string(), sim::kEepromBytes);

@@ -91,7 +91,10 @@ TEST_P(ReadRunCommands, OnlyTheCommandedMotorProducesTheCommandedForce) {
 
 INSTANTIATE_TEST_SUITE_P(Table, ReadRunCommands,
                          ::testing::Values(MotorCommand{0, 150}, MotorCommand{1, 300},
-                                           MotorCommand{2, 350}, MotorCommand{3, 100}));
+                                           MotorCommand{2, 350}, MotorCommand{3, 100}),
+                         [](const ::testing::TestParamInfo<MotorCommand>& info) {
+                           return fmt::format("motor{}_{}g", info.param.motor, info.param.grams);
+                         });
 
 TEST_F(ReadRunQuad, FailsafeStopsEveryMotorHalfASecondAfterTheLastLine) {
   HIL_REQUIRE_IMAGE("read_run");
@@ -208,6 +211,9 @@ TEST_P(BatteryCompensation, HoldsThreeHundredGramsWithinFourPercent) {
                                     << rig.bench.busVoltage_v() << " V";
 }
 
-INSTANTIATE_TEST_SUITE_P(Table, BatteryCompensation, ::testing::Values(1.0, 0.7, 0.4, 0.2));
+INSTANTIATE_TEST_SUITE_P(Table, BatteryCompensation, ::testing::Values(1.0, 0.7, 0.4, 0.2),
+                         [](const ::testing::TestParamInfo<double>& info) {
+                           return fmt::format("charge{:.0f}pct", info.param * 100);
+                         });
 
 }  // namespace

@@ -44,7 +44,10 @@ TEST_P(ProbePulses, EscPulseWidthIsMeasuredFromPinEdgesWithinOneTick) {
 
 INSTANTIATE_TEST_SUITE_P(Table, ProbePulses,
                          ::testing::Values(PulseCase{0, 1000}, PulseCase{1, 1234}, PulseCase{2, 1680},
-                                           PulseCase{3, 2000}));
+                                           PulseCase{3, 2000}),
+                         [](const ::testing::TestParamInfo<PulseCase>& info) {
+                           return fmt::format("esc{}_{}us", info.param.channel, info.param.set_us);
+                         });
 
 TEST_F(ProbeBoard, PulseListenersHearEveryFrame) {
   int pulses = 0;

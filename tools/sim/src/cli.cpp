@@ -92,9 +92,16 @@ void addGather(CLI::App& sim) {
                   "write gather_slotK_curve{1,2}.csv (the streamed sweeps + plant columns) and "
                   "gather_slotK_curves.csv (stored vs true PWM per gram)");
   cmd->add_option("--json", *json, "results as JSON (calibration.curve_error_max_g, sim.*)");
-  cmd->add_option("--range", *range, "sweep PWM range MIN MAX in us")->expected(2);
+  cmd->add_option("--range", *range,
+                  fmt::format("sweep PWM range MIN MAX in us (default {} {}: the 13 sag bins of "
+                              "40 us then span {}..{} us, where the motors fly)",
+                              o->pwm_min_us, o->pwm_max_us, o->pwm_min_us, o->pwm_min_us + 520))
+      ->expected(2);
   cmd->add_option("--step", o->step_us, "sweep step in us")->capture_default_str();
-  cmd->add_option("--settle", o->settle_ms, "settle time per step in ms")->capture_default_str();
+  cmd->add_option("--settle", o->settle_ms,
+                  "settle time per step in ms (thesis: 200, which leaves the bench's low-pass "
+                  "~1 % behind each step)")
+      ->capture_default_str();
   cmd->add_option("--second", *second, "curve 2 source: supply (bench supply) or drained (pack)")
       ->check(CLI::IsMember({"supply", "drained"}))
       ->capture_default_str();

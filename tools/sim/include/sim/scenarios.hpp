@@ -40,7 +40,14 @@ struct GatherOptions {
   std::vector<int> slots = {0};         // ... calibrated into this slot (same length)
   double variation = 0.03;              // plant::makeVaried spread
   std::vector<uint8_t> eeprom;          // starting image (empty: erased)
-  int pwm_min_us = 1000, pwm_max_us = 1800, step_us = 10, settle_ms = 200;
+  // Sweep. It starts at 1040 us (below the ESC's ~1100 us start: bin 0 reads the resting pack)
+  // so that gather_store's 13 sag bins of 40 us span 1040..1560 us, the band the motors fly
+  // in; everything above 1520 us lands in the last bin. Started at 1000 us the last bin
+  // (1480 us and up) averages the sag of the whole top of the sweep, and a motor flying near
+  // 1480 us limit-cycles between two offsets ~0.4 V apart (measured: lift-off spread 3 % instead
+  // of 0.7-1 %). Settle 500 ms: the bench's 3rd-order low-pass is then within 0.01 % of each
+  // step; the thesis's 200 ms leaves ~1 % (stored curves ~7 g off instead of ~3 g).
+  int pwm_min_us = 1040, pwm_max_us = 1800, step_us = 10, settle_ms = 500;
   SecondCurveSource second = SecondCurveSource::kBenchSupply;
   double supply_v = 10.0;               // bench supply for curve 2 (6.32 A limit)
   double drained_soc = 0.25;            // pack state of charge for curve 2 when drained
