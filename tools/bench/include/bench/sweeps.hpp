@@ -1,0 +1,43 @@
+// A calibration sweep as gather_store sees it, simulated on the plant's thesis bench without
+// the firmware: per PWM step the ESC holds the pulse for settle_ms, then the load cell is read
+// 201 times and the battery monitor 101 times through the plant's sensors (noise, ADC
+// quantization), the medians are converted with core/'s LoadCell (tared before the sweep) and
+// BatteryMonitor. What comes out is what gather_store streams: (pwm_us, force_dg, vbat_mv).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "plant/params.hpp"
+#include "plant/power_source.hpp"
+
+namespace bench {
+
+struct SweepSpec {
+  int pwm_min_us = 1000;
+  int pwm_max_us = 1800;
+  int step_us = 10;
+  int settle_ms = 200;
+  uint64_t noise_seed = 1;  // load cell and battery monitor noise
+};
+
+struct SweepPoint {
+  uint16_t pwm_us;
+  int16_t force_dg;  // tared load-cell reading, thrust positive
+  uint16_t vbat_mv;  // battery monitor reading (sagged under load)
+  double true_thrust_g;
+  double true_bus_v;
+};
+
+struct Sweep {
+  std::vector<SweepPoint> points;
+  double rest_v = 0;  // source resting voltage before the sweep
+  double simulated_s = 0;
+};
+
+// LiPo (3S) whose resting voltage is rest_v: state of charge from the OCV table.
+plant::BatteryParams lipoAt(double rest_v);
+
+Sweep simulateSweep(const plant::ActuatorParams& motor, const plant::BatteryParams& power,
+                    const SweepSpec& spec);
+
+}  // namespace bench

@@ -1,0 +1,100 @@
+#include "bench/cli.hpp"
+
+#include <chrono>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "bench/sections.hpp"
+
+namespace bench {
+
+namespace {
+
+struct Options {
+  std::string json_path;
+  AvrPaths paths;
+  bool quick = false;
+  int settle_ms = 0;  // 0: the benchmark's default
+};
+
+void emit(const std::vector<Section>& sections, const Options& o) {
+  nlohmann::json j;
+  for (const Section& s : sections) {
+    for (const Table& t : s.tables) t.print(std::cout);
+    j[s.key] = s.json;
+  }
+  std::cout.flush();
+  if (!o.json_path.empty()) {
+    std::ofstream f(o.json_path);
+    if (!f) throw std::runtime_error("cannot write " + o.json_path + ": check the directory exists");
+    f << j.dump(2) << '\n';
+    std::cout << "JSON written to " << o.json_path << '\n';
+  }
+}
+
+AccuracyConfig accuracyConfig(const Options& o) {
+  AccuracyConfig c;
+  if (o.quick) {
+    c.v_step = 0.3;
+    c.force_step_g = 50;
+  }
+  if (o.settle_ms > 0) c.sweep.settle_ms = o.settle_ms;
+  return c;
+}
+
+using Runner = std::function<std::vector<Section>(const Options&)>;
+
+void add(CLI::App& bench, const std::shared_ptr<Options>& o, const std::string& name,
+         const std::string& help, Runner run) {
+  CLI::App* sub = bench.add_subcommand(name, help);
+  sub->add_option("--json", o->json_path, "write the figures to this JSON file");
+  sub->add_flag("--quick", o->quick, "coarser grids and shorter runs (for a smoke test)");
+  sub->add_option("--avr-build", o->paths.avr_build,
+                  "AVR build tree holding firmware/{gather_store,read_run}/*.elf "
+                  "(default: <source>/build/avr)");
+  if (name == "accuracy" || name == "all")
+    sub->add_option("--settle-ms", o->settle_ms, "accuracy: settle time per sweep step (default 600)")
+        ->check(CLI::Range(20, 5000));
+  sub->callback([o, run] {
+    try {
+      emit(run(*o), *o);
+    } catch (const std::exception& e) {
+      std::cerr << "thrustcal bench: " << e.what() << '\n';
+      throw CLI::RuntimeError(1);
+    }
+  });
+}
+
+}  // namespace
+
+void registerCommands(CLI::App& app) {
+  CLI::App* bench = app.add_subcommand(
+      "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off; each "
+               "figure next to its target");
+  bench->require_subcommand(1);
+  auto o = std::make_shared<Options>();
+  add(*bench, o, "accuracy",
+      "force error of the uncalibrated map, thesis option 2.1, ArduPilot-style and v2 on four "
+      "varied motors over 100-450 g and 9.9-12.6 V",
+      [](const Options& o) { return std::vector<Section>{accuracySection(accuracyConfig(o))}; });
+  add(*bench, o, "compute",
+      "simulated ATmega2560 cycles for one four-motor update, thesis option 2.1 vs v2 (simavr)",
+      [](const Options& o) { return std::vector<Section>{computeSection(o.paths)}; });
+  add(*bench, o, "footprint",
+      "flash and static SRAM of gather_store and read_run (avr-size), SRAM of the four models, "
+      "EEPROM per motor",
+      [](const Options& o) { return std::vector<Section>{footprintSection(o.paths)}; });
+  add(*bench, o, "all", "every benchmark, in order, one JSON file",
+      [](const Options& o) {
+        std::vector<Section> all;
+        all.push_back(accuracySection(accuracyConfig(o)));
+        all.push_back(computeSection(o.paths));
+        all.push_back(footprintSection(o.paths));
+        return all;
+      });
+}
+
+}  // namespace bench
