@@ -308,6 +308,93 @@ void addConsole(CLI::App& sim) {
   });
 }
 
+void addFleet(CLI::App& sim) {
+  auto* cmd = sim.add_subcommand(
+      "fleet",
+      "The whole virtual-bench story in one run (what tools/demo.sh shows): calibrate four varied\n"
+      "motors into slots 0..3 with gather_store (both curves each), then fly the tethered\n"
+      "lift-off with read_run calibrated and uncalibrated. Writes into --out-dir:\n"
+      "  sim_summary.json   calibration.curve_error_max_g, calibration.motors[],\n"
+      "                     liftoff.{calibrated,uncalibrated}.{thrust_spread_pct,\n"
+      "                     force_error_rms_pct,hold_thrust_g,...}, sim.realtime_factor\n"
+      "  eeprom.hex         the calibrated EEPROM (avrdude -U eeprom:w:eeprom.hex:i)\n"
+      "  gather_slotK_curve1.csv, gather_slotK_curve2.csv   the streamed sweeps\n"
+      "  gather_slotK_curves.csv                            stored vs true PWM per gram\n"
+      "  liftoff_calibrated.csv, liftoff_uncalibrated.csv   10 ms time series");
+  auto g = std::make_shared<GatherOptions>();
+  auto l = std::make_shared<LiftoffOptions>();
+  auto out_dir = std::make_shared<std::string>("build/demo");
+  auto seeds = std::make_shared<std::vector<uint64_t>>(std::vector<uint64_t>{11, 12, 13, 14});
+  g->elf_path = defaultElf("gather_store");
+  l->elf_path = defaultElf("read_run");
+  cmd->add_option("--gather-elf", g->elf_path, "gather_store ELF image")->capture_default_str();
+  cmd->add_option("--read-run-elf", l->elf_path, "read_run ELF image")->capture_default_str();
+  cmd->add_option("--seeds", *seeds, "the four motors (slot 0..3)")
+      ->delimiter(',')
+      ->expected(4)
+      ->capture_default_str();
+  cmd->add_option("--preset", g->preset, "motor + propeller preset")->capture_default_str();
+  cmd->add_option("--variation", g->variation, "part-to-part spread")->capture_default_str();
+  cmd->add_option("--settle", g->settle_ms, "gather settle time per step in ms")
+      ->capture_default_str();
+  cmd->add_option("--force", l->force_g, "lift-off force per motor in g")->capture_default_str();
+  cmd->add_option("--hold-ms", l->hold_ms, "lift-off hold time")->capture_default_str();
+  cmd->add_option("--out-dir", *out_dir, "where every output goes")->capture_default_str();
+  cmd->callback([=] {
+    guarded([&] {
+      fs::create_directories(*out_dir);
+      GatherOptions go = *g;
+      go.seeds = *seeds;
+      go.slots = {0, 1, 2, 3};
+      go.log_dir = *out_dir;
+      go.eeprom = std::vector<uint8_t>(kEepromBytes, 0xFF);
+      const GatherResult gr = runGather(go);
+      const std::string eeprom_path = (fs::path(*out_dir) / "eeprom.hex").string();
+      writeIntelHexFile(eeprom_path, gr.eeprom);
+      nlohmann::json j = gr.toJson();
+      double sim_s = gr.simulated_s, wall_s = gr.wall_s;
+      for (const bool uncal : {false, true}) {
+        LiftoffOptions lo = *l;
+        lo.preset = go.preset;
+        lo.variation = go.variation;
+        for (int i = 0; i < 4; ++i) lo.seeds[i] = (*seeds)[i];
+        lo.eeprom = gr.eeprom;
+        lo.uncalibrated = uncal;
+        lo.csv_path = (fs::path(*out_dir) / (uncal ? "liftoff_uncalibrated.csv"
+                                                    : "liftoff_calibrated.csv")).string();
+        const LiftoffResult lr = runLiftoff(lo);
+        j["liftoff"][lr.mode] = lr.toJson();
+        sim_s += lr.simulated_s;
+        wall_s += lr.wall_s;
+      }
+      j["scenario"] = "fleet";
+      j["preset"] = go.preset;
+      j["seeds"] = *seeds;
+      j["eeprom"] = eeprom_path;
+      j["sim"]["realtime_factor"] = wall_s > 0 ? sim_s / wall_s : 0;
+      j["sim"]["simulated_s"] = sim_s;
+      j["sim"]["wall_s"] = wall_s;
+      const std::string json_path = (fs::path(*out_dir) / "sim_summary.json").string();
+      writeJson(json_path, j);
+      const auto& c = j["liftoff"]["calibrated"];
+      const auto& u = j["liftoff"]["uncalibrated"];
+      fmt::print("stored curves vs plant: max error {:.2f} g\n", gr.curve_error_max_g);
+      fmt::print("lift-off {:.0f} g per motor   thrust spread   force error rms   max tilt\n",
+                 l->force_g);
+      fmt::print("  calibrated          {:8.2f} %      {:8.2f} %    {:6.2f} deg\n",
+                 c["thrust_spread_pct"].get<double>(), c["force_error_rms_pct"].get<double>(),
+                 c["max_tilt_deg"].get<double>());
+      fmt::print("  uncalibrated        {:8.2f} %      {:8.2f} %    {:6.2f} deg\n",
+                 u["thrust_spread_pct"].get<double>(), u["force_error_rms_pct"].get<double>(),
+                 u["max_tilt_deg"].get<double>());
+      fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time ({:.1f}x during "
+                 "sweeps)\nresults: {}\n",
+                 sim_s, wall_s, wall_s > 0 ? sim_s / wall_s : 0, gr.sweep_realtime_factor,
+                 json_path);
+    });
+  });
+}
+
 }  // namespace
 
 void registerCommands(CLI::App& app) {
@@ -319,6 +406,7 @@ void registerCommands(CLI::App& app) {
   addGather(*sim);
   addLiftoff(*sim);
   addConsole(*sim);
+  addFleet(*sim);
 }
 
 }  // namespace sim
