@@ -856,7 +856,8 @@ void GatherStoreApp::cmdStoreV2() {
     fw::printUint(fitter_.capacity());
     say(TC_PSTR(" (SRAM): set a step of at least "));
     const uint16_t span_us = static_cast<uint16_t>(settings_.pwm_max_us - settings_.pwm_min_us);
-    fw::printUint(span_us / (fitter_.capacity() - 1u) + 1u);
+    const uint16_t gaps = static_cast<uint16_t>(fitter_.capacity() - 1u);
+    fw::printUint((span_us + gaps - 1u) / gaps);  // the smallest step that fits
     sayLine(TC_PSTR(" us for this range and sweep again; nothing changed"));
     return;
   }
@@ -1013,17 +1014,19 @@ void GatherStoreApp::showV2(uint8_t slot) {
     say(TC_PSTR(", single sweep (store v2 after a sweep at another voltage refines it)"));
   }
   fw::newline();
+  // What read_run sends for a step from rest: the bus voltage at the command predicted from
+  // the bench sag.
   tc::BusVoltageFilter bus;
   bus.reset(model_.rest_mv);
-  say(TC_PSTR("PWM at "));
+  say(TC_PSTR("PWM from rest at "));
   printVolts(model_.rest_mv);
-  hal::Uart::write(':');
+  say(TC_PSTR(" (bench sag predicted):"));
   const uint16_t max_g = static_cast<uint16_t>(model_.maxForceDg() / 10u);
   for (uint16_t grams = 10; grams <= max_g; grams = static_cast<uint16_t>(grams == 10 ? 100 : grams + 100)) {
     hal::Uart::write(' ');
     fw::printUint(grams);
     say(TC_PSTR(" g "));
-    fw::printUint(tc::forceGramsToPwmV2(model_, grams, bus).pwm_us);
+    fw::printUint(tc::forceToPwmV2(model_, static_cast<uint16_t>(grams * 10u), bus, 0).pwm_us);
     say(TC_PSTR(" us"));
   }
   fw::newline();
