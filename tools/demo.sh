@@ -1,8 +1,13 @@
 #!/usr/bin/env bash
 # The main job: installs what is missing, builds the firmware images and the host tool, then
-# runs the virtual bench: calibrates four varied simulated motors with the real gather_store
-# image, flies the tethered lift-off with the real read_run image (calibrated and not), and
-# runs the model lab on the logged sweeps. Results: build/demo/ (summary.json, plots, logs).
+# runs the virtual bench with the REAL firmware images in simavr:
+#   1. calibrates four varied simulated KV1100 + APC 9x4.7 motors with gather_store
+#      (curve 1 on a full 3S LiPo, curve 2 on a 10 V bench supply), EEPROM saved as Intel HEX;
+#   2. flies the thesis's tethered lift-off with read_run: calibrated (each motor its own
+#      record) and uncalibrated (the same PWM on all four);
+#   3. runs the model lab on the sweeps it just logged: thesis model vs the measurements,
+#      the diagnosis, and the error ladder as effects are added.
+# Results: build/demo/summary.json, build/demo/*.png, build/demo/lab/report.md, logs.
 set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
 cd "$THRUSTCAL_ROOT"
@@ -11,5 +16,89 @@ ensure_packages
 build_avr
 build_host
 
-say "firmware images"
-print_firmware_sizes
+OUT="$THRUSTCAL_ROOT/build/demo"
+TC="$THRUSTCAL_ROOT/build/host/tools/thrustcal/thrustcal"
+SEEDS=(11 12 13 14)   # four varied motors (part-to-part spread 3 %)
+rm -rf "$OUT"
+mkdir -p "$OUT/logs" "$OUT/liftoff"
+t0=$(date +%s)
+
+say "1/4 calibrating four simulated motors with gather_store (curve 1: LiPo, curve 2: 10 V supply)"
+"$TC" sim gather --seeds "${SEEDS[@]}" --slots 0 1 2 3 \
+  --eeprom "$OUT/eeprom.hex" --log-dir "$OUT/logs" --json "$OUT/gather.json" 2> >(sed -u 's/^/   /' >&2)
+
+say "2/4 tethered lift-off with read_run, calibrated and uncalibrated"
+"$TC" sim liftoff --eeprom "$OUT/eeprom.hex" --seeds "${SEEDS[@]}" --force 300 --mode both \
+  --out-dir "$OUT/liftoff" --json "$OUT/liftoff.json" 2> >(sed -u 's/^/   /' >&2)
+
+say "3/4 plots"
+for k in 0 1 2 3; do
+  [ -f "$OUT/logs/gather_slot${k}_curves.csv" ] || die "missing $OUT/logs/gather_slot${k}_curves.csv"
+done
+gnuplot <<GP
+set datafile separator ","
+set datafile commentschars "#"
+set terminal pngcairo size 1400,1000 font ",11"
+set output "$OUT/force_curves.png"
+set multiplot layout 2,2 title "Stored force curves (EEPROM) vs the plant's true curve, per motor"
+do for [k=0:3] {
+  set title sprintf("motor %d", k)
+  set xlabel "force [g]"; set ylabel "PWM [us]"; set key left top; set grid
+  f = sprintf("$OUT/logs/gather_slot%d_curves.csv", k)
+  plot f using 1:2 every ::1 with lines lw 2 title "curve 1 (LiPo)", \
+       f using 1:4 every ::1 with lines dt 2 lc rgb "black" title "true at curve 1", \
+       f using 1:3 every ::1 with lines lw 2 title "curve 2 (10 V supply)", \
+       f using 1:5 every ::1 with lines dt 3 lc rgb "black" title "true at curve 2"
+}
+unset multiplot
+set output "$OUT/liftoff_thrust.png"
+set multiplot layout 2,1 title "Tethered lift-off, 300 g per motor: thrust of each motor over time"
+do for [mode in "calibrated uncalibrated"] {
+  set title mode
+  set xlabel "t [s]"; set ylabel "thrust [g]"; set key right bottom; set grid
+  f = sprintf("$OUT/liftoff/liftoff_%s.csv", mode)
+  plot for [m=0:3] f using 1:(column(2+m)) every ::1 with lines lw 2 title sprintf("motor %d", m), \
+       300 with lines dt 2 lc rgb "black" title "command"
+}
+unset multiplot
+GP
+
+say "4/4 model lab on the logged sweeps (thesis model vs measurements)"
+mapfile -t SWEEPS < <(ls "$OUT"/logs/gather_slot*_curve[12].csv)
+"$TC" lab diagnose "${SWEEPS[@]}" --model thesis | tee "$OUT/lab_diagnose.txt"
+"$TC" lab diagnose "${SWEEPS[@]}" --model thesis --json > "$OUT/lab_diagnose.json"
+"$TC" lab ladder "${SWEEPS[@]}" --model curve --add deadband --add voltage --add sag --add motor \
+  --report "$OUT/lab" | tee "$OUT/lab_ladder.txt"
+"$TC" lab ladder "${SWEEPS[@]}" --model curve --add deadband --add voltage --add sag --add motor \
+  --json > "$OUT/lab_ladder.json"
+
+wall_s=$(( $(date +%s) - t0 ))
+jq -n --slurpfile g "$OUT/gather.json" --slurpfile l "$OUT/liftoff.json" \
+      --slurpfile d "$OUT/lab_diagnose.json" --slurpfile la "$OUT/lab_ladder.json" --argjson wall "$wall_s" '
+  {
+    calibration: $g[0].calibration,
+    liftoff: $l[0].liftoff,
+    lab: {diagnose: $d[0], ladder: $la[0]},
+    sim: {
+      realtime_factor: ([$g[0].sim.realtime_factor, $l[0].sim.realtime_factor] | min),
+      gather: $g[0].sim, liftoff: $l[0].sim,
+      demo_wall_s: $wall
+    }
+  }' > "$OUT/summary.json"
+
+say "summary"
+jq -r '
+  def r(x): (x * 100 | round) / 100;
+  "calibration: stored curves vs the plant, max error \(r(.calibration.curve_error_max_g)) g",
+  "",
+  "lift-off 300 g per motor       thrust per motor [g]              spread    rms error   max tilt",
+  (["calibrated", "uncalibrated"][] as $m | .liftoff[$m] as $x |
+    "  \($m | . + "                " | .[0:16])  \($x.hold_thrust_g | map(r(.) | tostring) | join("  "))   \(r($x.thrust_spread_pct)) %    \(r($x.force_error_rms_pct)) %     \(r($x.max_tilt_deg)) deg"),
+  "",
+  "lab: thesis model rmse \(r(.lab.diagnose.rmse_g)) g over \(.lab.diagnose.n) samples; first suspect: \(.lab.diagnose.suspects[0].variable // "none") -> \(.lab.diagnose.suspects[0].effects // [] | join(", "))",
+  "lab ladder: " + (.lab.ladder.steps | map("\(.model) \(r(.rmse_g)) g") | join("  ->  ")),
+  "",
+  "simulator: \(r(.sim.realtime_factor))x real time; demo took \(.sim.demo_wall_s) s"
+' "$OUT/summary.json"
+echo
+echo "files: $OUT/summary.json, $OUT/force_curves.png, $OUT/liftoff_thrust.png, $OUT/lab/report.md"

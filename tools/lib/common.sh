@@ -11,7 +11,7 @@ THRUSTCAL_PACKAGES=(
   simavr libsimavr-dev libelf-dev
   googletest libgtest-dev libgmock-dev
   libeigen3-dev libcli11-dev libmuparser-dev nlohmann-json3-dev libfmt-dev
-  gnuplot-nox gcovr
+  gnuplot-nox gcovr jq
 )
 
 say() { printf '\033[1m==> %s\033[0m\n' "$*" >&2; }
