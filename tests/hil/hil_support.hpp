@@ -21,8 +21,12 @@ namespace hil {
 
 namespace fs = std::filesystem;
 
+// <avr build>/firmware/<name>/<name>.elf (CMake's layout), or <avr build>/firmware/<name>.elf.
 inline std::string imagePath(const std::string& name) {
-  return (fs::path(THRUSTCAL_AVR_BUILD_DIR) / "firmware" / name / (name + ".elf")).string();
+  const fs::path dir = fs::path(THRUSTCAL_AVR_BUILD_DIR) / "firmware";
+  const fs::path flat = dir / (name + ".elf");
+  const fs::path nested = dir / name / (name + ".elf");
+  return (fs::exists(nested) || !fs::exists(flat) ? nested : flat).string();
 }
 
 // GTEST_SKIP()s the calling test when an image is missing (the lead's test script builds them).

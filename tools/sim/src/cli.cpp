@@ -80,7 +80,8 @@ void addGather(CLI::App& sim) {
                   "varied motor per seed; several seeds calibrate several slots")
       ->delimiter(',')
       ->capture_default_str();
-  cmd->add_option("--slot,--slots", o->slots, "EEPROM slot / ESC output per seed (0..3); "
+  auto slots = std::make_shared<std::vector<int>>();
+  cmd->add_option("--slot,--slots", *slots, "EEPROM slot / ESC output per seed (0..3); "
                                                "default 0, 1, 2, ... in seed order")
       ->delimiter(',');
   cmd->add_option("--variation", o->variation, "part-to-part spread (relative sigma)")
@@ -116,10 +117,9 @@ void addGather(CLI::App& sim) {
         opt.pwm_min_us = (*range)[0];
         opt.pwm_max_us = (*range)[1];
       }
-      if (opt.slots.empty() || (opt.slots.size() == 1 && opt.seeds.size() > 1 && opt.slots[0] == 0)) {
-        opt.slots.clear();
+      opt.slots = *slots;
+      if (opt.slots.empty())
         for (std::size_t i = 0; i < opt.seeds.size(); ++i) opt.slots.push_back(static_cast<int>(i));
-      }
       opt.second = *second == "drained" ? SecondCurveSource::kDrainedPack
                                         : SecondCurveSource::kBenchSupply;
       opt.eeprom = loadEepromOrErased(*eeprom, false);
@@ -302,8 +302,9 @@ void addConsole(CLI::App& sim) {
         writeIntelHexFile(*eeprom, board->eeprom());
         fmt::print("EEPROM saved: {}\n", *eeprom);
       }
-      fmt::print("{:.1f} s simulated, {:.1f}x real time\n", board->simulatedSeconds(),
-                 board->realtimeFactor());
+      fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {:.0f}x real "
+                 "time)\n",
+                 board->simulatedSeconds(), *speed, board->realtimeFactor());
     });
   });
 }

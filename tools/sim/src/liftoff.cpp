@@ -94,7 +94,10 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
   const double t_cmd = rig->board.timeS();
   con.send(fmt::format("liftoff {} {} {}", static_cast<int>(std::lround(o.force_g)), o.ramp_ms,
                        o.hold_ms));
-  con.expect("^# liftoff (done|aborted)", (o.ramp_ms + o.hold_ms) / 1000.0 + 5.0);
+  const auto end = con.expect("^(# liftoff (done|aborted).*|error: .*)$",
+                              (o.ramp_ms + o.hold_ms) / 1000.0 + 5.0);
+  if (end[0].rfind("error:", 0) == 0)
+    throw std::runtime_error(fmt::format("read_run refused the lift-off: {}", end[0]));
   con.waitPrompt(1.0);
   rig->board.runFor(0.5);  // spin-down
   rig->recording = false;
