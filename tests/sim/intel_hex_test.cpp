@@ -3,6 +3,11 @@
 
 #include "sim/intel_hex.hpp"
 
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+
 namespace {
 
 TEST(IntelHex, FormatsRecordsWithChecksumsAvrdudeAccepts) {
@@ -32,6 +37,25 @@ TEST(IntelHex, AcceptsCrlfLineEndsAndExtendedLinearAddressZero) {
   const auto image =
       sim::parseIntelHex(":020000040000FA\r\n:0100000055AA\r\n:00000001FF\r\n", 4);
   EXPECT_EQ(image[0], 0x55);
+}
+
+TEST(IntelHex, BinutilsReadsOurImageBackByteForByte) {
+  // GNU objcopy's Intel HEX reader is as strict as avrdude's: same records, same checksums.
+  const std::string objcopy = SIM_AVR_OBJCOPY;
+  if (objcopy.empty()) GTEST_SKIP() << "avr-objcopy not found";
+  // given
+  std::vector<uint8_t> image(4096);
+  for (std::size_t i = 0; i < image.size(); ++i) image[i] = static_cast<uint8_t>(i ^ (i >> 8));
+  const std::string hex = std::string(SIM_TEST_TMP) + "/roundtrip.hex";
+  const std::string bin = std::string(SIM_TEST_TMP) + "/roundtrip.bin";
+  sim::writeIntelHexFile(hex, image);
+  // when
+  const std::string cmd = objcopy + " -I ihex -O binary " + hex + " " + bin;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  // then
+  std::ifstream in(bin, std::ios::binary);
+  const std::vector<uint8_t> back((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(back, image);
 }
 
 struct BadHex {
