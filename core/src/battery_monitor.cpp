@@ -26,6 +26,23 @@ uint8_t SagTable::binFor(uint16_t pwm_us, uint16_t base_pwm_us) {
   return bin >= kSagBins ? static_cast<uint8_t>(kSagBins - 1) : static_cast<uint8_t>(bin);
 }
 
+int16_t SagTable::offsetFor(uint16_t pwm_us) const {
+  const uint16_t half_bin_us = kSagBinWidthUs / 2;
+  const uint16_t first_centre_us = static_cast<uint16_t>(base_pwm_us + half_bin_us);
+  if (pwm_us <= first_centre_us) return offset_mv[0];
+  const uint16_t from_centre_us = static_cast<uint16_t>(pwm_us - first_centre_us);
+  const uint16_t bin = static_cast<uint16_t>(from_centre_us / kSagBinWidthUs);
+  if (bin >= kSagBins - 1) return offset_mv[kSagBins - 1];
+  const int16_t fraction_us = static_cast<int16_t>(from_centre_us - bin * kSagBinWidthUs);
+  const int16_t lo = offset_mv[bin];
+  const int16_t hi = offset_mv[bin + 1];
+  // |hi - lo| * 40 fits int32; rounded to the nearest mV.
+  const int32_t delta = static_cast<int32_t>(hi - lo) * fraction_us;
+  const int32_t step = (delta >= 0 ? delta + kSagBinWidthUs / 2 : delta - kSagBinWidthUs / 2) /
+                       static_cast<int32_t>(kSagBinWidthUs);
+  return static_cast<int16_t>(lo + step);
+}
+
 uint16_t BatteryMonitor::millivoltsFromCounts(uint16_t counts) const {
   if (config_.adc_max_counts == 0) return 0;
   if (counts >= config_.adc_max_counts) return config_.full_scale_mv;
@@ -51,6 +68,7 @@ void SagBuilder::reset(uint16_t base_pwm_us) {
 }
 
 void SagBuilder::add(uint16_t pwm_us, uint16_t vbat_mv) {
+  if (pwm_us >= base_pwm_us_ && pwm_us - base_pwm_us_ >= kSagBins * kSagBinWidthUs) return;
   const uint8_t bin = SagTable::binFor(pwm_us, base_pwm_us_);
   if (count_[bin] == 0xFFFF) return;  // 65535 samples per bin are plenty: the sum stays exact
   sum_mv_[bin] += vbat_mv;

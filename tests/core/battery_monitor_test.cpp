@@ -73,7 +73,7 @@ TEST(BatteryMonitor, CompensationAddsTheOffsetOfTheLastPwmSent) {
   const BatteryMonitor monitor;
   // then
   EXPECT_EQ(monitor.compensatedMillivolts(10800, 1600, sag), 11350);
-  EXPECT_EQ(monitor.compensatedMillivolts(11000, 1200, sag), 11200);
+  EXPECT_EQ(monitor.compensatedMillivolts(11000, 1220, sag), 11200);  // centre of bin 5
   EXPECT_EQ(monitor.compensatedMillivolts(11400, 1000, sag), 11400);
 }
 
@@ -83,7 +83,7 @@ TEST(BatteryMonitor, CompensationSaturatesAtBothEnds) {
   sag.offset_mv[1] = 100;
   const BatteryMonitor monitor;
   EXPECT_EQ(monitor.compensatedMillivolts(50, 1000, sag), 0);
-  EXPECT_EQ(monitor.compensatedMillivolts(65500, 1040, sag), 65535);
+  EXPECT_EQ(monitor.compensatedMillivolts(65500, 1060, sag), 65535);
 }
 
 TEST(SagBuilder, AveragesPerBinAndOffsetsAreDropsFromTheStartVoltage) {
@@ -132,18 +132,39 @@ TEST(SagBuilder, EmptyBinsBorrowTheNearestVisitedBinLowerOnTies) {
   EXPECT_EQ(sag.offset_mv[12], 200);
 }
 
-TEST(SagBuilder, SamplesOutsideTheBinsGoToTheFirstOrLastBin) {
+TEST(SagBuilder, SamplesBelowBaseGoToBinZeroAndSamplesAboveTheLastBinAreLeftOut) {
   SagBuilder builder;
   builder.reset(1080);
   builder.add(1000, 12000);  // below base: bin 0
-  builder.add(1999, 11500);  // far above: bin 12
+  builder.add(1599, 11600);  // last us of bin 12 (1080 + 13 * 40 = 1600)
+  builder.add(1600, 11000);  // beyond the table: left out
+  builder.add(1999, 10500);  // far above: left out
   EXPECT_EQ(builder.samples(0), 1);
   EXPECT_EQ(builder.samples(12), 1);
   SagTable sag;
   uint16_t start_mv = 0;
   ASSERT_TRUE(builder.build(sag, start_mv));
   EXPECT_EQ(sag.base_pwm_us, 1080);
-  EXPECT_EQ(sag.offset_mv[12], 500);
+  EXPECT_EQ(sag.offset_mv[12], 400) << "bin 12 is the average of its own 40 us only";
+}
+
+TEST(SagTable, OffsetIsInterpolatedBetweenBinCentresAndFlatBeyondTheEnds) {
+  // given offsets rising 40 mV per bin from base 1000 (centres at 1020, 1060, ..., 1500)
+  SagTable sag;
+  sag.base_pwm_us = 1000;
+  for (uint8_t i = 0; i < tc::kSagBins; ++i) sag.offset_mv[i] = static_cast<int16_t>(40 * i);
+  struct Row {
+    uint16_t pwm_us;
+    int16_t offset_mv;
+  };
+  const Row rows[] = {{0, 0},      {1000, 0},   {1020, 0},   {1021, 1},   {1040, 20},
+                      {1059, 39},  {1060, 40},  {1479, 459}, {1480, 460}, {1500, 480},
+                      {1519, 480}, {2000, 480}, {65535, 480}};
+  for (const auto& r : rows) EXPECT_EQ(sag.offsetFor(r.pwm_us), r.offset_mv) << r.pwm_us;
+  // and a falling pair rounds to the nearest mV too
+  sag.offset_mv[1] = -40;
+  EXPECT_EQ(sag.offsetFor(1030), -10);
+  EXPECT_EQ(sag.offsetFor(1041), -21);
 }
 
 TEST(SagBuilder, AverageRoundsToNearestMillivolt) {

@@ -30,7 +30,11 @@ struct SagTable {
 
   // Bin of a PWM: (pwm - base) / 40, clamped to 0..12 (below base: bin 0).
   static uint8_t binFor(uint16_t pwm_us, uint16_t base_pwm_us);
-  int16_t offsetFor(uint16_t pwm_us) const { return offset_mv[binFor(pwm_us, base_pwm_us)]; }
+  // Offset for a PWM, interpolated linearly between the centres of the bins (flat below the
+  // centre of bin 0 and above the centre of bin 12). The thesis used the bin's offset as a
+  // step; on the virtual bench a hovering motor whose PWM sat on a bin edge then toggled
+  // between two offsets (a limit cycle of ~12 us every few frames), which interpolation ends.
+  int16_t offsetFor(uint16_t pwm_us) const;
 };
 
 class BatteryMonitor {
@@ -51,7 +55,9 @@ class BatteryMonitor {
 // Collects (pwm, battery) pairs during a sweep and turns them into the start voltage and the
 // 13 offsets (thesis fig. 6.9: average per 40 us bin; Average[0] is the start voltage;
 // offset[i] = Average[0] - Average[i]). Bins nobody visited take the nearest visited bin's
-// offset; samples below base go to bin 0, above the last bin to bin 12.
+// offset; samples below base go to bin 0; samples at or above the end of the last bin
+// (base + 13 * 40 us) are left out, so bin 12 is the average of its own 40 us and not of the
+// whole rest of the sweep (which made it read ~3x the sag of its neighbour).
 class SagBuilder {
  public:
   void reset(uint16_t base_pwm_us);

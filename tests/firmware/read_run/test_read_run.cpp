@@ -303,7 +303,7 @@ TEST_F(ReadRun, SagOffsetOfTheLastPwmIsAddedToTheBatteryReading) {
   auto cal = storedCalibration(0);
   const uint16_t read_mv = mvFromCounts(read_counts);
   const int16_t offset_mv = cal->sag.offsetFor(pulse(0));
-  EXPECT_EQ(offset_mv, 600) << "pwm " << pulse(0) << " is in the last bin";
+  EXPECT_NEAR(offset_mv, 600, 10) << "pwm " << pulse(0) << " is near the centre of the last bin";
   EXPECT_EQ(app_->motor(0).vbat_mv, read_mv + offset_mv);
   EXPECT_EQ(app_->motor(1).vbat_mv, read_mv);
   EXPECT_NEAR(pulse(0), option21PwmUs(*cal, 300, read_mv + offset_mv), 1.0);
