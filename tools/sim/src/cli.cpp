@@ -90,7 +90,7 @@ void addGather(CLI::App& sim) {
                   "Intel HEX EEPROM image: read if it exists (other slots are kept), written "
                   "after the run (avrdude -U eeprom:w:FILE:i puts it on a real board)");
   cmd->add_option("--log-dir", o->log_dir,
-                  "write gather_slotK_curve{1,2}.csv (the streamed sweeps + plant columns) and "
+                  "write gather_slotK_curve{1,2}.csv (the streamed sweeps + current_a, rpm, temp_c) and "
                   "gather_slotK_curves.csv (stored vs true PWM per gram)");
   cmd->add_option("--json", *json, "results as JSON (calibration.curve_error_max_g, sim.*)");
   cmd->add_option("--range", *range,

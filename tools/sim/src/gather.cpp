@@ -112,7 +112,7 @@ CurveCheck runSweep(BenchRig& rig, Console& con, const GatherOptions& o, int slo
                                            check.csv_path));
     cap.csv << fmt::format(
         "# thrustcal sim gather: slot {} curve {}, streamed by gather_store (first six columns);\n"
-        "# current_a, rpm, temp_c, true_force_g: the plant at the moment the row was printed\n",
+        "# current_a, rpm, temp_c: instruments on the plant at the moment the row was printed\n",
         slot, curve_no);
   }
   cap.active = true;
@@ -126,14 +126,13 @@ CurveCheck runSweep(BenchRig& rig, Console& con, const GatherOptions& o, int slo
       if (progress) progress(line.substr(2));
       if (cap.csv) cap.csv << line << "\n";
     } else if (line.rfind("pwm_us,", 0) == 0) {
-      if (cap.csv) cap.csv << line << ",current_a,rpm,temp_c,true_force_g\n";
+      if (cap.csv) cap.csv << line << ",current_a,rpm,temp_c\n";
     } else if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) {
       ++cap.rows;
       if (cap.csv) {
         const auto& a = rig.bench.actuator();
         cap.csv << line << "," << fmtCsvNumber(rig.bench.busCurrent_a(), 3) << ","
-                << fmtCsvNumber(a.rpm(), 0) << "," << fmtCsvNumber(a.windingTemp_c(), 2) << ","
-                << fmtCsvNumber(a.thrust_g(), 1) << "\n";
+                << fmtCsvNumber(a.rpm(), 0) << "," << fmtCsvNumber(a.windingTemp_c(), 2) << "\n";
       }
     }
   });
