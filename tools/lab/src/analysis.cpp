@@ -164,7 +164,7 @@ std::vector<Suspect> rankVariables(const Dataset& data, const FitResult& fit, co
     for (const auto& t : trials) {
       if (done) break;
       try {
-        const FitResult r = fitModel(work, t, &fit.params);
+        const FitResult r = fitModel(work, t, &fit.params, /*warm_only=*/true);
         if (!std::isfinite(r.rss)) continue;
         const double dk = std::max(1, r.k - fit.k);
         s.score = fit.rss > 0 ? std::max(0.0, 1.0 - (r.rss / fit.rss) * std::exp(dk * std::log(n) / n)) : 0.0;
@@ -276,7 +276,8 @@ std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,
     }
     step.spec = spec;
     step.fit = fitModel(data, spec, steps.empty() ? nullptr : &steps.back().fit.params);
-    step.variables = rankVariables(data, step.fit, spec);
+    // the diagnosis of the first and the last step (the report and the text use those)
+    if (s == 0 || s == adds.size()) step.variables = rankVariables(data, step.fit, spec);
     step.holdout_rmse_g = holdoutRmse(data, spec, holdout);
     if (!steps.empty()) {
       step.delta_bic = step.fit.bic - steps.back().fit.bic;

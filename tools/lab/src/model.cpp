@@ -390,11 +390,11 @@ struct Model::Impl {
           i_sagrel = addParam("sag_full", "1", e, 0.02, 0.02, 0.0, 0.9);
       } else if (e == "lag") {
         if (usable(train, "t_s")) {
-          i_tau = addParam("tau_s", "s", e, 0.05, 0.02, 1e-4, 100.0, 1e-4);
+          i_tau = addParam("tau_s", "s", e, 0.05, 0.02, 1e-4, 100.0, kNaN);
         } else {
           // no time column: the rows are taken as equally spaced samples in logging order
           lag_in_samples = true;
-          i_tau = addParam("tau_samples", "samples", e, 1.0, 0.5, 1e-3, 1000.0, 1e-3);
+          i_tau = addParam("tau_samples", "samples", e, 1.0, 0.5, 1e-3, 1000.0, kNaN);
         }
       } else if (e == "motor") {
         require(e, "motor");
@@ -898,7 +898,7 @@ struct Model::Impl {
     }
   };
 
-  FitResult fit(const std::vector<Param>* warm) {
+  FitResult fit(const std::vector<Param>* warm, bool warm_only) {
     FitResult r;
     r.model = spec.text();
     const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
@@ -923,7 +923,7 @@ struct Model::Impl {
       auto runLm = [&](const Eigen::VectorXd& start, double& rss) {
         Functor fn(this, start, sc);
         Eigen::LevenbergMarquardt<Functor> lm(fn);
-        lm.setMaxfev(200 * static_cast<int>(np + 1));
+        lm.setMaxfev(60 + 20 * static_cast<int>(np));
         lm.setXtol(1e-8);
         lm.setFtol(1e-9);
         Eigen::VectorXd z = Eigen::VectorXd::Zero(np);
@@ -937,8 +937,9 @@ struct Model::Impl {
         if (!std::isfinite(rss)) rss = std::numeric_limits<double>::infinity();
         return th;
       };
-      double rss_cold = 0;
-      Eigen::VectorXd best = runLm(theta, rss_cold);
+      double rss_cold = std::numeric_limits<double>::infinity();
+      Eigen::VectorXd best = theta;
+      if (!(warm_only && warm && !warm->empty())) best = runLm(theta, rss_cold);
       if (warm && !warm->empty()) {
         // Warm start from a smaller model's fit, the new parameters switched off: a model with
         // an added effect then never fits worse than the one without it.
@@ -954,7 +955,7 @@ struct Model::Impl {
             }
           if (!found && std::isfinite(d.neutral)) start[i] = d.neutral;
         }
-        if (any || start != theta) {
+        if (any || start != theta || warm_only) {
           double rss_warm = 0;
           const Eigen::VectorXd th = runLm(start, rss_warm);
           if (rss_warm < rss_cold) best = th;
@@ -1053,12 +1054,13 @@ struct Model::Impl {
 
 Model::Model(const ModelSpec& spec, const Dataset& train) : impl_(std::make_unique<Impl>(spec, train)) {}
 Model::~Model() = default;
-FitResult Model::fit(const std::vector<Param>* warm) { return impl_->fit(warm); }
+FitResult Model::fit(const std::vector<Param>* warm, bool warm_only) { return impl_->fit(warm, warm_only); }
 std::vector<double> Model::predict(const Dataset& data) const { return impl_->predict(data); }
 
-FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm) {
+FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm,
+                   bool warm_only) {
   Model m(spec, data);
-  return m.fit(warm);
+  return m.fit(warm, warm_only);
 }
 
 }  // namespace lab

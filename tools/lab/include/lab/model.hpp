@@ -90,8 +90,8 @@ class Model {
   Model& operator=(const Model&) = delete;
 
   // `warm`: parameters of a smaller model; the fit also starts from them (new effects switched
-  // off) and keeps the better of the two starts.
-  FitResult fit(const std::vector<Param>* warm = nullptr);
+  // off) and keeps the better of the two starts; `warm_only` skips the cold start.
+  FitResult fit(const std::vector<Param>* warm = nullptr, bool warm_only = false);
   // Prediction of the fitted model on other data (same columns needed). NaN where it cannot.
   std::vector<double> predict(const Dataset& data) const;
 
@@ -101,7 +101,8 @@ class Model {
 };
 
 // Fits `spec` on `data`.
-FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm = nullptr);
+FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm = nullptr,
+                   bool warm_only = false);
 
 // Adds derived candidate columns: rho_kg_m3 (from temp_c and a pressure column) and dpwm_us
 // (the PWM step from the previous sample of the same run: what a lag responds to).

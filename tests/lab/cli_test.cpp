@@ -1,0 +1,130 @@
+// The command line as scripts use it: `thrustcal lab diagnose|ladder ... --json` shapes, several
+// DATA files, --report files, clean errors.
+#include <gtest/gtest.h>
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "lab/cli.hpp"
+#include "lab/dataset.hpp"
+#include "lab/generate.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string tmp(const std::string& name) {
+  fs::create_directories(THRUSTCAL_LAB_TMP_DIR);
+  return std::string(THRUSTCAL_LAB_TMP_DIR) + "/" + name;
+}
+
+// Writes a generated log split into one file per run, as a bench session would leave them.
+std::vector<std::string> writeRuns(const char* hidden) {
+  lab::GenerateOptions o;
+  o.hidden = hidden;
+  o.noise_g = 0.5;
+  const lab::Dataset d = lab::generate(o);
+  std::vector<std::string> files;
+  for (std::size_t r = 0; r < d.runs(); ++r) {
+    std::vector<bool> keep(d.rows());
+    for (std::size_t i = 0; i < d.rows(); ++i) keep[i] = d.run[i] == static_cast<int>(r);
+    const std::string path = tmp(std::string(hidden) + "_run" + std::to_string(r) + ".csv");
+    std::ofstream(path) << lab::toCsv(d.subset(keep), {"generated for cli_test"});
+    files.push_back(path);
+  }
+  return files;
+}
+
+int run(std::vector<std::string> args, std::string& out) {
+  CLI::App app{"thrustcal"};
+  app.require_subcommand(1);
+  lab::registerCommands(app);
+  args.insert(args.begin(), "thrustcal");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  testing::internal::CaptureStdout();
+  int rc = 0;
+  try {
+    app.parse(static_cast<int>(argv.size()), argv.data());
+  } catch (const CLI::Error& e) {
+    rc = e.get_exit_code();
+  }
+  out = testing::internal::GetCapturedStdout();
+  return rc;
+}
+
+TEST(LabCli, DiagnoseJsonHasTheIssueShapeWithSuspectsBestFirst) {
+  // given four run files with a load-cell drift
+  auto files = writeRuns("drift");
+  std::vector<std::string> args = {"lab", "diagnose"};
+  args.insert(args.end(), files.begin(), files.end());
+  for (const char* a : {"--model", "curve+deadband+voltage", "--json"}) args.push_back(a);
+  std::string out;
+  // when diagnosed with --json
+  ASSERT_EQ(run(args, out), 0);
+  const auto j = nlohmann::json::parse(out);
+  // then {"rmse_g": x, "n": N, "suspects": [{"variable", "score", "effects"}...]} best first
+  EXPECT_GT(j.at("rmse_g").get<double>(), 1.0);
+  EXPECT_EQ(j.at("n").get<int>(), 296);
+  EXPECT_EQ(j.at("runs").get<int>(), 4);
+  const auto& s = j.at("suspects");
+  ASSERT_GE(s.size(), 1u);
+  EXPECT_EQ(s[0].at("variable"), "t_s");
+  EXPECT_EQ(s[0].at("effects")[0], "drift");
+  for (std::size_t i = 1; i < s.size(); ++i)
+    if (s[i].at("variable") != "run") {
+      EXPECT_GE(s[i - 1].at("score").get<double>(), s[i].at("score").get<double>());
+    }
+}
+
+TEST(LabCli, LadderJsonListsTheStepsInOrderAndTheReportIsWritten) {
+  auto files = writeRuns("sag");
+  const std::string dir = tmp("report_sag");
+  fs::remove_all(dir);
+  std::vector<std::string> args = {"lab", "ladder"};
+  args.insert(args.end(), files.begin(), files.end());
+  for (const char* a : {"--model", "curve", "--add", "deadband", "--add", "voltage", "--add", "sag", "--json", "--report"})
+    args.push_back(a);
+  args.push_back(dir);
+  std::string out;
+  ASSERT_EQ(run(args, out), 0);
+  const auto j = nlohmann::json::parse(out);
+  const auto& steps = j.at("steps");
+  ASSERT_EQ(steps.size(), 4u);
+  EXPECT_EQ(steps[0].at("model"), "curve");
+  EXPECT_EQ(steps[3].at("model"), "curve+deadband+voltage+sag");
+  EXPECT_LT(steps[3].at("rmse_g").get<double>(), steps[0].at("rmse_g").get<double>() / 3);
+  EXPECT_TRUE(steps[3].contains("bic"));
+  // the report: a page, and each plot as PNG and SVG
+  EXPECT_TRUE(fs::exists(dir + "/report.md"));
+  for (const char* img : {"ladder", "measured_vs_model", "residual_vs_current_a"}) {
+    for (const char* ext : {".png", ".svg"}) {
+      const std::string p = dir + "/" + img + ext;
+      ASSERT_TRUE(fs::exists(p)) << p;
+      EXPECT_GT(fs::file_size(p), 1000u) << p;
+    }
+  }
+}
+
+TEST(LabCli, BadInputIsAnErrorExitNotACrash) {
+  const std::string bad = tmp("bad.csv");
+  std::ofstream(bad) << "pwm_us,force_g\n1000,1\n1100,x\n";
+  std::string out;
+  testing::internal::CaptureStderr();
+  EXPECT_NE(run({"lab", "diagnose", bad, "--model", "curve"}, out), 0);
+  EXPECT_NE(run({"lab", "diagnose", bad, "--model", "nonsense"}, out), 0);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("bad.csv:3:6"), std::string::npos) << err;
+}
+
+TEST(LabCli, EffectsListingDocumentsTheWholeCatalogue) {
+  std::string out;
+  ASSERT_EQ(run({"lab", "effects"}, out), 0);
+  for (const char* name : {"curve", "deadband", "voltage", "sag", "motor", "drift", "lag", "thermal", "density", "thesis", "mul: EXPR"})
+    EXPECT_NE(out.find(std::string("\n  ") + name + "\n"), std::string::npos) << name;
+  EXPECT_NE(out.find("[ohm]"), std::string::npos);
+}
+
+}  // namespace

@@ -1,0 +1,48 @@
+// Real data: Bitcraze's Crazyflie 2.1 thrust-stand logs (../shared/data). The force follows
+// pwm * vbat; the `voltage` effect must lower the error against a PWM-only curve.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "lab/analysis.hpp"
+#include "lab/dataset.hpp"
+#include "lab/model.hpp"
+
+namespace {
+
+lab::Dataset crazyflie() {
+  const std::string dir = THRUSTCAL_LAB_CF_DIR;
+  lab::ReadOptions ro;
+  ro.maps = {lab::parseColumnMap("force_g=weight[g]/4"), lab::parseColumnMap("pwm_us=pwm"),
+             lab::parseColumnMap("vbat_v=vbat[V]")};
+  lab::Dataset d = lab::readFiles({dir + "/cf2.1-stock-prop.csv", dir + "/cf21_stock2.csv"}, ro);
+  lab::addDerivedColumns(d);
+  return d;
+}
+
+bool haveData() { return std::filesystem::exists(std::string(THRUSTCAL_LAB_CF_DIR) + "/cf21_stock2.csv"); }
+
+TEST(LabCrazyflie, VoltageEffectLowersTheErrorAgainstAPwmOnlyCurve) {
+  if (!haveData()) GTEST_SKIP() << "no Crazyflie data at " << THRUSTCAL_LAB_CF_DIR;
+  // given both real logs (two runs, 4308 samples) and a PWM-only model with the lag they show
+  const lab::Dataset d = crazyflie();
+  ASSERT_EQ(d.rows(), 2573u + 1735u);
+  // when the ladder adds `voltage`
+  const auto steps = lab::ladder(d, lab::parseSpec("curve+deadband+lag"), {"voltage"}, lab::Holdout::kNone);
+  // then the error falls and BIC says the voltage exponent earns its parameter
+  EXPECT_LT(steps[1].fit.rmse_g, 0.95 * steps[0].fit.rmse_g)
+      << steps[0].fit.rmse_g << " -> " << steps[1].fit.rmse_g;
+  EXPECT_TRUE(steps[1].earns);
+  EXPECT_LT(steps[1].delta_bic, -100.0);
+}
+
+TEST(LabCrazyflie, DiagnosisOfAPwmOnlyCurveBlamesTheLagFirst) {
+  if (!haveData()) GTEST_SKIP() << "no Crazyflie data at " << THRUSTCAL_LAB_CF_DIR;
+  const lab::Dataset d = crazyflie();
+  const lab::Diagnosis diag = lab::diagnose(d, lab::parseSpec("curve+deadband"), lab::Holdout::kNone);
+  ASSERT_FALSE(diag.variables.empty());
+  EXPECT_EQ(diag.variables.front().variable, "dpwm_us");
+  EXPECT_EQ(diag.variables.front().effects.front(), "lag");
+}
+
+}  // namespace
