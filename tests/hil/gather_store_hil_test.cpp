@@ -49,6 +49,8 @@ struct CurveCase {
   const char* what;
 };
 
+void PrintTo(const CurveCase& c, std::ostream* os) { *os << c.what << " (seed " << c.seed << ")"; }
+
 class StoredCurve : public ::testing::TestWithParam<CurveCase> {};
 
 // Tolerance: 4 g over 10 g .. 95 % of the heaviest stored gram (about 5 load-cell counts of

@@ -62,6 +62,8 @@ struct MotorCommand {
   int grams;
 };
 
+void PrintTo(const MotorCommand& c, std::ostream* os) { *os << "f " << c.motor << " " << c.grams; }
+
 class ReadRunCommands : public ReadRunQuad, public ::testing::WithParamInterface<MotorCommand> {};
 
 // Tolerance 4 %: the stored curve (<= 4 g), the 1 us PWM grid and the sag compensation.

@@ -36,6 +36,8 @@ struct PulseCase {
   int set_us;
 };
 
+void PrintTo(const PulseCase& c, std::ostream* os) { *os << "pwm " << c.channel << " " << c.set_us; }
+
 class ProbePulses : public ProbeBoard, public ::testing::WithParamInterface<PulseCase> {};
 
 TEST_P(ProbePulses, EscPulseWidthIsMeasuredFromPinEdgesWithinOneTick) {
