@@ -87,12 +87,22 @@ void registerCommands(CLI::App& app) {
       "flash and static SRAM of gather_store and read_run (avr-size), SRAM of the four models, "
       "EEPROM per motor",
       [](const Options& o) { return std::vector<Section>{footprintSection(o.paths)}; });
+  add(*bench, o, "calibration",
+      "simulated sweep time and stored-curve error of gather_store in simavr: thesis 200 ms steps "
+      "vs a v2 sweep",
+      [](const Options& o) { return std::vector<Section>{calibrationSection(o.paths, o.quick)}; });
+  add(*bench, o, "liftoff",
+      "read_run in simavr on the tethered quad for a simulated minute on a draining pack: thesis "
+      "vs v2 records",
+      [](const Options& o) { return std::vector<Section>{liftoffSection(o.paths, o.quick)}; });
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
         std::vector<Section> all;
         all.push_back(accuracySection(accuracyConfig(o)));
         all.push_back(computeSection(o.paths));
         all.push_back(footprintSection(o.paths));
+        all.push_back(calibrationSection(o.paths, o.quick));
+        all.push_back(liftoffSection(o.paths, o.quick));
         return all;
       });
 }
