@@ -338,10 +338,11 @@ Section liftoffSection(const AvrPaths& paths, bool quick) {
   Section s;
   s.key = "liftoff";
   const int hold_ms = quick ? 10000 : 60000;
-  const double force_g = 300.0, soc = 0.5;
+  const double force_g = 300.0;
+  const double socs[] = {0.5, 0.15};  // half charged; nearly empty (below the thesis's 10 V curve)
   const std::string title = fmt::format(
       "5. Lift-off on a draining pack: read_run in simavr on the tethered quad, {} g per motor, "
-      "{} s hold, 3S LiPo from {:.0f} % (force error, % of command)", force_g, hold_ms / 1000, soc * 100);
+      "{} s hold, 3S LiPo (force error, % of command)", force_g, hold_ms / 1000);
   const std::string elf = paths.elf("read_run");
   if (!std::filesystem::exists(elf)) {
     const std::string why = elf + " not found: build the AVR tree (--target read_run) or pass --avr-build DIR";
@@ -355,7 +356,9 @@ Section liftoffSection(const AvrPaths& paths, bool quick) {
     s.json = {{"available", false}, {"reason", runs.error}};
     return s;
   }
-  Table t(title, {"EEPROM flown", "RMS %", "max %", "drift %", "tilt deg", "bus V start-end", "target", "met?"});
+  Table t(title, {"EEPROM flown", "pack", "RMS %", "max %", "drift %", "tilt deg", "bus V start-end",
+                  "target", "met?"});
+  for (const double soc : socs)
   for (const MethodRun* m : {&runs.thesis, &runs.v2}) {
     sim::LiftoffOptions o;
     o.elf_path = elf;
@@ -370,7 +373,8 @@ Section liftoffSection(const AvrPaths& paths, bool quick) {
     o.settle_s = 1.0;
     o.sample_period_s = 0.05;
     o.progress = [](const std::string&) {};
-    std::cerr << fmt::format("bench: read_run lift-off in simavr, {} EEPROM, {} s hold\n", m->key, hold_ms / 1000);
+    std::cerr << fmt::format("bench: read_run lift-off in simavr, {} EEPROM, {} s hold from {:.0f} %\n",
+                             m->key, hold_ms / 1000, soc * 100);
     const sim::LiftoffResult r = sim::runLiftoff(o);
     // The hold ends where read_run stops the motors (last sample with all four pulses above
     // 1050 us; the scenario records a spin-down after it); it began hold_ms before.
@@ -406,11 +410,13 @@ Section liftoffSection(const AvrPaths& paths, bool quick) {
     const double rms = std::sqrt(sum_sq / n);
     const double drift = (n_last ? last / n_last : 0) - (n_first ? first / n_first : 0);
     const bool flies_v2 = m->key == "v2";
-    t.addRow({flies_v2 ? "v2 records (fit + refine)" : "thesis v1 records (option 2.1)", fixed(rms, 2),
+    t.addRow({flies_v2 ? "v2 records (fit + refine)" : "thesis v1 records (option 2.1)",
+              fmt::format("{:.0f} %", soc * 100), fixed(rms, 2),
               fixed(max_abs, 2), fixed(drift, 2), fixed(r.max_tilt_deg, 1),
               fmt::format("{:.2f}-{:.2f}", v_start, v_end), flies_v2 ? "RMS <= 1, max <= 3" : "-",
               flies_v2 ? verdict(rms <= 1.0 && max_abs <= 3.0) : "-"});
-    s.json[m->key] = {{"rms_pct", rms}, {"max_pct", max_abs}, {"drift_pct", drift},
+    const std::string soc_key = fmt::format("soc{:.0f}", soc * 100);
+    s.json[soc_key][m->key] = {{"rms_pct", rms}, {"max_pct", max_abs}, {"drift_pct", drift},
                       {"max_tilt_deg", r.max_tilt_deg}, {"hold_tilt_deg", r.hold_tilt_deg},
                       {"bus_v_start", v_start}, {"bus_v_end", v_end},
                       {"hold_thrust_g", r.hold_thrust_g}, {"thrust_spread_pct", r.thrust_spread_pct},
@@ -422,7 +428,7 @@ Section liftoffSection(const AvrPaths& paths, bool quick) {
   s.json["available"] = true;
   s.json["force_g"] = force_g;
   s.json["hold_s"] = hold_ms / 1000.0;
-  s.json["lipo_soc_start"] = soc;
+  s.json["lipo_soc_start"] = {socs[0], socs[1]};
   s.tables.push_back(std::move(t));
   return s;
 }
