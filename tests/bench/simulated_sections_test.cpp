@@ -1,0 +1,52 @@
+// Benchmarks 4 and 5 on the real gather_store and read_run images (THRUSTCAL_AVR_BUILD_DIR) in
+// simavr: the sections produce their figures, and the ranking they exist to show holds.
+// Skipped when the AVR tree has not been built.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "bench/sections.hpp"
+
+namespace {
+
+bench::AvrPaths avrPaths() {
+  bench::AvrPaths p;
+  p.avr_build = THRUSTCAL_AVR_BUILD_DIR;
+  return p;
+}
+
+bool imagesBuilt() {
+  const bench::AvrPaths p = avrPaths();
+  return std::filesystem::exists(p.elf("gather_store")) && std::filesystem::exists(p.elf("read_run"));
+}
+
+}  // namespace
+
+TEST(BenchSimulatedSections, SettledV2SweepStoresAMoreAccurateModelThanTheThesisSweep) {
+  if (!imagesBuilt()) GTEST_SKIP() << "no AVR images in " << THRUSTCAL_AVR_BUILD_DIR;
+  // when: both calibrations run in simavr (four motors each)
+  const bench::Section s = bench::calibrationSection(avrPaths(), true);
+  // then
+  ASSERT_TRUE(s.json.value("available", false)) << s.json.dump();
+  const double thesis = s.json["thesis"]["curve_error_max_pct_100_450g"];
+  const double v2 = s.json["v2"]["curve_error_max_pct_100_450g"];
+  EXPECT_LT(v2, thesis);
+  EXPECT_EQ(s.json["v2"]["motors"].size(), 4u);
+  // and: a sweep takes simulated time in proportion to its steps (81 x 200 ms, 54 x 500 ms)
+  EXPECT_GT(s.json["thesis"]["sweep_simulated_s_max"].get<double>(), 81 * 0.2);
+  EXPECT_GT(s.json["v2"]["sweep_simulated_s_max"].get<double>(), 54 * 0.5);
+}
+
+TEST(BenchSimulatedSections, ReadRunFliesV2RecordsCloserToTheCommandThanTheThesisRecords) {
+  if (!imagesBuilt()) GTEST_SKIP() << "no AVR images in " << THRUSTCAL_AVR_BUILD_DIR;
+  // when: the quick lift-off (10 s hold) from both charges, each EEPROM
+  const bench::Section s = bench::liftoffSection(avrPaths(), true);
+  // then
+  ASSERT_TRUE(s.json.value("available", false)) << s.json.dump();
+  for (const char* soc : {"soc50", "soc15"}) {
+    SCOPED_TRACE(soc);
+    EXPECT_LT(s.json[soc]["v2"]["rms_pct"].get<double>(), s.json[soc]["thesis"]["rms_pct"].get<double>());
+    // the pack drains during the hold
+    EXPECT_LT(s.json[soc]["v2"]["bus_v_end"].get<double>(), s.json[soc]["v2"]["bus_v_start"].get<double>());
+  }
+}
