@@ -270,6 +270,7 @@ void GatherStoreApp::cmdHelp() {
   sayLine(TC_PSTR("  range MIN MAX sweep PWM range in us, 1000..2000 (default 1000 1800)"));
   sayLine(TC_PSTR("  step US       sweep step in us, 1..100 (default 10)"));
   sayLine(TC_PSTR("  settle MS     wait per step in ms, 0..10000 (default 200)"));
+  sayLine(TC_PSTR("  settle auto   next step once the force stops changing; settle MS is the cap"));
   sayLine(TC_PSTR("  sweep         run the sweep, stream CSV; any key aborts (motor -> 1000 us)"));
   sayLine(TC_PSTR("  store 1       store the last sweep as curve 1 (+ start voltage, sag offsets)"));
   sayLine(TC_PSTR("  store 2       store the last sweep as curve 2 (another battery voltage)"));
@@ -372,10 +373,25 @@ void GatherStoreApp::cmdStep(char** args, uint8_t n) {
 
 void GatherStoreApp::cmdSettle(char** args, uint8_t n) {
   int32_t ms;
-  if (!oneArg(args, n, TC_PSTR("settle MS (e.g. settle 200)"), TC_PSTR("settle time in ms"),
+  if (n == 2 && fw::equalsP(args[1], TC_PSTR("auto"))) {
+    settings_.settle_auto = true;
+    say(TC_PSTR("settle auto: next step once "));
+    fw::printUint(kSettledAgreements + 1u);
+    say(TC_PSTR(" force medians "));
+    fw::printUint(kSettleProbeMs);
+    say(TC_PSTR(" ms apart agree within "));
+    fw::printUint(kSettledCounts);
+    say(TC_PSTR(" counts, at most "));
+    fw::printUint(settings_.settle_ms);
+    sayLine(TC_PSTR(" ms per step (settle MS sets the cap and turns auto off)"));
+    return;
+  }
+  if (!oneArg(args, n, TC_PSTR("settle MS | settle auto (e.g. settle 200)"),
+              TC_PSTR("settle time in ms"),
               kSettleMinMs, kSettleMaxMs, ms))
     return;
   settings_.settle_ms = static_cast<uint16_t>(ms);
+  settings_.settle_auto = false;
   say(TC_PSTR("settle "));
   fw::printInt(ms);
   sayLine(TC_PSTR(" ms per step"));
@@ -499,6 +515,31 @@ bool GatherStoreApp::waitOrAbort(uint16_t ms) {
   }
 }
 
+void GatherStoreApp::printSettle() {
+  say(settings_.settle_auto ? TC_PSTR("settle auto (cap ") : TC_PSTR("settle "));
+  fw::printUint(settings_.settle_ms);
+  say(settings_.settle_auto ? TC_PSTR(" ms)") : TC_PSTR(" ms"));
+}
+
+bool GatherStoreApp::settleForce(uint16_t& counts) {
+  const uint32_t start = hal::Clock::millis();
+  uint16_t previous = 0;
+  bool have_previous = false;
+  uint8_t agreements = 0;
+  for (;;) {
+    if (!waitOrAbort(kSettleProbeMs)) return false;
+    if (!readForceCounts(counts)) return false;
+    if (have_previous) {
+      const uint16_t change = counts > previous ? counts - previous : previous - counts;
+      agreements = change <= kSettledCounts ? static_cast<uint8_t>(agreements + 1) : 0;
+      if (agreements >= kSettledAgreements) return true;
+    }
+    previous = counts;
+    have_previous = true;
+    if (hal::Clock::millis() - start >= settings_.settle_ms) return true;  // the cap
+  }
+}
+
 bool GatherStoreApp::readForceCounts(uint16_t& counts) {
   force_median_.reset();
   for (uint16_t i = 0; i < kForceWindow; ++i) {
@@ -607,9 +648,9 @@ void GatherStoreApp::cmdSweep() {
   fw::printUint(settings_.pwm_max_us);
   say(TC_PSTR(" us, step "));
   fw::printUint(settings_.step_us);
-  say(TC_PSTR(" us, settle "));
-  fw::printUint(settings_.settle_ms);
-  say(TC_PSTR(" ms, "));
+  say(TC_PSTR(" us, "));
+  printSettle();
+  say(TC_PSTR(", "));
   fw::printUint(planned);
   sayLine(TC_PSTR(" steps; any key aborts"));
   if (planned > kMaxV2Samples) {
@@ -668,10 +709,13 @@ bool GatherStoreApp::swallowLineFeed() {
 
 bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {
   hal::Esc::writePulse(settings_.slot, pwm_us);
-  if (!waitOrAbort(settings_.settle_ms)) return false;
-
   uint16_t force_counts;
-  if (!readForceCounts(force_counts)) return false;
+  if (settings_.settle_auto) {
+    if (!settleForce(force_counts)) return false;
+  } else {
+    if (!waitOrAbort(settings_.settle_ms)) return false;
+    if (!readForceCounts(force_counts)) return false;
+  }
   const tc::LoadCellStatus cell_status = cell_.check(force_counts);
   if (cell_status == tc::LoadCellStatus::kImplausible) {
     abortSweep(SweepEnd::kImplausible, force_counts);
@@ -1097,9 +1141,9 @@ void GatherStoreApp::cmdStatus() {
   fw::printUint(settings_.pwm_max_us);
   say(TC_PSTR(" us, step "));
   fw::printUint(settings_.step_us);
-  say(TC_PSTR(" us, settle "));
-  fw::printUint(settings_.settle_ms);
-  sayLine(TC_PSTR(" ms"));
+  say(TC_PSTR(" us, "));
+  printSettle();
+  fw::newline();
 
   const uint16_t counts = medianForceCounts();
   say(TC_PSTR("load cell "));

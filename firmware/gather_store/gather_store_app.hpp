@@ -72,13 +72,24 @@ constexpr uint16_t kSettleMinMs = 0;
 constexpr uint16_t kSettleMaxMs = 10000;
 constexpr int16_t kPlateMaxG = 500;
 
+// settle auto: force medians kSettleProbeMs apart; the step is settled when
+// kSettledAgreements successive pairs differ by at most kSettledCounts ADC counts (0 counts:
+// three equal medians), or when settle_ms (the cap) has passed. One count (0.75 g) was too
+// loose at the low end, where a 10 us step moves the force by only 1-3 counts (simavr plant
+// bench, cap 500 ms: 0.79 % RMS v2 error with 1 count and 2 agreements, 0.48 % with 0 counts;
+// fixed 500 ms 0.36 %). Measured sweep times: tests/hil_power/settle_auto_hil_test.cpp.
+constexpr uint16_t kSettleProbeMs = 20;
+constexpr uint16_t kSettledCounts = 0;
+constexpr uint8_t kSettledAgreements = 2;
+
 struct Settings {
   uint8_t slot = 0;             // motor slot 0..3 = ESC output and EEPROM record
   int16_t plate_g = 60;         // plate carrying the motor (thesis 60 g)
   uint16_t pwm_min_us = 1000;   // sweep start
   uint16_t pwm_max_us = 1800;   // sweep end (inclusive when on the step grid)
   uint16_t step_us = 10;
-  uint16_t settle_ms = 200;     // thesis: 200 ms per step
+  uint16_t settle_ms = 200;     // thesis: 200 ms per step (settle auto: the cap)
+  bool settle_auto = false;     // settle auto: step on once the force stops changing
 };
 
 // Why a sweep ended.
@@ -154,6 +165,10 @@ class GatherStoreApp {
   // Builds the curve and the sag table from the samples and prints the summary.
   void finishSweep(uint8_t slot, uint32_t elapsed_ms);
   bool waitOrAbort(uint16_t ms);  // false: a key arrived (motor already stopped)
+  // settle auto: waits until the force median stops changing (or the cap) and returns the
+  // last median. False: a key arrived.
+  bool settleForce(uint16_t& counts);
+  void printSettle();  // "settle 200 ms" / "settle auto (cap 200 ms)"
   bool readForceCounts(uint16_t& counts);  // false: a key arrived during the 201 readings
   bool readBatteryCounts(uint16_t& counts);
   void stopMotor();

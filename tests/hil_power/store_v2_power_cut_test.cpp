@@ -130,6 +130,8 @@ std::string secondStoreName(SecondStore how) {
   return how == SecondStore::kRefine ? "Refine" : "MotorSwap";
 }
 
+void PrintTo(SecondStore how, std::ostream* os) { *os << secondStoreName(how); }
+
 constexpr uint64_t kMotorSeed = 21;
 constexpr uint64_t kSwappedMotorSeed = 22;
 constexpr double kSwappedVariation = 0.08;  // clearly another motor: PWMs several us apart

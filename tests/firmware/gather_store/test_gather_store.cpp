@@ -40,7 +40,7 @@ TEST_F(GatherStore, StartArmsAllFourEscsAtOneThousandAndShowsThePrompt) {
 TEST_F(GatherStore, HelpListsEveryCommand) {
   const std::string out = run("help");
   for (const char* cmd : {"help", "motor N", "plate G", "weigh", "tare", "cal W", "span W",
-                          "range MIN MAX", "step US", "settle MS", "sweep", "store 1", "store 2",
+                          "range MIN MAX", "step US", "settle MS", "settle auto", "sweep", "store 1", "store 2",
                           "store v2", "show", "erase", "status"}) {
     EXPECT_NE(out.find(std::string("  ") + cmd), std::string::npos) << cmd;
   }
@@ -288,6 +288,62 @@ TEST_F(GatherStore, SettingsChangeTheSweep) {
   EXPECT_NE(out.find("# done: 31 samples"), std::string::npos) << out;
   EXPECT_GE(took, 31u * 50u);
   EXPECT_LT(took, 31u * 50u + 200u);
+}
+
+TEST_F(GatherStore, SettleAutoStepsOnOnceTheForceStopsChanging) {
+  // given: the plant settles with a 30 ms time constant, far within the 200 ms cap
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  const auto said = responseLines(run("settle auto"));
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_TRUE(startsWith(said[0], "settle auto: next step once 3 force medians 20 ms apart "
+                                  "agree within 0 counts, at most 200 ms per step"))
+      << said[0];
+  EXPECT_NE(run("status").find("settle auto (cap 200 ms)"), std::string::npos);
+  // when
+  const uint32_t t0 = hal::fake::nowMs();
+  const std::string out = sweep();
+  const uint32_t took = hal::fake::nowMs() - t0;
+  // then: every row still within 1.5 g of the plant's steady state, in well under 81 * 200 ms
+  EXPECT_NE(out.find("# sweep motor 0: 1000..1800 us, step 10 us, settle auto (cap 200 ms)"),
+            std::string::npos)
+      << out;
+  const std::regex row(R"(^(\d+),(-?\d+\.\d),.*$)");
+  int rows = 0;
+  for (const auto& line : splitLines(out)) {
+    std::smatch m;
+    if (!std::regex_match(line, m, row)) continue;
+    ++rows;
+    EXPECT_NEAR(std::stod(m[2]), plant_.steadyThrust(std::stod(m[1])), 1.5) << line;
+  }
+  EXPECT_EQ(rows, 81);
+  EXPECT_LT(took, 81u * 200u * 2u / 3u);
+  RecordProperty("settle_auto_sweep_ms", std::to_string(took));
+  // and settle MS turns it off again
+  EXPECT_NE(run("settle 150").find("settle 150 ms per step"), std::string::npos);
+  EXPECT_NE(run("status").find("settle 150 ms"), std::string::npos);
+  EXPECT_FALSE(app_->settings().settle_auto);
+}
+
+TEST_F(GatherStore, SettleAutoWaitsNoLongerThanTheCapWhenTheForceNeverSettles) {
+  // given: an amplifier offset that jumps 3 counts every 20 ms (a vibrating bench)
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  run("range 1000 1090");
+  run("settle 100");
+  run("settle auto");
+  hal::fake::setTickHook([&](uint32_t now) {
+    plant_.tick();
+    plant_.base_counts = 100.0 + ((now / 20) % 2) * 3.0;
+  });
+  // when
+  const uint32_t t0 = hal::fake::nowMs();
+  const std::string out = sweep();
+  const uint32_t took = hal::fake::nowMs() - t0;
+  // then: 10 steps of the cap (100 ms, ending at the next 20 ms probe)
+  EXPECT_NE(out.find("# done: 10 samples"), std::string::npos) << out;
+  EXPECT_GE(took, 10u * 100u);
+  EXPECT_LE(took, 10u * 120u + 50u);
 }
 
 TEST_F(GatherStore, SpanCalibratesTheGainFromAKnownWeight) {
