@@ -36,6 +36,8 @@
 #include <string>
 #include <vector>
 
+#include <fcntl.h>
+#include <gelf.h>
 #include <unistd.h>
 
 #include "plant/bench.hpp"
@@ -109,6 +111,58 @@ class EepromWriteRecorder {
   }
 };
 
+// ---- stack high-water mark ---------------------------------------------------------------------
+
+// Data-space address of an ELF symbol (e.g. __bss_end), or 0 when absent.
+uint16_t elfDataSymbol(const std::string& path, const char* name) {
+  uint32_t value = 0;
+  elf_version(EV_CURRENT);
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) return 0;
+  Elf* elf = elf_begin(fd, ELF_C_READ, nullptr);
+  for (Elf_Scn* scn = elf ? elf_nextscn(elf, nullptr) : nullptr; scn; scn = elf_nextscn(elf, scn)) {
+    GElf_Shdr sh;
+    if (!gelf_getshdr(scn, &sh) || sh.sh_type != SHT_SYMTAB || sh.sh_entsize == 0) continue;
+    Elf_Data* data = elf_getdata(scn, nullptr);
+    for (std::size_t i = 0; data && i < sh.sh_size / sh.sh_entsize; ++i) {
+      GElf_Sym sym;
+      if (!gelf_getsym(data, static_cast<int>(i), &sym)) continue;
+      const char* sym_name = elf_strptr(elf, sh.sh_link, sym.st_name);
+      if (sym_name && std::string(sym_name) == name) value = static_cast<uint32_t>(sym.st_value);
+    }
+  }
+  if (elf) elf_end(elf);
+  ::close(fd);
+  return static_cast<uint16_t>(value & 0xFFFF);  // SRAM symbols live at 0x800000 + address
+}
+
+constexpr avr_io_addr_t kSpl = 0x5D, kSph = 0x5E;
+constexpr uint16_t kRamEnd = 0x21FF;  // ATmega2560
+constexpr uint8_t kPaint = 0xA5;
+
+// Paints the free SRAM between the end of .bss and the stack pointer; stackLowWater() then
+// finds the lowest byte the stack reached since.
+class StackPaint {
+ public:
+  StackPaint(avr_t* avr, uint16_t bss_end) : avr_(avr), bss_end_(bss_end) {
+    const uint16_t sp = static_cast<uint16_t>(avr->data[kSpl] | (avr->data[kSph] << 8));
+    for (uint16_t a = bss_end; a < sp; ++a) avr->data[a] = kPaint;
+  }
+  // Bytes between .bss and the deepest stack byte (never touched), and the stack's depth.
+  uint16_t untouchedBytes() const {
+    uint16_t a = bss_end_;
+    while (a <= kRamEnd && avr_->data[a] == kPaint) ++a;
+    return static_cast<uint16_t>(a - bss_end_);
+  }
+  uint16_t peakStackBytes() const {
+    return static_cast<uint16_t>(kRamEnd + 1 - bss_end_ - untouchedBytes());
+  }
+
+ private:
+  avr_t* avr_;
+  uint16_t bss_end_;
+};
+
 // ---- (a) the bench part: old image and the second store's writes ------------------------------
 
 struct StoreRecording {
@@ -117,6 +171,9 @@ struct StoreRecording {
   std::vector<EepromWrite> writes;   // physical writes of the second store, in order
   int reported_bytes = -1;           // gather_store's "wrote N bytes"
   std::string first_store_line, second_store_line;
+  int static_sram_bytes = -1;    // .data + .bss (__bss_end - 0x200)
+  int peak_stack_bytes = -1;     // deepest stack during the second store v2
+  int free_sram_bytes = -1;      // SRAM the stack never reached
   double wall_s = 0, simulated_s = 0;
 };
 
@@ -135,7 +192,7 @@ void PrintTo(SecondStore how, std::ostream* os) { *os << secondStoreName(how); }
 constexpr uint64_t kMotorSeed = 21;
 constexpr uint64_t kSwappedMotorSeed = 22;
 constexpr double kSwappedVariation = 0.08;  // clearly another motor: PWMs several us apart
-constexpr char kCacheVersion[] = "hil_power-2";
+constexpr char kCacheVersion[] = "hil_power-3";
 
 std::vector<std::string> mustCommand(sim::Console& con, const std::string& line, double budget_s) {
   auto lines = con.command(line, budget_s);
@@ -207,9 +264,15 @@ StoreRecording recordOnTheBench(SecondStore how) {
     calibrateAndSweep(*rig, *con, swapped);
   }
   EepromWriteRecorder recorder(rig->board);
+  const uint16_t bss_end = elfDataSymbol(imagePath("gather_store"), "__bss_end");
+  if (bss_end < 0x200) throw std::runtime_error("gather_store.elf has no __bss_end symbol");
+  const StackPaint paint(rig->board.avr(), bss_end);
   recorder.recording = true;
   r.second_store_line = storeLine(mustCommand(*con, "store v2", 10));
   recorder.recording = false;
+  r.static_sram_bytes = bss_end - 0x200;
+  r.peak_stack_bytes = paint.peakStackBytes();
+  r.free_sram_bytes = paint.untouchedBytes();
   r.writes = recorder.writes;
   r.final_image = rig->board.eeprom();
   r.reported_bytes = wroteBytes(r.second_store_line);
@@ -252,6 +315,8 @@ bool loadCache(const fs::path& path, StoreRecording& r) {
       if (!parseHexBytes(rest, r.final_image)) return false;
     } else if (key == "reported") {
       r.reported_bytes = std::stoi(rest);
+    } else if (key == "sram") {
+      std::istringstream(rest) >> r.static_sram_bytes >> r.peak_stack_bytes >> r.free_sram_bytes;
     } else if (key == "first") {
       r.first_store_line = rest;
     } else if (key == "second") {
@@ -272,7 +337,8 @@ void saveCache(const fs::path& path, const StoreRecording& r) {
   {
     std::ofstream out(tmp, std::ios::trunc);
     out << "old " << hexBytes(r.old_image) << "\nfinal " << hexBytes(r.final_image)
-        << "\nreported " << r.reported_bytes << "\nfirst " << r.first_store_line << "\nsecond "
+        << "\nreported " << r.reported_bytes << "\nsram " << r.static_sram_bytes << " "
+        << r.peak_stack_bytes << " " << r.free_sram_bytes << "\nfirst " << r.first_store_line << "\nsecond "
         << r.second_store_line << "\n";
     for (const auto& w : r.writes) out << "w " << w.addr << " " << unsigned(w.value) << "\n";
     out << "end\n";
@@ -413,6 +479,17 @@ TEST_P(StoreV2PowerCut, TheSecondStoreWritesOnlyTheSpareCopyBodyThenSequenceThen
   }
   EXPECT_EQ(phase(rec.writes.back().addr), 2) << "the last write must be a CRC byte";
   RecordProperty("second_store_v2_bytes", std::to_string(rec.writes.size()));
+  // and the stack of `store v2` (fit or refine, then the two-copy write) fits the SRAM left
+  // by the static data with room to spare
+  EXPECT_GE(rec.free_sram_bytes, 256) << "static " << rec.static_sram_bytes << " B, stack "
+                                      << rec.peak_stack_bytes << " B";
+  RecordProperty("static_sram_bytes", std::to_string(rec.static_sram_bytes));
+  RecordProperty("store_v2_peak_stack_bytes", std::to_string(rec.peak_stack_bytes));
+  RecordProperty("free_sram_bytes", std::to_string(rec.free_sram_bytes));
+  std::printf("%s: second store v2 wrote %zu bytes; SRAM static %d B, peak stack %d B, never "
+              "touched %d B\n",
+              secondStoreName(GetParam()).c_str(), rec.writes.size(), rec.static_sram_bytes,
+              rec.peak_stack_bytes, rec.free_sram_bytes);
   RecordProperty("bench_wall_s", fmt::format("{:.2f}", rec.wall_s));
 }
 
