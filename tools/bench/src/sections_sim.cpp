@@ -297,6 +297,71 @@ nlohmann::json methodJson(const MethodRun& m) {
   return j;
 }
 
+struct LiftoffFigures {
+  double rms_pct = 0, max_pct = 0, drift_pct = 0, max_tilt_deg = 0, bus_v_start = 0, bus_v_end = 0;
+  nlohmann::json json;
+};
+
+// read_run flies `m`'s EEPROM on the tethered quad: per motor and sample errors over the hold.
+LiftoffFigures flyLiftoff(const std::string& elf, const MethodRun& m, double soc, int hold_ms,
+                          double force_g) {
+  sim::LiftoffOptions o;
+  o.elf_path = elf;
+  o.eeprom = m.eeprom;
+  o.preset = kPreset;
+  o.seeds = {kSeeds[0], kSeeds[1], kSeeds[2], kSeeds[3]};
+  o.variation = kVariation;
+  o.force_g = force_g;
+  o.ramp_ms = 2000;
+  o.hold_ms = hold_ms;
+  o.lipo_soc = soc;
+  o.settle_s = 1.0;
+  o.sample_period_s = 0.05;
+  o.progress = [](const std::string&) {};
+  std::cerr << fmt::format("bench: read_run lift-off in simavr, {} EEPROM, {} s hold from {:.0f} %\n",
+                           m.key, hold_ms / 1000, soc * 100);
+  const sim::LiftoffResult r = sim::runLiftoff(o);
+  // The hold ends where read_run stops the motors (last sample with all four pulses above
+  // 1050 us; the scenario records a spin-down after it); it began hold_ms before.
+  double t_active = -1;
+  for (const sim::LiftoffSample& smp : r.samples) {
+    bool all_on = true;
+    for (double p : smp.pwm_us) all_on = all_on && p > 1050.0;
+    if (all_on) t_active = smp.t_s;
+  }
+  if (t_active < 0) throw std::runtime_error("the lift-off never drove all four motors");
+  const double hold_start = t_active - hold_ms / 1000.0 + o.settle_s;
+  const double hold_end = t_active - 2 * o.sample_period_s;
+  double sum_sq = 0, first = 0, last = 0;
+  int n = 0, n_first = 0, n_last = 0;
+  LiftoffFigures f;
+  for (const sim::LiftoffSample& smp : r.samples) {
+    if (smp.t_s < hold_start || smp.t_s > hold_end) continue;
+    if (f.bus_v_start == 0) f.bus_v_start = smp.bus_v;
+    f.bus_v_end = smp.bus_v;
+    double mean = 0;
+    for (double thrust_g : smp.thrust_g) {
+      const double e = 100.0 * (thrust_g - force_g) / force_g;
+      sum_sq += e * e;
+      f.max_pct = std::max(f.max_pct, std::fabs(e));
+      ++n;
+      mean += e / 4;
+    }
+    if (smp.t_s < hold_start + 5.0) first += mean, ++n_first;
+    if (smp.t_s > hold_end - 5.0) last += mean, ++n_last;
+  }
+  if (n == 0) throw std::runtime_error("the lift-off scenario returned no samples in the hold");
+  f.rms_pct = std::sqrt(sum_sq / n);
+  f.drift_pct = (n_last ? last / n_last : 0) - (n_first ? first / n_first : 0);
+  f.max_tilt_deg = r.max_tilt_deg;
+  f.json = {{"rms_pct", f.rms_pct}, {"max_pct", f.max_pct}, {"drift_pct", f.drift_pct},
+            {"max_tilt_deg", r.max_tilt_deg}, {"hold_tilt_deg", r.hold_tilt_deg},
+            {"bus_v_start", f.bus_v_start}, {"bus_v_end", f.bus_v_end},
+            {"hold_thrust_g", r.hold_thrust_g}, {"thrust_spread_pct", r.thrust_spread_pct},
+            {"calibration_report", r.calibration_report}, {"simulated_s", r.simulated_s}};
+  return f;
+}
+
 }  // namespace
 
 Section calibrationSection(const AvrPaths& paths, bool) {
@@ -358,69 +423,18 @@ Section liftoffSection(const AvrPaths& paths, bool quick) {
   }
   Table t(title, {"EEPROM flown", "pack", "RMS %", "max %", "drift %", "tilt deg", "bus V start-end",
                   "target", "met?"});
-  for (const double soc : socs)
-  for (const MethodRun* m : {&runs.thesis, &runs.v2}) {
-    sim::LiftoffOptions o;
-    o.elf_path = elf;
-    o.eeprom = m->eeprom;
-    o.preset = kPreset;
-    o.seeds = {kSeeds[0], kSeeds[1], kSeeds[2], kSeeds[3]};
-    o.variation = kVariation;
-    o.force_g = force_g;
-    o.ramp_ms = 2000;
-    o.hold_ms = hold_ms;
-    o.lipo_soc = soc;
-    o.settle_s = 1.0;
-    o.sample_period_s = 0.05;
-    o.progress = [](const std::string&) {};
-    std::cerr << fmt::format("bench: read_run lift-off in simavr, {} EEPROM, {} s hold from {:.0f} %\n",
-                             m->key, hold_ms / 1000, soc * 100);
-    const sim::LiftoffResult r = sim::runLiftoff(o);
-    // The hold ends where read_run stops the motors (last sample with all four pulses above
-    // 1050 us; the scenario records a spin-down after it); it began hold_ms before.
-    double t_active = -1;
-    for (const sim::LiftoffSample& smp : r.samples) {
-      bool all_on = true;
-      for (double p : smp.pwm_us) all_on = all_on && p > 1050.0;
-      if (all_on) t_active = smp.t_s;
+  for (const double soc : socs) {
+    for (const MethodRun* m : {&runs.thesis, &runs.v2}) {
+      const LiftoffFigures f = flyLiftoff(elf, *m, soc, hold_ms, force_g);
+      const bool flies_v2 = m->key == "v2";
+      t.addRow({flies_v2 ? "v2 records (fit + refine)" : "thesis v1 records (option 2.1)",
+                fmt::format("{:.0f} %", soc * 100), fixed(f.rms_pct, 2), fixed(f.max_pct, 2),
+                fixed(f.drift_pct, 2), fixed(f.max_tilt_deg, 1),
+                fmt::format("{:.2f}-{:.2f}", f.bus_v_start, f.bus_v_end),
+                flies_v2 ? "RMS <= 1, max <= 3" : "-",
+                flies_v2 ? verdict(f.rms_pct <= 1.0 && f.max_pct <= 3.0) : "-"});
+      s.json[fmt::format("soc{:.0f}", soc * 100)][m->key] = f.json;
     }
-    if (t_active < 0) throw std::runtime_error("the lift-off never drove all four motors");
-    const double hold_start = t_active - hold_ms / 1000.0 + o.settle_s;
-    const double hold_end = t_active - 2 * o.sample_period_s;
-    double sum_sq = 0, max_abs = 0, first = 0, last = 0;
-    int n = 0, n_first = 0, n_last = 0;
-    double v_start = 0, v_end = 0;
-    const double t_end = hold_end;
-    for (const sim::LiftoffSample& smp : r.samples) {
-      if (smp.t_s < hold_start || smp.t_s > hold_end) continue;
-      if (v_start == 0) v_start = smp.bus_v;
-      v_end = smp.bus_v;
-      double mean = 0;
-      for (int k = 0; k < 4; ++k) {
-        const double e = 100.0 * (smp.thrust_g[static_cast<size_t>(k)] - force_g) / force_g;
-        sum_sq += e * e;
-        max_abs = std::max(max_abs, std::fabs(e));
-        ++n;
-        mean += e / 4;
-      }
-      if (smp.t_s < hold_start + 5.0) first += mean, ++n_first;
-      if (smp.t_s > t_end - 5.0) last += mean, ++n_last;
-    }
-    if (n == 0) throw std::runtime_error("the lift-off scenario returned no samples in the hold");
-    const double rms = std::sqrt(sum_sq / n);
-    const double drift = (n_last ? last / n_last : 0) - (n_first ? first / n_first : 0);
-    const bool flies_v2 = m->key == "v2";
-    t.addRow({flies_v2 ? "v2 records (fit + refine)" : "thesis v1 records (option 2.1)",
-              fmt::format("{:.0f} %", soc * 100), fixed(rms, 2),
-              fixed(max_abs, 2), fixed(drift, 2), fixed(r.max_tilt_deg, 1),
-              fmt::format("{:.2f}-{:.2f}", v_start, v_end), flies_v2 ? "RMS <= 1, max <= 3" : "-",
-              flies_v2 ? verdict(rms <= 1.0 && max_abs <= 3.0) : "-"});
-    const std::string soc_key = fmt::format("soc{:.0f}", soc * 100);
-    s.json[soc_key][m->key] = {{"rms_pct", rms}, {"max_pct", max_abs}, {"drift_pct", drift},
-                      {"max_tilt_deg", r.max_tilt_deg}, {"hold_tilt_deg", r.hold_tilt_deg},
-                      {"bus_v_start", v_start}, {"bus_v_end", v_end},
-                      {"hold_thrust_g", r.hold_thrust_g}, {"thrust_spread_pct", r.thrust_spread_pct},
-                      {"calibration_report", r.calibration_report}, {"simulated_s", r.simulated_s}};
   }
   t.addNote("errors per motor and sample (every 50 ms) after the hold's first second; drift: mean error "
             "over the last 5 s minus over the first 5 s");
