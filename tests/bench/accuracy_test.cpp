@@ -41,6 +41,13 @@ TEST(BenchAccuracy, V2BeatsOption2p1AtLeastThreefoldOutsideItsCalibrationVoltage
   EXPECT_GE(thesis.outside.rms_pct, 3.0 * v2.outside.rms_pct);
 }
 
+TEST(BenchAccuracy, Option2p1IsBetterBetweenItsCalibrationVoltagesThanOutside) {
+  // PWM-per-volt is a hyperbola: the linear interpolation holds between the two curves and
+  // drifts off outside them
+  const bench::ModelAccuracy& thesis = result().model("thesis_2_1");
+  EXPECT_LT(thesis.inside.rms_pct, thesis.outside.rms_pct);
+}
+
 TEST(BenchAccuracy, V2MeetsItsTargetsOnSettledSweeps) {
   const bench::ModelAccuracy& v2 = result().model("v2");
   EXPECT_LE(v2.all.rms_pct, 1.0);

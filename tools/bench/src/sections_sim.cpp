@@ -19,6 +19,8 @@
 #include <iostream>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 
 #include "bench/sections.hpp"
@@ -202,12 +204,14 @@ MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::s
   return m;
 }
 
+// Cached per gather_store image: `bench all` runs the gathers once for sections 4 and 5.
 CalibrationRuns& calibrationRuns(const AvrPaths& paths) {
   static CalibrationRuns runs;
-  static bool done = false;
-  if (done) return runs;
-  done = true;
+  static std::string done_for;
   const std::string elf = paths.elf("gather_store");
+  if (done_for == elf) return runs;
+  done_for = elf;
+  runs = CalibrationRuns();
   if (!std::filesystem::exists(elf)) {
     runs.error = elf + " not found: build the AVR tree (--target gather_store) or pass --avr-build DIR";
     return runs;
