@@ -25,6 +25,8 @@ std::string lowerCopy(std::string s) {
   return s;
 }
 
+bool isOutcomeName(const std::string& v);
+
 struct Advice {
   std::vector<std::string> effects;
   std::string words;
@@ -77,7 +79,7 @@ Advice adviceFor(const std::string& var, double mean, const ModelSpec& spec) {
   } else if (v == "dir") {
     pick({"lag"});
     a.words = "up and down sweeps differ: the motor speed lags the command; add `lag`";
-  } else if (startsWith(v, "rpm") || v.find("speed") != std::string::npos) {
+  } else if (isOutcomeName(v)) {
     pick({"voltage", "sag", "density"});
     a.words = var + " is the motor's response, not a condition: it follows whatever the drive model misses, so it is not ranked as a suspect";
   } else {
@@ -87,6 +89,8 @@ Advice adviceFor(const std::string& var, double mean, const ModelSpec& spec) {
   }
   return a;
 }
+
+bool isOutcomeName(const std::string& v) { return isOutcome(v); }
 
 // Catalogue effects that use this variable, in the order to try them.
 std::vector<std::string> trialsFor(const std::string& var, const ModelSpec& spec, const Dataset& data) {
@@ -114,9 +118,13 @@ std::vector<std::string> trialsFor(const std::string& var, const ModelSpec& spec
 
 }  // namespace
 
+// The motor's responses: speed, torque, power, another thrust or force reading. Each is a thrust
+// meter in disguise, so it would "explain" any residual; they are scored, never suspects.
 bool isOutcome(const std::string& name) {
   const std::string v = lowerCopy(name);
-  return startsWith(v, "rpm") || v.find("speed") != std::string::npos;
+  for (const char* word : {"rpm", "speed", "torque", "power", "efficien", "thrust", "force", "weight"})
+    if (v.find(word) != std::string::npos) return true;
+  return v == "p_w" || v == "p_mw";
 }
 
 std::vector<Suspect> rankVariables(const Dataset& data, const FitResult& fit, const ModelSpec& spec) {

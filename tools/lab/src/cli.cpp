@@ -230,13 +230,31 @@ int runLadder(const Common& c, const std::vector<std::string>& adds) {
   return 0;
 }
 
+// Wraps `text` at `width` columns, continuation lines indented by `indent` spaces.
+std::string wrap(const std::string& text, std::size_t width, std::size_t indent) {
+  std::string out, line;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find(' ', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(pos, end - pos);
+    if (!line.empty() && line.size() + 1 + word.size() > width) {
+      out += line + "\n" + std::string(indent, ' ');
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+    pos = end + 1;
+  }
+  return out + line;
+}
+
 std::string effectsText() {
   std::string s = "Effects (a model SPEC joins them with '+', e.g. curve+deadband+voltage):\n";
   for (const auto& e : effectCatalogue()) {
     s += "\n  " + e.name + "\n";
-    s += "    physics:    " + e.physics + "\n";
-    s += "    columns:    " + e.columns + "\n";
-    s += "    parameters: " + e.parameters + "\n";
+    s += "    physics:    " + wrap(e.physics, 82, 16) + "\n";
+    s += "    columns:    " + wrap(e.columns, 82, 16) + "\n";
+    s += "    parameters: " + wrap(e.parameters, 82, 16) + "\n";
   }
   s += "\nData columns: pwm_us and force_g are required; t_s, motor, vbat_v, current_a, rpm, temp_c,\n"
        "dir are known; any other numeric column is a candidate variable for the diagnosis.\n"

@@ -1004,6 +1004,19 @@ struct Model::Impl {
     r.predicted_g.assign(pred.data(), pred.data() + pred.size());
     r.residual_g.assign(res.data(), res.data() + res.size());
     if (!res.allFinite()) r.warnings.push_back("the model is not finite on some rows (check expressions and columns)");
+    if (static_cast<double>(r.k) >= n)
+      r.warnings.push_back(fmt::format("{} samples for {} parameters: the fit interpolates, its error says "
+                                       "nothing; log more samples or use fewer effects", r.n, r.k));
+    if (thesis) {
+      std::size_t saturated = 0;
+      double top = 0;
+      for (const auto& cal : cals) top = std::max<double>(top, std::max(cal.first.maxGrams(), cal.second.maxGrams()));
+      for (Eigen::Index i = 0; i < y.size(); ++i)
+        if (y[i] > top + 1) ++saturated;
+      if (saturated)
+        r.warnings.push_back(fmt::format("{} samples are above the thesis curves' heaviest gram ({:.0f} g): "
+                                         "the model saturates there, as the firmware does", saturated, top));
+    }
 
     const double dof = std::max(n - static_cast<double>(ncol), 1.0);
     const double s2 = r.rss / dof;

@@ -26,6 +26,9 @@ struct Suspect {
 
 // Every candidate variable scored against the residual, best first. Only `significant` ones
 // count as suspects (p below 0.001 divided by the number of variables).
+// True for the motor's responses (rpm, speed, torque, power, another thrust/force reading).
+bool isOutcome(const std::string& name);
+
 std::vector<Suspect> rankVariables(const Dataset& data, const FitResult& fit, const ModelSpec& spec);
 
 enum class Holdout { kNone, kRuns, kVoltage };
