@@ -171,6 +171,8 @@ struct StoreRecording {
   std::vector<EepromWrite> writes;   // physical writes of the second store, in order
   int reported_bytes = -1;           // gather_store's "wrote N bytes"
   std::string first_store_line, second_store_line;
+  std::string third_store_line;  // `store v2` once more, same sweep
+  int third_store_writes = -1;   // its physical writes (EEPE strobes)
   int static_sram_bytes = -1;    // .data + .bss (__bss_end - 0x200)
   int peak_stack_bytes = -1;     // deepest stack during the second store v2
   int free_sram_bytes = -1;      // SRAM the stack never reached
@@ -192,7 +194,7 @@ void PrintTo(SecondStore how, std::ostream* os) { *os << secondStoreName(how); }
 constexpr uint64_t kMotorSeed = 21;
 constexpr uint64_t kSwappedMotorSeed = 22;
 constexpr double kSwappedVariation = 0.08;  // clearly another motor: PWMs several us apart
-constexpr char kCacheVersion[] = "hil_power-3";
+constexpr char kCacheVersion[] = "hil_power-5";
 
 std::vector<std::string> mustCommand(sim::Console& con, const std::string& line, double budget_s) {
   auto lines = con.command(line, budget_s);
@@ -275,6 +277,14 @@ StoreRecording recordOnTheBench(SecondStore how) {
   r.free_sram_bytes = paint.untouchedBytes();
   r.writes = recorder.writes;
   r.final_image = rig->board.eeprom();
+  // The same command again: nothing new to write (motor swap: the same model; refine: that
+  // sweep already refined it, refused).
+  recorder.writes.clear();
+  recorder.recording = true;
+  const auto third = con->command("store v2", 10);
+  recorder.recording = false;
+  r.third_store_line = third.empty() ? std::string() : third.front();
+  r.third_store_writes = static_cast<int>(recorder.writes.size());
   r.reported_bytes = wroteBytes(r.second_store_line);
   r.wall_s += rig->board.wallSeconds();
   r.simulated_s += rig->board.simulatedSeconds();
@@ -317,6 +327,11 @@ bool loadCache(const fs::path& path, StoreRecording& r) {
       r.reported_bytes = std::stoi(rest);
     } else if (key == "sram") {
       std::istringstream(rest) >> r.static_sram_bytes >> r.peak_stack_bytes >> r.free_sram_bytes;
+    } else if (key == "third") {
+      std::istringstream in3(rest);
+      in3 >> r.third_store_writes;
+      std::getline(in3, r.third_store_line);
+      if (!r.third_store_line.empty() && r.third_store_line[0] == ' ') r.third_store_line.erase(0, 1);
     } else if (key == "first") {
       r.first_store_line = rest;
     } else if (key == "second") {
@@ -338,7 +353,8 @@ void saveCache(const fs::path& path, const StoreRecording& r) {
     std::ofstream out(tmp, std::ios::trunc);
     out << "old " << hexBytes(r.old_image) << "\nfinal " << hexBytes(r.final_image)
         << "\nreported " << r.reported_bytes << "\nsram " << r.static_sram_bytes << " "
-        << r.peak_stack_bytes << " " << r.free_sram_bytes << "\nfirst " << r.first_store_line << "\nsecond "
+        << r.peak_stack_bytes << " " << r.free_sram_bytes << "\nthird " << r.third_store_writes
+        << " " << r.third_store_line << "\nfirst " << r.first_store_line << "\nsecond "
         << r.second_store_line << "\n";
     for (const auto& w : r.writes) out << "w " << w.addr << " " << unsigned(w.value) << "\n";
     out << "end\n";
@@ -479,6 +495,15 @@ TEST_P(StoreV2PowerCut, TheSecondStoreWritesOnlyTheSpareCopyBodyThenSequenceThen
   }
   EXPECT_EQ(phase(rec.writes.back().addr), 2) << "the last write must be a CRC byte";
   RecordProperty("second_store_v2_bytes", std::to_string(rec.writes.size()));
+  // storing again writes nothing: the firmware says so and the EECR saw no write
+  EXPECT_EQ(rec.third_store_writes, 0) << rec.third_store_line;
+  EXPECT_NE(rec.third_store_line.find(GetParam() == SecondStore::kRefine
+                                          ? "error: motor 0 already holds a model v2 refined by a "
+                                            "sweep at"
+                                          : "motor 0 already holds this model v2 (copy B, sequence "
+                                            "2): nothing to write; wrote 0 bytes"),
+            std::string::npos)
+      << rec.third_store_line;
   // and the stack of `store v2` (fit or refine, then the two-copy write) fits the SRAM left
   // by the static data with room to spare
   EXPECT_GE(rec.free_sram_bytes, 256) << "static " << rec.static_sram_bytes << " B, stack "
