@@ -9,7 +9,8 @@
 //
 // Measured (simavr, this plant): fixed 200 ms 20.1 s, 2.42 % RMS / 4.71 % max (the load
 // cell's third-order low-pass is still moving after 200 ms); fixed 500 ms 44.5 s, 0.36 / 0.52 %;
-// settle auto with a 200 ms cap 18.3 s, 2.44 / 4.52 % (most steps end at the cap: no gain);
+// settle auto with a 200 ms cap ~18.4 s, ~2.4 / 4.7 % (most steps end at the cap: no gain;
+// the figures move by a few hundredths when the image's timing changes the noise draws);
 // settle auto with a 500 ms cap 33.8 s, 0.48 / 1.25 % (the worst at 50 g, where one step moves
 // the force by only 1-3 counts). So settle auto pays with a cap that lets the cell settle.
 #include <gtest/gtest.h>
