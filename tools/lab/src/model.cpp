@@ -1004,7 +1004,7 @@ struct Model::Impl {
     r.predicted_g.assign(pred.data(), pred.data() + pred.size());
     r.residual_g.assign(res.data(), res.data() + res.size());
     if (!res.allFinite()) r.warnings.push_back("the model is not finite on some rows (check expressions and columns)");
-    if (static_cast<double>(r.k) >= n)
+    if (!thesis && static_cast<double>(r.k) >= n)
       r.warnings.push_back(fmt::format("{} samples for {} parameters: the fit interpolates, its error says "
                                        "nothing; log more samples or use fewer effects", r.n, r.k));
     if (thesis) {

@@ -82,12 +82,13 @@ ReportFiles writeReport(const std::string& dir_name, const Dataset& data,
   {
     std::string cmd = "set xlabel 'PWM (us)'\nset ylabel 'force (g)'\nset key left top\n";
     cmd += fmt::format("set title {}\n", label("measured vs model"));
-    cmd += fmt::format("plot {} using 1:2 with points pt 7 ps 0.4 lc rgb '#444444' title 'measured'", data_file);
-    cmd += fmt::format(", '' using 1:{} with points pt 6 ps 0.5 lc rgb '#d62728' title {}", 3,
+    // models first, the measurements last (open circles on top) so both stay visible
+    cmd += fmt::format("plot {} using 1:3 with points pt 7 ps 0.5 lc rgb '#d62728' title {}", data_file,
                        label("model: " + stepName(steps.front(), 0)));
     if (steps.size() > 1)
-      cmd += fmt::format(", '' using 1:{} with points pt 2 ps 0.5 lc rgb '#1f77b4' title {}",
+      cmd += fmt::format(", '' using 1:{} with points pt 7 ps 0.5 lc rgb '#1f77b4' title {}",
                          3 + 2 * (steps.size() - 1), label("model: " + steps.back().spec.text()));
+    cmd += ", '' using 1:2 with points pt 6 ps 0.9 lc rgb '#222222' title 'measured'";
     plots.emplace_back("measured_vs_model", cmd + "\n");
   }
   const char* colors[] = {"#d62728", "#ff7f0e", "#2ca02c", "#1f77b4", "#9467bd", "#8c564b", "#e377c2"};
