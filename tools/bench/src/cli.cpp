@@ -26,6 +26,8 @@ void emit(const std::vector<Section>& sections, const Options& o) {
     for (const Table& t : s.tables) t.print(std::cout);
     j[s.key] = s.json;
   }
+  if (sections.size() > 1) targetsTable(sections).print(std::cout);
+  j["targets"] = targetsJson(sections);
   std::cout.flush();
   if (!o.json_path.empty()) {
     std::ofstream f(o.json_path);

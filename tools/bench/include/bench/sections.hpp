@@ -11,11 +11,24 @@
 
 namespace bench {
 
+// One target of the issue and where this run stands against it.
+struct TargetCheck {
+  std::string what;    // "v2 force error over the grid"
+  std::string figure;  // "RMS 0.25 %, max 1.15 %"
+  std::string target;  // "RMS <= 1 %, max <= 3 %"
+  bool met = false;
+};
+
 struct Section {
   std::string key;
   std::vector<Table> tables;
   nlohmann::json json;
+  std::vector<TargetCheck> targets;
 };
+
+// The targets of several sections as one table (printed last by `bench all`) and as JSON.
+Table targetsTable(const std::vector<Section>& sections);
+nlohmann::json targetsJson(const std::vector<Section>& sections);
 
 // Paths the AVR-based sections need. Empty avr_build: <source>/build/avr.
 struct AvrPaths {
