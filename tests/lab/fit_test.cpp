@@ -145,3 +145,48 @@ TEST(LabThesis, TwoCurveModelThroughCoreFollowsTheDataNearItsCalibrationVoltages
 }
 
 }  // namespace
+
+namespace {
+
+TEST(LabFit, OddDataGivesAResultOrAClearRefusalNeverACrash) {
+  // given small data sets a real log can turn into (one row, a motor that never started,
+  // negative tare, zero volts, one PWM, absurd magnitudes)
+  struct Odd {
+    const char* name;
+    std::vector<double> pwm, force, vbat;
+  };
+  const Odd cases[] = {
+      {"one row", {1500}, {100}, {12}},
+      {"motor never started", {1000, 1100, 1200, 1300}, {0, 0, 0, 0}, {12, 12, 12, 12}},
+      {"negative tare", {1000, 1100, 1200, 1300}, {-50, -40, -20, 10}, {12, 12, 11, 11}},
+      {"zero volts", {1000, 1100, 1200, 1300}, {0, 5, 20, 50}, {0, 0, 0, 0}},
+      {"one pwm", {1500, 1500, 1500, 1500}, {100, 101, 99, 100}, {12, 11, 10, 9}},
+      {"absurd", {1e9, -1e9, 0, 5}, {1e12, -1e12, 3, 4}, {1e6, -5, 0, 12}},
+  };
+  const char* models[] = {"curve", "curve+deadband+voltage+sag", "thesis", "curve+lag+drift+motor",
+                          "curve+deadband+mul: 1 + a*vbat_v"};
+  for (const auto& c : cases) {
+    lab::Dataset d;
+    d.names = {"pwm_us", "force_g", "vbat_v", "t_s", "motor"};
+    std::vector<double> t, m;
+    for (std::size_t i = 0; i < c.pwm.size(); ++i) {
+      t.push_back(0.5 * static_cast<double>(i));
+      m.push_back(static_cast<double>(i % 2));
+    }
+    d.columns = {c.pwm, c.force, c.vbat, t, m};
+    d.run.assign(c.pwm.size(), 0);
+    d.run_labels = {"odd"};
+    lab::addDerivedColumns(d);
+    for (const char* model : models) {
+      // when diagnosed: then a diagnosis or std::invalid_argument, nothing else
+      try {
+        const lab::Diagnosis diag = lab::diagnose(d, lab::parseSpec(model), lab::Holdout::kRuns);
+        EXPECT_EQ(diag.fit.n, c.pwm.size()) << c.name << " / " << model;
+      } catch (const std::invalid_argument& e) {
+        EXPECT_GT(std::string(e.what()).size(), 20u) << c.name << " / " << model;
+      }
+    }
+  }
+}
+
+}  // namespace
