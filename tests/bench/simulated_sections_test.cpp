@@ -25,7 +25,7 @@ bool imagesBuilt() {
 TEST(BenchSimulatedSections, SettledV2SweepStoresAMoreAccurateModelThanTheThesisSweep) {
   if (!imagesBuilt()) GTEST_SKIP() << "no AVR images in " << THRUSTCAL_AVR_BUILD_DIR;
   // when: both calibrations run in simavr (four motors each)
-  const bench::Section s = bench::calibrationSection(avrPaths(), true);
+  const bench::Section s = bench::calibrationSection(avrPaths());
   // then
   ASSERT_TRUE(s.json.value("available", false)) << s.json.dump();
   const double thesis = s.json["thesis"]["curve_error_max_pct_100_450g"];

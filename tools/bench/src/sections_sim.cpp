@@ -4,13 +4,14 @@
 // Calibration: four varied motors are calibrated twice by gather_store in simavr:
 //   thesis: 1000-1800 us, 10 us steps, 200 ms settle (the thesis's sweep) -> the stored v1
 //           curves (EEPROM, decoded with the core codec);
-//   v2:     1000-1800 us, 20 us steps, 600 ms settle -> the streamed sweep (gather_store's CSV)
+//   v2:     1000-1800 us, 15 us steps, 500 ms settle -> the streamed sweep (gather_store's CSV)
 //           fitted with tc::ModelV2Fitter (the integer code that runs on the board; gather_store
 //           does not run the v2 fit itself yet) and refined with the second sweep.
 // Each stored model is checked against the plant on the bench it was measured on (motor, LiPo
 // as at the start of the first sweep): for every gram 50..450 its PWM (v2: at the bench's bus
 // reading for that PWM, iterated to a fixed point) gives the true steady-state thrust.
-// Lift-off: read_run flies the tethered quad for a simulated minute on a half-charged pack,
+// Lift-off: read_run flies the tethered quad for a simulated minute on a draining pack (from
+// 50 % and from 15 % charge),
 // all four motors commanded the same force, once with the thesis EEPROM and once with an
 // EEPROM holding the four v2 records (tc::writeModelV2).
 #include <cmath>
@@ -58,7 +59,7 @@ Table notAvailable(const std::string& title, const std::string& why) {
 
 #ifndef THRUSTCAL_BENCH_HAVE_SIM
 
-Section calibrationSection(const AvrPaths&, bool) {
+Section calibrationSection(const AvrPaths&) {
   Section s;
   s.key = "calibration";
   const std::string why = "tools/sim (thrustcal_sim) is not part of this build: no gather scenario";
@@ -368,7 +369,7 @@ LiftoffFigures flyLiftoff(const std::string& elf, const MethodRun& m, double soc
 
 }  // namespace
 
-Section calibrationSection(const AvrPaths& paths, bool) {
+Section calibrationSection(const AvrPaths& paths) {
   Section s;
   s.key = "calibration";
   const std::string title = fmt::format(

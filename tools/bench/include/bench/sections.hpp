@@ -40,7 +40,8 @@ struct AvrPaths {
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
 Section footprintSection(const AvrPaths& paths);
-Section calibrationSection(const AvrPaths& paths, bool quick);
+Section calibrationSection(const AvrPaths& paths);
+// quick: 10 s hold instead of 60 s.
 Section liftoffSection(const AvrPaths& paths, bool quick);
 
 }  // namespace bench
