@@ -169,8 +169,12 @@ ExpoModel fitExpo(const std::vector<SweepPoint>& points) {
     return rms;
   };
   // spin-min: coarse scan, then golden-section refinement around the best point.
-  const double lowest = static_cast<double>(points.front().pwm_us) - 100.0;
-  const double highest = static_cast<double>(used.front()->pwm_us) - 1.0;
+  // spin-min lies below every sample used (x >= 0 there) and not far below the sweep's start
+  uint16_t first_used_us = used.front()->pwm_us, sweep_start_us = points.front().pwm_us;
+  for (const SweepPoint* p : used) first_used_us = std::min(first_used_us, p->pwm_us);
+  for (const SweepPoint& p : points) sweep_start_us = std::min(sweep_start_us, p.pwm_us);
+  const double lowest = static_cast<double>(sweep_start_us) - 100.0;
+  const double highest = static_cast<double>(first_used_us) - 1.0;
   ExpoModel best, m;
   double best_rms = 1e300, best_s = lowest;
   for (double s = lowest; s <= highest; s += 2.0) {
