@@ -26,8 +26,9 @@ const std::vector<HiddenEffectInfo> kHidden = {
      "temperature also cycling +-15 K within each run (a climate box); temp_c and pressure_hpa logged",
      "curve+deadband+voltage", "density", "rho_kg_m3"},
     {"sag",
-     "a worn 3S LiPo (0.12 ohm) at four states of charge; vbat_v is the resting voltage "
-     "(logged before the load), current_a the pack current",
+     "a worn 3S LiPo (0.15 ohm) at four states of charge (12.6 to 10.2 V) that also feeds the "
+     "frame's other motors (0-8 A, changing point by point); vbat_v is the resting voltage (logged "
+     "before the load), current_a the pack current",
      "curve+deadband+voltage", "sag", "current_a"},
     {"motor", "four motors with 3 % part variation (Kv, R, I0, C_T, C_P, D), two voltages each",
      "curve+deadband+voltage", "motor", "motor"},
@@ -99,11 +100,11 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
       }
     }
   } else if (h == "sag") {
-    for (double v : {12.5, 11.8, 11.2, 10.6}) {
+    for (double v : {12.6, 11.8, 11.0, 10.2}) {
       RunSetup r;
       r.params = base;
       r.battery = plant::BatteryParams::lipo3s(plant::socForCellOcv(v / 3.0));
-      r.battery.r_internal_ohm = 0.12;
+      r.battery.r_internal_ohm = 0.15;
       r.battery.r_polarization_ohm = 0.0;
       r.battery.wiring_r_ohm = 0.03;
       runs.push_back(r);
@@ -144,6 +145,8 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
     const double run_start = clock;
     for (const auto& [pulse, dir] : points) {
       act.holdPulse(pulse);
+      // sag: the pack also feeds the frame's other motors, 0..8 A that change point by point
+      const double other_a = h == "sag" ? 8.0 * rng.uniform() : 0.0;
       double bus_current = 0, bus_v = 0;
       for (double t = 0; t < settle_s - 1e-12; t += dt) {
         const double now = clock + t;
@@ -152,9 +155,11 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
           act.setEnvironment(env);
         }
         act.setWindingTemp_c(25.0);  // thermal effect off: the winding stays at 25 C
-        bus_v = ps.solveBusVoltage(act.busLoad());
+        plant::BusLoad load = act.busLoad();
+        load.offset_a += other_a;
+        bus_v = ps.solveBusVoltage(load);
         bus_current = act.step(dt, bus_v);
-        ps.step(dt, bus_current);
+        ps.step(dt, bus_current + other_a);
       }
       clock += settle_s;
       Row r{};
@@ -170,7 +175,7 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
       force += creep_g_per_min * clock / 60.0;
       r.force_g = force + (o.noise_g > 0 ? rng.normal(o.noise_g, 4.0) : 0.0);
       r.vbat_v = h == "sag" ? ps.restingVoltage_v() : bus_v;
-      r.current_a = bus_current;
+      r.current_a = bus_current + other_a;
       r.rpm = act.rpm();
       r.temp_c = env.temp_c;
       r.pressure_hpa = env.pressure_pa / 100.0;
