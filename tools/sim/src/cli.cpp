@@ -66,11 +66,14 @@ void addGather(CLI::App& sim) {
       "Calibrate simulated motors with the real gather_store image on the thesis bench:\n"
       "motor K, plate 60, cal W (motor + propeller weight), sweep on a full 3S LiPo -> store 1,\n"
       "sweep on a bench supply (or a drained pack) -> store 2, show. Saves the EEPROM as Intel\n"
-      "HEX and reports the stored curves against the plant's true steady-state thrust.");
+      "HEX and reports the stored curves against the plant's true steady-state thrust.\n"
+      "--model v2: store v2 after each sweep instead (fit, then refine); the stored model v2 is\n"
+      "checked at each sweep's resting voltage (JSON: calibration.v2.*).");
   auto o = std::make_shared<GatherOptions>();
   auto eeprom = std::make_shared<std::string>();
   auto json = std::make_shared<std::string>();
   auto second = std::make_shared<std::string>("supply");
+  auto model = std::make_shared<std::string>("v1");
   auto range = std::make_shared<std::vector<int>>();
   o->elf_path = defaultElf("gather_store");
   cmd->add_option("--elf", o->elf_path, "gather_store ELF image")->capture_default_str();
@@ -106,6 +109,11 @@ void addGather(CLI::App& sim) {
   cmd->add_option("--second", *second, "curve 2 source: supply (bench supply) or drained (pack)")
       ->check(CLI::IsMember({"supply", "drained"}))
       ->capture_default_str();
+  cmd->add_option("--model", *model,
+                  "what to store: v1 (the thesis's curves: store 1, store 2) or v2 (store v2 "
+                  "after each sweep)")
+      ->check(CLI::IsMember({"v1", "v2"}))
+      ->capture_default_str();
   cmd->add_option("--supply-v", o->supply_v, "bench supply voltage for curve 2")
       ->capture_default_str();
   cmd->add_option("--drained-soc", o->drained_soc, "pack charge (0..1) for --second drained")
@@ -122,6 +130,7 @@ void addGather(CLI::App& sim) {
         for (std::size_t i = 0; i < opt.seeds.size(); ++i) opt.slots.push_back(static_cast<int>(i));
       opt.second = *second == "drained" ? SecondCurveSource::kDrainedPack
                                         : SecondCurveSource::kBenchSupply;
+      opt.model = *model == "v2" ? GatherModel::kModelV2 : GatherModel::kThesisV1;
       opt.eeprom = loadEepromOrErased(*eeprom, false);
       const GatherResult r = runGather(opt);
       if (!eeprom->empty()) {
@@ -133,14 +142,18 @@ void addGather(CLI::App& sim) {
       j["preset"] = opt.preset;
       j["eeprom"] = *eeprom;
       writeJson(*json, j);
-      fmt::print("calibration: max error of the stored curves vs the plant {:.2f} g\n",
+      const bool v2 = opt.model == GatherModel::kModelV2;
+      fmt::print("calibration{}: max error of the stored {} vs the plant {:.2f} g\n",
+                 v2 ? " (model v2)" : "", v2 ? "model at both sweeps' voltages" : "curves",
                  r.curve_error_max_g);
       for (const auto& m : r.motors)
-        fmt::print("  slot {} (seed {}): curve 1 {:.3f} V 1..{} g err max {:.2f} g rms {:.2f} g; "
-                   "curve 2 {:.3f} V 1..{} g err max {:.2f} g rms {:.2f} g\n",
-                   m.slot, m.seed, m.curve1.start_v, m.curve1.max_g, m.curve1.error_max_g,
-                   m.curve1.error_rms_g, m.curve2.start_v, m.curve2.max_g, m.curve2.error_max_g,
-                   m.curve2.error_rms_g);
+        fmt::print("  slot {} (seed {}): {} 1 {:.3f} V 1..{} g err max {:.2f} g rms {:.2f} g; "
+                   "{} 2 {:.3f} V 1..{} g err max {:.2f} g rms {:.2f} g{}\n",
+                   m.slot, m.seed, v2 ? "sweep" : "curve", m.curve1.start_v, m.curve1.max_g,
+                   m.curve1.error_max_g, m.curve1.error_rms_g, v2 ? "sweep" : "curve",
+                   m.curve2.start_v, m.curve2.max_g, m.curve2.error_max_g, m.curve2.error_rms_g,
+                   v2 ? fmt::format("; start {:.1f} us, {} knots", m.v2_start_us, m.v2_knots)
+                      : std::string());
       fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time ({:.1f}x during "
                  "sweeps)\n",
                  r.simulated_s, r.wall_s, r.realtime_factor, r.sweep_realtime_factor);
@@ -162,6 +175,7 @@ void addLiftoff(CLI::App& sim) {
   auto out_dir = std::make_shared<std::string>();
   auto mode = std::make_shared<std::string>("both");
   auto uncal = std::make_shared<bool>(false);
+  auto label = std::make_shared<std::string>();
   auto seeds = std::make_shared<std::vector<uint64_t>>(std::vector<uint64_t>{1, 2, 3, 4});
   o->elf_path = defaultElf("read_run");
   cmd->add_option("--elf", o->elf_path, "read_run ELF image")->capture_default_str();
@@ -184,6 +198,14 @@ void addLiftoff(CLI::App& sim) {
       ->check(CLI::IsMember({"calibrated", "uncalibrated", "both"}))
       ->capture_default_str();
   cmd->add_flag("--uncalibrated", *uncal, "same as --mode uncalibrated");
+  cmd->add_option("--label", *label,
+                  "name of the calibrated run: JSON liftoff.NAME, CSV liftoff_NAME.csv (e.g. v2 "
+                  "for an EEPROM from gather --model v2)")
+      ->check([](const std::string& v) {
+        return v.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") == std::string::npos
+                   ? std::string()
+                   : std::string("use lower-case letters, digits and _ only");
+      });
   cmd->add_option("--reference-slot", o->reference_slot,
                   "uncalibrated: the slot whose record all four motors use")
       ->capture_default_str();
@@ -207,15 +229,17 @@ void addLiftoff(CLI::App& sim) {
         for (int i = 0; i < 4; ++i) opt.seeds[i] = (*seeds)[i];
         opt.eeprom = loadEepromOrErased(*eeprom, true);
         opt.uncalibrated = mm == "uncalibrated";
+        if (!opt.uncalibrated) opt.label = *label;
+        const std::string name = opt.label.empty() ? mm : opt.label;
         if (!out_dir->empty())
-          opt.csv_path = (fs::path(*out_dir) / fmt::format("liftoff_{}.csv", mm)).string();
+          opt.csv_path = (fs::path(*out_dir) / fmt::format("liftoff_{}.csv", name)).string();
         const LiftoffResult r = runLiftoff(opt);
-        j["liftoff"][mm] = r.toJson();
+        j["liftoff"][name] = r.toJson();
         sim_s += r.simulated_s;
         wall_s += r.wall_s;
         fmt::print("liftoff {}: thrust {:.1f} {:.1f} {:.1f} {:.1f} g for {:.0f} g: spread {:.2f} %, "
                    "rms error {:.2f} %, tilt {:.2f} deg (max {:.2f})\n",
-                   mm, r.hold_thrust_g[0], r.hold_thrust_g[1], r.hold_thrust_g[2],
+                   name, r.hold_thrust_g[0], r.hold_thrust_g[1], r.hold_thrust_g[2],
                    r.hold_thrust_g[3], r.force_g, r.thrust_spread_pct, r.force_error_rms_pct,
                    r.hold_tilt_deg, r.max_tilt_deg);
       }

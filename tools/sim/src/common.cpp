@@ -5,6 +5,7 @@
 
 #include "sim/scenarios.hpp"
 #include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/record_v2.hpp"
 
 namespace sim {
 namespace {
@@ -17,19 +18,31 @@ struct ImageStorage {
 };
 const std::vector<uint8_t>* ImageStorage::image = nullptr;
 
-}  // namespace
-
-std::string decodeSlot(const std::vector<uint8_t>& eeprom, int slot, tc::MotorCalibration& out) {
+void checkImageAndSlot(const std::vector<uint8_t>& eeprom, int slot) {
   if (eeprom.size() < static_cast<std::size_t>(tc::kRecordBytes) * tc::kMotorSlots)
     throw std::invalid_argument(
         fmt::format("EEPROM image has {} bytes, need {}", eeprom.size(),
                     tc::kRecordBytes * tc::kMotorSlots));
   if (slot < 0 || slot >= tc::kMotorSlots)
     throw std::invalid_argument(fmt::format("slot {} is not 0..3", slot));
+}
+
+}  // namespace
+
+std::string decodeSlot(const std::vector<uint8_t>& eeprom, int slot, tc::MotorCalibration& out) {
+  checkImageAndSlot(eeprom, slot);
   ImageStorage::image = &eeprom;
   const tc::DecodeStatus status = tc::readRecord<ImageStorage>(static_cast<uint8_t>(slot), out);
   ImageStorage::image = nullptr;
   return tc::decodeStatusText(status);
+}
+
+std::string decodeSlotV2(const std::vector<uint8_t>& eeprom, int slot, tc::ModelV2& out) {
+  checkImageAndSlot(eeprom, slot);
+  ImageStorage::image = &eeprom;
+  const tc::RecordV2Read r = tc::readModelV2<ImageStorage>(static_cast<uint8_t>(slot), out);
+  ImageStorage::image = nullptr;
+  return tc::decodeStatusText(r.status);
 }
 
 void copySlot(std::vector<uint8_t>& eeprom, int from, int to) {

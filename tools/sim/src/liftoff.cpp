@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <memory>
 
@@ -54,7 +55,7 @@ std::vector<std::string> bootReadRun(Console& con) {
 LiftoffResult runLiftoff(const LiftoffOptions& o) {
   const ProgressFn progress = o.progress ? o.progress : ProgressFn(stderrProgress);
   LiftoffResult r;
-  r.mode = o.uncalibrated ? "uncalibrated" : "calibrated";
+  r.mode = !o.label.empty() ? o.label : o.uncalibrated ? "uncalibrated" : "calibrated";
   r.force_g = o.force_g;
   std::vector<uint8_t> eeprom = o.eeprom;
   if (eeprom.size() != kEepromBytes)
@@ -62,8 +63,9 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
                                             kEepromBytes, eeprom.size()));
   if (o.uncalibrated) {
     tc::MotorCalibration ref;
+    tc::ModelV2 ref_v2;
     const std::string status = decodeSlot(eeprom, o.reference_slot, ref);
-    if (status != "ok")
+    if (status != "ok" && decodeSlotV2(eeprom, o.reference_slot, ref_v2) != "ok")
       throw std::invalid_argument(fmt::format(
           "uncalibrated mode copies slot {}'s record to all four, but it is '{}'; calibrate it "
           "first (thrustcal sim gather)",
@@ -80,9 +82,14 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
   Console con(rig->board, "rr> ");
   progress(fmt::format("liftoff ({}): read_run booting, seeds {} {} {} {}", r.mode, o.seeds[0],
                        o.seeds[1], o.seeds[2], o.seeds[3]));
-  for (const auto& line : bootReadRun(con))
+  for (const auto& line : bootReadRun(con)) {
     if (line.rfind("motor ", 0) == 0 || line.rfind("calibrated motors", 0) == 0)
       r.calibration_report.push_back(line);
+    int slot = -1;  // "motor K: ok, ... model v1 (...)" / "motor K: ok, model v2 (...)"
+    if (std::sscanf(line.c_str(), "motor %d: ok", &slot) == 1 && slot >= 0 && slot < 4)
+      for (const char* model : {"v1", "v2"})
+        if (line.find(std::string("model ") + model) != std::string::npos) r.models[slot] = model;
+  }
 
   double t_hold = -1, t_done = -1;
   con.onLine([&](const std::string& line) {
@@ -179,6 +186,7 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
 
 nlohmann::json LiftoffResult::toJson() const {
   return {{"force_g", force_g},
+          {"models", models},
           {"hold_thrust_g", hold_thrust_g},
           {"hold_pwm_us", hold_pwm_us},
           {"thrust_spread_pct", thrust_spread_pct},

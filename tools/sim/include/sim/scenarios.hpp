@@ -7,6 +7,8 @@
 //          the pack) -> tare, sweep -> store 2, show. The EEPROM image is kept across motors.
 //          The stored curves are decoded with the core codec and compared with the plant's true
 //          steady-state thrust at each stored PWM (power source as at the start of that sweep).
+//          With model v2 each sweep is followed by `store v2` instead (the second one refines
+//          the model); the stored model is checked at each sweep's conditions the same way.
 // liftoff: read_run on the tethered quad (plant::QuadFrame, four varied motors, one LiPo):
 //          "liftoff G RAMP HOLD"; thrust, moments and tilt are logged; the hold phase is
 //          summarized. Uncalibrated = every slot holds the reference slot's record, so all four
@@ -22,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include "plant/params.hpp"
+#include "thrustcal/model_v2.hpp"
 #include "thrustcal/motor_calibration.hpp"
 
 namespace sim {
@@ -32,6 +35,10 @@ using ProgressFn = std::function<void(const std::string&)>;
 // ---- gather ---------------------------------------------------------------------------------
 
 enum class SecondCurveSource { kBenchSupply, kDrainedPack };
+// What gather_store stores after each sweep: the thesis's two curves (store 1, store 2) or
+// model v2 (store v2 after both sweeps: fitted from the first, refined by the second).
+enum class GatherModel { kThesisV1, kModelV2 };
+const char* gatherModelName(GatherModel model);  // "v1" / "v2"
 
 struct GatherOptions {
   std::string elf_path;                 // gather_store.elf
@@ -49,6 +56,7 @@ struct GatherOptions {
   // step; the thesis's 200 ms leaves ~1 % (stored curves ~7 g off instead of ~3 g).
   int pwm_min_us = 1040, pwm_max_us = 1800, step_us = 10, settle_ms = 500;
   SecondCurveSource second = SecondCurveSource::kBenchSupply;
+  GatherModel model = GatherModel::kThesisV1;
   double supply_v = 10.0;               // bench supply for curve 2 (6.32 A limit)
   double drained_soc = 0.25;            // pack state of charge for curve 2 when drained
   double band_min_g = 10.0;             // calibrated band for the error: band_min_g ..
@@ -57,9 +65,13 @@ struct GatherOptions {
   ProgressFn progress;
 };
 
+// A stored model at one sweep's conditions against the plant. v1: the stored curve of that
+// sweep. v2: the stored model, the PWM read_run sends holding each gram in steady state
+// (tc::forceToPwmV2 at the bus voltage the plant settles at for that PWM).
 struct CurveCheck {
-  double start_v = 0;          // as stored
-  int max_g = 0;               // heaviest gram the stored curve reaches
+  double start_v = 0;          // as stored (v1: the curve's start voltage; v2: the sweep's rest)
+  int max_g = 0;               // heaviest gram the stored curve reaches, at most sweep_max_g
+  double sweep_max_g = 0;      // the sweep's largest force, as gather_store reported it
   double band_lo_g = 0, band_hi_g = 0;
   double error_max_g = 0;      // |true thrust at stored PWM - gram| over the band
   double error_rms_g = 0;
@@ -75,16 +87,21 @@ struct GatherMotorResult {
   double mount_weight_g = 0;   // what `cal` was told
   CurveCheck curve1, curve2;
   std::string second_source;   // "bench supply 10.0 V" / "drained pack 25 %"
+  std::vector<std::string> store;  // the answers to the two store commands
   std::vector<std::string> show;  // `show` output lines
   std::string curves_csv_path;
+  double v2_start_us = 0;         // model v2: the stored ESC start threshold
+  int v2_knots = 0;               // model v2: knots of the stored curve
 };
 
 struct GatherResult {
+  GatherModel model = GatherModel::kThesisV1;
   std::vector<GatherMotorResult> motors;
   std::vector<uint8_t> eeprom;
   double curve_error_max_g = 0;  // worst over all motors and both curves
   double simulated_s = 0, wall_s = 0, realtime_factor = 0;
   double sweep_realtime_factor = 0;  // simulated / wall during sweeps only
+  // v1: calibration.{curve_error_max_g, motors}; v2: calibration.v2.{...} (same keys)
   nlohmann::json toJson() const;
 };
 
@@ -102,6 +119,7 @@ struct LiftoffOptions {
   int ramp_ms = 2000, hold_ms = 5000;
   double lipo_soc = 1.0;                      // pack at take-off
   bool uncalibrated = false;
+  std::string label;                          // names the run ("" = calibrated/uncalibrated)
   int reference_slot = 0;                     // uncalibrated: whose record all four use
   double settle_s = 1.0;                      // hold time skipped before averaging
   double sample_period_s = 0.01;              // CSV time step
@@ -116,7 +134,8 @@ struct LiftoffSample {
 };
 
 struct LiftoffResult {
-  std::string mode;                       // "calibrated" / "uncalibrated"
+  std::string mode;                       // "calibrated" / "uncalibrated" (or the label)
+  std::array<std::string, 4> models;      // per slot, as read_run reported it: v1, v2 or ""
   double force_g = 0;
   std::array<double, 4> hold_thrust_g{};  // mean over the hold (after settle_s)
   std::array<double, 4> hold_pwm_us{};
@@ -139,6 +158,8 @@ LiftoffResult runLiftoff(const LiftoffOptions& options);
 // Decodes one slot of an EEPROM image with the firmware's codec. Returns the status text
 // ("ok", "erased", ...) and fills `out` when ok.
 std::string decodeSlot(const std::vector<uint8_t>& eeprom, int slot, tc::MotorCalibration& out);
+// Same for a model v2 record (the newest valid of the slot's two copies).
+std::string decodeSlotV2(const std::vector<uint8_t>& eeprom, int slot, tc::ModelV2& out);
 // Copies slot `from`'s 1024-byte record over slot `to` (CRC included: the copy is valid).
 void copySlot(std::vector<uint8_t>& eeprom, int from, int to);
 // The varied motor for a seed (plant::makeVaried on the preset).
