@@ -4,6 +4,8 @@
 // adding a wrong effect does not help, and the information criterion says so.
 #include <gtest/gtest.h>
 
+#include <ostream>
+
 #include "lab/analysis.hpp"
 #include "lab/generate.hpp"
 #include "lab/model.hpp"
@@ -27,6 +29,9 @@ const HiddenCase kCases[] = {
     {"plate", "curve+deadband+voltage", "plate_height_m", "mul: 1/(1 - k/plate_height_m^2)",
      "mul: 1 + a*(plate_height_m", "drift"},
 };
+
+// gtest prints a parameter in test listings; the scenario's name is what a reader needs
+void PrintTo(const HiddenCase& c, std::ostream* os) { *os << c.hidden; }
 
 constexpr double kNoiseG = 0.5;
 

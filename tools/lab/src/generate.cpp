@@ -41,8 +41,6 @@ const std::vector<HiddenEffectInfo> kHidden = {
      "curve+deadband+voltage", "mul: 1/(1 - k/plate_height_m^2)", "plate_height_m"},
 };
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 }  // namespace
 
 const std::vector<HiddenEffectInfo>& hiddenEffects() { return kHidden; }
@@ -217,7 +215,6 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
     const std::size_t per_run = rows.size() / runs.size();
     for (std::size_t j = 0; j < per_run; ++j, ++k) d.run.push_back(run);
   }
-  (void)kNaN;
   if (comments) {
     comments->push_back(fmt::format("thrustcal lab generate --hidden {} --noise-g {} --seed {} (plant preset {})",
                                     h, o.noise_g, o.seed, o.preset));
