@@ -35,6 +35,10 @@ const std::vector<HiddenEffectInfo> kHidden = {
     {"drift",
      "the load cell's zero creeps by 1.2 g per minute through an 18-minute session",
      "curve+deadband+voltage", "drift", "t_s"},
+    {"thermal",
+     "the motor warms up through long sweeps (2 s per point) and cools between runs; temp_c is "
+     "a thermocouple on the motor (winding resistance +0.39 %/K, magnets -0.1 %/K)",
+     "curve+deadband+voltage", "thermal", "temp_c"},
     {"plate",
      "a deflector plate under the propeller at a height varied per point (plate_height_m): "
      "ground effect, force x 1/(1 - (R/4z)^2); not in the catalogue",
@@ -120,11 +124,11 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
         r.pressure_pa = press[k];
         r.temp_swing_k = 15.0;
       }
-      if (h == "drift") r.pause_before_s = 120.0;
+      if (h == "drift" || h == "thermal") r.pause_before_s = 120.0;
       runs.push_back(r);
     }
   }
-  const double settle_s = h == "drift" ? 2.0 : 0.5;
+  const double settle_s = h == "drift" || h == "thermal" ? 2.0 : 0.5;
   const double dt = 0.002;
   const double creep_g_per_min = h == "drift" ? 1.2 : 0.0;
 
@@ -152,7 +156,7 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
           env.temp_c = run.temp_c + run.temp_swing_k * std::sin(2 * M_PI * (now - run_start) / 23.0);
           act.setEnvironment(env);
         }
-        act.setWindingTemp_c(25.0);  // thermal effect off: the winding stays at 25 C
+        if (h != "thermal") act.setWindingTemp_c(25.0);  // thermal effect off: winding at 25 C
         plant::BusLoad load = act.busLoad();
         load.offset_a += other_a;
         bus_v = ps.solveBusVoltage(load);
@@ -175,7 +179,7 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
       r.vbat_v = h == "sag" ? ps.restingVoltage_v() : bus_v;
       r.current_a = bus_current + other_a;
       r.rpm = act.rpm();
-      r.temp_c = env.temp_c;
+      r.temp_c = h == "thermal" ? act.windingTemp_c() : env.temp_c;
       r.pressure_hpa = env.pressure_pa / 100.0;
       r.dir = dir;
       r.plate_m = plate;

@@ -68,8 +68,11 @@ const std::vector<EffectInfo> kCatalogue = {
      "t_s (optional)", "tau_s [s]: time constant | tau_samples [samples]: without t_s"},
     {"thermal",
      "Temperature of the motor: copper resistance +0.39 %/K and magnets -0.1 %/K change the "
-     "force at a given command; a linear factor around the mean temperature.",
-     "temp_c", "thermal_pct_per_k [%/K]: force change per kelvin"},
+     "force at a given command; a factor linear in the temperature around its mean, whose "
+     "slope changes with the drive x (the resistance matters more at high current).",
+     "temp_c",
+     "thermal_pct_per_k [%/K]: force change per kelvin at zero drive; "
+     "thermal_drive_pct_per_k [%/K]: its change up to full drive"},
     {"density",
      "Air density rho = p / (287.05 T) from temperature and pressure: thrust at fixed speed is "
      "proportional to rho; at a fixed command the motor slows down under a heavier load, the "
@@ -422,6 +425,7 @@ struct Model::Impl {
         for (double v : t) s += v;
         temp0 = s / static_cast<double>(t.size());
         i_thermal = addParam("thermal_pct_per_k", "%/K", e, 0.0, 0.1);
+        addParam("thermal_drive_pct_per_k", "%/K", e, 0.0, 0.1);
       } else if (e == "density") {
         if (!usable(train, "rho_kg_m3"))
           throw std::invalid_argument(
@@ -781,7 +785,12 @@ struct Model::Impl {
       const auto r = static_cast<Eigen::Index>(i);
       if (i_motor0 >= 0 && b.motor_index[i] > 0) mul[r] *= 1.0 + p(th, i_motor0 + b.motor_index[i] - 1);
       if (i_drift >= 0) add[r] += p(th, i_drift) * ((*b.t)[i] - t0) / 60.0;
-      if (i_thermal >= 0) mul[r] *= 1.0 + p(th, i_thermal) / 100.0 * ((*b.temp)[i] - temp0);
+      if (i_thermal >= 0) {
+        // the magnets' share is a plain gain; the winding resistance's share grows with the
+        // current, i.e. with the drive
+        const double k = p(th, i_thermal) + p(th, i_thermal + 1) * std::clamp(x[i] / xtop, 0.0, 1.0);
+        mul[r] *= 1.0 + k / 100.0 * ((*b.temp)[i] - temp0);
+      }
       if (i_beta >= 0) {
         // exponent falls with the drive: at low drive the speed barely depends on the load
         // (F ~ rho), at high drive the winding resistance lets the motor slow down
