@@ -100,6 +100,7 @@ StoredCurve thesisCurve(const tc::ThesisCurve& curve) {
 // Model v2 at a sweep's conditions, in steady state as read_run holds a force: the bus
 // voltage is what the plant settles at for the PWM sent (a fixed point, found by iterating
 // from the resting voltage; the motor's own command does not change, so no sag prediction).
+// The curve refers to `truth`, which must outlive it.
 StoredCurve modelV2Curve(const tc::ModelV2& model, uint16_t rest_mv, const TruthTable& truth) {
   auto pwm = [model, rest_mv, &truth](int g) {
     tc::BusVoltageFilter bus;
