@@ -5,6 +5,8 @@
 #      (curve 1 on a full 3S LiPo, curve 2 on a 10 V bench supply), EEPROM saved as Intel HEX;
 #   2. flies the thesis's tethered lift-off with read_run: calibrated (each motor its own
 #      record) and uncalibrated (the same PWM on all four);
+#   2b. calibrates the same motors again with gather_store's `store v2` (model v2 fitted on the
+#      board: force in effective motor voltage) and flies the lift-off on those records;
 #   3. runs the model lab on the sweeps it just logged: thesis model vs the measurements,
 #      the diagnosis, and the error ladder as effects are added.
 # Results: build/demo/summary.json, build/demo/*.png, build/demo/lab/report.md, logs.
@@ -31,6 +33,12 @@ say "2/4 tethered lift-off with read_run, calibrated and uncalibrated"
 "$TC" sim liftoff --eeprom "$OUT/eeprom.hex" --seeds "${SEEDS[@]}" --force 300 --mode both \
   --out-dir "$OUT/liftoff" --json "$OUT/liftoff.json" 2> >(sed -u 's/^/   /' >&2)
 
+say "2b/4 the same motors with model v2 (store v2 after each sweep), lift-off on v2 records"
+"$TC" sim gather --seeds "${SEEDS[@]}" --slots 0 1 2 3 --model v2 \
+  --eeprom "$OUT/eeprom_v2.hex" --json "$OUT/gather_v2.json" 2> >(sed -u 's/^/   /' >&2)
+"$TC" sim liftoff --eeprom "$OUT/eeprom_v2.hex" --seeds "${SEEDS[@]}" --force 300 --mode calibrated \
+  --label v2 --out-dir "$OUT/liftoff" --json "$OUT/liftoff_v2.json" 2> >(sed -u 's/^/   /' >&2)
+
 say "3/4 plots"
 for k in 0 1 2 3; do
   [ -f "$OUT/logs/gather_slot${k}_curves.csv" ] || die "missing $OUT/logs/gather_slot${k}_curves.csv"
@@ -51,10 +59,11 @@ do for [k=0:3] {
        f using 1:5 every ::1 with lines dt 3 lc rgb "black" title "true at curve 2"
 }
 unset multiplot
+set terminal pngcairo size 1400,1300 font ",11"
 set output "$OUT/liftoff_thrust.png"
-set multiplot layout 2,1 title "Tethered lift-off, 300 g per motor: thrust of each motor over time"
-do for [mode in "calibrated uncalibrated"] {
-  set title mode
+set multiplot layout 3,1 title "Tethered lift-off, 300 g per motor: thrust of each motor over time"
+do for [mode in "calibrated v2 uncalibrated"] {
+  set title (mode eq "calibrated" ? "calibrated, thesis model (option 2.1)" : (mode eq "v2" ? "calibrated, model v2" : "uncalibrated (same PWM on all four)"))
   set xlabel "t [s]"; set ylabel "thrust [g]"; set key right bottom; set grid
   f = sprintf("$OUT/liftoff/liftoff_%s.csv", mode)
   plot for [m=0:3] f using 1:(column(2+m)) every ::1 with lines lw 2 title sprintf("motor %d", m), \
@@ -74,13 +83,15 @@ mapfile -t SWEEPS < <(ls "$OUT"/logs/gather_slot*_curve[12].csv)
 
 wall_s=$(( $(date +%s) - t0 ))
 jq -n --slurpfile g "$OUT/gather.json" --slurpfile l "$OUT/liftoff.json" \
+      --slurpfile g2 "$OUT/gather_v2.json" --slurpfile l2 "$OUT/liftoff_v2.json" \
       --slurpfile d "$OUT/lab_diagnose.json" --slurpfile la "$OUT/lab_ladder.json" --argjson wall "$wall_s" '
   {
-    calibration: $g[0].calibration,
-    liftoff: $l[0].liftoff,
+    calibration: ($g[0].calibration + {v2: $g2[0].calibration.v2}),
+    liftoff: ($l[0].liftoff + {v2: $l2[0].liftoff.v2}),
     lab: {diagnose: $d[0], ladder: $la[0]},
     sim: {
-      realtime_factor: ([$g[0].sim.realtime_factor, $l[0].sim.realtime_factor] | min),
+      realtime_factor: ([$g[0].sim.realtime_factor, $l[0].sim.realtime_factor,
+                         $g2[0].sim.realtime_factor, $l2[0].sim.realtime_factor] | min),
       gather: $g[0].sim, liftoff: $l[0].sim,
       demo_wall_s: $wall
     }
@@ -89,11 +100,13 @@ jq -n --slurpfile g "$OUT/gather.json" --slurpfile l "$OUT/liftoff.json" \
 say "summary"
 jq -r '
   def r(x): (x * 100 | round) / 100;
-  "calibration: stored curves vs the plant, max error \(r(.calibration.curve_error_max_g)) g",
+  . as $root |
+  "calibration: stored curves vs the plant, max error \(r(.calibration.curve_error_max_g)) g (thesis curves), \(r(.calibration.v2.curve_error_max_g)) g (model v2)",
   "",
-  "lift-off 300 g per motor       thrust per motor [g]              spread    rms error   max tilt",
-  (["calibrated", "uncalibrated"][] as $m | .liftoff[$m] as $x |
-    "  \($m | . + "                " | .[0:16])  \($x.hold_thrust_g | map(r(.) | tostring) | join("  "))   \(r($x.thrust_spread_pct)) %    \(r($x.force_error_rms_pct)) %     \(r($x.max_tilt_deg)) deg"),
+  "lift-off 300 g per motor           thrust per motor [g]              spread    rms error   max tilt",
+  ({"calibrated": "calibrated, thesis", "v2": "calibrated, v2", "uncalibrated": "uncalibrated"} | to_entries[] |
+    .value as $label | $root.liftoff[.key] as $x |
+    "  \($label + "                    " | .[0:20])  \($x.hold_thrust_g | map(r(.) | tostring) | join("  "))   \(r($x.thrust_spread_pct)) %    \(r($x.force_error_rms_pct)) %     \(r($x.max_tilt_deg)) deg"),
   "",
   "lab: thesis model rmse \(r(.lab.diagnose.rmse_g)) g over \(.lab.diagnose.n) samples; first suspect: \(.lab.diagnose.suspects[0].variable // "none") -> \(.lab.diagnose.suspects[0].effects // [] | join(", "))",
   "lab ladder: " + (.lab.ladder.steps | map("\(.model) \(r(.rmse_g)) g") | join("  ->  ")),
