@@ -8,9 +8,13 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <filesystem>
+
+#include "sim/intel_hex.hpp"
 
 #include "lab/analysis.hpp"
 #include "lab/dataset.hpp"
+#include "lab/export.hpp"
 #include "lab/generate.hpp"
 #include "lab/model.hpp"
 #include "lab/report.hpp"
@@ -230,6 +234,56 @@ int runLadder(const Common& c, const std::vector<std::string>& adds) {
   return 0;
 }
 
+struct ExportArgs {
+  std::vector<std::string> files;
+  std::vector<std::string> maps;
+  std::string model;
+  int slot = -1;
+  std::string eeprom;
+  long motor = -1;
+};
+
+int runExport(const ExportArgs& a) {
+  const ModelSpec spec = parseSpec(a.model);
+  checkExportable(spec, a.motor >= 0);  // refuse before reading anything
+  if (a.slot < 0 || a.slot >= kEepromSlots)
+    throw std::invalid_argument(fmt::format("--slot {}: the EEPROM holds slots 0..{}", a.slot, kEepromSlots - 1));
+  ReadOptions ro;
+  for (const auto& m : a.maps) ro.maps.push_back(parseColumnMap(m));
+  Dataset data = readFiles(a.files, ro);
+  if (a.motor >= 0) data = selectMotor(data, a.motor);
+  const bool existed = std::filesystem::exists(a.eeprom);
+  std::vector<uint8_t> image = existed ? sim::readIntelHexFile(a.eeprom, kEepromBytes)
+                                       : std::vector<uint8_t>(kEepromBytes, 0xFF);
+  const ExportResult r = exportModel(data, spec, static_cast<uint8_t>(a.slot), image);
+  if (r.write.status == tc::WriteV2Status::kWritten || !existed) {
+    const std::string tmp = a.eeprom + ".tmp";
+    sim::writeIntelHexFile(tmp, image);
+    std::filesystem::rename(tmp, a.eeprom);
+  }
+  printNotes(data);
+  const tc::ModelV2& m = r.model;
+  std::printf("model %s on %zu samples in %zu run(s): lab fit RMSE %.3f g, max %.2f g\n", r.fit.model.c_str(),
+              r.fit.n, data.runs(), r.fit.rmse_g, r.fit.max_g);
+  if (r.write.status == tc::WriteV2Status::kUnchanged)
+    std::printf("slot %d copy %c, sequence %u already holds this model: nothing written to %s\n", a.slot,
+                r.write.copy ? 'B' : 'A', r.write.sequence, a.eeprom.c_str());
+  else
+    std::printf("wrote slot %d copy %c, sequence %u (%u bytes changed) into %s (%s %zu-byte EEPROM image)\n",
+                a.slot, r.write.copy ? 'B' : 'A', r.write.sequence, r.write.bytes_changed, a.eeprom.c_str(),
+                existed ? "existing" : "new, erased", kEepromBytes);
+  std::printf("  knots %u (%u every %.1f g, then every %.1f g), start threshold %.2f us, max force %.1f g, "
+              "resting voltage %.2f V, sag at max force %.2f V\n",
+              m.knots, m.fine_knots, m.step_dg / 10.0, m.coarse_step_dg / 10.0, m.start_q4_us / 16.0,
+              m.maxForceDg() / 10.0, m.rest_mv / 1000.0, m.sag_10mv[m.knots - 1] * 10 / 1000.0);
+  std::printf("  the record flown at the data's PWMs and motor voltages: RMSE %.3f g (max %.2f g) against the "
+              "measured force, %.3f g (max %.2f g) against the lab model\n",
+              r.v2_rmse_g, r.v2_max_g, r.v2_vs_lab_rmse_g, r.v2_vs_lab_max_g);
+  for (const auto& n : r.notes) std::printf("  note: %s\n", n.c_str());
+  std::printf("flash: avrdude -p m2560 -c wiring -P PORT -U eeprom:w:%s:i\n", a.eeprom.c_str());
+  return 0;
+}
+
 // Wraps `text` at `width` columns, continuation lines indented by `indent` spaces.
 std::string wrap(const std::string& text, std::size_t width, std::size_t indent) {
   std::string out, line;
@@ -306,6 +360,29 @@ void registerCommands(CLI::App& app) {
             "JSON: {\"steps\": [{\"model\": ..., \"rmse_g\": x, \"bic\": b, ...}, ...]}");
   l->callback([lad, adds] {
     const int rc = guarded([&] { return runLadder(*lad, *adds); });
+    if (rc) throw CLI::RuntimeError(rc);
+  });
+
+  auto ex = std::make_shared<ExportArgs>();
+  auto* x = lab->add_subcommand(
+      "export", "fit a model and write it as the firmware's model v2 record into an EEPROM image (Intel HEX) "
+                "that read_run flies");
+  x->add_option("DATA", ex->files, "measurement CSV files (as for diagnose)")->required();
+  x->add_option("--model,-m", ex->model,
+                "model SPEC of what the firmware can run: curve, deadband, voltage, sag (e.g. "
+                "curve+deadband+voltage+sag); other effects are refused")
+      ->required();
+  x->add_option("--slot", ex->slot, "motor slot 0..3 to write")->required();
+  x->add_option("--eeprom", ex->eeprom,
+                "EEPROM image (Intel HEX): updated in place when it exists (other slots kept), else "
+                "created erased")
+      ->required();
+  x->add_option("--motor", ex->motor, "use only this motor's rows (data with a motor column)");
+  x->add_option("--map", ex->maps, "column mapping TARGET=SOURCE[*K|/K|+K|-K...], repeatable");
+  x->footer("Example: thrustcal lab export sag.csv --model curve+deadband+voltage+sag --slot 0 --eeprom board.hex\n"
+            "Then: avrdude -p m2560 -c wiring -P PORT -U eeprom:w:board.hex:i");
+  x->callback([ex] {
+    const int rc = guarded([&] { return runExport(*ex); });
     if (rc) throw CLI::RuntimeError(rc);
   });
 

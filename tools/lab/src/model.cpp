@@ -1072,12 +1072,33 @@ struct Model::Impl {
     const Eigen::VectorXd pred = predictWith(b, theta, c, false, nullptr);
     return std::vector<double>(pred.data(), pred.data() + pred.size());
   }
+
+  std::vector<double> motorVolts(const Dataset& d) const {
+    if (!fitted) throw std::logic_error("motorVoltage before fit");
+    Bound b = bind(d);
+    std::vector<double> v(b.n, kNaN);
+    if (!b.vbat) return v;
+    for (std::size_t i = 0; i < b.n; ++i) {
+      const double pw = (*b.pwm)[i];
+      const double duty = i_start >= 0 ? softPlus(pw - p(theta, i_start), kSoftStartUs) / span
+                                       : std::max(0.0, pw - pmin) / span;
+      v[i] = voltageAt(b, theta, i, duty);
+    }
+    return v;
+  }
+
+  double startUs() const {
+    if (!fitted) throw std::logic_error("startUs before fit");
+    return i_start >= 0 ? p(theta, i_start) : pmin;
+  }
 };
 
 Model::Model(const ModelSpec& spec, const Dataset& train) : impl_(std::make_unique<Impl>(spec, train)) {}
 Model::~Model() = default;
 FitResult Model::fit(const std::vector<Param>* warm, bool warm_only) { return impl_->fit(warm, warm_only); }
 std::vector<double> Model::predict(const Dataset& data) const { return impl_->predict(data); }
+std::vector<double> Model::motorVoltage(const Dataset& data) const { return impl_->motorVolts(data); }
+double Model::startUs() const { return impl_->startUs(); }
 
 FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm,
                    bool warm_only) {

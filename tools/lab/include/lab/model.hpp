@@ -94,6 +94,12 @@ class Model {
   FitResult fit(const std::vector<Param>* warm = nullptr, bool warm_only = false);
   // Prediction of the fitted model on other data (same columns needed). NaN where it cannot.
   std::vector<double> predict(const Dataset& data) const;
+  // The voltage the motor sees per row (vbat_v after the fitted sag; NaN without vbat_v):
+  // what the board's battery monitor reads under load. Needs fit().
+  std::vector<double> motorVoltage(const Dataset& data) const;
+  // The ESC start threshold the drive is measured from: pwm_start_us with `deadband`, else
+  // the smallest PWM of the training data. Needs fit().
+  double startUs() const;
 
  private:
   struct Impl;

@@ -1,0 +1,236 @@
+// `thrustcal lab export`: the record written into the EEPROM image is read back the way the
+// board does (Intel HEX -> tc::loadSlot) and flown with core's run-time maths (tc::forceToPwmV2)
+// at the data's voltages; the lab model says what force that PWM gives. Other slots keep their
+// bytes, a second export is a next-sequence write, refused effects leave the file alone.
+#include <gtest/gtest.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "lab/cli.hpp"
+#include "lab/dataset.hpp"
+#include "lab/export.hpp"
+#include "lab/generate.hpp"
+#include "lab/model.hpp"
+#include "sim/intel_hex.hpp"
+#include "thrustcal/model_v2.hpp"
+#include "thrustcal/record_v2.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string tmp(const std::string& name) {
+  fs::create_directories(THRUSTCAL_LAB_TMP_DIR);
+  return std::string(THRUSTCAL_LAB_TMP_DIR) + "/" + name;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+struct CliRun {
+  int rc = 0;
+  std::string out, err;
+};
+
+CliRun thrustcal(std::vector<std::string> args) {
+  CLI::App app{"thrustcal"};
+  app.require_subcommand(1);
+  lab::registerCommands(app);
+  args.insert(args.begin(), "thrustcal");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  CliRun r;
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  try {
+    app.parse(static_cast<int>(argv.size()), argv.data());
+  } catch (const CLI::Error& e) {
+    r.rc = e.get_exit_code();
+  }
+  r.out = testing::internal::GetCapturedStdout();
+  r.err = testing::internal::GetCapturedStderr();
+  return r;
+}
+
+lab::Dataset generated(const char* hidden, const std::string& path) {
+  lab::GenerateOptions o;
+  o.hidden = hidden;
+  o.noise_g = 0.5;
+  const lab::Dataset d = lab::generate(o);
+  std::ofstream(path) << lab::toCsv(d, {"generated for export_test"});
+  return lab::readFiles({path}, lab::ReadOptions());
+}
+
+// The EEPROM image as record_v2.hpp's Storage.
+std::vector<uint8_t> g_image;
+struct Image {
+  static uint8_t readByte(uint16_t addr) { return g_image[addr]; }
+  static void updateByte(uint16_t addr, uint8_t value) { g_image[addr] = value; }
+};
+
+// An image whose slots 0, 2 and 3 hold recognisable bytes (another motor's data).
+std::vector<uint8_t> patterned() {
+  std::vector<uint8_t> img(lab::kEepromBytes, 0xFF);
+  for (std::size_t a = 0; a < img.size(); ++a)
+    if (a / tc::kRecordBytes != 1) img[a] = static_cast<uint8_t>(a * 7 + 3);
+  return img;
+}
+
+constexpr const char* kSpec = "curve+deadband+voltage+sag";
+
+TEST(LabExport, RecordReadBackFromTheHexFileFliesTheLabModelsForceWithin1Percent) {
+  // given the sag data set from the plant and an EEPROM image with other slots in use
+  const std::string csv = tmp("export_sag.csv"), hex = tmp("export_sag.hex");
+  const lab::Dataset data = generated("sag", csv);
+  sim::writeIntelHexFile(hex, patterned());
+
+  // when the fitted model is exported into slot 1
+  const CliRun r = thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "1", "--eeprom", hex});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote slot 1 copy A, sequence 1"), std::string::npos) << r.out;
+
+  // then the board's loader finds a v2 record in slot 1
+  g_image = sim::readIntelHexFile(hex, lab::kEepromBytes);
+  tc::ModelV2 v2;
+  tc::MotorCalibration v1;
+  const tc::SlotLoad load = tc::loadSlot<Image>(1, v2, v1);
+  ASSERT_EQ(load.layout, tc::SlotLayout::kModelV2);
+  ASSERT_EQ(load.status, tc::DecodeStatus::kOk);
+  EXPECT_EQ(load.v2.sequence, 1u);
+
+  // and flying it: command the lab model's force of each row at the voltage the monitor reads
+  // there, give the firmware's PWM back to the lab model, compare the forces
+  lab::Model model(lab::parseSpec(kSpec), data);
+  model.fit();
+  const std::vector<double> want_g = model.predict(data);
+  const std::vector<double> volts = model.motorVoltage(data);
+  lab::Dataset flown = data;
+  std::vector<double> pwm = data.col("pwm_us");
+  std::vector<bool> used(data.rows(), false);
+  std::size_t commanded = 0;
+  for (std::size_t i = 0; i < data.rows(); ++i) {
+    if (want_g[i] < 20.0) continue;  // around the start threshold (a fifth of the rows)
+    ++commanded;
+    tc::BusVoltageFilter bus;
+    bus.reset(static_cast<uint16_t>(std::lround(1000.0 * volts[i])));
+    const tc::ForcePwmResult out =
+        tc::forceToPwmV2(v2, static_cast<uint16_t>(std::lround(10.0 * want_g[i])), bus);
+    if (out.flags & (tc::kSaturated | tc::kClamped)) continue;
+    pwm[i] = out.pwm_us;
+    used[i] = true;
+  }
+  flown.set("pwm_us", pwm);
+  const std::vector<double> got_g = model.predict(flown);
+  double ss = 0, worst_pct = 0, worst_g = 0, fmax = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < data.rows(); ++i) {
+    if (!used[i]) continue;
+    const double e = got_g[i] - want_g[i];
+    ss += e * e;
+    ++n;
+    worst_pct = std::max(worst_pct, 100.0 * std::fabs(e) / want_g[i]);
+    worst_g = std::max(worst_g, std::fabs(e));
+    fmax = std::max(fmax, want_g[i]);
+  }
+  const double rms_g = std::sqrt(ss / static_cast<double>(n));
+  RecordProperty("flown_rms_g", std::to_string(rms_g));
+  RecordProperty("flown_worst_g", std::to_string(worst_g));
+  std::printf("flown %zu of %zu commands: RMS %.3f g, worst %.2f g / %.2f %% (top force %.1f g)\n", n,
+              commanded, rms_g, worst_g, worst_pct, fmax);
+  EXPECT_EQ(n, commanded) << "every force the data reached is reachable, none saturates";
+  // measured (seed 1): 228 of 228 commands flown, 1.51 g RMS (0.19 % of the top force 792 g),
+  // worst 3.47 g (3.1 % of a small command): knot interpolation plus the 1 us PWM step.
+  // Stated with margin: RMS below 0.5 %, worst below 1 % of the top force.
+  EXPECT_LT(rms_g, 0.005 * fmax);
+  EXPECT_LT(worst_g, 0.01 * fmax);
+
+  // and the other slots hold their bytes
+  const std::vector<uint8_t> before = patterned();
+  for (std::size_t a = 0; a < before.size(); ++a) {
+    if (a / tc::kRecordBytes == 1) continue;
+    ASSERT_EQ(g_image[a], before[a]) << "byte " << a;
+  }
+}
+
+TEST(LabExport, SecondExportIsTheNextSequenceInTheOtherCopyAndTheFirstStaysValid) {
+  // given slot 2 exported once
+  const std::string csv = tmp("export_seq.csv"), hex = tmp("export_seq.hex");
+  generated("sag", csv);
+  fs::remove(hex);
+  ASSERT_EQ(thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "2", "--eeprom", hex}).rc, 0);
+
+  // when a different model goes into the same slot
+  const CliRun r = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "2", "--eeprom", hex});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote slot 2 copy B, sequence 2"), std::string::npos) << r.out;
+
+  // then the loader takes copy B, sequence 2, and copy A still decodes (the power-fail fallback)
+  g_image = sim::readIntelHexFile(hex, lab::kEepromBytes);
+  tc::ModelV2 v2;
+  const tc::RecordV2Read read = tc::readModelV2<Image>(2, v2);
+  EXPECT_EQ(read.copy, 1u);
+  EXPECT_EQ(read.sequence, 2u);
+  EXPECT_EQ(read.copy_status[0], tc::DecodeStatus::kOk);
+  EXPECT_EQ(read.copy_sequence[0], 1u);
+  for (uint8_t slot : {0, 1, 3}) {
+    tc::ModelV2 none;
+    EXPECT_EQ(tc::readModelV2<Image>(slot, none).status, tc::DecodeStatus::kErased) << int(slot);
+  }
+}
+
+TEST(LabExport, EffectsTheFirmwareCannotRunAreRefusedByNameAndTheFileIsUntouched) {
+  const std::string csv = tmp("export_refuse.csv"), hex = tmp("export_refuse.hex");
+  generated("sag", csv);
+  sim::writeIntelHexFile(hex, patterned());
+  const std::string before = slurp(hex);
+  const struct {
+    const char* spec;
+    const char* named;
+  } cases[] = {
+      {"curve+deadband+voltage+sag+drift", "`drift`"},
+      {"curve+deadband+voltage+lag", "`lag`"},
+      {"curve+deadband+voltage+thermal", "`thermal`"},
+      {"curve+deadband+voltage+density", "`density`"},
+      {"curve+deadband+voltage+motor", "`motor`"},
+      {"thesis", "`thesis`"},
+      {"curve+deadband+voltage+mul: 1 + a*vbat_v", "`mul: "},
+  };
+  for (const auto& c : cases) {
+    // when exporting a model with the effect
+    const CliRun r = thrustcal({"lab", "export", csv, "--model", c.spec, "--slot", "1", "--eeprom", hex});
+    // then it fails, names the effect with a reason, and writes nothing
+    EXPECT_NE(r.rc, 0) << c.spec;
+    EXPECT_NE(r.err.find(std::string("cannot export ") + c.named), std::string::npos) << r.err;
+    EXPECT_EQ(slurp(hex), before) << c.spec;
+    EXPECT_FALSE(fs::exists(hex + ".tmp"));
+  }
+}
+
+TEST(LabExport, SeveralMotorsAreRefusedUnlessMotorPicksOne) {
+  // given four varied motors in one file
+  const std::string csv = tmp("export_motors.csv"), hex = tmp("export_motors.hex");
+  generated("motor", csv);
+  fs::remove(hex);
+  // when exported as one model, then refused and no file appears
+  const CliRun all = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "0", "--eeprom", hex});
+  EXPECT_NE(all.rc, 0);
+  EXPECT_NE(all.err.find("--motor"), std::string::npos) << all.err;
+  EXPECT_FALSE(fs::exists(hex));
+  // when one motor is picked (the `motor` effect is then moot), then its record lands
+  const CliRun one = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage+motor", "--motor", "2",
+                             "--slot", "0", "--eeprom", hex});
+  ASSERT_EQ(one.rc, 0) << one.err;
+  g_image = sim::readIntelHexFile(hex, lab::kEepromBytes);
+  tc::ModelV2 v2;
+  EXPECT_EQ(tc::readModelV2<Image>(0, v2).status, tc::DecodeStatus::kOk);
+}
+
+}  // namespace
