@@ -105,8 +105,8 @@ jq -r '
   "",
   "lift-off 300 g per motor           thrust per motor [g]              spread    rms error   max tilt",
   ({"calibrated": "calibrated, thesis", "v2": "calibrated, v2", "uncalibrated": "uncalibrated"} | to_entries[] |
-    .value as $label | $root.liftoff[.key] as $x |
-    "  \($label + "                    " | .[0:20])  \($x.hold_thrust_g | map(r(.) | tostring) | join("  "))   \(r($x.thrust_spread_pct)) %    \(r($x.force_error_rms_pct)) %     \(r($x.max_tilt_deg)) deg"),
+    .value as $name | $root.liftoff[.key] as $x |
+    "  \($name + "                    " | .[0:20])  \($x.hold_thrust_g | map(r(.) | tostring) | join("  "))   \(r($x.thrust_spread_pct)) %    \(r($x.force_error_rms_pct)) %     \(r($x.max_tilt_deg)) deg"),
   "",
   "lab: thesis model rmse \(r(.lab.diagnose.rmse_g)) g over \(.lab.diagnose.n) samples; first suspect: \(.lab.diagnose.suspects[0].variable // "none") -> \(.lab.diagnose.suspects[0].effects // [] | join(", "))",
   "lab ladder: " + (.lab.ladder.steps | map("\(.model) \(r(.rmse_g)) g") | join("  ->  ")),
