@@ -148,8 +148,8 @@ TEST(LabExport, RecordReadBackFromTheHexFileFliesTheLabModelsForceWithin1Percent
               commanded, rms_g, worst_g, worst_pct, fmax);
   EXPECT_EQ(n, commanded) << "every force the data reached is reachable, none saturates";
   // measured (seed 1): 227 of 227 commands flown (one row above the top knot saturates, by
-  // design), 1.44 g RMS (0.19 % of the top command 746 g), worst 3.47 g (1.95 % of a 178 g
-  // command): knot interpolation plus the 1 us PWM step.
+  // design), 1.44 g RMS (0.19 % of the top command 746 g), worst 3.47 g (worst relative 1.95 %;
+  // small commands): knot interpolation plus the 1 us PWM step.
   // Stated with margin: RMS below 0.5 %, worst below 1 % of the top force.
   EXPECT_LT(rms_g, 0.005 * fmax);
   EXPECT_LT(worst_g, 0.01 * fmax);
