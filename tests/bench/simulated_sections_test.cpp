@@ -37,6 +37,39 @@ TEST(BenchSimulatedSections, SettledV2SweepStoresAMoreAccurateModelThanTheThesis
   EXPECT_GT(s.json["v2"]["sweep_simulated_s_max"].get<double>(), 54 * 0.5);
 }
 
+TEST(BenchSimulatedSections, V2RowsAreTheModelsGatherStoreStoredOnTheBoard) {
+  if (!imagesBuilt()) GTEST_SKIP() << "no AVR images in " << THRUSTCAL_AVR_BUILD_DIR;
+  // when
+  const bench::Section s = bench::calibrationSection(avrPaths());
+  // then: four v2 records decoded from each EEPROM
+  ASSERT_TRUE(s.json.value("available", false)) << s.json.dump();
+  ASSERT_EQ(s.json["v2"]["stored_v2"].size(), 4u);
+  ASSERT_EQ(s.json["v2_settle_auto"]["stored_v2"].size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    SCOPED_TRACE(i);
+    // the fixed-settle run stored twice: fitted on the LiPo (~12.6 V), refined on the 10 V supply
+    EXPECT_GT(s.json["v2"]["stored_v2"][i]["rest_mv"].get<int>(), 12000);
+    EXPECT_NEAR(s.json["v2"]["stored_v2"][i]["second_mv"].get<int>(), 10000, 300);
+    // the settle-auto run swept once: a fit, not refined
+    EXPECT_EQ(s.json["v2_settle_auto"]["stored_v2"][i]["second_mv"].get<int>(), 0);
+  }
+  EXPECT_TRUE(s.json["v2_settle_auto"]["settle_auto"].get<bool>());
+}
+
+TEST(BenchSimulatedSections, SettleAutoSweepIsShorterThanTheFixedSettleEqualToItsCap) {
+  if (!imagesBuilt()) GTEST_SKIP() << "no AVR images in " << THRUSTCAL_AVR_BUILD_DIR;
+  // when
+  const bench::Section s = bench::calibrationSection(avrPaths());
+  // then: same steps and cap, and steps end before the cap
+  ASSERT_TRUE(s.json.value("available", false)) << s.json.dump();
+  const double fixed_s = s.json["v2"]["sweep_simulated_s_max"];
+  const double auto_s = s.json["v2_settle_auto"]["sweep_simulated_s_max"];
+  EXPECT_EQ(s.json["v2_settle_auto"]["step_us"], s.json["v2"]["step_us"]);
+  EXPECT_EQ(s.json["v2_settle_auto"]["settle_ms"], s.json["v2"]["settle_ms"]);
+  EXPECT_LT(auto_s, fixed_s);
+  EXPECT_GT(auto_s, 0.0);
+}
+
 TEST(BenchSimulatedSections, ReadRunFliesV2RecordsCloserToTheCommandThanTheThesisRecords) {
   if (!imagesBuilt()) GTEST_SKIP() << "no AVR images in " << THRUSTCAL_AVR_BUILD_DIR;
   // when: the quick lift-off (10 s hold) from both charges, each EEPROM
