@@ -17,6 +17,8 @@ cd "$THRUSTCAL_ROOT"
 ensure_packages
 build_avr
 build_host
+say "firmware images (avr-size)"
+print_firmware_sizes
 
 OUT="$THRUSTCAL_ROOT/build/demo"
 TC="$THRUSTCAL_ROOT/build/host/tools/thrustcal/thrustcal"
