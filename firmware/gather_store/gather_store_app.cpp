@@ -413,7 +413,8 @@ uint16_t GatherStoreApp::medianBatteryCounts() {
   return battery_median_.median();
 }
 
-bool GatherStoreApp::requireSaneCell(uint16_t counts) {
+bool GatherStoreApp::readSaneCell(uint16_t& counts) {
+  counts = medianForceCounts();
   if (cell_.check(counts) != tc::LoadCellStatus::kImplausible) return true;
   say(TC_PSTR("error: load cell reads "));
   fw::printUint(counts);
@@ -423,8 +424,8 @@ bool GatherStoreApp::requireSaneCell(uint16_t counts) {
 }
 
 void GatherStoreApp::cmdWeigh() {
-  const uint16_t counts = medianForceCounts();
-  if (!requireSaneCell(counts)) return;
+  uint16_t counts;
+  if (!readSaneCell(counts)) return;
   say(TC_PSTR("weight "));
   fw::printInt(cell_.weightGrams(counts));
   say(TC_PSTR(" g (plate "));
@@ -440,11 +441,15 @@ void GatherStoreApp::cmdWeigh() {
   fw::newline();
 }
 
-void GatherStoreApp::cmdTare() {
-  const uint16_t counts = medianForceCounts();
-  if (!requireSaneCell(counts)) return;
+void GatherStoreApp::tareAt(uint16_t counts) {
   cell_.tare(counts);
-  tare_counts_ = counts;
+  tare_counts_ = counts;  // the empty point of a later span
+}
+
+void GatherStoreApp::cmdTare() {
+  uint16_t counts;
+  if (!readSaneCell(counts)) return;
+  tareAt(counts);
   say(TC_PSTR("tared: force reads 0.0 g now ("));
   fw::printUint(counts);
   sayLine(TC_PSTR(" counts); ready to sweep"));
@@ -455,12 +460,11 @@ void GatherStoreApp::cmdCal(char** args, uint8_t n) {
   if (!oneArg(args, n, TC_PSTR("cal W (W = motor + propeller in g, e.g. cal 95)"),
               TC_PSTR("known weight in g"), 1, cell_.config().overload_g, grams))
     return;
-  const uint16_t counts = medianForceCounts();
-  if (!requireSaneCell(counts)) return;
+  uint16_t counts;
+  if (!readSaneCell(counts)) return;
   cell_.calibrateWeight(counts, static_cast<int16_t>(grams));  // in range: cannot fail
   // Thesis: after calibration the program zerolizes and reads force upwards (phase 2).
-  cell_.tare(counts);
-  tare_counts_ = counts;
+  tareAt(counts);
   say(TC_PSTR("calibrated: motor + propeller weigh "));
   fw::printInt(grams);
   sayLine(TC_PSTR(" g; tared (force 0.0 g): ready to sweep"));
@@ -476,8 +480,8 @@ void GatherStoreApp::cmdSpan(char** args, uint8_t n) {
                     "plate, then span W; nothing changed"));
     return;
   }
-  const uint16_t counts = medianForceCounts();
-  if (!requireSaneCell(counts)) return;
+  uint16_t counts;
+  if (!readSaneCell(counts)) return;
   if (!cell_.calibrateSpan(tare_counts_, counts, static_cast<int16_t>(grams))) {
     say(TC_PSTR("error: the reading moved from "));
     fw::printUint(tare_counts_);

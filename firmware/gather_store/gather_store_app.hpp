@@ -182,7 +182,9 @@ class GatherStoreApp {
   // Readings outside a sweep.
   uint16_t medianForceCounts();
   uint16_t medianBatteryCounts();
-  bool requireSaneCell(uint16_t counts);  // prints an error and returns false at a rail
+  // Median load-cell reading; prints an error and returns false when it sits at an ADC rail.
+  bool readSaneCell(uint16_t& counts);
+  void tareAt(uint16_t counts);  // zerolize and remember the reading for `span`
 
   Settings settings_;
   tc::LoadCell cell_;
