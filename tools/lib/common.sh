@@ -7,7 +7,7 @@ JOBS="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
 # Debian packages the project needs (build, firmware, simulator, lab, plots, coverage).
 THRUSTCAL_PACKAGES=(
   cmake g++ make pkg-config
-  gcc-avr binutils-avr avr-libc avrdude
+  gcc-avr binutils-avr avr-libc avrdude arduino-core-avr
   simavr libsimavr-dev libelf-dev
   googletest libgtest-dev libgmock-dev
   libeigen3-dev libcli11-dev libmuparser-dev nlohmann-json3-dev libfmt-dev
