@@ -203,4 +203,37 @@ TEST(SagBuilder, ResetForgetsPreviousSweep) {
   EXPECT_FALSE(builder.build(sag, start_mv));
 }
 
+// offsetFor divides by 40 with a multiplication: the same offset as the division it replaces,
+// for every pulse width and offsets up to the int16 limits.
+int16_t offsetByDivision(const SagTable& sag, uint16_t pwm_us) {
+  const uint16_t first_centre_us = static_cast<uint16_t>(sag.base_pwm_us + 20);
+  if (pwm_us <= first_centre_us) return sag.offset_mv[0];
+  const uint16_t from_centre_us = static_cast<uint16_t>(pwm_us - first_centre_us);
+  const uint16_t bin = static_cast<uint16_t>(from_centre_us / 40);
+  if (bin >= tc::kSagBins - 1) return sag.offset_mv[tc::kSagBins - 1];
+  const int16_t fraction_us = static_cast<int16_t>(from_centre_us - bin * 40);
+  const int32_t delta = static_cast<int32_t>(sag.offset_mv[bin + 1] - sag.offset_mv[bin]) * fraction_us;
+  const int32_t step = (delta >= 0 ? delta + 20 : delta - 20) / 40;
+  return static_cast<int16_t>(sag.offset_mv[bin] + step);
+}
+
+TEST(SagTable, OffsetWithoutDivisionEqualsTheDivisionForEveryPulse) {
+  const int16_t patterns[][tc::kSagBins] = {
+      {0, 10, 30, 60, 100, 150, 210, 280, 360, 450, 550, 660, 780},
+      {0, -1280, 1270, -1280, 1270, -1280, 1270, -1280, 1270, -1280, 1270, -1280, 1270},
+      {0, 32767, -32768, 32767, -32768, 12345, -23456, 32767, 0, -1, 1, -32768, 32767},
+      {0, 7, 13, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59},
+  };
+  for (const auto& pattern : patterns) {
+    for (const uint16_t base : {uint16_t{0}, uint16_t{1000}, uint16_t{1234}, uint16_t{65000}}) {
+      SagTable sag;
+      sag.base_pwm_us = base;
+      for (uint8_t i = 0; i < tc::kSagBins; ++i) sag.offset_mv[i] = pattern[i];
+      for (uint32_t pwm = 0; pwm <= 0xFFFF; ++pwm)
+        ASSERT_EQ(sag.offsetFor(static_cast<uint16_t>(pwm)), offsetByDivision(sag, static_cast<uint16_t>(pwm)))
+            << "pwm " << pwm << " base " << base;
+    }
+  }
+}
+
 }  // namespace

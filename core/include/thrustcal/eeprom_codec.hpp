@@ -40,6 +40,15 @@ constexpr uint16_t kPlausibleMaxMv = 30000;
 constexpr uint16_t kPlausibleMinPwmUs = 500;
 constexpr uint16_t kPlausibleMaxPwmUs = 2500;
 
+// Where each curve's steps lie in a v1 record (the layout above): read_run reads them from the
+// EEPROM on demand (thesis_runtime.hpp).
+constexpr uint16_t kRecordFirstStepsOffset = 5;
+constexpr uint16_t kRecordSecondStepsOffset = kRecordFirstStepsOffset + (kCurveGrams - 1) + 2 +
+                                              kSagBins + 2 + 2;
+static_assert(kRecordSecondStepsOffset == 523, "layout table and offsets disagree");
+static_assert(kRecordSecondStepsOffset + (kCurveGrams - 1) + 2 == kRecordBytes,
+              "the second curve's steps end at the CRC");
+
 inline uint16_t slotAddress(uint8_t slot) { return static_cast<uint16_t>(slot) * kRecordBytes; }
 
 enum class DecodeStatus : uint8_t {

@@ -47,4 +47,72 @@ struct ForcePwmResult {
 ForcePwmResult forceToPwm(const MotorCalibration& cal, uint16_t force_g, uint16_t vbat_mv,
                           const ForcePwmLimits& limits = ForcePwmLimits());
 
+namespace force_pwm_detail {
+
+// num / den rounded to nearest (halves away from zero), den != 0.
+inline int32_t divRound(int32_t num, int32_t den) {
+  int32_t q = num / den;
+  int32_t r = num % den;  // sign of num
+  if (r < 0) r = -r;
+  const int32_t abs_den = den < 0 ? -den : den;
+  if (2 * r >= abs_den) q += ((num < 0) != (den < 0)) ? -1 : 1;
+  return q;
+}
+
+inline uint16_t clampPwm(int32_t pwm_us, const ForcePwmLimits& limits, uint8_t& flags) {
+  if (pwm_us < limits.pwm_min_us) {
+    flags |= kClamped;
+    return limits.pwm_min_us;
+  }
+  if (pwm_us > limits.pwm_max_us) {
+    flags |= kClamped;
+    return limits.pwm_max_us;
+  }
+  return static_cast<uint16_t>(pwm_us);
+}
+
+}  // namespace force_pwm_detail
+
+// Option 2.1 over any form of the thesis record: `cal` has isCalibrated(), hasSecondCurve() and
+// curves `first` / `second` with start_mv and maxGrams(); pwmFor(curve, grams) is the curve's
+// PWM at a gram (1..maxGrams()). forceToPwm(MotorCalibration) is this over the decoded record;
+// read_run flies it over tc::ThesisRun (thesis_runtime.hpp), the same arithmetic to the bit.
+template <class Cal, class PwmFor>
+ForcePwmResult forceToPwmWith(const Cal& cal, uint16_t force_g, uint16_t vbat_mv,
+                              const ForcePwmLimits& limits, PwmFor pwmFor) {
+  ForcePwmResult result{limits.pwm_min_us, 0};
+  if (!cal.isCalibrated() || cal.first.maxGrams() == 0) result.flags |= kNotCalibrated;
+  if (force_g == 0) result.flags |= kStopped;
+  if (result.flags) return result;
+
+  // PWM of a curve at force_g, flagging a force beyond what the curve reaches.
+  if (force_g > cal.first.maxGrams()) result.flags |= kSaturated;
+  const uint16_t c1_us = pwmFor(cal.first, force_g);
+  if (vbat_mv < limits.v_min_mv || vbat_mv > limits.v_max_mv) {
+    result.flags |= kVoltageInvalid;
+  } else if (!cal.hasSecondCurve() || cal.second.maxGrams() == 0) {
+    result.flags |= kSingleCurve;
+  } else {
+    const int32_t span_mv = static_cast<int32_t>(cal.second.start_mv) - cal.first.start_mv;
+    const int32_t min_span_mv = limits.min_voltage_span_mv;
+    if (span_mv < min_span_mv && -span_mv < min_span_mv) {
+      result.flags |= kEqualVoltages;
+    } else {
+      if (force_g > cal.second.maxGrams()) result.flags |= kSaturated;
+      const uint16_t c2_us = pwmFor(cal.second, force_g);
+      // |dv| <= 65535 and |dc| <= 32767 keep the product inside int32; a calibration that
+      // passed the codec's checks has PWMs of a few thousand us, so the clamp never bites.
+      const int32_t dv_mv = static_cast<int32_t>(vbat_mv) - cal.first.start_mv;
+      int32_t dc_us = static_cast<int32_t>(c2_us) - c1_us;
+      if (dc_us > 32767) dc_us = 32767;
+      if (dc_us < -32767) dc_us = -32767;
+      const int32_t pwm_us = static_cast<int32_t>(c1_us) + force_pwm_detail::divRound(dv_mv * dc_us, span_mv);
+      result.pwm_us = force_pwm_detail::clampPwm(pwm_us, limits, result.flags);
+      return result;
+    }
+  }
+  result.pwm_us = force_pwm_detail::clampPwm(c1_us, limits, result.flags);
+  return result;
+}
+
 }  // namespace tc
