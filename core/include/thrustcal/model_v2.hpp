@@ -65,6 +65,10 @@ constexpr uint16_t kDriveUnitUsMv = 512;   // one stored drive unit = 512 us*mV
 constexpr uint8_t kV2SagUnitMv = 10;       // sag table unit
 constexpr uint16_t kV2MinStepDg = 66;      // 2^22 / step must fit 16 bits
 constexpr uint32_t kRecipOne = 1ul << 28;  // reciprocal scale: recip_q28 = 2^28 / mV
+// Bus / monitor readings model v2 accepts (the filter ignores others, a model whose resting
+// reading lies outside does not finalize).
+constexpr uint16_t kV2SaneMinMv = 6000;
+constexpr uint16_t kV2SaneMaxMv = 17500;
 
 struct ModelV2 {
   // Stored fields (record_v2.hpp serializes exactly these). Field order: everything the
@@ -115,7 +119,7 @@ enum : uint8_t { kV2Refined = 1u << 0 };
 // and counted; until the first good sample isValid() is false.
 struct BusVoltageFilter {
   uint16_t mv = 0;           // filtered millivolts (floor of y)
-  uint8_t rem = 0;           // fraction of y below 1 mV, in 1/2^shift mV
+  uint8_t rem = 0;           // fraction of y below 1 mV, in 1/256 mV
   uint8_t shift = 3;         // alpha = 1 / 2^shift, 0..6
   uint16_t recip_q28 = 0;    // 2^28 / mv (within 1 LSB after the first update in steady state)
   uint8_t rejected = 0;      // samples ignored as insane (saturates at 255)
