@@ -56,6 +56,30 @@ int16_t SagTable::offsetFor(uint16_t pwm_us) const {
   return static_cast<int16_t>(lo + (delta >= 0 ? step : -step));
 }
 
+BatteryMonitor::BatteryMonitor(const BatteryConfig& config) : config_(config) {
+  const uint32_t den = 2ul * config_.adc_max_counts;
+  // floor(m * fs / den) == floor(m * ceil(fs * 2^22 / den) / 2^22) for every m <= den when
+  // den^2 < 2^22; the factor fits 32 bits when fs < den * 1024.
+  if (den == 0 || den >= 2048u || config_.full_scale_mv >= den * 1024u) return;
+  // ceil(fs * 2^22 / den) by long division in steps of 11 bits (fs * 2^22 needs 38 bits).
+  const uint32_t q = config_.full_scale_mv / den;
+  const uint32_t t1 = (config_.full_scale_mv % den) << 11;
+  const uint32_t t2 = (t1 % den) << 11;
+  two_counts_factor_q22_ = (q << 22) + ((t1 / den) << 11) + t2 / den + (t2 % den != 0 ? 1u : 0u);
+}
+
+uint16_t BatteryMonitor::millivoltsFromTwoCounts(uint16_t two_counts) const {
+  const uint16_t den = static_cast<uint16_t>(2u * config_.adc_max_counts);
+  if (den == 0) return 0;
+  if (two_counts >= den) return config_.full_scale_mv;
+  if (two_counts_factor_q22_ == 0)
+    return static_cast<uint16_t>(static_cast<uint32_t>(two_counts) * config_.full_scale_mv / den);
+  // two_counts * factor / 2^22 with 16 x 16 products: (m * f_hi + (m * f_lo) / 2^16) / 2^6.
+  const uint32_t hi = static_cast<uint32_t>(two_counts) * static_cast<uint16_t>(two_counts_factor_q22_ >> 16);
+  const uint32_t lo = static_cast<uint32_t>(two_counts) * static_cast<uint16_t>(two_counts_factor_q22_);
+  return static_cast<uint16_t>((hi + (lo >> 16)) >> 6);
+}
+
 uint16_t BatteryMonitor::millivoltsFromCounts(uint16_t counts) const {
   if (config_.adc_max_counts == 0) return 0;
   if (counts >= config_.adc_max_counts) return config_.full_scale_mv;

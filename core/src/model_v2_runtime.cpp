@@ -893,6 +893,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "20:\n\t"  // force 0: stopped, pwm_min
       "ldi  r16, 1\n\t"
       "movw r20, r6\n\t"
+      "adiw r26, 3\n\t"  // past the lane's start threshold
       "rjmp 17f\n"
       "21:\n\t"  // fine run (below the split, so below the curve's end)
       "ldd  r22, Z+%[o_inv]\n\t"

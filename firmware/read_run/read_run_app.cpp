@@ -70,8 +70,7 @@ void sayV1Summary(const tc::MotorCalibration& cal) {
 
 // Start-up line of a v2 slot, after "motor N: ok": start threshold, the force reachable at
 // the sweep's resting voltage, the refining sweep's voltage, and a damaged other copy.
-void sayV2Summary(const Motor& m) {
-  const tc::ModelV2& v2 = m.model.v2();
+void sayV2Summary(const Motor& m, const tc::ModelV2& v2) {
   say(TC_PSTR(", model v2 (effective voltage), start "));
   fw::printFixed(static_cast<int32_t>((static_cast<uint32_t>(v2.start_q4_us) * 10u + 8u) >> 4), 1);
   say(TC_PSTR(" us, max "));
@@ -97,20 +96,18 @@ void sayV2Summary(const Motor& m) {
 
 // Mean of the middle two of four readings (one spike either way is ignored), through the
 // thesis map() at half-count resolution: equal readings give exactly map(reading).
-uint16_t middleTwoMillivolts(const uint16_t* counts, const tc::BatteryConfig& config) {
-  if (config.adc_max_counts == 0) return 0;
+uint16_t middleTwoMillivolts(const uint16_t* counts, const tc::BatteryMonitor& monitor) {
+  const uint16_t adc_max = monitor.config().adc_max_counts;
   uint16_t sum = 0;
   uint16_t lo = 0xFFFF;
   uint16_t hi = 0;
   for (uint8_t k = 0; k < 4; ++k) {
-    const uint16_t c = counts[k] < config.adc_max_counts ? counts[k] : config.adc_max_counts;
+    const uint16_t c = counts[k] < adc_max ? counts[k] : adc_max;
     sum = static_cast<uint16_t>(sum + c);
     if (c < lo) lo = c;
     if (c > hi) hi = c;
   }
-  const uint16_t middle_two = static_cast<uint16_t>(sum - lo - hi);  // <= 2 * 1023
-  return static_cast<uint16_t>(static_cast<uint32_t>(middle_two) * config.full_scale_mv /
-                               (2u * config.adc_max_counts));
+  return monitor.millivoltsFromTwoCounts(static_cast<uint16_t>(sum - lo - hi));  // <= 2 * 1023
 }
 
 // Flags of one controller result in words, comma separated; "none" when clear.
@@ -155,13 +152,14 @@ void ReadRunApp::printBanner() {
 
 uint8_t ReadRunApp::loadCalibration() {
   uint8_t calibrated = 0;
-  any_v2_ = false;
+  v2_.count = 0;
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
-    // The loader fills the v1 calibration in place; a v2 model goes through this copy
-    // (123 bytes of stack, start-up only) into the same storage.
+    // The loader decodes into these (1.2 KB of stack, start-up only); the slot keeps the
+    // compact form the frame flies (the thesis curves' steps stay in the EEPROM).
     tc::ModelV2 v2;
-    const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(i, v2, m.model.resetToV1());
+    tc::MotorCalibration v1;
+    const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(i, v2, v1);
     m.layout = load.layout;
     // Neither layout recognized: copy A's status is that of the version byte at the slot
     // start (erased or unknown), which both layouts share; the loader's "most telling copy"
@@ -170,13 +168,21 @@ uint8_t ReadRunApp::loadCalibration() {
     m.v2_copy = load.v2.copy;
     m.v2_copy_status[0] = load.v2.copy_status[0];
     m.v2_copy_status[1] = load.v2.copy_status[1];
-    if (load.layout == tc::SlotLayout::kModelV2 && load.status == tc::DecodeStatus::kOk) {
-      m.model.setV2(v2);
-      any_v2_ = true;
+    m.lane = kNoLane;
+    m.model.clear();
+    if (m.record == tc::DecodeStatus::kOk) {
+      const bool loaded = load.layout == tc::SlotLayout::kModelV2 ? m.model.setV2(v2)
+                                                                  : m.model.setV1<hal::Eeprom>(v1, i);
+      if (!loaded) {  // the EEPROM changed under the loader: never flown
+        m.record = tc::DecodeStatus::kBadContent;
+        m.model.clear();
+      } else if (m.model.holdsV2()) {
+        m.lane = v2_.count++;
+        v2_.lane[m.lane].setModel(&m.model.v2());
+      }
     }
-    m.force_g = 0;
+    setForce(i, 0);
     m.pwm_us = kStopPwmUs;
-    m.seen_force_acc = 0;
     m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
     sayMotor(i);
     say(TC_PSTR(": "));
@@ -184,9 +190,9 @@ uint8_t ReadRunApp::loadCalibration() {
       ++calibrated;
       say(TC_PSTR("ok"));
       if (m.fliesV2()) {
-        sayV2Summary(m);
+        sayV2Summary(m, v2);
       } else {
-        sayV1Summary(m.model.v1());
+        sayV1Summary(v1);
       }
     } else {
       sayRecordStatus(m);
@@ -208,7 +214,7 @@ void ReadRunApp::arm() {
   mode_ = Mode::kArming;
   sayLine(TC_PSTR("arming... (every ESC at 1000 us for 2 s)"));
   for (uint8_t i = 0; i < kMotors; ++i) {
-    motors_[i].force_g = 0;
+    setForce(i, 0);
     motors_[i].pwm_us = kStopPwmUs;
     hal::Esc::writePulse(i, kStopPwmUs);
   }
@@ -294,7 +300,7 @@ void ReadRunApp::checkFailsafe(uint32_t now_ms) {
 void ReadRunApp::stopAll() {
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
-    m.force_g = 0;
+    setForce(i, 0);
     m.pwm_us = kStopPwmUs;
     m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
     hal::Esc::writePulse(i, kStopPwmUs);
@@ -317,9 +323,9 @@ bool ReadRunApp::frameDue(uint32_t now_ms) const {
 }
 
 // v1 and status: the thesis median of 101. v2: this frame's four readings (middle two) into
-// the bus voltage filter, every frame while a v2 motor is loaded (a v1-only aircraft skips
-// its ~900 cycles); an insane reading is skipped by the filter (it keeps the last good
-// value) and flagged on the v2 motors' results.
+// the frame of the v2 motors (tc::V2Frame: the bus filter, the sag prediction, every v2 motor's
+// pulse), every frame while a v2 motor is loaded; an insane reading is skipped by the filter
+// (it keeps the last good value) and flagged on the v2 motors' results.
 void ReadRunApp::sampleBattery() {
   static_assert(kBatterySamplesPerFrame == 4, "middleTwoMillivolts takes four readings");
   uint16_t counts[kBatterySamplesPerFrame];
@@ -328,10 +334,10 @@ void ReadRunApp::sampleBattery() {
     battery_counts_.push(counts[k]);
   }
   battery_mv_ = monitor_.millivoltsFromCounts(battery_counts_.median());
-  if (!any_v2_) return;
-  const uint16_t frame_mv = middleTwoMillivolts(counts, monitor_.config());
+  if (v2_.count == 0) return;
+  const uint16_t frame_mv = middleTwoMillivolts(counts, monitor_);
   bus_sample_sane_ = monitor_.isSane(frame_mv);
-  bus_.update(frame_mv);
+  v2_.fly(frame_mv, bus_sample_sane_ ? 0 : tc::kVoltageInvalid);
 }
 
 // Filter constant per frame rate: 1/8 at 50-99 Hz, 1/16 at 100-199, 1/32 at 200-399, 1/64 at
@@ -340,16 +346,19 @@ void ReadRunApp::sampleBattery() {
 void ReadRunApp::setFilterShift(uint16_t frame_hz) {
   uint8_t shift = 3;
   for (uint16_t hz = 100; hz <= frame_hz && shift < 6; hz = static_cast<uint16_t>(hz * 2)) ++shift;
-  if (shift == bus_.shift) return;
-  const uint8_t old_shift = bus_.shift;
-  bus_.shift = shift;
-  if (bus_.isValid()) bus_.reset(bus_.mv);
-  for (uint8_t i = 0; i < kMotors; ++i) {
-    motors_[i].seen_force_acc = (motors_[i].seen_force_acc >> old_shift) << shift;
-  }
+  if (shift == v2_.bus.shift) return;
+  v2_.bus.shift = shift;
+  if (v2_.bus.isValid()) v2_.bus.reset(v2_.bus.mv);
 }
 
-// One motor's pulse for this frame from its model. Integer only; no division on the v2 path.
+void ReadRunApp::setForce(uint8_t index, uint16_t force_g) {
+  Motor& m = motors_[index];
+  m.force_g = force_g;
+  if (m.lane != kNoLane) v2_.lane[m.lane].force_dg = static_cast<uint16_t>(force_g * 10u);  // <= 5000
+}
+
+// One motor's pulse for this frame from its model. Integer only; the v2 motors' pulses come
+// from the frame (sampleBattery), no division on their path.
 void ReadRunApp::flyMotor(Motor& m) {
   if (!m.isArmable()) {
     m.force_g = 0;
@@ -359,23 +368,17 @@ void ReadRunApp::flyMotor(Motor& m) {
     return;
   }
   if (m.fliesV2()) {
-    const uint16_t force_dg = static_cast<uint16_t>(m.force_g * 10u);  // <= 5000
-    // The filtered voltage reflects the sag of the filtered force: predict the step to the
-    // command from the bench sag (equal in steady state, then the plain model).
-    const uint16_t seen_dg = static_cast<uint16_t>(m.seen_force_acc >> bus_.shift);
-    tc::ForcePwmResult result = tc::forceToPwmV2(m.model.v2(), force_dg, bus_, seen_dg);
-    if (!bus_sample_sane_) result.flags |= tc::kVoltageInvalid;  // flying the last good value
-    m.seen_force_acc = m.seen_force_acc - (m.seen_force_acc >> bus_.shift) + force_dg;
-    m.pwm_us = result.pwm_us;
-    m.flags = result.flags;
-    m.vbat_mv = bus_.mv;
+    const tc::V2Lane& lane = v2_.lane[m.lane];
+    m.pwm_us = lane.pwm_us;
+    m.flags = lane.flags;
+    m.vbat_mv = v2_.bus.mv;
     return;
   }
   // Thesis fig. 6.9: the reading sags under this motor's load; add the offset of the PWM it
   // was last sent.
-  const tc::MotorCalibration& cal = m.model.v1();
-  m.vbat_mv = monitor_.compensatedMillivolts(battery_mv_, m.pwm_us, cal.sag);
-  const tc::ForcePwmResult result = tc::forceToPwm(cal, m.force_g, m.vbat_mv);
+  const tc::ThesisRun& thesis = m.model.v1();
+  m.vbat_mv = monitor_.compensatedMillivolts(battery_mv_, m.pwm_us, thesis.sag);
+  const tc::ForcePwmResult result = tc::forceToPwm<hal::Eeprom>(thesis, m.force_g, m.vbat_mv);
   m.pwm_us = result.pwm_us;
   m.flags = result.flags;
 }
@@ -452,7 +455,7 @@ void ReadRunApp::updateLiftoff(uint32_t now_ms) {
     prompt();
     return;
   }
-  for (uint8_t i = 0; i < kMotors; ++i) motors_[i].force_g = force_g;
+  for (uint8_t i = 0; i < kMotors; ++i) setForce(i, force_g);
 }
 
 void ReadRunApp::printLiftoffProgress(uint32_t elapsed_ms, uint16_t force_g) {
@@ -554,7 +557,7 @@ void ReadRunApp::commandForce(char** tokens, uint8_t count) {
   }
   if (motor >= 0) {
     if (!requireArmable(static_cast<uint8_t>(motor))) return;
-    motors_[motor].force_g = static_cast<uint16_t>(force_g);
+    setForce(static_cast<uint8_t>(motor), static_cast<uint16_t>(force_g));
     return;
   }
   uint8_t armable = 0;
@@ -566,7 +569,7 @@ void ReadRunApp::commandForce(char** tokens, uint8_t count) {
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
     if (m.isArmable()) {
-      m.force_g = static_cast<uint16_t>(force_g);
+      setForce(i, static_cast<uint16_t>(force_g));
     } else {
       say(TC_PSTR("warning: "));
       sayMotor(i);
@@ -603,8 +606,8 @@ void ReadRunApp::commandStatus() {
       // Headroom: the most this motor reaches at the present (filtered) voltage with the
       // ESC at its maximum pulse. One division: status only, never per frame.
       say(TC_PSTR(" filtered, headroom "));
-      fw::printUint(gramsFromDg(tc::headroomDg(m.model.v2(), bus_.isValid() ? bus_.mv
-                                                                            : m.model.v2().rest_mv)));
+      fw::printUint(gramsFromDg(tc::headroomDg(m.model.v2(), v2_.bus.isValid() ? v2_.bus.mv
+                                                                              : m.model.v2().rest_mv)));
       say(TC_PSTR(" g, flags: "));
     } else {
       say(TC_PSTR(" compensated, flags: "));
@@ -612,13 +615,13 @@ void ReadRunApp::commandStatus() {
     sayFlags(m.flags);
     fw::newline();
   }
-  if (any_v2_) {
+  if (v2_.count != 0) {
     say(TC_PSTR("bus filter "));
-    sayVolts(bus_.mv);
+    sayVolts(v2_.bus.mv);
     say(TC_PSTR(" (v2 motors: 1/"));
-    fw::printUint(1u << bus_.shift);
+    fw::printUint(1u << v2_.bus.shift);
     say(TC_PSTR(" per frame), readings rejected "));
-    fw::printUint(bus_.rejected);
+    fw::printUint(v2_.bus.rejected);
     fw::newline();
   }
   say(TC_PSTR("battery "));

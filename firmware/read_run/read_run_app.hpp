@@ -46,8 +46,10 @@
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
+#include "thrustcal/model_v2_runtime.hpp"
 #include "thrustcal/motor_calibration.hpp"
 #include "thrustcal/record_v2.hpp"
+#include "thrustcal/thesis_runtime.hpp"
 #include "slot_model.hpp"
 
 namespace rr {
@@ -66,23 +68,22 @@ constexpr uint16_t kLiftoffDefaultHoldMs = 5000;
 constexpr uint16_t kLiftoffMaxMs = 60000;
 constexpr uint16_t kLiftoffProgressMs = 500;  // one "# " progress line this often
 constexpr uint8_t kStreamLinesPerSecond = 10;
+constexpr uint8_t kNoLane = 0xFF;             // a motor that does not fly v2
 
 // One motor as the thesis's motor_struct: the model loaded from EEPROM plus the controller's
 // run-time state.
 struct Motor {
-  SlotModel model;                               // v1 calibration or model v2 (a union)
+  SlotModel model;                               // v1 ThesisRun or v2 ModelV2Run (a union)
   tc::SlotLayout layout = tc::SlotLayout::kNone; // what the slot holds
   tc::DecodeStatus record = tc::DecodeStatus::kErased;  // kOk: `model` is loaded and flown
   uint8_t v2_copy = tc::kNoCopy;                 // v2: copy flown (0 = A, 1 = B)
   tc::DecodeStatus v2_copy_status[2] = {tc::DecodeStatus::kErased, tc::DecodeStatus::kErased};
+  uint8_t lane = kNoLane;           // v2: its lane in the frame (command in, pulse out)
   uint16_t force_g = 0;             // commanded force
   uint16_t pwm_us = kStopPwmUs;     // last pulse written to the ESC
   uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
                                     // v2 the bus filter's value
   uint8_t flags = 0;                // tc::ForcePwmFlag bits of that pulse
-  // v2: the commanded force filtered like the bus voltage (decigrams << filter shift), i.e.
-  // the force whose sag the filtered voltage reflects.
-  uint32_t seen_force_acc = 0;
 
   bool isArmable() const { return record == tc::DecodeStatus::kOk; }
   bool fliesV2() const { return isArmable() && model.holdsV2(); }
@@ -114,12 +115,10 @@ class ReadRunApp {
   bool isRunning() const;               // any motor commanded above 0 g
   uint16_t batteryMv() const { return battery_mv_; }  // median reading, uncompensated
   // v2 motors' voltage: this frame's reading through the IIR filter, and its reciprocal.
-  const tc::BusVoltageFilter& busFilter() const { return bus_; }
+  const tc::BusVoltageFilter& busFilter() const { return v2_.bus; }
   bool busSampleSane() const { return bus_sample_sane_; }  // this frame's reading was usable
-  // v2: the force (decigrams) the filtered voltage reflects for motor `index`.
-  uint16_t seenForceDg(uint8_t index) const {
-    return static_cast<uint16_t>(motors_[index].seen_force_acc >> bus_.shift);
-  }
+  // v2: the bench sag of the commands the filtered voltage reflects (1/16 of 10 mV).
+  const tc::BusSagFilter& sagFilter() const { return v2_.sag; }
   bool isStreaming() const { return stream_; }
   uint32_t failsafeTrips() const { return failsafe_trips_; }
 
@@ -145,6 +144,7 @@ class ReadRunApp {
   void frame(uint32_t now_ms);
   void sampleBattery();
   void setFilterShift(uint16_t frame_hz);
+  void setForce(uint8_t index, uint16_t force_g);  // a v2 motor's lane too
   void flyMotor(Motor& m);
   void streamLine(uint32_t now_ms);
   void prompt();
@@ -152,9 +152,8 @@ class ReadRunApp {
   Motor motors_[kMotors];
   tc::MedianFilter<kBatteryWindow> battery_counts_;
   tc::BatteryMonitor monitor_;
-  tc::BusVoltageFilter bus_;        // runs only while a slot flies v2 (any_v2_)
+  tc::V2Frame v2_;                  // the motors flying v2: bus filter, sag, their lanes
   bool bus_sample_sane_ = false;
-  bool any_v2_ = false;             // some slot holds a valid v2 model
   fw::LineReader line_;
   Mode mode_ = Mode::kBoot;
   uint16_t battery_mv_ = 0;

@@ -1,8 +1,9 @@
-// The force model one motor slot flies, in one piece of SRAM: either the thesis calibration
-// (layout v1: two 500-gram curves and the sag table, 1114 bytes on the AVR, flown with option
-// 2.1) or model v2 (force in effective motor voltage, 123 bytes). A slot holds one or the
-// other, never both, so the two share their storage (a union): four slots cost what four v1
-// calibrations cost, whatever mix of layouts the EEPROM holds.
+// The force model one motor slot flies, in one piece of SRAM: either the thesis model (layout v1,
+// tc::ThesisRun: option 2.1 with the curves' PWM steps read from the EEPROM on demand, 165
+// bytes on the AVR) or model v2 (tc::ModelV2Run, the model as the frame reads it, 158 bytes).
+// A slot holds one or the other, never both, so the two share their storage (a union): four
+// slots stay under 1 KB whatever mix of layouts the EEPROM holds (the decoded thesis record is
+// 1114 bytes: four of them were 4.4 KB).
 //
 // Which member is alive is explicit: holdsV2(). v1() and v2() may only be called for the
 // member that is alive (callers check holdsV2() first; Motor::fliesV2() does).
@@ -10,8 +11,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "thrustcal/model_v2.hpp"
-#include "thrustcal/motor_calibration.hpp"
+#include "thrustcal/model_v2_runtime.hpp"
+#include "thrustcal/thesis_runtime.hpp"
 
 #if defined(__AVR__)
 // avr-libc ships no <new>; this is the standard placement form (construct at an address).
@@ -28,28 +29,35 @@ class SlotModel {
   SlotModel(const SlotModel&) = delete;
   SlotModel& operator=(const SlotModel&) = delete;
 
-  // Makes the thesis calibration the live member, cleared (not calibrated), and returns it
-  // so a loader can fill it in place.
-  tc::MotorCalibration& resetToV1() {
-    new (&v1_) tc::MotorCalibration();
+  // Makes the thesis model the live member, loaded from the record of `slot` decoded into
+  // `cal` (its steps stay in Storage). False: the EEPROM no longer holds what was decoded
+  // (the member is then cleared: not calibrated).
+  template <class Storage>
+  bool setV1(const tc::MotorCalibration& cal, uint8_t slot) {
+    new (&v1_) tc::ThesisRun();
     holds_v2_ = false;
-    return v1_;
+    return v1_.load<Storage>(cal, slot);
   }
-  // Makes model v2 the live member, a copy of `model`.
-  void setV2(const tc::ModelV2& model) {
-    new (&v2_) tc::ModelV2(model);
+  // Makes model v2 the live member, rebuilt from `model` for the frame. False: no model.
+  bool setV2(const tc::ModelV2& model) {
+    new (&v2_) tc::ModelV2Run();
     holds_v2_ = true;
+    return v2_.load(model);
+  }
+  void clear() {
+    new (&v1_) tc::ThesisRun();
+    holds_v2_ = false;
   }
 
   bool holdsV2() const { return holds_v2_; }
-  const tc::MotorCalibration& v1() const { return v1_; }
-  const tc::ModelV2& v2() const { return v2_; }
+  const tc::ThesisRun& v1() const { return v1_; }
+  const tc::ModelV2Run& v2() const { return v2_; }
 
  private:
   // Both members are trivially destructible: re-constructing over either ends the other.
   union {
-    tc::MotorCalibration v1_;
-    tc::ModelV2 v2_;
+    tc::ThesisRun v1_;
+    tc::ModelV2Run v2_;
   };
   bool holds_v2_ = false;
 };

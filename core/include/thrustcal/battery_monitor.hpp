@@ -39,9 +39,14 @@ struct SagTable {
 
 class BatteryMonitor {
  public:
-  explicit BatteryMonitor(const BatteryConfig& config = BatteryConfig()) : config_(config) {}
+  explicit BatteryMonitor(const BatteryConfig& config = BatteryConfig());
   // Thesis map(): counts * full_scale / adc_max. Counts above adc_max read as full scale.
   uint16_t millivoltsFromCounts(uint16_t counts) const;
+  // The same at half-count resolution, from two readings added (0..2 * adc_max):
+  // two_counts * full_scale / (2 * adc_max), truncating; above 2 * adc_max, full scale. No
+  // division (read_run's every frame) when 2 * adc_max < 2048 and the full scale below
+  // 1024 times it: a multiplication by a rounded-up 2^22 / (2 * adc_max), exact in that range.
+  uint16_t millivoltsFromTwoCounts(uint16_t two_counts) const;
   // Reading + sag offset of the last PWM sent (thesis fig. 6.9). Saturates at 0 and 65535.
   uint16_t compensatedMillivolts(uint16_t measured_mv, uint16_t last_pwm_us,
                                  const SagTable& sag) const;
@@ -50,6 +55,7 @@ class BatteryMonitor {
 
  private:
   BatteryConfig config_;
+  uint32_t two_counts_factor_q22_ = 0;  // ceil(full_scale * 2^22 / (2 * adc_max)); 0: divide
 };
 
 // Collects (pwm, battery) pairs during a sweep and turns them into the start voltage and the

@@ -91,7 +91,7 @@ TEST_F(ReadRunV2, V2RecordIsFlownWithModelV2AtTheFilteredBusVoltage) {
     SCOPED_TRACE(int(m));
     EXPECT_TRUE(app_->motor(m).fliesV2());
     EXPECT_EQ(app_->motor(m).layout, tc::SlotLayout::kModelV2);
-    EXPECT_EQ(app_->seenForceDg(m), 3000) << "steady state: no sag step predicted";
+    EXPECT_EQ(app_->sagFilter().seen_q4, app_->sagFilter().last_q4) << "steady: no sag step predicted";
     EXPECT_EQ(pulse(m), expectedV2Pwm(m, 300));
     EXPECT_NEAR(plantForceG(kPlantK[m], pulse(m), vbat_mv), 300.0, 300.0 * 0.02);
     EXPECT_EQ(app_->motor(m).flags, 0);
@@ -186,7 +186,7 @@ TEST_F(ReadRunV2, BusFilterRunsEveryFrameAndSettlesOnTheNewVoltage) {
   EXPECT_EQ(pulse(0), expectedV2Pwm(0, 300));
 }
 
-TEST_F(ReadRunV2, CommandStepPredictsTheBenchSagUntilTheFilteredVoltageShowsIt) {
+TEST_F(ReadRunV2, CommandStepPredictsTheBenchSagOfAllMotorsUntilTheFilteredVoltageShowsIt) {
   // given: motors whose bench sweep saw the monitor drop 60 mV per 100 g, at rest
   for (uint8_t m = 0; m < rr::kMotors; ++m)
     storeV2Motor(m, kPlantK[m], mvFromCounts(kCountsV1), 60.0);
@@ -194,22 +194,25 @@ TEST_F(ReadRunV2, CommandStepPredictsTheBenchSagUntilTheFilteredVoltageShowsIt) 
   const tc::ModelV2 model = storedV2Model(0);
   ASSERT_GT(model.sag_10mv[model.knots / 2], 0) << "the model holds the bench sag";
 
-  // when: 300 g from rest, the first frame, then until the filters settle
+  // when: 300 g from rest on all four, two frames, then until the filters settle
   fake::feedInput("f 300\n");
   runFrames(1);
   const uint16_t first_pwm = pulse(0);
-  const uint16_t seen_after_first_dg = app_->seenForceDg(0);
+  runFrames(1);
+  const uint16_t second_pwm = pulse(0);
   runFor(kSettleMs, true);
 
-  // then: the first frame expects the ~180 mV drop of 300 g (the reading still shows rest);
-  // once the seen force is the command, the plain model at the reading flies
-  EXPECT_EQ(first_pwm, tc::forceToPwmV2(model, 3000, app_->busFilter(), 0).pwm_us);
-  EXPECT_EQ(seen_after_first_dg, 3000 / 8);
+  // then: the step's frame flies the plain model at the reading (the prediction is one frame
+  // late); the next expects the drop of all four motors' 300 g on the one pack (~4 x 180 mV);
+  // once the filters settle, the plain model at the reading flies again
+  EXPECT_EQ(first_pwm, tc::forceToPwmV2(model, 3000, app_->busFilter()).pwm_us);
   const uint16_t steady_pwm = expectedV2Pwm(0, 300);
+  EXPECT_EQ(first_pwm, steady_pwm);
   EXPECT_EQ(pulse(0), steady_pwm);
-  const double predicted_us = (steady_pwm - model.start_q4_us / 16.0) * 180.0 /
-                              (mvFromCounts(kCountsV1) - 180.0);
-  EXPECT_NEAR(first_pwm - steady_pwm, predicted_us, 2.0);
+  EXPECT_EQ(app_->sagFilter().seen_q4, app_->sagFilter().last_q4);
+  const double predicted_us = (steady_pwm - model.start_q4_us / 16.0) * 4 * 180.0 /
+                              (mvFromCounts(kCountsV1) - 4 * 180.0);
+  EXPECT_NEAR(second_pwm - steady_pwm, predicted_us, 3.0);
 }
 
 struct RateCase {

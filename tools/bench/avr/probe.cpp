@@ -5,26 +5,39 @@
 //   GPIOR1 = label, GPIOR0 = 1 (start) ... GPIOR0 = 2 (end)       a measured section
 //   GPIOR1 = 0x80 + key, GPIOR2 = low byte, GPIOR2 = high byte     a value (sizes, checks)
 //   GPIOR1 = 0xFF                                                  done
-// One four-motor update is measured the way read_run's flyMotor() computes it (read_run's
-// ReadRunApp is not linkable without its HAL, so the per-motor path is repeated here, calling
-// the same core/ functions on read_run's own per-motor storage, rr::SlotModel).
+// Every section is a call read_run makes, with read_run's own types and storage:
+//   - tc::V2Frame::fly, the frame read_run calls for its v2 motors (bus filter, sag prediction,
+//     four pulses; the lanes' commands set as read_run's setForce sets them);
+//   - the v1 (thesis) motor as read_run's flyMotor flies it: the sag-compensated reading and
+//     tc::forceToPwm over tc::ThesisRun, its curves' steps read from the EEPROM through the
+//     real hal::Eeprom (hal/avr/eeprom.cpp is linked in);
+//   - the battery readings: the median of 101 (v1, status) and the middle two of four (v2).
+// The frame's assembly is also checked against its portable C++ (V2Frame::flyPortable) on
+// frames with insane readings and jumps (key kFrameMismatches must read 0).
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <avr/sleep.h>
+#include <string.h>
 
+#include "hal/hal.hpp"
+#include "read_run_app.hpp"
 #include "slot_model.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/curve_builder.hpp"
+#include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
+#include "thrustcal/model_v2_runtime.hpp"
+#include "thrustcal/thesis_runtime.hpp"
 
 enum Label : uint8_t {
   kEmpty = 0,          // marker overhead
-  kV2ReadRun = 1,      // bus filter update + 4 x forceToPwmV2 with sag prediction (read_run)
-  kV2Frame = 2,        // bus filter update + forceToPwmV2Frame (four motors, one call)
-  kThesis = 3,         // 4 x (sag-compensated reading + forceToPwm), option 2.1
+  kV2Frame = 1,        // V2Frame::fly: bus filter + 4 motors + sag prediction (commands change)
+  kV2Steady = 2,       // V2Frame::fly with the same commands every frame (prediction settled)
+  kThesis = 3,         // 4 x (sag-compensated reading + forceToPwm over ThesisRun)
   kThesisMedian = 4,   // thesis battery reading: 4 pushes into the median of 101 + median()
+  kV2Reading = 5,      // v2 battery reading: the middle two of four readings in mV
 };
 enum Key : uint8_t {
   kSizeofModelV2 = 0x80,
@@ -32,6 +45,12 @@ enum Key : uint8_t {
   kSizeofSlotModel = 0x82,
   kFitFailures = 0x83,
   kFrames = 0x84,
+  kSizeofModelV2Run = 0x85,
+  kSizeofThesisRun = 0x86,
+  kSizeofMotor = 0x87,
+  kSizeofV2Frame = 0x88,
+  kFrameMismatches = 0x89,
+  kFramesChecked = 0x8A,
 };
 
 static inline void markStart(uint8_t label) { GPIOR1 = label; GPIOR0 = 1; }
@@ -41,16 +60,21 @@ static void report(uint8_t key, uint16_t value) {
   GPIOR2 = static_cast<uint8_t>(value);
   GPIOR2 = static_cast<uint8_t>(value >> 8);
 }
+// Keeps a value in a register across the markers: inputs are computed before the start.
+template <class T>
+static inline void ready(const T& v) { __asm__ volatile("" ::"r"(v) : "memory"); }
 
-// read_run's storage: four slots, each v1 or v2 (the symbol's size is what the image holds).
+// read_run's storage: four slots and the frame of its v2 motors (the symbols' sizes are what
+// the image holds).
 rr::SlotModel bench_slots[4];
-// The four v2 models alone (what a v2-only read_run would hold).
-tc::ModelV2 bench_models_v2[4];
+tc::V2Frame bench_frame;
+static tc::ModelV2 models[4];
+static tc::MotorCalibration decoded;  // one at a time, as read_run's loader
 static tc::ModelV2Fitter<81> fitter;
 static tc::CurveBuilder<81> builder;
 static tc::MedianFilter<101> battery_median;
-static const tc::ForcePwmLimits limits;
 static const tc::BatteryMonitor monitor;
+static tc::V2Frame reference;
 volatile uint16_t sink;
 
 // Integer synthetic motor: force ~ ((pwm - start) * V)^2, about 700 g at 1800 us and 12.4 V.
@@ -79,12 +103,17 @@ int main() {
   report(kSizeofModelV2, sizeof(tc::ModelV2));
   report(kSizeofMotorCalibration, sizeof(tc::MotorCalibration));
   report(kSizeofSlotModel, sizeof(rr::SlotModel));
+  report(kSizeofModelV2Run, sizeof(tc::ModelV2Run));
+  report(kSizeofThesisRun, sizeof(tc::ThesisRun));
+  report(kSizeofMotor, sizeof(rr::Motor));
+  report(kSizeofV2Frame, sizeof(tc::V2Frame));
   uint16_t failures = 0;
   const uint16_t kFramesRun = 500;
 
-  // ---- thesis: two curves (12.4 V, 10.5 V) and the sag table per motor, in the slots ----------
+  // ---- thesis: two curves (12.4 V, 10.5 V) and the sag table per motor, written to the
+  // EEPROM as gather_store writes them, loaded into the slots as read_run loads them ----------
   for (uint8_t m = 0; m < 4; ++m) {
-    tc::MotorCalibration& cal = bench_slots[m].resetToV1();
+    decoded.clear();
     const uint16_t rests[2] = {12400, 10500};
     for (uint8_t c = 0; c < 2; ++c) {
       builder.reset();
@@ -95,74 +124,123 @@ int main() {
         builder.add(p, f);
         sag.add(p, benchMv(rests[c], f));
       }
-      tc::ThesisCurve& curve = c == 0 ? cal.first : cal.second;
+      tc::ThesisCurve& curve = c == 0 ? decoded.first : decoded.second;
       if (builder.build(curve).status != tc::BuildStatus::kOk) ++failures;
       uint16_t start_mv = 0;
       tc::SagTable second_sag;  // gather_store keeps only the first sweep's offsets
-      sag.build(c == 0 ? cal.sag : second_sag, start_mv);
+      sag.build(c == 0 ? decoded.sag : second_sag, start_mv);
       curve.start_mv = start_mv;
     }
+    tc::writeRecord<hal::Eeprom>(m, decoded);
+    if (tc::readRecord<hal::Eeprom>(m, decoded) != tc::DecodeStatus::kOk) ++failures;
+    if (!bench_slots[m].setV1<hal::Eeprom>(decoded, m)) ++failures;
   }
   for (uint8_t k = 0; k < 101; ++k) battery_median.push(793);  // ~12.1 V
   uint16_t pwm[4] = {1000, 1000, 1000, 1000};
   for (uint16_t frame = 0; frame < kFramesRun; ++frame) {
     const uint16_t counts = static_cast<uint16_t>(793 - frame / 8 + (frame * 7u) % 3u);
+    uint16_t force_g[4];
+    for (uint8_t m = 0; m < 4; ++m) force_g[m] = static_cast<uint16_t>(commandDg(frame, m) / 10u);
+    ready(counts);
     markStart(kThesisMedian);
     for (uint8_t k = 0; k < 4; ++k) battery_median.push(static_cast<uint16_t>(counts + k % 2));
     const uint16_t battery_mv = monitor.millivoltsFromCounts(battery_median.median());
     markEnd();
+    ready(battery_mv);
     markStart(kThesis);
-    for (uint8_t m = 0; m < 4; ++m) {
-      const tc::MotorCalibration& cal = bench_slots[m].v1();
-      const uint16_t mv = monitor.compensatedMillivolts(battery_mv, pwm[m], cal.sag);
-      pwm[m] = tc::forceToPwm(cal, commandDg(frame, m) / 10u, mv, limits).pwm_us;
+    for (uint8_t m = 0; m < 4; ++m) {  // read_run's flyMotor, v1 branch
+      const tc::ThesisRun& thesis = bench_slots[m].v1();
+      const uint16_t mv = monitor.compensatedMillivolts(battery_mv, pwm[m], thesis.sag);
+      pwm[m] = tc::forceToPwm<hal::Eeprom>(thesis, force_g[m], mv).pwm_us;
     }
     markEnd();
     sink = pwm[3];
+    // the v2 battery reading: four readings, the middle two in mV (read_run's middleTwoMillivolts)
+    const uint16_t four[4] = {counts, static_cast<uint16_t>(counts + 1), static_cast<uint16_t>(counts - 2),
+                              static_cast<uint16_t>(counts + 30)};
+    ready(four[3]);
+    markStart(kV2Reading);
+    uint16_t sum = 0, lo = 0xFFFF, hi = 0;
+    for (uint8_t k = 0; k < 4; ++k) {
+      const uint16_t c = four[k] < 1023 ? four[k] : 1023;
+      sum = static_cast<uint16_t>(sum + c);
+      if (c < lo) lo = c;
+      if (c > hi) hi = c;
+    }
+    sink = monitor.millivoltsFromTwoCounts(static_cast<uint16_t>(sum - lo - hi));
+    markEnd();
   }
 
-  // ---- v2: one sweep at 12.4 V, refined by one at 10.5 V, per motor -------------------------
+  // ---- v2: one sweep at 12.4 V, refined by one at 10.5 V, per motor; the slots and the frame
+  // as read_run's loader sets them -------------------------------------------------------------
+  bench_frame.count = 0;
   for (uint8_t m = 0; m < 4; ++m) {
     fitter.reset();
     for (uint16_t p = 1000; p <= 1800; p += 10) {
       const int16_t f = forceDg(p, m, 12400);
       fitter.add(p, f, benchMv(12400, f));
     }
-    if (fitter.fit(bench_models_v2[m]).status != tc::FitV2Status::kOk) ++failures;
+    if (fitter.fit(models[m]).status != tc::FitV2Status::kOk) ++failures;
     fitter.reset();
     for (uint16_t p = 1000; p <= 1800; p += 10) {
       const int16_t f = forceDg(p, m, 10500);
       fitter.add(p, f, benchMv(10500, f));
     }
-    if (fitter.refine(bench_models_v2[m]).status != tc::FitV2Status::kOk) ++failures;
-    bench_slots[m].setV2(bench_models_v2[m]);
+    if (fitter.refine(models[m]).status != tc::FitV2Status::kOk) ++failures;
+    if (!bench_slots[m].setV2(models[m])) ++failures;
+    bench_frame.lane[bench_frame.count++].setModel(&bench_slots[m].v2());
   }
-  tc::BusVoltageFilter bus;
-  bus.reset(busMv(0));
-  uint32_t seen_acc[4] = {0, 0, 0, 0};
-  uint16_t cmd[4];
-  tc::ForcePwmResult out[4];
+  bench_frame.bus.reset(busMv(0));  // read_run's filter has been running since arming
   for (uint16_t frame = 0; frame < kFramesRun; ++frame) {
-    for (uint8_t m = 0; m < 4; ++m) cmd[m] = commandDg(frame, m);
-    // read_run's flyMotor() for four v2 slots
-    markStart(kV2ReadRun);
-    bus.update(busMv(frame));
-    for (uint8_t m = 0; m < 4; ++m) {
-      const uint16_t seen_dg = static_cast<uint16_t>(seen_acc[m] >> bus.shift);
-      const tc::ForcePwmResult r = tc::forceToPwmV2(bench_slots[m].v2(), cmd[m], bus, seen_dg, limits);
-      seen_acc[m] = seen_acc[m] - (seen_acc[m] >> bus.shift) + cmd[m];
-      pwm[m] = r.pwm_us;
-    }
-    markEnd();
-    sink = pwm[3];
+    for (uint8_t m = 0; m < 4; ++m) bench_frame.lane[m].force_dg = commandDg(frame, m);  // setForce
+    const uint16_t mv = busMv(frame);
+    ready(mv);
     markStart(kV2Frame);
-    bus.update(busMv(frame));
-    tc::forceToPwmV2Frame(bench_models_v2, cmd, 4, bus, out, limits);
+    bench_frame.fly(mv, 0);
     markEnd();
-    sink = out[3].pwm_us;
+    sink = bench_frame.lane[3].pwm_us;
   }
+  for (uint16_t frame = 0; frame < kFramesRun; ++frame) {
+    for (uint8_t m = 0; m < 4; ++m) bench_frame.lane[m].force_dg = static_cast<uint16_t>(1500 + 500 * m);
+    const uint16_t mv = busMv(kFramesRun + frame);
+    ready(mv);
+    markStart(kV2Steady);
+    bench_frame.fly(mv, 0);
+    markEnd();
+    sink = bench_frame.lane[3].pwm_us;
+  }
+
+  // ---- the assembly against the portable frame: same state in, same state out ---------------
+  uint16_t mismatches = 0, checked = 0;
+  bench_frame.bus = tc::BusVoltageFilter();
+  bench_frame.sag = tc::BusSagFilter();
+  for (uint16_t frame = 0; frame < 2000; ++frame) {
+    for (uint8_t m = 0; m < 4; ++m) {
+      bench_frame.lane[m].force_dg = (frame % 50 < 3) ? 0 : static_cast<uint16_t>((frame * 131u + m * 877u) % 9000u);
+    }
+    uint16_t mv = static_cast<uint16_t>(12600 - frame + (frame * 37u) % 23u);
+    if (frame % 97 == 50) mv = 1500;      // wire off: rejected, flagged
+    if (frame % 400 == 300) mv = 9000;    // a jump: re-seeded by division
+    if (frame == 1500) bench_frame.bus.shift = 6;  // 400 Hz
+    if (frame == 1800) bench_frame.bus.shift = 0;  // no filtering
+    const uint8_t extra = (frame % 7 == 0) ? tc::kVoltageInvalid : 0;
+    memcpy(&reference, &bench_frame, sizeof reference);
+    reference.flyPortable(mv, extra);
+    bench_frame.fly(mv, extra);
+    bool same = memcmp(&reference.bus, &bench_frame.bus, sizeof reference.bus) == 0 &&
+                reference.sag.seen_q4 == bench_frame.sag.seen_q4 &&
+                reference.sag.rem == bench_frame.sag.rem && reference.sag.last_q4 == bench_frame.sag.last_q4;
+    for (uint8_t m = 0; m < 4; ++m)
+      same = same && reference.lane[m].pwm_us == bench_frame.lane[m].pwm_us &&
+             reference.lane[m].flags == bench_frame.lane[m].flags;
+    if (!same) ++mismatches;
+    ++checked;
+  }
+
   report(kFitFailures, failures);
   report(kFrames, kFramesRun);
+  report(kFrameMismatches, mismatches);
+  report(kFramesChecked, checked);
   GPIOR1 = 0xFF;
   cli();
   sleep_enable();
