@@ -269,8 +269,8 @@ void GatherStoreApp::cmdHelp() {
   sayLine(TC_PSTR("  span W        optional gain: after tare put W g on the plate, then span W"));
   sayLine(TC_PSTR("  range MIN MAX sweep PWM range in us, 1000..2000 (default 1000 1800)"));
   sayLine(TC_PSTR("  step US       sweep step in us, 1..100 (default 10)"));
-  sayLine(TC_PSTR("  settle MS     wait per step in ms, 0..10000 (default 200)"));
-  sayLine(TC_PSTR("  settle auto   next step once the force stops changing; settle MS is the cap"));
+  sayLine(TC_PSTR("  settle MS     wait per step in ms, 0..10000 (thesis: 200); also the cap"));
+  sayLine(TC_PSTR("  settle auto   next step once the force stops changing (default, cap 500)"));
   sayLine(TC_PSTR("  sweep         run the sweep, stream CSV; any key aborts (motor -> 1000 us)"));
   sayLine(TC_PSTR("  store 1       store the last sweep as curve 1 (+ start voltage, sag offsets)"));
   sayLine(TC_PSTR("  store 2       store the last sweep as curve 2 (another battery voltage)"));
@@ -640,7 +640,7 @@ void GatherStoreApp::cmdSweep() {
   sweep_.valid = false;
   sweep_.complete = false;
   if (!swallowLineFeed()) return;
-  builder_.reset();
+  scratch_.startBuilder();
   sag_builder_.reset(settings_.pwm_min_us);
   fitter_.reset();
 
@@ -678,7 +678,7 @@ void GatherStoreApp::cmdSweep() {
     int16_t force_dg;
     uint16_t vbat_mv;
     if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
-    builder_.add(pwm, force_dg);
+    scratch_.builder().add(pwm, force_dg);
     sag_builder_.add(pwm, vbat_mv);
     fitter_.add(pwm, force_dg, vbat_mv);  // false once full: store v2 then refuses the sweep
     if (force_dg > max_force_dg) max_force_dg = force_dg;
@@ -747,8 +747,8 @@ void GatherStoreApp::finishSweep(uint8_t slot, uint32_t elapsed_ms) {
   sweep_.sag = tc::SagTable();
   sag_builder_.build(sweep_.sag, start_mv);  // bin 0 holds the first step: cannot fail
   sweep_.curve.start_mv = start_mv;
-  sweep_.samples = builder_.size();
-  sweep_.report = builder_.build(sweep_.curve);
+  sweep_.samples = scratch_.builder().size();
+  sweep_.report = scratch_.builder().build(sweep_.curve);
   sweep_.slot = slot;
   sweep_.complete = true;
 
@@ -825,11 +825,12 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
     return;
   }
   const bool had_v2 = tc::probeSlotLayout<hal::Eeprom>(slot) == tc::SlotLayout::kModelV2;
-  const tc::DecodeStatus before = tc::readRecord<hal::Eeprom>(slot, record_);
+  tc::MotorCalibration& record = scratch_.startRecord();
+  const tc::DecodeStatus before = tc::readRecord<hal::Eeprom>(slot, record);
   if (which == 1) {
-    if (before != tc::DecodeStatus::kOk) record_.clear();
-    record_.first = sweep_.curve;
-    record_.sag = sweep_.sag;
+    if (before != tc::DecodeStatus::kOk) record.clear();
+    record.first = sweep_.curve;
+    record.sag = sweep_.sag;
   } else {
     if (had_v2) {
       say(TC_PSTR("error: motor "));
@@ -847,7 +848,7 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
       return;
     }
     const int32_t span_mv =
-        absolute(static_cast<int32_t>(sweep_.curve.start_mv) - record_.first.start_mv);
+        absolute(static_cast<int32_t>(sweep_.curve.start_mv) - record.first.start_mv);
     const uint16_t min_span_mv = tc::ForcePwmLimits().min_voltage_span_mv;
     if (span_mv < min_span_mv) {
       say(TC_PSTR("error: this sweep started at "));
@@ -855,15 +856,15 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
       say(TC_PSTR(", within "));
       printVolts(min_span_mv);
       say(TC_PSTR(" of curve 1 ("));
-      printVolts(record_.first.start_mv);
+      printVolts(record.first.start_mv);
       sayLine(TC_PSTR("): sweep again at another battery voltage; nothing changed"));
       return;
     }
-    record_.second = sweep_.curve;
+    record.second = sweep_.curve;
   }
   CountingEeprom::written = 0;
-  tc::writeRecord<CountingEeprom>(slot, record_);
-  const tc::DecodeStatus after = tc::readRecord<hal::Eeprom>(slot, record_);
+  tc::writeRecord<CountingEeprom>(slot, record);
+  const tc::DecodeStatus after = tc::readRecord<hal::Eeprom>(slot, record);
   if (after != tc::DecodeStatus::kOk) {
     say(TC_PSTR("error: read-back of motor "));
     fw::printUint(slot);
@@ -885,9 +886,9 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
   say(TC_PSTR(" g"));
   if (which == 1) {
     say(TC_PSTR(", sag offsets in 13 bins of 40 us from "));
-    fw::printUint(record_.sag.base_pwm_us);
+    fw::printUint(record.sag.base_pwm_us);
     say(TC_PSTR(" us"));
-    if (record_.hasSecondCurve()) say(TC_PSTR("; curve 2 kept"));
+    if (record.hasSecondCurve()) say(TC_PSTR("; curve 2 kept"));
   }
   if (had_v2) say(TC_PSTR("; replaced model v2 (the slot holds the thesis record now)"));
   sayWritten();
@@ -1086,7 +1087,8 @@ void GatherStoreApp::cmdShow() {
     showV2(slot);
     return;
   }
-  const tc::DecodeStatus status = tc::readRecord<hal::Eeprom>(slot, record_);
+  tc::MotorCalibration& record = scratch_.startRecord();
+  const tc::DecodeStatus status = tc::readRecord<hal::Eeprom>(slot, record);
   say(TC_PSTR("motor "));
   fw::printUint(slot);
   say(TC_PSTR(" ("));
@@ -1098,19 +1100,19 @@ void GatherStoreApp::cmdShow() {
     fw::newline();
     return;
   }
-  sayLine(record_.hasSecondCurve() ? TC_PSTR("calibrated, two curves")
+  sayLine(record.hasSecondCurve() ? TC_PSTR("calibrated, two curves")
                                    : TC_PSTR("calibrated, one curve"));
-  printCurve(1, record_.first);
+  printCurve(1, record.first);
   say(TC_PSTR("sag offsets in mV per 40 us from "));
-  fw::printUint(record_.sag.base_pwm_us);
+  fw::printUint(record.sag.base_pwm_us);
   say(TC_PSTR(" us:"));
   for (uint8_t i = 0; i < tc::kSagBins; ++i) {
     hal::Uart::write(' ');
-    fw::printInt(record_.sag.offset_mv[i]);
+    fw::printInt(record.sag.offset_mv[i]);
   }
   fw::newline();
-  if (record_.hasSecondCurve()) {
-    printCurve(2, record_.second);
+  if (record.hasSecondCurve()) {
+    printCurve(2, record.second);
   } else {
     sayLine(TC_PSTR("curve 2: none (store 2 after a sweep at another battery voltage)"));
   }

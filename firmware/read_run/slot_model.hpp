@@ -11,15 +11,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "placement_new.hpp"
 #include "thrustcal/model_v2_runtime.hpp"
 #include "thrustcal/thesis_runtime.hpp"
-
-#if defined(__AVR__)
-// avr-libc ships no <new>; this is the standard placement form (construct at an address).
-inline void* operator new(size_t, void* where) noexcept { return where; }
-#else
-#include <new>
-#endif
 
 namespace rr {
 

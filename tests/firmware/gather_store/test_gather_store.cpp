@@ -111,7 +111,9 @@ TEST_F(GatherStore, SweepStreamsAValidCsvWithCommentsOnly) {
   EXPECT_EQ(headers, 1);
   ASSERT_EQ(pwms.size(), 81u);  // 1000..1800 step 10
   for (size_t i = 0; i < pwms.size(); ++i) EXPECT_EQ(pwms[i], 1000 + 10 * static_cast<int>(i));
-  for (size_t i = 1; i < times.size(); ++i) EXPECT_GE(times[i] - times[i - 1], 0.200 - 1e-9);
+  // the default settles by measurement: at least three force medians kSettleProbeMs apart
+  for (size_t i = 1; i < times.size(); ++i)
+    EXPECT_GE(times[i] - times[i - 1], 3 * gs::kSettleProbeMs / 1000.0 - 1e-9);
   EXPECT_GE(countLinesStartingWith(out, "# "), 8);  // start, progress, summary
   EXPECT_NE(out.find("# done: 81 samples"), std::string::npos);
   EXPECT_NE(out.find("violations 0"), std::string::npos);
@@ -264,7 +266,7 @@ TEST_F(GatherStore, StatusShowsSettingsLiveReadingsAndTheLastSweep) {
   run("step 20");
   const std::string out = run("status");
   EXPECT_NE(out.find("motor 1 (ESC D7"), std::string::npos) << out;
-  EXPECT_NE(out.find("range 1000..1800 us, step 20 us, settle 200 ms"), std::string::npos) << out;
+  EXPECT_NE(out.find("range 1000..1800 us, step 20 us, settle auto (cap 500 ms)"), std::string::npos) << out;
   EXPECT_NE(out.find("not tared"), std::string::npos) << out;
   EXPECT_NE(out.find("battery 12.5"), std::string::npos) << out;
   EXPECT_NE(out.find("last sweep: none kept"), std::string::npos) << out;
@@ -291,9 +293,10 @@ TEST_F(GatherStore, SettingsChangeTheSweep) {
 }
 
 TEST_F(GatherStore, SettleAutoStepsOnOnceTheForceStopsChanging) {
-  // given: the plant settles with a 30 ms time constant, far within the 200 ms cap
+  // given: the plant settles with a 30 ms time constant, far within a 200 ms cap
   hal::fake::advanceMs(gs::kArmMs);
   calibrateAndTare();
+  run("settle 200");
   const auto said = responseLines(run("settle auto"));
   ASSERT_EQ(said.size(), 1u);
   EXPECT_TRUE(startsWith(said[0], "settle auto: next step once 3 force medians 20 ms apart "
@@ -323,6 +326,30 @@ TEST_F(GatherStore, SettleAutoStepsOnOnceTheForceStopsChanging) {
   EXPECT_NE(run("settle 150").find("settle 150 ms per step"), std::string::npos);
   EXPECT_NE(run("status").find("settle 150 ms"), std::string::npos);
   EXPECT_FALSE(app_->settings().settle_auto);
+}
+
+TEST_F(GatherStore, DefaultSweepSettlesByMeasurementAndSettle200IsTheThesisTiming) {
+  // given: a fresh console
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  // then: the default settles by measurement with a 500 ms cap
+  EXPECT_TRUE(app_->settings().settle_auto);
+  EXPECT_EQ(app_->settings().settle_ms, gs::kDefaultSettleCapMs);
+  EXPECT_NE(run("status").find("settle auto (cap 500 ms)"), std::string::npos);
+  // when: the thesis's fixed 200 ms
+  EXPECT_NE(run("settle 200").find("settle 200 ms per step"), std::string::npos);
+  run("range 1000 1100");
+  const std::string out = sweep();
+  // then: every step waits the 200 ms
+  EXPECT_NE(out.find("# sweep motor 0: 1000..1100 us, step 10 us, settle 200 ms"), std::string::npos) << out;
+  const std::regex row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),(\d+\.\d{3}),0,1$)");
+  std::vector<double> times;
+  for (const auto& line : splitLines(out)) {
+    std::smatch m;
+    if (std::regex_match(line, m, row)) times.push_back(std::stod(m[4]));
+  }
+  ASSERT_EQ(times.size(), 11u);
+  for (size_t i = 1; i < times.size(); ++i) EXPECT_GE(times[i] - times[i - 1], 0.200 - 1e-9);
 }
 
 TEST_F(GatherStore, SettleAutoWaitsNoLongerThanTheCapWhenTheForceNeverSettles) {
