@@ -25,6 +25,15 @@ int32_t slopeMilligrams(int32_t slope_ug_per_count, uint16_t counts) {
   return whole_mg * counts + divRound(frac_ug * counts, 1000);
 }
 
+// The same for a reading in 1/16 count: whole counts as slopeMilligrams, the fraction's
+// slope * frac / 16 rounded (|slope * 15| < 2^31 for |slope| <= 3 g/count).
+int32_t slopeMilligramsQ4(int32_t slope_ug_per_count, uint16_t counts_q4) {
+  const uint16_t frac = counts_q4 & 15u;
+  const int32_t whole = slopeMilligrams(slope_ug_per_count, static_cast<uint16_t>(counts_q4 >> 4));
+  if (frac == 0) return whole;
+  return whole + divRound(slope_ug_per_count * static_cast<int32_t>(frac), 16000);
+}
+
 int16_t saturateGrams(int32_t mg) {
   const int32_t g = divRound(mg, 1000);
   if (g > 32767) return 32767;
@@ -75,6 +84,17 @@ bool LoadCell::calibrateSpan(uint16_t counts_empty, uint16_t counts_loaded,
 void LoadCell::tare(uint16_t counts) {
   zero_mg_ = -lineMilligrams(counts);  // thesis ZEROLIZE_VALUE
   tared_ = true;
+}
+
+void LoadCell::tareQ4(uint16_t counts_q4) {
+  zero_mg_ = -(slopeMilligramsQ4(config_.slope_ug_per_count, counts_q4) + config_.offset_mg -
+               calibration_mg_);
+  tared_ = true;
+}
+
+int32_t LoadCell::forceMilligramsQ4(uint16_t counts_q4) const {
+  return slopeMilligramsQ4(config_.slope_ug_per_count, counts_q4) + config_.offset_mg - calibration_mg_ +
+         zero_mg_;
 }
 
 int32_t LoadCell::forceMilligrams(uint16_t counts) const { return lineMilligrams(counts) + zero_mg_; }

@@ -94,6 +94,17 @@ void MedianFilterBase::push(uint16_t sample) {
   }
 }
 
+uint16_t MedianFilterBase::centralMeanQ4(uint16_t central) const {
+  if (count_ == 0) return 0;
+  if (central > count_) central = count_;
+  if (central == 0) central = 1;
+  // The same lower index as median() for odd counts; central values symmetric around it.
+  const uint16_t first = static_cast<uint16_t>(((count_ - 1u) >> 1) - ((central - 1u) >> 1));
+  uint32_t sum = 0;
+  for (uint16_t i = 0; i < central; ++i) sum += sorted_[first + i];
+  return static_cast<uint16_t>((sum * 16u + central / 2u) / central);
+}
+
 uint16_t MedianFilterBase::median() const {
   if (count_ == 0) return 0;
   // Odd count: the middle; even count (only while filling): the lower of the two middles.

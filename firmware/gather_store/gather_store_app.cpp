@@ -435,14 +435,14 @@ void GatherStoreApp::cmdWeigh() {
   say(TC_PSTR(" counts"));
   if (cell_.isTared()) {
     say(TC_PSTR(", force "));
-    fw::printFixed(divRound(cell_.forceMilligrams(counts), 100), 1);
+    fw::printFixed(divRound(cell_.forceMilligramsQ4(forceQ4()), 100), 1);
     say(TC_PSTR(" g"));
   }
   fw::newline();
 }
 
 void GatherStoreApp::tareAt(uint16_t counts) {
-  cell_.tare(counts);
+  cell_.tareQ4(forceQ4());
   tare_counts_ = counts;  // the empty point of a later span
 }
 
@@ -729,6 +729,7 @@ bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& v
     abortSweep(SweepEnd::kOverload, static_cast<uint16_t>(cell_.forceGrams(force_counts)));
     return false;
   }
+  const uint16_t force_q4 = forceQ4();  // the window whose median force_counts is
   uint16_t battery_counts;
   if (!readBatteryCounts(battery_counts)) return false;
   vbat_mv = battery_.millivoltsFromCounts(battery_counts);
@@ -736,7 +737,7 @@ bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& v
     abortSweep(SweepEnd::kBattery, vbat_mv);
     return false;
   }
-  force_dg = static_cast<int16_t>(divRound(cell_.forceMilligrams(force_counts), 100));
+  force_dg = static_cast<int16_t>(divRound(cell_.forceMilligramsQ4(force_q4), 100));
   return true;
 }
 
@@ -1159,7 +1160,7 @@ void GatherStoreApp::cmdStatus() {
     say(TC_PSTR(" (ADC rail: check A0)"));
   } else if (cell_.isTared()) {
     say(TC_PSTR(", force "));
-    fw::printFixed(divRound(cell_.forceMilligrams(counts), 100), 1);
+    fw::printFixed(divRound(cell_.forceMilligramsQ4(forceQ4()), 100), 1);
     say(TC_PSTR(" g"));
   } else {
     say(TC_PSTR(", weight "));

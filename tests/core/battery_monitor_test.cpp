@@ -236,4 +236,29 @@ TEST(SagTable, OffsetWithoutDivisionEqualsTheDivisionForEveryPulse) {
   }
 }
 
+TEST(BatteryMonitor, TwoReadingsMapAtHalfCountResolutionWithoutDividing) {
+  // given: the thesis divider and others; when: every sum of two readings; then: the division
+  struct Config {
+    uint16_t full_scale_mv, adc_max;
+  };
+  const Config configs[] = {{15638, 1023}, {5000, 1023}, {25000, 1023}, {65535, 1023}, {15638, 511},
+                            {3000, 4095}, {65535, 32}};
+  for (const Config& c : configs) {
+    tc::BatteryConfig config;
+    config.full_scale_mv = c.full_scale_mv;
+    config.adc_max_counts = c.adc_max;
+    const BatteryMonitor monitor(config);
+    for (uint32_t sum = 0; sum <= 2u * c.adc_max + 3u; ++sum) {
+      const uint32_t den = 2u * c.adc_max;
+      const uint16_t want = sum >= den ? c.full_scale_mv : static_cast<uint16_t>(sum * c.full_scale_mv / den);
+      ASSERT_EQ(monitor.millivoltsFromTwoCounts(static_cast<uint16_t>(sum)), want)
+          << c.full_scale_mv << " mV / " << c.adc_max << ", sum " << sum;
+    }
+  }
+  // equal readings: exactly map() of the reading
+  const BatteryMonitor thesis;
+  for (uint16_t counts = 0; counts <= 1023; ++counts)
+    ASSERT_EQ(thesis.millivoltsFromTwoCounts(static_cast<uint16_t>(2 * counts)), thesis.millivoltsFromCounts(counts));
+}
+
 }  // namespace

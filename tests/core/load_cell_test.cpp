@@ -85,6 +85,27 @@ TEST(LoadCell, TareZeroesTheForceAndThrustReadsPositive) {
   EXPECT_EQ(cell.forceGrams(301), 1);  // 0.75 g rounds to 1 g
 }
 
+TEST(LoadCell, QuarterCountReadingsSitBetweenTheWholeCounts) {
+  // given: a cell tared at a whole count and one tared a quarter count higher
+  LoadCell whole;
+  LoadCell quarter;
+  whole.tare(300);
+  quarter.tareQ4(300 * 16 + 4);
+  // then: whole-count readings in 1/16 are the whole-count figures
+  for (uint16_t c : {300, 301, 310, 600})
+    EXPECT_EQ(whole.forceMilligramsQ4(static_cast<uint16_t>(c * 16)), whole.forceMilligrams(c)) << c;
+  // and: a quarter count is 187.5 mg of the thesis's 0.75 g per count (rounded)
+  EXPECT_EQ(whole.forceMilligramsQ4(300 * 16 + 4), 188);
+  EXPECT_EQ(quarter.forceMilligramsQ4(300 * 16 + 4), 0);
+  EXPECT_EQ(quarter.forceMilligrams(310), 7500 - 188);
+  // and: on a spanned slope too
+  LoadCell spanned;
+  ASSERT_TRUE(spanned.calibrateSpan(400, 300, 100));  // 1 g per count
+  spanned.tareQ4(300 * 16);
+  EXPECT_EQ(spanned.forceMilligramsQ4(300 * 16 + 8), 500);
+  EXPECT_EQ(spanned.forceMilligramsQ4(310 * 16), spanned.forceMilligrams(310));
+}
+
 TEST(LoadCell, ForceAfterTareDoesNotDependOnTheCalibrationShift) {
   // given two cells, one calibrated
   LoadCell plain;

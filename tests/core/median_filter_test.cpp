@@ -115,4 +115,35 @@ TEST(MedianFilter, ResetForgetsEverySample) {
   EXPECT_EQ(filter.median(), 42);
 }
 
+TEST(MedianFilter, CentralMeanIsTheMedianOfAConstantAndResolvesDitheredReadings) {
+  // given: a constant reading, then readings dithered between 300 and 301 (a quarter 301)
+  tc::MedianFilter<201> filter;
+  for (int i = 0; i < 201; ++i) filter.push(300);
+  EXPECT_EQ(filter.centralMeanQ4(65), 300 * 16);
+  EXPECT_EQ(filter.centralMeanQ4(1), filter.median() * 16u);
+  filter.reset();
+  for (int i = 0; i < 201; ++i) filter.push(static_cast<uint16_t>(i % 4 == 0 ? 301 : 300));
+  // then: the median is stuck at 300; the central mean sees the 301s that reach the middle
+  EXPECT_EQ(filter.median(), 300);
+  const uint16_t q4 = filter.centralMeanQ4(201);
+  EXPECT_EQ(q4, (300 * 16 * 150 + 301 * 16 * 51 + 100) / 201);
+  // and: 65 around the median of 101 x 300 and 100 x 301: ranks 68..132, 33 of them 300
+  filter.reset();
+  for (int i = 0; i < 201; ++i) filter.push(static_cast<uint16_t>(i < 101 ? 300 : 301));
+  EXPECT_EQ(filter.centralMeanQ4(65), (33 * 300 * 16 + 32 * 301 * 16 + 32) / 65);
+}
+
+TEST(MedianFilter, CentralMeanIgnoresSpikesOutsideTheMiddleRanks) {
+  // given: 201 readings of 500 with 60 spikes to 0 and 1023
+  tc::MedianFilter<201> filter;
+  for (int i = 0; i < 201; ++i) filter.push(static_cast<uint16_t>(i % 7 == 0 ? 0 : (i % 7 == 1 ? 1023 : 500)));
+  // then: the middle 65 are all 500
+  EXPECT_EQ(filter.centralMeanQ4(65), 500 * 16);
+  // and: more than asked is clamped to the samples held; empty reads 0
+  tc::MedianFilter<5> few;
+  EXPECT_EQ(few.centralMeanQ4(3), 0);
+  for (uint16_t v : {10, 20, 30}) few.push(v);
+  EXPECT_EQ(few.centralMeanQ4(5), 20 * 16);
+}
+
 }  // namespace

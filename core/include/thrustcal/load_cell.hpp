@@ -46,10 +46,15 @@ class LoadCell {
   bool calibrateSpan(uint16_t counts_empty, uint16_t counts_loaded, int16_t known_weight_g);
   // Zerolize: afterwards forceMilligrams(counts) == 0.
   void tare(uint16_t counts);
+  // The same with a reading in 1/16 count (MedianFilter::centralMeanQ4): tareQ4(c * 16) is
+  // tare(c).
+  void tareQ4(uint16_t counts_q4);
   bool isTared() const { return tared_; }
   // Phase 2: upward force since tare, thrust positive.
   int32_t forceMilligrams(uint16_t counts) const;
   int16_t forceGrams(uint16_t counts) const;  // rounded to nearest
+  // The force at a reading in 1/16 count: forceMilligramsQ4(c * 16) == forceMilligrams(c).
+  int32_t forceMilligramsQ4(uint16_t counts_q4) const;
   // Overload / rail check for one (median) reading: kImplausible within rail_margin_counts of
   // 0 or adc_max; kOverload when |weightGrams| or, once tared, |forceGrams| exceeds overload_g.
   LoadCellStatus check(uint16_t counts) const;

@@ -17,6 +17,12 @@ class MedianFilterBase {
   // Median of the samples held (lower median while fewer than `window` samples and their
   // count is even). Returns 0 when empty: check count() first.
   uint16_t median() const;
+  // Mean of the middle `central` samples held (the median's neighbourhood in rank: a trimmed
+  // mean, as robust to spikes as the median while the spikes stay outside it), in 1/16 of a
+  // sample unit, rounded: between the integer readings a median is stuck to when the noise
+  // dithers them. central must be odd and <= count() (count() odd; clamped otherwise); 1 gives
+  // the median * 16. One 32/16 division; no division when central is 1.
+  uint16_t centralMeanQ4(uint16_t central) const;
   uint16_t count() const { return count_; }
   uint16_t window() const { return window_; }
   bool full() const { return count_ == window_; }

@@ -210,7 +210,8 @@ nlohmann::json AccuracyResult::toJson() const {
                       {"sweep", {{"pwm_min_us", c.sweep.pwm_min_us},
                                  {"pwm_max_us", c.sweep.pwm_max_us},
                                  {"step_us", c.sweep.step_us},
-                                 {"settle_ms", c.sweep.settle_ms}}}};
+                                 {"settle_ms", c.sweep.settle_ms}, {"settle_auto", c.sweep.settle_auto},
+                                 {"fine_force", c.sweep.fine_force}}}};
   for (const ModelAccuracy& m : models) {
     nlohmann::json by_v = nlohmann::json::array();
     for (const auto& [v, st] : m.by_voltage) {

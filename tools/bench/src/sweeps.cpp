@@ -6,6 +6,7 @@
 #include "plant/bench.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/load_cell.hpp"
+#include "thrustcal/median_filter.hpp"
 
 namespace bench {
 
@@ -13,12 +14,24 @@ namespace {
 
 constexpr int kForceReadings = 201;    // gather_store: median of 201
 constexpr int kBatteryReadings = 101;  // gather_store: median of 101
+constexpr uint16_t kForceCentral = 65;  // gather_store's kForceCentral (fine_force)
 
 uint16_t medianCounts(plant::Bench& bench, int channel, int n) {
   std::vector<int> v(static_cast<size_t>(n));
   for (int& c : v) c = bench.readCounts(channel);
   std::nth_element(v.begin(), v.begin() + n / 2, v.end());
   return static_cast<uint16_t>(v[static_cast<size_t>(n / 2)]);
+}
+
+// 201 load-cell readings: their median, and in `q4` the reading the sweep converts (fine: the
+// mean of the middle 65 in 1/16 count, as gather_store since issue 11; else the median * 16).
+uint16_t forceCounts(plant::Bench& bench, bool fine, uint16_t& q4) {
+  static tc::MedianFilter<kForceReadings> window;
+  window.reset();
+  for (int i = 0; i < kForceReadings; ++i) window.push(static_cast<uint16_t>(bench.readCounts(0)));
+  const uint16_t median = window.median();
+  q4 = fine ? window.centralMeanQ4(kForceCentral) : static_cast<uint16_t>(median * 16u);
+  return median;
 }
 
 }  // namespace
@@ -44,16 +57,40 @@ Sweep simulateSweep(const plant::ActuatorParams& motor, const plant::BatteryPara
   bench.actuator().holdPulse(spec.pwm_min_us);
   bench.run(0.5);
   tc::LoadCell cell;
-  cell.tare(medianCounts(bench, 0, kForceReadings));
+  uint16_t q4 = 0;
+  forceCounts(bench, spec.fine_force, q4);
+  cell.tareQ4(q4);
   const tc::BatteryMonitor monitor;
 
   const double settle_s = spec.settle_ms / 1000.0;
   for (int pwm = spec.pwm_min_us; pwm <= spec.pwm_max_us; pwm += spec.step_us) {
     bench.actuator().holdPulse(pwm);
-    bench.run(settle_s);
+    uint16_t force_counts = 0;
+    if (spec.settle_auto) {
+      // gather_store's settleForce: a median every kProbe; stop when two successive pairs agree
+      // (within 0 counts) or the cap has passed.
+      constexpr double kProbeS = 0.020, kMedianS = 0.021;  // 201 conversions of 104 us
+      double waited = 0;
+      int previous = -1, agreements = 0;
+      for (;;) {
+        bench.run(kProbeS);
+        force_counts = forceCounts(bench, spec.fine_force, q4);
+        bench.run(kMedianS);
+        waited += kProbeS + kMedianS;
+        if (previous >= 0) {
+          agreements = force_counts == previous ? agreements + 1 : 0;
+          if (agreements >= 2) break;
+        }
+        previous = force_counts;
+        if (waited >= settle_s) break;
+      }
+    } else {
+      bench.run(settle_s);
+      forceCounts(bench, spec.fine_force, q4);
+    }
     SweepPoint pt;
     pt.pwm_us = static_cast<uint16_t>(pwm);
-    const int32_t mg = cell.forceMilligrams(medianCounts(bench, 0, kForceReadings));
+    const int32_t mg = cell.forceMilligramsQ4(q4);
     pt.force_dg = static_cast<int16_t>(std::clamp<int32_t>(
         static_cast<int32_t>(std::lround(mg / 100.0)), INT16_MIN, INT16_MAX));
     pt.vbat_mv = monitor.millivoltsFromCounts(medianCounts(bench, 1, kBatteryReadings));

@@ -270,6 +270,7 @@ GatherResult runGather(const GatherOptions& o) {
     mustCommand(con, fmt::format("range {} {}", o.pwm_min_us, o.pwm_max_us));
     mustCommand(con, fmt::format("step {}", o.step_us));
     mustCommand(con, fmt::format("settle {}", o.settle_ms));
+    if (o.settle_auto) mustCommand(con, "settle auto");
     auto cal = mustCommand(con, fmt::format("cal {}", static_cast<int>(mr.mount_weight_g)), 15);
     progress(fmt::format("slot {}: cal {} g: {}", mr.slot, mr.mount_weight_g,
                          cal.empty() ? "" : cal.back()));

@@ -1,5 +1,6 @@
 // A calibration sweep as gather_store sees it, simulated on the plant's thesis bench without
-// the firmware: per PWM step the ESC holds the pulse for settle_ms, then the load cell is read
+// the firmware: per PWM step the ESC holds the pulse for settle_ms (or settles by measurement,
+// as gather_store's settle auto does), then the load cell is read
 // 201 times and the battery monitor 101 times through the plant's sensors (noise, ADC
 // quantization), the medians are converted with core/'s LoadCell (tared before the sweep) and
 // BatteryMonitor. What comes out is what gather_store streams: (pwm_us, force_dg, vbat_mv).
@@ -16,8 +17,14 @@ struct SweepSpec {
   int pwm_min_us = 1000;
   int pwm_max_us = 1800;
   int step_us = 10;
-  int settle_ms = 200;
+  int settle_ms = 200;      // per step; with settle_auto the cap
   uint64_t noise_seed = 1;  // load cell and battery monitor noise
+  // gather_store's `settle auto` (its default sweep): force medians 20 ms apart (each over the
+  // 21 ms of its 201 readings) until three in a row are equal, or settle_ms has passed.
+  bool settle_auto = false;
+  // gather_store's force reading since issue 11: the mean of the middle 65 of the 201 readings
+  // in 1/16 count (tare too), instead of their median (the thesis, and these rows before).
+  bool fine_force = false;
 };
 
 struct SweepPoint {

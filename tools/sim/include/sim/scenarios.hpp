@@ -55,6 +55,7 @@ struct GatherOptions {
   // of 0.7-1 %). Settle 500 ms: the bench's 3rd-order low-pass is then within 0.01 % of each
   // step; the thesis's 200 ms leaves ~1 % (stored curves ~7 g off instead of ~3 g).
   int pwm_min_us = 1040, pwm_max_us = 1800, step_us = 10, settle_ms = 500;
+  bool settle_auto = false;             // `settle auto` after `settle settle_ms` (then the cap)
   SecondCurveSource second = SecondCurveSource::kBenchSupply;
   GatherModel model = GatherModel::kThesisV1;
   double supply_v = 10.0;               // bench supply for curve 2 (6.32 A limit)
