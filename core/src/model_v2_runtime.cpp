@@ -305,7 +305,7 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
 
 namespace {
 
-// The per-motor path, inlined into both entry points.
+// The per-motor path of forceToPwmV2 (V2Frame has its own, the same arithmetic).
 TC_INLINE ForcePwmResult pwmFor(const ModelV2& model, uint16_t force_dg, uint16_t recip26,
                                 uint8_t flags, PwmRange limits) {
   if (model.max_force_dg == 0)  // finalize() sets it for every valid model, clear() zeroes it
@@ -322,15 +322,6 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
                             const ForcePwmLimits& limits) {
   return pwmFor(model, force_dg, recip26Of(bus.recip_q28), bus.isValid() ? 0 : kVoltageInvalid,
                 PwmRange{limits.pwm_min_us, limits.pwm_max_us});
-}
-
-void forceToPwmV2Frame(const ModelV2* models, const uint16_t* force_dg, uint8_t count,
-                       const BusVoltageFilter& bus, ForcePwmResult* out,
-                       const ForcePwmLimits& limits) {
-  const uint8_t flags = bus.isValid() ? 0 : kVoltageInvalid;
-  const uint16_t recip26 = recip26Of(bus.recip_q28);
-  const PwmRange range{limits.pwm_min_us, limits.pwm_max_us};  // in registers, not reloaded
-  for (uint8_t i = 0; i < count; ++i) out[i] = pwmFor(models[i], force_dg[i], recip26, flags, range);
 }
 
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
@@ -538,9 +529,12 @@ void framePortable(V2Frame& f, uint16_t sample_mv, uint8_t extra_flags) {
 // the lane and model pointers of the C pass on the stack and reached every field through X
 // with adiw/sbiw pairs (~400 cycles per motor; here ~150), and its 32-bit shifts by a variable
 // count are loops. X walks the lanes (their fields in order, post-increment; each lane carries
-// its model's start threshold), Z reads the bus filter, the limits, then each model's fields
-// and its knots, Y the sag filter. Registers of the pass:
-//   r2 lanes left, r3 flags (T: fly each model's resting voltage), r5:r4 recip26,
+// its model's start threshold), Z reads each model's fields and its knots, Y the frame. The
+// labels tc_v2fly_* mark its steps (`thrustcal bench compute` attributes cycles by them).
+// Registers: r3 holds the extra flags on entry; after the set-up every lane's flags are in
+// g_lane_flags, the T bit says "fly each model's resting voltage" and r3 is a second zero
+// register (avr-gcc's r1 is used by mul). The pass:
+//   r2 lanes left, r5:r4 recip26,
 //   r7:r6 min, r9:r8 max, r11:r10 total sag, r13:r12 force (then the upper knot's drive),
 //   r15:r14 product bytes, r16 a lane's flags, r17 index base (then the fraction's nibble),
 //   r21..r18 knot position (then the duty), r23:r22 inverse step (then temporaries, the upper
@@ -590,6 +584,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
   register uint16_t sample asm("r22") = sample_mv;
   register uint8_t fl asm("r3") = extra_flags;
   __asm__ volatile(
+      "tc_v2fly_check:\n\t"
       // an insane sample or a filter not valid yet: BusVoltageFilter::update in C
       "ldd  r12, Y+0\n\t"
       "ldd  r13, Y+1\n\t"
@@ -647,6 +642,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "ld   r16, Z\n\t"
       "mov  r10, r16\n\t"
       "rjmp 49f\n"
+      "tc_v2fly_filter:\n\t"
       "42:\n\t"
       // bus filter: mv += step, rem from t * m = rem + (sample - mv) * m
       "sub  r22, r12\n\t"  // r13:r12 = mv (loaded by the check above)
@@ -760,6 +756,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "breq 49f\n\t"
       "inc  r16\n\t"
       "std  Y+%[o_reseeds], r16\n"
+      "tc_v2fly_sag:\n\t"
       "49:\n\t"
       // sag filter: seen += floor((rem + (last - seen) * m) / 256); x = seen - last = -d (r23:r22)
       "ldd  r12, Y+%[o_sag]\n\t"
@@ -790,6 +787,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "adc  r13, r25\n\t"
       "std  Y+%[o_sag], r12\n\t"
       "std  Y+%[o_sag]+1, r13\n\t"
+      "tc_v2fly_predict:\n\t"
       // prediction (as predictedRecip): skipped when x = 0 or the bus is not valid
       "brts 30f\n\t"
       "cp   r22, r3\n\t"
@@ -889,6 +887,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "brne 10f\n\t"
       "rjmp 19f\n"
       "rjmp 10f\n"
+      "tc_v2fly_rare_a:\n\t"
       // out of line, ahead of the loop (within a branch's reach of its start)
       "20:\n\t"  // force 0: stopped, pwm_min
       "ldi  r16, 1\n\t"
@@ -904,6 +903,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "movw r12, r18\n\t"
       "ori  r16, 4\n\t"
       "rjmp 13f\n"
+      "tc_v2fly_lane:\n\t"
       "10:\n\t"
       "ld   r30, X+\n\t"  // model
       "ld   r31, X+\n\t"
@@ -930,6 +930,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "ldd  r23, Z+%[o_invc]+1\n\t"
       "ldd  r17, Z+%[o_fine]\n"
       "14:\n\t"
+      "tc_v2fly_knot:\n\t"
       // r21..r18 = force * inv * 4: index = r21, fraction = r20:r19
       "mul  r12, r22\n\t"
       "movw r18, r0\n\t"
@@ -951,6 +952,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "rol  r19\n\t"
       "rol  r20\n\t"
       "rol  r21\n\t"
+      "tc_v2fly_interp:\n\t"
       // Z = &knot[base + index], 4 bytes per knot
       "add  r17, r21\n\t"
       "lsl  r17\n\t"
@@ -984,6 +986,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "adc  r15, r3\n\t"
       "add  r24, r14\n\t"
       "adc  r25, r15\n\t"
+      "tc_v2fly_sagpt:\n\t"
       // sag in 1/16 unit: lo * (16 - f) + hi * f, f = the fraction's top nibble
       "mov  r17, r20\n\t"
       "swap r17\n\t"
@@ -997,6 +1000,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "add  r10, r0\n\t"
       "adc  r11, r1\n\t"
       "brts 23f\n"  // bus not valid
+      "tc_v2fly_duty:\n\t"
       "15:\n\t"
       // r21..r18 = drive * recip26 + start (+ 1/2 us; its byte 0 is 0), pulse = r21:r20 / 2
       "mul  r24, r4\n\t"
@@ -1019,6 +1023,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "adc  r21, r0\n\t"
       "lsr  r21\n\t"
       "ror  r20\n\t"
+      "tc_v2fly_limits:\n\t"
       // limits
       "cp   r8, r20\n\t"
       "cpc  r9, r21\n\t"
@@ -1033,6 +1038,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "dec  r2\n\t"
       "breq 19f\n\t"
       "rjmp 10b\n"
+      "tc_v2fly_rare_b:\n\t"
       // out of line, after the loop (within a branch's reach of its end)
       "23:\n\t"  // bus not valid: this model's resting voltage, (rest_recip + 2) / 4
       "movw r22, r26\n\t"  // the model again, from the lane
@@ -1058,6 +1064,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "movw r20, r6\n\t"
       "ori  r16, 0x40\n\t"
       "rjmp 17b\n"
+      "tc_v2fly_out:\n\t"
       "19:\n\t"
       "std  Y+%[o_sag]+3, r10\n\t"
       "std  Y+%[o_sag]+4, r11\n\t"

@@ -187,31 +187,6 @@ TEST(ForceToPwmV2, GramsWrapperEqualsDecigrams) {
   EXPECT_EQ(tc::forceGramsToPwmV2(m, 60000, bus).flags, tc::kSaturated);
 }
 
-TEST(ForceToPwmV2, FrameCallGivesEachMotorItsOwnResult) {
-  // given: four different motors, one of them not calibrated, varied commands
-  SyntheticMotor a, b, c;
-  b.exponent = 1.6;
-  b.start_us = 1080;
-  c.exponent = 2.0;
-  c.start_us = 1115;
-  const tc::ModelV2 models[4] = {tc_test::fittedModel(a, 12.4), tc_test::fittedModel(b, 12.4),
-                                 tc::ModelV2(), tc_test::fittedModel(c, 11.1)};
-  const uint16_t force_dg[4] = {1500, 3500, 2000, 0};
-  for (const tc::BusVoltageFilter& bus : {busAt(10400), busAt(12200), tc::BusVoltageFilter()}) {
-    // when
-    tc::ForcePwmResult out[4];
-    tc::forceToPwmV2Frame(models, force_dg, 4, bus, out, tc::ForcePwmLimits());
-    // then
-    for (int i = 0; i < 4; ++i) {
-      const tc::ForcePwmResult one = tc::forceToPwmV2(models[i], force_dg[i], bus);
-      EXPECT_EQ(out[i].pwm_us, one.pwm_us) << "motor " << i;
-      EXPECT_EQ(out[i].flags, one.flags) << "motor " << i;
-    }
-    EXPECT_EQ(out[2].flags, tc::kNotCalibrated);
-    EXPECT_EQ(out[3].flags & tc::kStopped, tc::kStopped);
-  }
-}
-
 // ---- headroom and the inverse --------------------------------------------------------------
 
 TEST(HeadroomV2, IsTheForceAtFullThrottleAtThePresentVoltage) {

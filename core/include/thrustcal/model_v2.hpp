@@ -25,7 +25,8 @@
 //   voltage, used to predict the bus voltage at a commanded operating point that differs
 //   from the present one (command steps), see forceToPwmV2(..., force_now_dg).
 //
-// Run time (forceToPwmV2, forceToPwmV2Frame): no float, no division. The bus voltage filter
+// Run time (forceToPwmV2 here; read_run flies its four motors with one tc::V2Frame::fly call,
+// model_v2_runtime.hpp, the same arithmetic): no float, no division. The bus voltage filter
 // (BusVoltageFilter) keeps the filtered millivolts AND their reciprocal (2^28 / mV), updated
 // by one Newton step (two 16x16 multiplications) in the frames where the filtered value
 // moves; a jump of more than 1/128 re-seeds it with one 32/16 division. Per motor: three
@@ -35,9 +36,9 @@
 // Divisions, counted: per frame 0, or 1 after a jump (filter re-seed); per motor 0.
 // headroomDg / forceForPwmDg (status command, not per frame) use one 32/32 division each.
 // Fitting (gather_store, once per sweep) uses 32/32 divisions freely.
-// Measured on the ATmega2560 in simavr (tests/core_v2/avr_cycles.sh, avr-g++ -Os): filter
-// update + forceToPwmV2Frame for four motors 1242 cycles mean, 1290 max (thesis option 2.1,
-// forceToPwm x4: 8062 mean); fit of a 101-sample sweep ~0.5 M cycles (31 ms), refine 0.28 M.
+// Measured on the ATmega2560 in simavr (`thrustcal bench compute`, docs/performance.md):
+// V2Frame::fly for four motors (filter, sag prediction, flags) 962 cycles mean, 989 max;
+// tests/core_v2/avr_cycles.sh: fit of a 101-sample sweep ~0.5 M cycles (31 ms), refine 0.28 M.
 //
 // Fitting on the board (ModelV2Fitter): one sweep of (pwm_us, force_dg, vbat_mv) samples as
 // gather_store records them, integer maths, 8 bytes per sample of work space (128 samples:
@@ -149,12 +150,6 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
 // plain call.
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
                             uint16_t force_now_dg, const ForcePwmLimits& limits = ForcePwmLimits());
-// One frame for several motors (read_run's four) at the same bus voltage: the same result
-// as forceToPwmV2 per motor, in one call (one prologue, no per-motor call overhead).
-// Update `bus` once per frame before.
-void forceToPwmV2Frame(const ModelV2* models, const uint16_t* force_dg, uint8_t count,
-                       const BusVoltageFilter& bus, ForcePwmResult* out,
-                       const ForcePwmLimits& limits);
 inline ForcePwmResult forceGramsToPwmV2(const ModelV2& model, uint16_t force_g,
                                         const BusVoltageFilter& bus,
                                         const ForcePwmLimits& limits = ForcePwmLimits()) {

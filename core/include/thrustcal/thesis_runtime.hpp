@@ -1,4 +1,4 @@
-// The thesis model (record layout v1, option 2.1) as read_run flies it, in 165 bytes of SRAM
+// The thesis model (record layout v1, option 2.1) as read_run flies it, in 168 bytes of SRAM
 // per motor instead of the 1114 of the decoded record (tc::MotorCalibration): the curves' 499
 // PWM steps per curve stay in the EEPROM and are read on demand; SRAM keeps each curve's PWM
 // every 16 grams (checkpoints), its start voltage and heaviest gram, and the sag table.
@@ -69,7 +69,8 @@ struct ThesisCurveRun {
         }
         checkpoint_us[(g - 1) / kThesisCheckpointEvery] = pwm;
       }
-      if (g < max_grams) pwm = static_cast<uint16_t>(pwm + Storage::readByte(static_cast<uint16_t>(steps_address + g - 1)));
+      if (g < max_grams)
+        pwm = static_cast<uint16_t>(pwm + Storage::readByte(static_cast<uint16_t>(steps_address + g - 1)));
     }
     if (max_grams != 0 && pwm != curve.pwmForGrams(max_grams)) {
       *this = ThesisCurveRun();

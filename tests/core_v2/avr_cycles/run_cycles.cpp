@@ -53,7 +53,7 @@ void onGpior2(avr_t* avr, avr_io_addr_t addr, uint8_t v, void*) {
 
 const char* nameOf(int l) {
   switch (l) {
-    case 1: return "v2 four-motor frame (filter update + forceToPwmV2Frame)";
+    case 1: return "v2 four-motor frame as read_run flies it (V2Frame::fly)";
     case 2: return "v2 four-motor frame with sag prediction";
     case 3: return "thesis option 2.1 frame (forceToPwm x4, no voltage filter)";
     case 4: return "v2 four-motor frame, one forceToPwmV2 call per motor";

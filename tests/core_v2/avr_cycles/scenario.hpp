@@ -12,6 +12,7 @@
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/model_v2.hpp"
+#include "thrustcal/model_v2_runtime.hpp"
 #include "thrustcal/motor_calibration.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -19,7 +20,7 @@ namespace scenario {
 
 enum Label : uint8_t {
   kEmpty = 0,         // marker overhead
-  kV2Frame = 1,       // bus filter update + forceToPwmV2Frame (four motors)
+  kV2Frame = 1,       // V2Frame::fly: bus filter + four motors + sag prediction (one call)
   kV2SagFrame = 2,    // bus filter update + forceToPwmV2 with sag prediction x4
   kThesisFrame = 3,   // forceToPwm (option 2.1, two curves) x4
   kV2SingleCalls = 4, // bus filter update + forceToPwmV2 x4 (one call per motor)
@@ -41,6 +42,8 @@ struct State {
   tc::MotorCalibration cal;
   tc::CurveBuilder<101> builder;
   tc::ForcePwmLimits limits;  // read_run holds one; not rebuilt per call
+  tc::ModelV2Run runs[4];     // the models as read_run flies them
+  tc::V2Frame frame;
 };
 
 template <class Io>
@@ -102,6 +105,12 @@ void run(State& s) {
 
   tc::BusVoltageFilter bus;
   bus.reset(12400);
+  for (uint8_t m = 0; m < 4; ++m) {
+    Io::emit(s.runs[m].load(s.models[m]) ? 1 : 0);
+    s.frame.lane[m].setModel(&s.runs[m]);
+  }
+  s.frame.count = 4;
+  s.frame.bus.reset(12400);
   uint16_t cmd_dg[4], now_dg[4] = {0, 0, 0, 0};
   tc::ForcePwmResult out[4];
   for (uint16_t frame = 0; frame < 1000; ++frame) {
@@ -109,13 +118,14 @@ void run(State& s) {
     for (uint8_t m = 0; m < 4; ++m)
       cmd_dg[m] = static_cast<uint16_t>(1000 + (frame * 13u + m * 700u) % 3500u);
 
-    Io::markStart(kV2Frame);
-    bus.update(sample_mv);
-    tc::forceToPwmV2Frame(s.models, cmd_dg, 4, bus, out, s.limits);
+    for (uint8_t m = 0; m < 4; ++m) s.frame.lane[m].force_dg = cmd_dg[m];
+    Io::markStart(kV2Frame);  // on the AVR the assembly, on the host the portable C++
+    s.frame.fly(sample_mv);
     Io::markEnd();
-    emit16<Io>(bus.mv);
-    emit16<Io>(bus.recip_q28);
-    for (uint8_t m = 0; m < 4; ++m) emitResult<Io>(out[m]);
+    emit16<Io>(s.frame.bus.mv);
+    emit16<Io>(s.frame.bus.recip_q28);
+    emit16<Io>(s.frame.sag.last_q4);
+    for (uint8_t m = 0; m < 4; ++m) emitResult<Io>(s.frame.lane[m].result());
 
     Io::markStart(kV2SingleCalls);
     bus.update(sample_mv);

@@ -7,6 +7,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 
 namespace bench {
@@ -27,6 +28,7 @@ struct State {
   uint8_t label = 0;
   avr_cycle_count_t started = 0;
   bool done = false;
+  bool in_section = false;
 };
 
 void onGpior0(avr_t* avr, avr_io_addr_t addr, uint8_t v, void* param) {
@@ -34,7 +36,9 @@ void onGpior0(avr_t* avr, avr_io_addr_t addr, uint8_t v, void* param) {
   avr->data[addr] = v;
   if (v == 1) {
     s->started = avr->cycle;
+    s->in_section = true;
   } else if (v == 2) {
+    s->in_section = false;
     const uint64_t d = avr->cycle - s->started;
     Raw& r = s->raw[s->label];
     ++r.n;
@@ -68,7 +72,7 @@ struct QuietLog {
 
 }  // namespace
 
-ProbeResult runProbe(const std::string& elf_path, uint64_t budget_cycles) {
+ProbeResult runProbe(const std::string& elf_path, uint64_t budget_cycles, int profile_label) {
   const QuietLog quiet;
   elf_firmware_t fw;
   std::memset(&fw, 0, sizeof fw);
@@ -86,11 +90,16 @@ ProbeResult runProbe(const std::string& elf_path, uint64_t budget_cycles) {
   avr_register_io_write(avr, kGpior0, onGpior0, &s);
   avr_register_io_write(avr, kGpior1, onGpior1, &s);
   avr_register_io_write(avr, kGpior2, onGpior2, &s);
+  ProbeResult r;
   while (!s.done && avr->cycle < budget_cycles) {
+    // avr_run executes one instruction: its cycles belong to the address it started at.
+    const bool profiling = s.in_section && s.label == profile_label;
+    const uint32_t pc = avr->pc;
+    const avr_cycle_count_t before = avr->cycle;
     const int state = avr_run(avr);
+    if (profiling) r.profile[pc] += avr->cycle - before;
     if (state == cpu_Done || state == cpu_Crashed) break;
   }
-  ProbeResult r;
   r.total_cycles = avr->cycle;
   avr_terminate(avr);
   if (!s.done)
@@ -106,6 +115,44 @@ ProbeResult runProbe(const std::string& elf_path, uint64_t budget_cycles) {
     if (b.size() >= 2)
       r.values[key] = static_cast<uint16_t>(static_cast<uint8_t>(b[0]) | static_cast<uint8_t>(b[1]) << 8);
   return r;
+}
+
+std::vector<std::pair<std::string, uint64_t>> cyclesByRange(const ProbeResult& r, const std::string& elf,
+                                                            const std::vector<ProfileRange>& ranges,
+                                                            const std::string& end_symbol) {
+  // Symbol addresses from avr-nm (local labels of inline assembly included).
+  std::unique_ptr<FILE, int (*)(FILE*)> p(popen(("avr-nm -S '" + elf + "' 2>/dev/null").c_str(), "r"), pclose);
+  if (!p) throw std::runtime_error("cannot run avr-nm on " + elf + ": is binutils-avr installed?");
+  std::map<std::string, uint32_t> address, size;
+  char line[512];
+  while (fgets(line, sizeof line, p.get())) {
+    char name[400];
+    unsigned addr = 0, bytes = 0;
+    char type = 0;
+    if (std::sscanf(line, "%x %x %c %399s", &addr, &bytes, &type, name) == 4) {
+      address[name] = addr;
+      size[name] = bytes;
+    } else if (std::sscanf(line, "%x %c %399s", &addr, &type, name) == 3) {
+      address[name] = addr;
+    }
+  }
+  std::vector<uint32_t> starts;
+  for (const ProfileRange& range : ranges) {
+    if (!address.count(range.symbol))
+      throw std::runtime_error("the AVR probe " + elf + " has no symbol " + range.symbol +
+                               ": rebuild it (tools/bench builds it from core/)");
+    starts.push_back(address.at(range.symbol));
+  }
+  if (!size.count(end_symbol)) throw std::runtime_error("the AVR probe has no function " + end_symbol);
+  const uint32_t end = address.at(end_symbol) + size.at(end_symbol);
+  std::vector<std::pair<std::string, uint64_t>> out;
+  for (size_t i = 0; i < ranges.size(); ++i) {
+    const uint32_t lo = starts[i], hi = i + 1 < ranges.size() ? starts[i + 1] : end;
+    uint64_t sum = 0;
+    for (auto it = r.profile.lower_bound(lo); it != r.profile.end() && it->first < hi; ++it) sum += it->second;
+    out.emplace_back(ranges[i].name, sum);
+  }
+  return out;
 }
 
 std::string builtinProbePath() {

@@ -74,8 +74,8 @@ void add(CLI::App& bench, const std::shared_ptr<Options>& o, const std::string& 
 
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
-      "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off; each "
-               "figure next to its target");
+      "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime; "
+               "each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -97,6 +97,10 @@ void registerCommands(CLI::App& app) {
       "read_run in simavr on the tethered quad for a simulated minute on a draining pack: thesis "
       "vs v2 records",
       [](const Options& o) { return std::vector<Section>{liftoffSection(o.paths, o.quick)}; });
+  add(*bench, o, "runtime",
+      "read_run's CPU load, frame cycles and worst loop period in simavr at 50 and 400 Hz (lift-off "
+      "on the tethered quad)",
+      [](const Options& o) { return std::vector<Section>{runtimeSection(o.paths)}; });
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
         std::vector<Section> all;
@@ -105,6 +109,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(footprintSection(o.paths));
         all.push_back(calibrationSection(o.paths));
         all.push_back(liftoffSection(o.paths, o.quick));
+        all.push_back(runtimeSection(o.paths));
         return all;
       });
 }

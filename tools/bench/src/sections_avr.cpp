@@ -18,6 +18,10 @@ namespace {
 
 constexpr uint64_t kCycleTarget = 1000;
 constexpr uint64_t kModelsSramTarget = 1024;
+constexpr uint64_t kStaticSramTarget = 6144;  // 8 KB minus 2 KB for the stack
+// tools/bench/avr/probe.cpp's labels.
+constexpr int kLabelV2Frame = 1, kLabelV2Steady = 2, kLabelThesis = 3, kLabelThesisMedian = 4,
+              kLabelV2Reading = 5;
 
 std::string probePath(const AvrPaths& paths) {
   return paths.probe_elf.empty() ? builtinProbePath() : paths.probe_elf;
@@ -88,8 +92,8 @@ std::string AvrPaths::elf(const std::string& image) const {
 Section computeSection(const AvrPaths& paths) {
   Section s;
   s.key = "compute";
-  Table t("2. Compute: simulated ATmega2560 cycles (simavr, 16 MHz) for one four-motor update, "
-          "100-450 g commands, draining bus",
+  Table t("2. Compute: simulated ATmega2560 cycles (simavr, 16 MHz) of read_run's calls for four "
+          "motors, 100-450 g commands changing every frame, draining bus",
           {"update", "mean", "min", "max", "target", "met?"});
   const std::string probe = probePath(paths);
   if (probe.empty() || !std::filesystem::exists(probe)) {
@@ -100,7 +104,7 @@ Section computeSection(const AvrPaths& paths) {
     s.tables.push_back(std::move(t));
     return s;
   }
-  const ProbeResult r = runProbe(probe);
+  const ProbeResult r = runProbe(probe, 400000000ull, kLabelV2Frame);
   struct RowSpec {
     int label;
     const char* key;
@@ -108,16 +112,22 @@ Section computeSection(const AvrPaths& paths) {
     bool target;
   };
   const RowSpec rows[] = {
-      {3, "thesis_controller", "thesis option 2.1: 4 x (sag-compensated reading + forceToPwm)", false},
-      {4, "thesis_battery_median", "thesis battery reading: median of 101 (4 pushes + median)", false},
-      {1, "v2_read_run", "v2 as read_run flies it: filter + 4 x forceToPwmV2 (sag prediction)", true},
-      {2, "v2_frame", "v2 one call: filter + forceToPwmV2Frame (no sag prediction)", true},
+      {kLabelV2Frame, "v2_read_run",
+       "v2 as read_run flies it: V2Frame::fly (bus filter + 4 motors + sag prediction)", true},
+      {kLabelV2Steady, "v2_frame", "v2 one-call frame, the same commands every frame: V2Frame::fly", true},
+      {kLabelV2Reading, "v2_battery_reading", "v2 battery reading: the middle two of four readings", false},
+      {kLabelThesis, "thesis_controller",
+       "thesis option 2.1 as read_run flies it: 4 x (compensated reading + forceToPwm)", false},
+      {kLabelThesisMedian, "thesis_battery_median", "thesis battery reading: median of 101 (4 pushes)", false},
   };
+  // The assembly must give the portable C++'s state on every frame checked, or no target is met.
+  const uint16_t mismatches = r.values.count(0x89) ? r.values.at(0x89) : 0xFFFF;
+  const uint16_t checked = r.values.count(0x8A) ? r.values.at(0x8A) : 0;
   for (const RowSpec& row : rows) {
     auto it = r.sections.find(row.label);
     if (it == r.sections.end()) throw std::runtime_error(std::string("the AVR probe did not measure ") + row.name);
     const CycleStat& c = it->second;
-    const bool met = c.max <= kCycleTarget;
+    const bool met = c.max <= kCycleTarget && mismatches == 0 && checked > 0;
     t.addRow({row.name, std::to_string(c.mean), std::to_string(c.min), std::to_string(c.max),
               row.target ? "<= 1000 (max)" : "-", row.target ? verdict(met) : "-"});
     s.json["updates"][row.key] = {{"name", row.name}, {"frames", c.count}, {"mean_cycles", c.mean},
@@ -128,29 +138,69 @@ Section computeSection(const AvrPaths& paths) {
                            "<= 1000 cycles", met});
     }
   }
-  const CycleStat& th = r.sections.at(3);
-  const CycleStat& med = r.sections.at(4);
+  const CycleStat& th = r.sections.at(kLabelThesis);
+  const CycleStat& med = r.sections.at(kLabelThesisMedian);
   t.addRow({"thesis total (reading + controller)", std::to_string(th.mean + med.mean), "", "", "-", "-"});
   const uint16_t failures = r.values.count(0x83) ? r.values.at(0x83) : 0xFFFF;
-  if (failures != 0) t.addNote(fmt::format("WARNING: {} model fits failed inside the probe", failures));
-  t.addNote(fmt::format("probe: {} (core/ built with avr-g++ -Os as in the AVR tree), net of {} "
-                        "cycles of marker overhead, {} frames each",
+  if (failures != 0) t.addNote(fmt::format("WARNING: {} model fits or loads failed inside the probe", failures));
+  t.addNote(fmt::format("probe: {} (core/ and read_run's slot storage built with avr-g++ -Os as in the AVR "
+                        "tree, the thesis steps read through hal/avr's Eeprom), net of {} cycles of marker "
+                        "overhead, {} frames each; the calls' argument setup is included",
                         probe, r.overhead_cycles, th.count));
-  t.addNote("read_run also pushes the 4 battery readings into the median of 101 on v2 frames "
-            "(for its status line): that cost is outside the v2 rows");
+  t.addNote(fmt::format("V2Frame::fly is assembly on the AVR; on {} frames with insane readings, jumps, rate "
+                        "changes, stops and saturation it gave the same state as its portable C++: {}",
+                        checked, mismatches == 0 ? "every frame" : fmt::format("NOT on {} frames", mismatches)));
+  t.addNote("one call: V2Frame::fly is read_run's one call per frame for all its v2 motors; it replaces issue "
+            "5's forceToPwmV2Frame (no sag prediction, 1295 cycles max) and includes the prediction");
   s.json["available"] = true;
   s.json["target_max_cycles"] = kCycleTarget;
   s.json["probe_elf"] = probe;
+  s.json["assembly_vs_portable"] = {{"frames", checked}, {"mismatches", mismatches}};
   s.tables.push_back(std::move(t));
+
+  // Where the cycles go: the frame's steps, by the labels of its assembly.
+  Table b("2b. Compute breakdown: V2Frame::fly, cycles per frame by step (mean over the frames above)",
+          {"step", "cycles", "share"});
+  const std::vector<ProfileRange> ranges = {
+      {"call: save registers", "_ZN2tc7V2Frame3flyEjh"},
+      {"reading check, limits, filter constant", "tc_v2fly_check"},
+      {"bus filter: first-order step + Newton reciprocal", "tc_v2fly_filter"},
+      {"sag filter (the commands' bench sag, filtered)", "tc_v2fly_sag"},
+      {"prediction: 1/V at the commands (3 products)", "tc_v2fly_predict"},
+      {"  (rare paths: stop, clamp to the curve)", "tc_v2fly_rare_a"},
+      {"per motor: command, model, fine/coarse run", "tc_v2fly_lane"},
+      {"per motor: knot position (16x16)", "tc_v2fly_knot"},
+      {"per motor: drive between the knots (16x16, rounded)", "tc_v2fly_interp"},
+      {"per motor: bench sag at the command (2 x 8x8)", "tc_v2fly_sagpt"},
+      {"per motor: duty = drive / V + start (16x16)", "tc_v2fly_duty"},
+      {"per motor: limits, store pulse and flags, next", "tc_v2fly_limits"},
+      {"  (rare paths: bus not valid, limits hit)", "tc_v2fly_rare_b"},
+      {"return: total sag, restore registers", "tc_v2fly_out"},
+  };
+  const auto by_range = cyclesByRange(r, probe, ranges, "_ZN2tc7V2Frame3flyEjh");
+  const CycleStat& frame = r.sections.at(kLabelV2Frame);
+  uint64_t total = 0;
+  for (const auto& [name, cycles] : by_range) total += cycles;
+  for (const auto& [name, cycles] : by_range) {
+    const double per_frame = frame.count ? static_cast<double>(cycles) / frame.count : 0.0;
+    b.addRow({name, fixed(per_frame, 1), total ? fmt::format("{:.1f} %", 100.0 * cycles / total) : "-"});
+    s.json["breakdown"].push_back({{"step", name}, {"cycles_per_frame", per_frame}});
+  }
+  b.addRow({"total (the function alone, without the caller's argument setup)",
+            fixed(frame.count ? static_cast<double>(total) / frame.count : 0.0, 1), "100 %"});
+  b.addNote("cycles attributed to the address of each instruction (simavr, one instruction per step) and "
+            "summed between the assembly's tc_v2fly_* labels; per motor rows are for all four motors");
+  s.tables.push_back(std::move(b));
   return s;
 }
 
 Section footprintSection(const AvrPaths& paths) {
   Section s;
   s.key = "footprint";
-  Table t("3. Footprint: AVR images (avr-size), SRAM of the four motors' models (sizeof on the "
-          "AVR), EEPROM per motor",
+  Table t("3. Footprint: AVR images (avr-size; stacks measured in simavr), SRAM of read_run's models "
+          "(sizeof on the AVR), EEPROM per motor",
           {"item", "bytes", "of", "target", "met?"});
+  const StackFigures stacks = measureStacks(paths);
   for (const char* image : {"gather_store", "read_run"}) {
     const std::string elf = paths.elf(image);
     if (!std::filesystem::exists(elf)) {
@@ -161,44 +211,69 @@ Section footprintSection(const AvrPaths& paths) {
       continue;
     }
     const SizeInfo z = avrSize(elf);
+    const bool sram_met = z.sram() <= kStaticSramTarget;
     t.addRow({fmt::format("{} flash (.text + .data)", image), std::to_string(z.flash()), "262144", "-", "-"});
-    t.addRow({fmt::format("{} static SRAM (.data + .bss)", image), std::to_string(z.sram()), "8192", "-", "-"});
+    t.addRow({fmt::format("{} static SRAM (.data + .bss)", image), std::to_string(z.sram()), "8192",
+              fmt::format("<= {} (2 KB stack)", kStaticSramTarget), verdict(sram_met)});
     s.json["images"][image] = {{"available", true}, {"elf", elf}, {"flash_bytes", z.flash()},
                                {"sram_static_bytes", z.sram()}, {"text", z.text}, {"data", z.data},
-                               {"bss", z.bss}};
+                               {"bss", z.bss}, {"sram_static_target_bytes", kStaticSramTarget}};
+    const uint32_t stack = std::string(image) == "read_run" ? stacks.read_run_bytes : stacks.gather_store_bytes;
+    if (stacks.available && stack) {
+      const int64_t free_bytes = 8192 - static_cast<int64_t>(z.sram()) - stack;
+      t.addRow({fmt::format("{} stack high-water mark (simavr)", image), std::to_string(stack),
+                std::to_string(8192 - z.sram()), "-", "-"});
+      t.addRow({fmt::format("{} SRAM never touched", image), std::to_string(free_bytes), "8192", "-", "-"});
+      s.json["images"][image]["stack_high_water_bytes"] = stack;
+      s.json["images"][image]["sram_never_touched_bytes"] = free_bytes;
+      s.json["images"][image]["stack_scenario"] =
+          std::string(image) == "read_run" ? stacks.read_run_scenario : stacks.gather_store_scenario;
+    }
+    s.targets.push_back({fmt::format("3. static SRAM of {} (>= 2 KB left for the stack)", image),
+                         fmt::format("{} bytes", z.sram()), fmt::format("<= {} bytes", kStaticSramTarget),
+                         sram_met});
+    s.json["met"][fmt::format("{}_static_sram", image)] = sram_met;
     if (std::string(image) == "read_run") {
       const uint64_t app = symbolSize(elf, "(anonymous namespace)::app");
       if (app) {
-        t.addRow({"read_run app object (ReadRunApp, incl. the four slots)", std::to_string(app), "", "-", "-"});
+        t.addRow({"read_run app object (ReadRunApp: slots, frame, median of 101)", std::to_string(app), "", "-", "-"});
         s.json["images"][image]["app_object_bytes"] = app;
       }
     }
+  }
+  if (stacks.available) {
+    t.addNote("stacks: SRAM above .bss painted before reset, the lowest byte changed after: gather_store " +
+              stacks.gather_store_scenario + "; read_run " + stacks.read_run_scenario);
+  } else {
+    t.addNote("stack high-water marks not measured: " + (stacks.reason.empty() ? std::string("no simulator") : stacks.reason));
   }
   const std::string probe = probePath(paths);
   if (!probe.empty() && std::filesystem::exists(probe)) {
     const ProbeResult r = runProbe(probe);
     const uint64_t v2 = r.values.at(0x80), v1 = r.values.at(0x81), slot = r.values.at(0x82);
-    const uint64_t v2_symbol = symbolSize(probe, "bench_models_v2");
-    t.addRow({fmt::format("four v2 models (4 x sizeof(tc::ModelV2) = 4 x {})", v2), std::to_string(4 * v2),
-              "", "<= 1024", verdict(4 * v2 <= kModelsSramTarget)});
-    t.addRow({fmt::format("four thesis calibrations (4 x sizeof(tc::MotorCalibration) = 4 x {})", v1),
-              std::to_string(4 * v1), "", "-", "-"});
+    const uint64_t v2run = r.values.at(0x85), v1run = r.values.at(0x86), motor = r.values.at(0x87),
+                   frame = r.values.at(0x88);
+    const bool slots_met = 4 * slot <= kModelsSramTarget;
     t.addRow({fmt::format("read_run's four slots, v1 or v2 (4 x sizeof(rr::SlotModel) = 4 x {})", slot),
-              std::to_string(4 * slot), "", "<= 1024", verdict(4 * slot <= kModelsSramTarget)});
-    if (v2_symbol && v2_symbol != 4 * v2)
-      t.addNote(fmt::format("WARNING: avr-nm says bench_models_v2 is {} bytes, sizeof says {}", v2_symbol, 4 * v2));
-    t.addNote("read_run keeps the thesis model flyable per slot: each slot is a union sized for v1, "
-              "so the image reserves the v1 size even when all four fly v2");
+              std::to_string(4 * slot), "", "<= 1024", verdict(slots_met)});
+    t.addRow({fmt::format("  four v2 models as flown (4 x sizeof(tc::ModelV2Run) = 4 x {})", v2run),
+              std::to_string(4 * v2run), "", "-", "-"});
+    t.addRow({fmt::format("  four thesis models as flown (4 x sizeof(tc::ThesisRun) = 4 x {})", v1run),
+              std::to_string(4 * v1run), "", "-", "-"});
+    t.addRow({fmt::format("read_run's per-motor state (4 x rr::Motor of {} + tc::V2Frame of {})", motor, frame),
+              std::to_string(4 * motor + frame), "", "-", "-"});
+    t.addRow({fmt::format("decoded records at start-up, on the stack (tc::MotorCalibration {} + tc::ModelV2 {})", v1, v2),
+              std::to_string(v1 + v2), "", "-", "-"});
+    t.addNote("read_run keeps the thesis curves' steps in the EEPROM (read on demand, PWM checkpoints every "
+              "16 g in SRAM) and model v2 in the form its frame reads: a slot is a union of the two");
     s.json["models_sram"] = {{"sizeof_model_v2", v2}, {"sizeof_motor_calibration", v1},
-                             {"sizeof_slot_model", slot}, {"four_v2_bytes", 4 * v2},
-                             {"four_v1_bytes", 4 * v1}, {"read_run_four_slots_bytes", 4 * slot},
-                             {"nm_bench_models_v2_bytes", v2_symbol}, {"target_bytes", kModelsSramTarget}};
-    s.targets.push_back({"3. SRAM of four v2 models (sizeof on the AVR)", fmt::format("{} bytes", 4 * v2),
-                         "<= 1024 bytes", 4 * v2 <= kModelsSramTarget});
-    s.targets.push_back({"3. SRAM of read_run's four slots (v1/v2 union)", fmt::format("{} bytes", 4 * slot),
-                         "<= 1024 bytes", 4 * slot <= kModelsSramTarget});
-    s.json["met"] = {{"four_v2_models", 4 * v2 <= kModelsSramTarget},
-                     {"read_run_slots", 4 * slot <= kModelsSramTarget}};
+                             {"sizeof_slot_model", slot}, {"sizeof_model_v2_run", v2run},
+                             {"sizeof_thesis_run", v1run}, {"sizeof_motor", motor}, {"sizeof_v2_frame", frame},
+                             {"read_run_four_slots_bytes", 4 * slot}, {"four_v2_bytes", 4 * v2run},
+                             {"four_v1_bytes", 4 * v1run}, {"target_bytes", kModelsSramTarget}};
+    s.targets.push_back({"3. SRAM of read_run's four slots (v1 or v2 each)", fmt::format("{} bytes", 4 * slot),
+                         "<= 1024 bytes", slots_met});
+    s.json["met"]["read_run_slots"] = slots_met;
   } else {
     t.addRow({"models' SRAM: not available (AVR probe not built, avr-g++ missing)", "", "", "<= 1024", "-"});
   }

@@ -37,11 +37,23 @@ struct AvrPaths {
   std::string elf(const std::string& image) const;  // <avr_build>/firmware/<image>/<image>.elf
 };
 
+// Stack high-water marks of the two images, measured in simavr (sections_runtime.cpp).
+struct StackFigures {
+  bool available = false;
+  std::string reason;             // why not, when not available
+  uint32_t gather_store_bytes = 0;
+  uint32_t read_run_bytes = 0;
+  std::string gather_store_scenario, read_run_scenario;
+};
+StackFigures measureStacks(const AvrPaths& paths);
+
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
 Section footprintSection(const AvrPaths& paths);
 Section calibrationSection(const AvrPaths& paths);
 // quick: 10 s hold instead of 60 s.
 Section liftoffSection(const AvrPaths& paths, bool quick);
+// read_run's CPU load, frame cycles and loop period in simavr at 50 and 400 Hz.
+Section runtimeSection(const AvrPaths& paths);
 
 }  // namespace bench

@@ -1,0 +1,483 @@
+// Benchmark 6 (runtime) and the stack figures of benchmark 3: the real read_run and gather_store
+// images in simavr, stepped one instruction at a time so that every cycle is attributed.
+//
+// read_run flies the tethered quad (tools/sim's QuadRig: four varied KV1100 + 9x4.7 motors on one
+// 3S LiPo at 50 % charge) through `liftoff 300 1000 3000` (commands change every frame during the
+// 1 s ramp, then a 3 s hold), at 50 and at 400 Hz, once with thesis (v1) records and once with v2
+// records made on the host from the plant's sweeps (bench::simulateSweep, as benchmark 1). Over
+// the lift-off it counts:
+//   CPU load      cycles the CPU is awake / all cycles (the image sleeps until the next
+//                 interrupt between loop passes; simavr skips asleep cycles);
+//   frame         awake cycles from entering rr::ReadRunApp::frame to its return: the four
+//                 battery conversions (asleep while converting), the median, the v2 frame, the
+//                 v1 motors and the four pulses, with the 1 ms tick and UART interrupts that hit it;
+//   V2Frame::fly  the same for the v2 frame alone (benchmark 2 measures it without interrupts);
+//   loop period   the longest time between two entries of rr::ReadRunApp::runOnce (normal
+//                 running, with the lift-off's progress lines; the flood case is another bench).
+// Stacks: the SRAM between the end of .bss and the top is painted before reset; after a boot and a
+// lift-off (read_run) or a calibration with every store and show (gather_store), the lowest byte
+// changed is the stack's high-water mark.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "bench/sections.hpp"
+
+#ifdef THRUSTCAL_BENCH_HAVE_SIM
+extern "C" {
+#include <simavr/sim_avr.h>
+}
+#include "bench/sweeps.hpp"
+#include "plant/bench.hpp"
+#include "sim/board.hpp"
+#include "sim/console.hpp"
+#include "sim/rigs.hpp"
+#include "sim/scenarios.hpp"
+#include "thrustcal/curve_builder.hpp"
+#include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/model_v2.hpp"
+#include "thrustcal/record_v2.hpp"
+#endif
+
+namespace bench {
+
+#ifndef THRUSTCAL_BENCH_HAVE_SIM
+
+Section runtimeSection(const AvrPaths&) {
+  Section s;
+  s.key = "runtime";
+  const std::string why = "tools/sim (thrustcal_sim) is not part of this build: no simulated board";
+  Table t("6. Runtime", {"item", "figure"});
+  t.addRow({"not available", "-"});
+  t.addNote(why);
+  s.tables.push_back(std::move(t));
+  s.json = {{"available", false}, {"reason", why}};
+  return s;
+}
+
+StackFigures measureStacks(const AvrPaths&) { return StackFigures{}; }
+
+#else
+
+namespace {
+
+constexpr uint16_t kRamEnd = 0x21FF;  // ATmega2560
+constexpr uint8_t kPaint = 0xA5;
+const std::vector<uint64_t> kSeeds = {11, 12, 13, 14};
+const std::string kPreset = "kv1100_9x4.7";
+constexpr double kVariation = 0.03;
+
+struct Symbol {
+  uint32_t addr = 0, size = 0;
+};
+
+// Symbols of an image by mangled name (avr-nm -S): functions' addresses in bytes, data's in the
+// data space (0x800000 + address).
+std::map<std::string, Symbol> symbols(const std::string& elf) {
+  std::unique_ptr<FILE, int (*)(FILE*)> p(popen(("avr-nm -S '" + elf + "' 2>/dev/null").c_str(), "r"), pclose);
+  if (!p) throw std::runtime_error("cannot run avr-nm on " + elf + ": is binutils-avr installed?");
+  std::map<std::string, Symbol> out;
+  char line[512];
+  while (fgets(line, sizeof line, p.get())) {
+    char name[400];
+    unsigned addr = 0, size = 0;
+    char type = 0;
+    if (std::sscanf(line, "%x %x %c %399s", &addr, &size, &type, name) == 4) {
+      out[name] = {addr, size};
+    } else if (std::sscanf(line, "%x %c %399s", &addr, &type, name) == 3) {
+      out[name] = {addr, 0};
+    }
+  }
+  return out;
+}
+
+uint32_t need(const std::map<std::string, Symbol>& syms, const std::string& name, const std::string& elf) {
+  auto it = syms.find(name);
+  if (it == syms.end())
+    throw std::runtime_error(fmt::format("{} has no symbol {}: is it the image of this source tree?", elf, name));
+  return it->second.addr;
+}
+
+// Paints the SRAM the stack may use (end of .bss/.noinit to the top) before the first instruction.
+uint16_t paintStack(sim::Board& board, const std::string& elf) {
+  const auto syms = symbols(elf);
+  // _end: the linker script's end of .bss and .noinit (__heap_start only exists with malloc)
+  const uint16_t heap_start = static_cast<uint16_t>(need(syms, "_end", elf) & 0xFFFF);
+  for (uint32_t a = heap_start; a <= kRamEnd; ++a) board.avr()->data[a] = kPaint;
+  return heap_start;
+}
+
+// Bytes of stack used at the deepest: from the top down to the lowest byte changed.
+uint32_t stackHighWater(sim::Board& board, uint16_t heap_start) {
+  for (uint32_t a = heap_start; a <= kRamEnd; ++a)
+    if (board.avr()->data[a] != kPaint) return kRamEnd - a + 1;
+  return 0;
+}
+
+// Four varied motors' records made on the host from the plant's sweeps, as gather_store makes
+// them: thesis v1 (curve 1 on the LiPo at 12.4 V with the sag offsets, curve 2 on a 10.5 V
+// bench supply) and v2 (fit from the LiPo sweep, refined by the bench-supply sweep).
+struct Records {
+  std::vector<uint8_t> v1, v2;
+};
+
+struct ImageStorage {
+  static std::vector<uint8_t>* image;
+  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
+  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
+};
+std::vector<uint8_t>* ImageStorage::image = nullptr;
+
+const Records& benchRecords() {
+  static Records r;
+  if (!r.v1.empty()) return r;
+  r.v1.assign(sim::kEepromBytes, 0xFF);
+  r.v2.assign(sim::kEepromBytes, 0xFF);
+  for (size_t i = 0; i < kSeeds.size(); ++i) {
+    const plant::ActuatorParams motor = sim::motorForSeed(kPreset, kSeeds[i], kVariation);
+    SweepSpec spec;
+    spec.pwm_min_us = 1040;
+    spec.settle_ms = 600;
+    spec.noise_seed = kSeeds[i];
+    const Sweep lipo = simulateSweep(motor, lipoAt(12.4), spec);
+    plant::BatteryParams supply = plant::BatteryParams::benchSupply(10.5, 6.32);
+    const Sweep bench_supply = simulateSweep(motor, supply, spec);
+    // v1
+    auto cal = std::make_unique<tc::MotorCalibration>();
+    for (int c = 0; c < 2; ++c) {
+      const Sweep& sweep = c == 0 ? lipo : bench_supply;
+      auto builder = std::make_unique<tc::CurveBuilder<161>>();
+      tc::SagBuilder sag;
+      sag.reset(static_cast<uint16_t>(spec.pwm_min_us));
+      for (const SweepPoint& p : sweep.points) {
+        builder->add(p.pwm_us, p.force_dg);
+        sag.add(p.pwm_us, p.vbat_mv);
+      }
+      tc::ThesisCurve& curve = c == 0 ? cal->first : cal->second;
+      if (builder->build(curve).status != tc::BuildStatus::kOk)
+        throw std::runtime_error(fmt::format("runtime bench: no thesis curve for motor {}", i));
+      uint16_t start_mv = 0;
+      tc::SagTable second;
+      sag.build(c == 0 ? cal->sag : second, start_mv);
+      curve.start_mv = start_mv;
+    }
+    ImageStorage::image = &r.v1;
+    tc::writeRecord<ImageStorage>(static_cast<uint8_t>(i), *cal);
+    // v2
+    auto fitter = std::make_unique<tc::ModelV2Fitter<161>>();
+    tc::ModelV2 model;
+    for (const SweepPoint& p : lipo.points) fitter->add(p.pwm_us, p.force_dg, p.vbat_mv);
+    if (fitter->fit(model).status != tc::FitV2Status::kOk)
+      throw std::runtime_error(fmt::format("runtime bench: model v2 fit failed for motor {}", i));
+    fitter->reset();
+    for (const SweepPoint& p : bench_supply.points) fitter->add(p.pwm_us, p.force_dg, p.vbat_mv);
+    fitter->refine(model);
+    ImageStorage::image = &r.v2;
+    if (tc::writeModelV2<ImageStorage>(static_cast<uint8_t>(i), model).status != tc::WriteV2Status::kWritten)
+      throw std::runtime_error(fmt::format("runtime bench: model v2 of motor {} not written", i));
+  }
+  return r;
+}
+
+// Cycles simavr skipped while the CPU slept (its run loop adds 1 + howLong after this callback).
+uint64_t g_slept = 0;
+void countSleep(avr_t*, avr_cycle_count_t how_long) { g_slept += 1 + how_long; }
+
+uint16_t stackPointer(const avr_t* avr) { return static_cast<uint16_t>(avr->data[0x5D] | (avr->data[0x5E] << 8)); }
+
+// The 3-byte return address (the ATmega2560's PC is 17 bits) stacked above sp, in bytes.
+uint32_t stackedReturn(const avr_t* avr, uint16_t sp) {
+  const uint8_t* ret = &avr->data[sp + 1];
+  return (static_cast<uint32_t>(ret[0]) << 16 | static_cast<uint32_t>(ret[1]) << 8 | ret[2]) * 2u;
+}
+
+constexpr uint32_t kVectorsEnd = 57 * 4;  // the ATmega2560's interrupt vectors, in bytes
+
+// Cycles from a function's entry to its return, awake only (the CPU may sleep inside: the ADC).
+struct CallTimer {
+  uint32_t entry = 0;
+  bool inside = false;
+  uint16_t sp_at_entry = 0;
+  uint32_t return_pc = 0;
+  uint64_t awake = 0;
+  uint64_t calls = 0, sum = 0, max = 0;
+  uint64_t quiet_calls = 0, quiet_sum = 0, quiet_max = 0;  // calls that printed nothing
+  uint64_t clean_max = 0;  // calls that printed nothing and no interrupt hit
+  bool interrupted = false;
+  const std::string* output = nullptr;  // the board's UART output
+  size_t output_at_entry = 0;
+
+  // Before an instruction: at the entry, SP is just below the return address the call pushed.
+  void before(const avr_t* avr) {
+    if (inside || avr->pc != entry) return;
+    sp_at_entry = stackPointer(avr);
+    return_pc = stackedReturn(avr, sp_at_entry);
+    inside = true;
+    awake = 0;
+    interrupted = false;
+    output_at_entry = output ? output->size() : 0;
+  }
+  // After it: the return lands on return_pc with the address popped, or on an interrupt vector
+  // that stacked return_pc in the same place.
+  void after(const avr_t* avr, uint64_t awake_cycles) {
+    if (!inside) return;
+    awake += awake_cycles;
+    const uint16_t sp = stackPointer(avr);
+    const bool returned = (avr->pc == return_pc && sp == sp_at_entry + 3) ||
+                          (avr->pc < kVectorsEnd && sp == sp_at_entry && stackedReturn(avr, sp) == return_pc);
+    if (!returned) {
+      if (avr->pc < kVectorsEnd) interrupted = true;
+      return;
+    }
+    inside = false;
+    ++calls;
+    sum += awake;
+    max = std::max(max, awake);
+    if (output && output->size() != output_at_entry) return;
+    ++quiet_calls;
+    quiet_sum += awake;
+    quiet_max = std::max(quiet_max, awake);
+    if (!interrupted) clean_max = std::max(clean_max, awake);
+  }
+};
+
+struct FlightFigures {
+  int hz = 0;
+  std::string records;
+  double cpu_load_pct = 0;    // all awake cycles / all cycles
+  double frame_load_pct = 0;  // frame()'s awake cycles / all cycles
+  uint64_t frames = 0, frame_mean = 0, frame_max = 0, frame_max_quiet = 0;
+  uint64_t fly_calls = 0, fly_mean = 0, fly_max = 0, fly_max_clean = 0;
+  double loop_period_max_ms = 0, loop_period_max_quiet_ms = 0, loop_period_mean_ms = 0;
+  uint32_t stack_bytes = 0;
+  double simulated_s = 0;
+};
+
+// read_run through a lift-off on the tethered quad, stepped one instruction at a time.
+FlightFigures flyReadRun(const std::string& elf, const std::vector<uint8_t>& eeprom, const std::string& records,
+                         int hz) {
+  FlightFigures f;
+  f.hz = hz;
+  f.records = records;
+  const auto syms = symbols(elf);
+  plant::QuadFrameParams qp;
+  qp.power = plant::BatteryParams::lipo3s(0.5);
+  std::array<plant::ActuatorParams, 4> motors;
+  for (int i = 0; i < 4; ++i) motors[i] = sim::motorForSeed(kPreset, kSeeds[i], kVariation);
+  sim::QuadRig rig(elf, qp, motors, 0.05);
+  rig.board.setEeprom(eeprom);
+  rig.board.avr()->sleep = countSleep;
+  const uint16_t heap_start = paintStack(rig.board, elf);
+  sim::Console con(rig.board, "rr> ");
+  con.waitPrompt(10.0);
+  if (hz != 50) {
+    const auto lines = con.command(fmt::format("rate {}", hz));
+    for (const std::string& l : lines)
+      if (l.rfind("error:", 0) == 0) throw std::runtime_error("read_run refused the rate: " + l);
+  }
+  CallTimer frame, fly;
+  frame.output = fly.output = &rig.board.output();
+  frame.entry = need(syms, "_ZN2rr10ReadRunApp5frameEm", elf);
+  const bool has_fly = syms.count("_ZN2tc7V2Frame3flyEjh") != 0;
+  fly.entry = has_fly ? syms.at("_ZN2tc7V2Frame3flyEjh").addr : 0xFFFFFFFF;
+  const uint32_t run_once = need(syms, "_ZN2rr10ReadRunApp7runOnceEv", elf);
+
+  con.send("liftoff 300 1000 3000");
+  avr_t* avr = rig.board.avr();
+  const uint64_t start = avr->cycle;
+  uint64_t awake = 0, last_loop = 0, loop_max = 0, loop_max_quiet = 0, loop_sum = 0, loops = 0;
+  size_t output_at_loop = 0;
+  size_t seen = rig.board.output().size();
+  const uint64_t budget = sim::secondsToCycles(8.0);
+  bool done = false;
+  uint64_t instructions = 0;
+  while (!done && avr->cycle - start < budget) {
+    const uint64_t before = avr->cycle, slept_before = g_slept;
+    if (avr->state != cpu_Sleeping && avr->pc == run_once) {
+      if (last_loop) {
+        const uint64_t period = before - last_loop;
+        loop_max = std::max(loop_max, period);
+        if (rig.board.output().size() == output_at_loop) loop_max_quiet = std::max(loop_max_quiet, period);
+        loop_sum += period;
+        ++loops;
+      }
+      last_loop = before;
+      output_at_loop = rig.board.output().size();
+    }
+    frame.before(avr);
+    if (has_fly) fly.before(avr);
+    const int state = avr_run(avr);
+    if (state == cpu_Done || state == cpu_Crashed)
+      throw std::runtime_error(fmt::format("read_run stopped at pc 0x{:05X} during the runtime bench", avr->pc));
+    const uint64_t slept = g_slept - slept_before;
+    const uint64_t awake_now = avr->cycle - before - slept;
+    awake += awake_now;
+    frame.after(avr, awake_now);
+    if (has_fly) fly.after(avr, awake_now);
+    if ((++instructions & 0x3FFF) == 0 && rig.board.output().size() != seen) {
+      const std::string& out = rig.board.output();
+      done = out.find("# liftoff done", seen > 64 ? seen - 64 : 0) != std::string::npos ||
+             out.find("# liftoff aborted", seen > 64 ? seen - 64 : 0) != std::string::npos;
+      seen = out.size();
+    }
+  }
+  if (!done) throw std::runtime_error("read_run did not finish the lift-off in the runtime bench:\n" + con.tail());
+  const uint64_t total = avr->cycle - start;
+  f.simulated_s = sim::cyclesToSeconds(total);
+  f.cpu_load_pct = total ? 100.0 * static_cast<double>(awake) / static_cast<double>(total) : 0.0;
+  f.frames = frame.calls;
+  f.frame_mean = frame.calls ? frame.sum / frame.calls : 0;
+  f.frame_max = frame.max;
+  f.frame_max_quiet = frame.quiet_max;
+  f.frame_load_pct = total ? 100.0 * static_cast<double>(frame.sum) / static_cast<double>(total) : 0.0;
+  f.fly_calls = fly.calls;
+  f.fly_mean = fly.calls ? fly.sum / fly.calls : 0;
+  f.fly_max = fly.max;
+  f.fly_max_clean = fly.clean_max;
+  f.loop_period_max_ms = 1000.0 * sim::cyclesToSeconds(loop_max);
+  f.loop_period_max_quiet_ms = 1000.0 * sim::cyclesToSeconds(loop_max_quiet);
+  f.loop_period_mean_ms = loops ? 1000.0 * sim::cyclesToSeconds(loop_sum / loops) : 0.0;
+  con.waitPrompt(2.0);
+  f.stack_bytes = stackHighWater(rig.board, heap_start);
+  return f;
+}
+
+std::vector<std::string> mustCommand(sim::Console& con, const std::string& line, double budget_s) {
+  const std::vector<std::string> lines = con.command(line, budget_s);
+  for (const std::string& l : lines)
+    if (l.rfind("error:", 0) == 0) throw std::runtime_error(fmt::format("gather_store refused `{}`: {}", line, l));
+  return lines;
+}
+
+// gather_store through a calibration with the default sweep and every store and show.
+uint32_t gatherStoreStack(const std::string& elf, std::string& scenario) {
+  plant::BenchParams params = plant::BenchParams::thesis(kPreset);
+  params.actuator = sim::motorForSeed(kPreset, kSeeds[0], kVariation);
+  sim::BenchRig rig(elf, params, 0);
+  const uint16_t heap_start = paintStack(rig.board, elf);
+  sim::Console con(rig.board, "gs> ");
+  con.waitPrompt(10.0);
+  mustCommand(con, "motor 0", 5);
+  mustCommand(con, fmt::format("plate {}", static_cast<int>(std::lround(params.load_cell.plate_g))), 5);
+  mustCommand(con, "range 1040 1800", 5);
+  mustCommand(con, fmt::format("cal {}", static_cast<int>(std::round(params.actuator.mountWeight_g()))), 15);
+  mustCommand(con, "sweep", 100);
+  mustCommand(con, "store v2", 15);
+  mustCommand(con, "show", 15);
+  mustCommand(con, "store 1", 15);
+  mustCommand(con, "show", 15);
+  mustCommand(con, "status", 15);
+  scenario = "boot, cal, the default sweep 1040-1800 us, store v2, show, store 1, show, status";
+  return stackHighWater(rig.board, heap_start);
+}
+
+}  // namespace
+
+StackFigures measureStacks(const AvrPaths& paths) {
+  static StackFigures cached;
+  static std::string done_for;
+  const std::string key = paths.elf("gather_store") + "|" + paths.elf("read_run");
+  if (done_for == key) return cached;
+  done_for = key;
+  cached = StackFigures{};
+  try {
+    if (std::filesystem::exists(paths.elf("gather_store"))) {
+      std::cerr << "bench: gather_store in simavr for its stack (calibration, stores, shows)\n";
+      cached.gather_store_bytes = gatherStoreStack(paths.elf("gather_store"), cached.gather_store_scenario);
+    }
+    if (std::filesystem::exists(paths.elf("read_run"))) {
+      std::cerr << "bench: read_run in simavr for its stack (boot with four thesis records, lift-off)\n";
+      // The thesis records: the loader decodes the biggest record at start-up.
+      const FlightFigures f = flyReadRun(paths.elf("read_run"), benchRecords().v1, "v1", 50);
+      cached.read_run_bytes = f.stack_bytes;
+      cached.read_run_scenario = "boot with four thesis records, liftoff 300 1000 3000 at 50 Hz";
+      const FlightFigures g = flyReadRun(paths.elf("read_run"), benchRecords().v2, "v2", 400);
+      cached.read_run_bytes = std::max(cached.read_run_bytes, g.stack_bytes);
+      cached.read_run_scenario += "; the same with four v2 records at 400 Hz";
+    }
+    cached.available = true;
+  } catch (const std::exception& e) {
+    cached.reason = e.what();
+  }
+  return cached;
+}
+
+Section runtimeSection(const AvrPaths& paths) {
+  Section s;
+  s.key = "runtime";
+  const std::string title =
+      "6. Runtime: read_run in simavr on the tethered quad, liftoff 300 g (1 s ramp, 3 s hold), one 3S "
+      "LiPo at 50 %; cycles awake, interrupts included";
+  const std::string elf = paths.elf("read_run");
+  if (!std::filesystem::exists(elf)) {
+    Table t(title, {"item", "figure"});
+    t.addRow({"not available", "-"});
+    const std::string why = elf + " not found: build the AVR tree (--target read_run) or pass --avr-build DIR";
+    t.addNote(why);
+    s.tables.push_back(std::move(t));
+    s.json = {{"available", false}, {"reason", why}};
+    return s;
+  }
+  Table t(title, {"records", "rate", "CPU load", "frame() load", "frame() mean", "max, quiet", "max, printing",
+                  "V2Frame::fly max", "no interrupt", "loop period max, quiet", "with a print"});
+  const Records& records = benchRecords();
+  for (const int hz : {50, 400}) {
+    for (const char* kind : {"v2", "v1"}) {
+      std::cerr << fmt::format("bench: read_run runtime in simavr, {} records, {} Hz\n", kind, hz);
+      const bool v2 = std::string(kind) == "v2";
+      const FlightFigures f = flyReadRun(elf, v2 ? records.v2 : records.v1, kind, hz);
+      t.addRow({v2 ? "v2 (store v2)" : "thesis v1", fmt::format("{} Hz", hz), fmt::format("{:.1f} %", f.cpu_load_pct),
+                fmt::format("{:.1f} %", f.frame_load_pct), std::to_string(f.frame_mean),
+                std::to_string(f.frame_max_quiet), std::to_string(f.frame_max),
+                f.fly_calls ? std::to_string(f.fly_max) : "-", f.fly_calls ? std::to_string(f.fly_max_clean) : "-",
+                fmt::format("{:.2f} ms", f.loop_period_max_quiet_ms),
+                fmt::format("{:.2f} ms", f.loop_period_max_ms)});
+      s.json[fmt::format("hz{}", hz)][kind] = {{"cpu_load_pct", f.cpu_load_pct},
+                                               {"frame_load_pct", f.frame_load_pct},
+                                               {"frames", f.frames},
+                                               {"frame_cycles_mean", f.frame_mean},
+                                               {"frame_cycles_max_quiet", f.frame_max_quiet},
+                                               {"frame_cycles_max", f.frame_max},
+                                               {"fly_calls", f.fly_calls},
+                                               {"fly_cycles_mean", f.fly_mean},
+                                               {"fly_cycles_max", f.fly_max},
+                                               {"fly_cycles_max_no_interrupt", f.fly_max_clean},
+                                               {"loop_period_mean_ms", f.loop_period_mean_ms},
+                                               {"loop_period_max_quiet_ms", f.loop_period_max_quiet_ms},
+                                               {"loop_period_max_ms", f.loop_period_max_ms},
+                                               {"stack_bytes", f.stack_bytes},
+                                               {"simulated_s", f.simulated_s}};
+      if (!v2) continue;
+      s.targets.push_back({fmt::format("6. read_run CPU load at {} Hz (v2, lift-off)", hz),
+                           fmt::format("{:.1f} % (frames {:.1f} %)", f.cpu_load_pct, f.frame_load_pct),
+                           "measured by bench", true});
+      s.targets.push_back({fmt::format("6. read_run worst loop period at {} Hz (v2, lift-off)", hz),
+                           fmt::format("{:.2f} ms ({:.2f} ms with a progress line)", f.loop_period_max_quiet_ms,
+                                       f.loop_period_max_ms),
+                           "measured by bench", true});
+    }
+  }
+  t.addNote("CPU load: awake cycles / all cycles over the lift-off (simavr skips the idle sleep); frame() load: "
+            "the awake cycles inside rr::ReadRunApp::frame / all cycles (the four battery conversions sleep)");
+  t.addNote("frame() cycles from entry to return, awake, with the 1 ms tick and UART interrupts that hit it; quiet: "
+            "frames that printed nothing; printing: the frames that wrote a lift-off progress line (the UART write "
+            "waits for the transmitter); V2Frame::fly: the v2 motors' frame inside it, with the interrupts that hit it and over the calls no "
+            "interrupt hit (benchmark 2 times it in the probe)");
+  t.addNote("loop period: between entries of rr::ReadRunApp::runOnce (the main loop wakes on each 1 ms tick); "
+            "quiet: periods in which nothing was printed; the flood case is another bench");
+  t.addNote("records made on the host from the plant's sweeps (as benchmark 1): thesis curves at 12.4 V and "
+            "10.5 V with the sag offsets, model v2 fit + refine");
+  s.json["available"] = true;
+  s.tables.push_back(std::move(t));
+  return s;
+}
+
+#endif
+
+}  // namespace bench
