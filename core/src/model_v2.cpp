@@ -7,11 +7,11 @@ namespace tc {
 
 namespace {
 
-constexpr uint16_t kSaneMinMv = 6000;
-constexpr uint16_t kSaneMaxMv = 17500;
+constexpr uint16_t kSaneMinMv = kPackMinMv;  // 1S..6S: the reciprocal fits 16 bits down to 3 V
+constexpr uint16_t kSaneMaxMv = kPackMaxMv;
 constexpr uint16_t kStartMinQ4 = 800u * 16u;
 constexpr uint16_t kStartMaxQ4 = 1800u * 16u;
-constexpr int32_t kNewtonLimit = 1l << 21;  // |e| above: re-seed by division (jump > 1/128)
+constexpr int32_t kNewtonLimit = 1l << 20;  // |e| above: re-seed by division (jump > 1/128)
 
 bool saneMv(uint16_t mv) { return mv >= kSaneMinMv && mv <= kSaneMaxMv; }
 
@@ -70,6 +70,9 @@ TC_INLINE KnotPos knotPos(const ModelV2& m, uint16_t force_dg) {
     base = m.fine_knots;
   }
   uint32_t pos = mulU16(force_dg, inv);
+  // Small motors (one run, step < kV2MinStepDg): inv is 2^16 / step, 2^6 below the Q22 scale.
+  // force < 32 steps: pos < 2^21 before, < 2^29 after both shifts.
+  if (m.q16_inverse) pos <<= 6;
   pos += pos;
   pos += pos;
   KnotPos p;
@@ -94,6 +97,17 @@ TC_INLINE int16_t mulS16U16Hi(int16_t a, uint16_t b) {
   return static_cast<int16_t>(mulU16(static_cast<uint16_t>(a), b) >> 16);
 }
 
+// (a * b) / 2^15 for a signed a, rounded toward zero and saturated to +-16384. The shift by
+// 15 is a byte move, a 16-bit shift by one and one bit from the low half.
+TC_INLINE int16_t mulS16U16Shr15Sat(int16_t a, uint16_t b) {
+  const uint16_t mag = static_cast<uint16_t>(a < 0 ? -a : a);
+  const uint32_t p = mulU16(mag, b);  // < 2^31
+  uint16_t q = static_cast<uint16_t>(static_cast<uint16_t>(p >> 16) << 1);
+  q = static_cast<uint16_t>(q | (static_cast<uint16_t>(p) >> 15));
+  if (q > 16384) q = 16384;
+  return static_cast<int16_t>(a < 0 ? -static_cast<int16_t>(q) : static_cast<int16_t>(q));
+}
+
 // Sag at a knot position in 1/256 of 10 mV (< 2^16), linear between knots (origin: 0).
 TC_INLINE uint16_t sagAtQ8(const ModelV2& m, KnotPos p) {
   // (uint16_t casts before the shifts: 255 << 8 does not fit the AVR's 16-bit int.)
@@ -115,13 +129,13 @@ TC_INLINE uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flag
   return force_dg;
 }
 
-// 2^26 / mV from the filter's 2^28 / mV: once per frame. 2^26 / 6000 < 11185.
-TC_INLINE uint16_t recip26Of(uint16_t recip_q28) {
-  return static_cast<uint16_t>((recip_q28 + 2u) >> 2);
+// 2^26 / mV from the filter's 2^27 / mV: once per frame. 2^26 / 3000 < 22370.
+TC_INLINE uint16_t recip26Of(uint16_t recip_q27) {
+  return static_cast<uint16_t>((recip_q27 + 1u) >> 1);
 }
 
 // drive (512 us*mV) * recip26 (2^26 / mV) = (drive * 512 / mV) us * 2^17: the duty in 2^-17 us.
-// drive < 2^16, recip26 < 11185: product < 2^30.
+// drive < 2^16, recip26 < 22370: product < 2^31.
 TC_INLINE uint32_t dutyQ17(uint16_t drive, uint16_t recip26) { return mulU16(drive, recip26); }
 
 struct PwmRange {
@@ -131,7 +145,7 @@ struct PwmRange {
 
 TC_INLINE ForcePwmResult finishPwm(const ModelV2& m, uint32_t duty_q17, uint8_t flags,
                                    PwmRange limits) {
-  // start <= 1800 us (< 2^28 in 2^-17 us) + duty < 2^30 + 1/2 us to round: < 2^31. The
+  // start <= 1800 us (< 2^28 in 2^-17 us) + duty < 2^31 + 1/2 us to round: < 2^32. The
   // shift by 17 is a byte move and one 16-bit shift.
   const uint32_t pwm_q17 = m.start_q17_us + duty_q17 + 0x10000ul;
   const uint16_t pwm_us = static_cast<uint16_t>(static_cast<uint16_t>(pwm_q17 >> 16) >> 1);
@@ -159,14 +173,16 @@ bool ModelV2::finalize() {
   inv_step_q22 = 0;
   inv_coarse_q22 = 0;
   split_dg = 0;
-  rest_recip_q28 = 0;
+  rest_recip_q27 = 0;
   max_force_dg = 0;
   start_q17_us = 0;
+  q16_inverse = 0;
   const bool coarse = fine_knots < knots;
   const uint32_t split = static_cast<uint32_t>(fine_knots) * step_dg;
   const uint32_t top = split + static_cast<uint32_t>(knots - fine_knots) * coarse_step_dg;
   bool ok = start_q4_us >= kStartMinQ4 && start_q4_us <= kStartMaxQ4 &&
-            step_dg >= kV2MinStepDg && knots >= 2 && knots <= kV2MaxKnots && fine_knots >= 1 &&
+            step_dg >= (coarse ? kV2MinStepDg : kV2MinStepSmallDg) && knots >= 2 &&
+            knots <= kV2MaxKnots && fine_knots >= 1 &&
             fine_knots <= knots && (coarse ? coarse_step_dg >= kV2MinStepDg : coarse_step_dg == 0) &&
             top <= 65535u && saneMv(rest_mv) && (second_mv == 0 || saneMv(second_mv));
   if (ok) {
@@ -181,12 +197,14 @@ bool ModelV2::finalize() {
     drive_512usmv[k] = 0;
     sag_10mv[k] = 0;
   }
-  inv_step_q22 = static_cast<uint16_t>(((1ul << 22) + step_dg / 2) / step_dg);
+  q16_inverse = step_dg < kV2MinStepDg ? 1 : 0;
+  const uint32_t one = q16_inverse ? (1ul << 16) : (1ul << 22);
+  inv_step_q22 = static_cast<uint16_t>((one + step_dg / 2) / step_dg);
   if (coarse) inv_coarse_q22 = static_cast<uint16_t>(((1ul << 22) + coarse_step_dg / 2) / coarse_step_dg);
   split_dg = static_cast<uint16_t>(split);
   max_force_dg = static_cast<uint16_t>(top);
   start_q17_us = static_cast<uint32_t>(start_q4_us) << 13;
-  rest_recip_q28 = static_cast<uint16_t>(kRecipOne / rest_mv);
+  rest_recip_q27 = static_cast<uint16_t>(kRecipOne / rest_mv);
   return true;
 }
 
@@ -203,9 +221,10 @@ static void placeKnots(ModelV2& m, uint16_t fmax_dg) {
     m.split_dg = static_cast<uint16_t>(16u * fine);
     return;
   }
-  // One run: floor of fmax / 32, at least the minimum step; the last knot <= fmax.
+  // One run: floor of fmax / 32, at least the minimum step; the last knot <= fmax. Below
+  // kV2MinStepDg (curves under 211 g) the knot position uses the Q16 reciprocal.
   uint16_t step = static_cast<uint16_t>(fmax_dg / kV2MaxKnots);
-  if (step < kV2MinStepDg) step = kV2MinStepDg;
+  if (step < kV2MinStepSmallDg) step = kV2MinStepSmallDg;
   const uint16_t n = static_cast<uint16_t>(fmax_dg / step);
   m.step_dg = step;
   m.knots = static_cast<uint8_t>(n > kV2MaxKnots ? kV2MaxKnots : n);
@@ -221,11 +240,11 @@ void BusVoltageFilter::reset(uint16_t mv_now) {
   rem = 0;
   if (!saneMv(mv_now)) {
     mv = 0;
-    recip_q28 = 0;
+    recip_q27 = 0;
     return;
   }
   mv = mv_now;
-  recip_q28 = static_cast<uint16_t>(kRecipOne / mv_now);  // the one division
+  recip_q27 = static_cast<uint16_t>(kRecipOne / mv_now);  // the one division
 }
 
 void BusVoltageFilter::update(uint16_t sample_mv) {
@@ -245,19 +264,19 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
   rem = static_cast<uint8_t>(static_cast<uint8_t>(t) & mask);  // t - step * 2^shift
   if (step == 0) return;  // steady: the reciprocal is still right
   mv = static_cast<uint16_t>(mv + step);
-  // Newton step on r = 2^28 / mv: e = 2^28 - mv * r, r += r * e / 2^28.
-  // mv * r <= 17500 * 44739 < 2^30.
-  const int32_t e = static_cast<int32_t>(kRecipOne - mulU16(mv, recip_q28));
+  // Newton step on r = 2^27 / mv: e = 2^27 - mv * r, r += r * e / 2^27.
+  // mv * r <= 26000 * 44739 < 2^31.
+  const int32_t e = static_cast<int32_t>(kRecipOne - mulU16(mv, recip_q27));
   if (e > kNewtonLimit || e < -kNewtonLimit) {
-    recip_q28 = static_cast<uint16_t>(kRecipOne / mv);
+    recip_q27 = static_cast<uint16_t>(kRecipOne / mv);
     if (reseeds != 255) ++reseeds;
     return;
   }
-  // r * e / 2^28 = ((e / 2^8) * r / 2^16) / 2^4: |e / 2^8| <= 2^13, r < 2^16: |product| < 2^29.
+  // r * e / 2^27 = ((e / 2^8) * r / 2^16) / 2^3: |e / 2^8| <= 2^12, r < 2^16: |product| < 2^28.
   const int16_t e8 = static_cast<int16_t>(e >> 8);
   const uint16_t mag = static_cast<uint16_t>(e8 < 0 ? -e8 : e8);
-  const uint16_t corr = static_cast<uint16_t>(static_cast<uint16_t>(mulU16(mag, recip_q28) >> 16) >> 4);
-  recip_q28 = static_cast<uint16_t>(e8 < 0 ? recip_q28 - corr : recip_q28 + corr);
+  const uint16_t corr = static_cast<uint16_t>(static_cast<uint16_t>(mulU16(mag, recip_q27) >> 16) >> 3);
+  recip_q27 = static_cast<uint16_t>(e8 < 0 ? recip_q27 - corr : recip_q27 + corr);
 }
 
 // ---- Run time ------------------------------------------------------------------------------
@@ -270,7 +289,7 @@ TC_INLINE ForcePwmResult pwmFor(const ModelV2& model, uint16_t force_dg, uint16_
   if (model.max_force_dg == 0)  // finalize() sets it for every valid model, clear() zeroes it
     return ForcePwmResult{limits.min_us, kNotCalibrated};
   if (force_dg == 0) return ForcePwmResult{limits.min_us, kStopped};
-  if (flags & kVoltageInvalid) recip26 = recip26Of(model.rest_recip_q28);
+  if (flags & kVoltageInvalid) recip26 = recip26Of(model.rest_recip_q27);
   const uint16_t drive = driveAt(model, knotPos(model, clampForce(model, force_dg, flags)));
   return finishPwm(model, dutyQ17(drive, recip26), flags, limits);
 }
@@ -279,7 +298,7 @@ TC_INLINE ForcePwmResult pwmFor(const ModelV2& model, uint16_t force_dg, uint16_
 
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
                             const ForcePwmLimits& limits) {
-  return pwmFor(model, force_dg, recip26Of(bus.recip_q28), bus.isValid() ? 0 : kVoltageInvalid,
+  return pwmFor(model, force_dg, recip26Of(bus.recip_q27), bus.isValid() ? 0 : kVoltageInvalid,
                 PwmRange{limits.pwm_min_us, limits.pwm_max_us});
 }
 
@@ -287,7 +306,7 @@ void forceToPwmV2Frame(const ModelV2* models, const uint16_t* force_dg, uint8_t 
                        const BusVoltageFilter& bus, ForcePwmResult* out,
                        const ForcePwmLimits& limits) {
   const uint8_t flags = bus.isValid() ? 0 : kVoltageInvalid;
-  const uint16_t recip26 = recip26Of(bus.recip_q28);
+  const uint16_t recip26 = recip26Of(bus.recip_q27);
   const PwmRange range{limits.pwm_min_us, limits.pwm_max_us};  // in registers, not reloaded
   for (uint8_t i = 0; i < count; ++i) out[i] = pwmFor(models[i], force_dg[i], recip26, flags, range);
 }
@@ -297,9 +316,9 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
   if (model.max_force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
   if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
   uint8_t flags = 0;
-  uint16_t recip = bus.recip_q28;
+  uint16_t recip = bus.recip_q27;
   if (!bus.isValid()) {
-    recip = model.rest_recip_q28;
+    recip = model.rest_recip_q27;
     flags |= kVoltageInvalid;
   }
   const KnotPos p = knotPos(model, clampForce(model, force_dg, flags));
@@ -308,18 +327,17 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
     uint8_t ignored = 0;
     const KnotPos now = knotPos(model, clampForce(model, force_now_dg, ignored));
     // Extra drop expected at the command: d = sag(cmd) - sag(now), in 1/128 of 10 mV
-    // (|d| < 2^15). delta = d_mv / V in Q16 = d * (1.25 * 2^28 / mV) / 2^16: the factor
-    // 1.25 * recip fits 16 bits (< 55924 at 6 V).
+    // (|d| < 2^15). delta = d_mv / V in Q16 = d * (1.25 * 2^27 / mV) / 2^15: the factor
+    // 1.25 * recip fits 16 bits (< 55924 at 3 V). A predicted change of more than 25 % is
+    // not sag: saturated at 16384.
     const int16_t d_q7 = static_cast<int16_t>((sagAtQ8(model, p) >> 1) - (sagAtQ8(model, now) >> 1));
     const uint16_t recip_x125 = static_cast<uint16_t>(recip + (recip >> 2));
-    int16_t delta = mulS16U16Hi(d_q7, recip_x125);
-    if (delta > 16384) delta = 16384;  // a predicted change of more than 25 % is not sag
-    if (delta < -16384) delta = -16384;
+    const int16_t delta = mulS16U16Shr15Sat(d_q7, recip_x125);
     // duty / (1 - delta) ~ duty * (1 + delta + delta^2): error delta^3 (< 0.01 % at 5 %).
     const uint16_t mag = static_cast<uint16_t>(delta < 0 ? -delta : delta);
     const int16_t factor = static_cast<int16_t>(delta + static_cast<int16_t>(mulU16(mag, mag) >> 16));
     // duty * (1 + factor / 2^16), factor in -16384..20480. With duty = hi * 2^16 + lo:
-    // duty * factor / 2^16 = hi * factor + lo * factor / 2^16 (hi < 2^14): byte-aligned.
+    // duty * factor / 2^16 = hi * factor + lo * factor / 2^16 (hi < 2^15): byte-aligned.
     const uint16_t hi = static_cast<uint16_t>(duty_q17 >> 16);
     const uint16_t lo = static_cast<uint16_t>(duty_q17);
     const uint16_t fmag = static_cast<uint16_t>(factor < 0 ? -factor : factor);
@@ -363,9 +381,9 @@ const char* fitV2StatusText(FitV2Status status) {
     case FitV2Status::kOk: return "ok";
     case FitV2Status::kTooFewSamples: return "too few samples: sweep at least 8 PWM steps";
     case FitV2Status::kNoForce:
-      return "no force: the sweep never reached 13.2 g (motor not spinning or cell not tared?)";
+      return "no force: the sweep never reached 5 g (motor not spinning or cell not tared?)";
     case FitV2Status::kBadVoltage:
-      return "battery reading outside 6-17.5 V: check the monitor wiring";
+      return "battery reading outside 3-26 V: check the monitor wiring and the divider setting";
     case FitV2Status::kStartNotFound:
       return "start threshold not found: sweep finer (<= 10 us steps) from 1000 us to full force";
     case FitV2Status::kVoltagesTooClose:
@@ -490,7 +508,7 @@ FitV2Report ModelV2FitterBase::prepare() {
     e = b - 1;
   }
   rep.max_force_dg = samples_[n - 1].force_dg;
-  if (rep.max_force_dg < static_cast<int16_t>(2 * kV2MinStepDg)) {
+  if (rep.max_force_dg < static_cast<int16_t>(10 * kRecordMinForceG)) {
     rep.status = FitV2Status::kNoForce;
     return rep;
   }
@@ -677,7 +695,7 @@ bool modelV2FromCurve(ModelV2& out, double start_us, const double* drive_usv,
     if (!(drive_usv[i] >= drive_usv[i - 1]) || !(force_g[i] >= force_g[i - 1])) return false;
   }
   const double fmax_dg = force_g[count - 1] * 10.0;
-  if (!(fmax_dg >= 2.0 * kV2MinStepDg) || !(fmax_dg <= 65535.0)) return false;
+  if (!(fmax_dg >= 10.0 * kRecordMinForceG) || !(fmax_dg <= 10.0 * kRecordMaxForceG)) return false;
   const uint16_t fmax = static_cast<uint16_t>(fmax_dg);
   if (!(start_us > 0.0 && start_us < 4000.0) || !(rest_mv > 0.0 && rest_mv < 65535.0) ||
       !(second_mv >= 0.0 && second_mv < 65535.0))

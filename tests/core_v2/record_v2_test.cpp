@@ -71,7 +71,7 @@ bool sameModel(const tc::ModelV2& a, const tc::ModelV2& b) {
     return false;
   for (uint8_t k = 0; k < tc::kV2MaxKnots; ++k)
     if (a.drive_512usmv[k] != b.drive_512usmv[k] || a.sag_10mv[k] != b.sag_10mv[k]) return false;
-  return a.inv_step_q22 == b.inv_step_q22 && a.rest_recip_q28 == b.rest_recip_q28 &&
+  return a.inv_step_q22 == b.inv_step_q22 && a.rest_recip_q27 == b.rest_recip_q27 &&
          a.max_force_dg == b.max_force_dg && a.start_q17_us == b.start_q17_us;
 }
 

@@ -114,7 +114,7 @@ void run(State& s) {
     tc::forceToPwmV2Frame(s.models, cmd_dg, 4, bus, out, s.limits);
     Io::markEnd();
     emit16<Io>(bus.mv);
-    emit16<Io>(bus.recip_q28);
+    emit16<Io>(bus.recip_q27);
     for (uint8_t m = 0; m < 4; ++m) emitResult<Io>(out[m]);
 
     Io::markStart(kV2SingleCalls);
