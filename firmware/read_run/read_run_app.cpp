@@ -33,11 +33,12 @@ void sayMotor(uint8_t index) {
 
 void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
 
-// Why a motor is not armed: the decode status; for a v2 slot both copies' reasons.
+// Why a motor is not armed: the decode status (with the plausibility rule a record broke);
+// for a v2 slot both copies' reasons.
 void sayRecordStatus(const Motor& m) {
   say(TC_PSTR("not calibrated: "));
   if (m.layout != tc::SlotLayout::kModelV2) {
-    hal::Uart::print(tc::decodeStatusText(m.record));
+    fw::printRecordStatus(m.record, m.why);
     return;
   }
   say(TC_PSTR("v2 record, both copies bad ("));
@@ -48,6 +49,10 @@ void sayRecordStatus(const Motor& m) {
     hal::Uart::print(tc::decodeStatusText(m.v2_copy_status[copy]));
   }
   say(TC_PSTR(")"));
+  if (m.record == tc::DecodeStatus::kBadContent && !m.why.ok()) {
+    say(TC_PSTR(": "));
+    fw::printRecordStatus(m.record, m.why);
+  }
 }
 
 // Grams (floor) of a force in decigrams.
@@ -70,7 +75,7 @@ void sayV1Summary(const tc::MotorCalibration& cal) {
 
 // Start-up line of a v2 slot, after "motor N: ok": start threshold, the force reachable at
 // the sweep's resting voltage, the refining sweep's voltage, and a damaged other copy.
-void sayV2Summary(const Motor& m) {
+void sayV2Summary(const Motor& m, uint8_t index) {
   const tc::ModelV2& v2 = m.model.v2();
   say(TC_PSTR(", model v2 (effective voltage), start "));
   fw::printFixed(static_cast<int32_t>((static_cast<uint32_t>(v2.start_q4_us) * 10u + 8u) >> 4), 1);
@@ -81,6 +86,13 @@ void sayV2Summary(const Motor& m) {
   if (v2.second_mv != 0) {
     say(TC_PSTR(", refined at "));
     sayVolts(v2.second_mv);
+  }
+  if (tc::isSpareCopy(m.v2_copy)) {
+    // A store was cut short after its copy in another slot was complete.
+    say(TC_PSTR("; flying the copy kept in motor "));
+    fw::printUint(tc::spareHost(index, m.v2_copy));
+    say(TC_PSTR("'s slot (a store was cut short; the next gather_store store settles it)"));
+    return;
   }
   const uint8_t other = static_cast<uint8_t>(m.v2_copy ^ 1u);
   const tc::DecodeStatus other_status = m.v2_copy_status[other];
@@ -156,12 +168,19 @@ void ReadRunApp::printBanner() {
 uint8_t ReadRunApp::loadCalibration() {
   uint8_t calibrated = 0;
   any_v2_ = false;
+  // The board's divider first: counts -> volts, and the voltages a record may hold.
+  tc::readSettings<hal::Eeprom>(settings_);
+  monitor_ = tc::BatteryMonitor(settings_.batteryConfig());
+  const tc::RecordLimits limits = settings_.recordLimits();
+  say(TC_PSTR("battery monitor: "));
+  fw::printDivider(settings_);
+  fw::newline();
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
     // The loader fills the v1 calibration in place; a v2 model goes through this copy
     // (123 bytes of stack, start-up only) into the same storage.
     tc::ModelV2 v2;
-    const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(i, v2, m.model.resetToV1());
+    const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(i, v2, m.model.resetToV1(), limits);
     m.layout = load.layout;
     // Neither layout recognized: copy A's status is that of the version byte at the slot
     // start (erased or unknown), which both layouts share; the loader's "most telling copy"
@@ -170,6 +189,7 @@ uint8_t ReadRunApp::loadCalibration() {
     m.v2_copy = load.v2.copy;
     m.v2_copy_status[0] = load.v2.copy_status[0];
     m.v2_copy_status[1] = load.v2.copy_status[1];
+    m.why = load.why;
     if (load.layout == tc::SlotLayout::kModelV2 && load.status == tc::DecodeStatus::kOk) {
       m.model.setV2(v2);
       any_v2_ = true;
@@ -184,7 +204,7 @@ uint8_t ReadRunApp::loadCalibration() {
       ++calibrated;
       say(TC_PSTR("ok"));
       if (m.fliesV2()) {
-        sayV2Summary(m);
+        sayV2Summary(m, i);
       } else {
         sayV1Summary(m.model.v1());
       }
@@ -359,7 +379,7 @@ void ReadRunApp::flyMotor(Motor& m) {
     return;
   }
   if (m.fliesV2()) {
-    const uint16_t force_dg = static_cast<uint16_t>(m.force_g * 10u);  // <= 5000
+    const uint16_t force_dg = static_cast<uint16_t>(m.force_g * 10u);  // <= 50000
     // The filtered voltage reflects the sag of the filtered force: predict the step to the
     // command from the bench sag (equal in steady state, then the plain model).
     const uint16_t seen_dg = static_cast<uint16_t>(m.seen_force_acc >> bus_.shift);
@@ -506,6 +526,8 @@ void ReadRunApp::handleLine(char* line) {
     if (stream_) return;  // no prompt: the next line is a CSV row, and must start clean
   } else if (fw::equalsP(verb, TC_PSTR("rate"))) {
     commandRate(tokens, count);
+  } else if (fw::equalsP(verb, TC_PSTR("divider"))) {
+    commandDivider(tokens, count);
   } else {
     say(TC_PSTR("error: unknown command \""));
     hal::Uart::print(verb);
@@ -515,7 +537,7 @@ void ReadRunApp::handleLine(char* line) {
 }
 
 void ReadRunApp::commandHelp() {
-  sayLine(TC_PSTR("f G            all calibrated motors to G grams (0..500)"));
+  sayLine(TC_PSTR("f G            all calibrated motors to G grams (0..5000)"));
   sayLine(TC_PSTR("f N G          motor N (0..3) to G grams"));
   sayLine(TC_PSTR("stop           all motors to 0 g (1000 us)"));
   sayLine(TC_PSTR("status         per motor: force, pwm, battery, flags; v2 motors: headroom"));
@@ -523,6 +545,8 @@ void ReadRunApp::commandHelp() {
   sayLine(TC_PSTR("               hold (default 5000 ms), stop; any key aborts"));
   sayLine(TC_PSTR("stream on|off  CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s"));
   sayLine(TC_PSTR("rate HZ        ESC frame rate 50..400 Hz (motors stopped)"));
+  sayLine(TC_PSTR("divider [R1 R2] battery divider in ohm, R1 pack-A1, R2 A1-ground (default"));
+  sayLine(TC_PSTR("               100000 47000); setting it reloads the calibration (motors stopped)"));
   sayLine(TC_PSTR("failsafe: while a motor runs, 500 ms without a line (an empty line will do)"));
   sayLine(TC_PSTR("stops all motors"));
 }
@@ -549,7 +573,7 @@ void ReadRunApp::commandForce(char** tokens, uint8_t count) {
          fw::parseInt(tokens[2], 0, kForceMaxG, force_g);
   }
   if (!ok) {
-    sayLine(TC_PSTR("error: usage: f GRAMS (all motors) or f MOTOR GRAMS, GRAMS 0..500, MOTOR 0..3"));
+    sayLine(TC_PSTR("error: usage: f GRAMS (all motors) or f MOTOR GRAMS, GRAMS 0..5000, MOTOR 0..3"));
     return;
   }
   if (motor >= 0) {
@@ -640,7 +664,7 @@ void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
                   (count < 3 || parseMs(tokens[2], ramp_ms)) &&
                   (count < 4 || parseMs(tokens[3], hold_ms));
   if (!ok) {
-    sayLine(TC_PSTR("error: usage: liftoff GRAMS [RAMP_MS] [HOLD_MS], GRAMS 1..500, times "
+    sayLine(TC_PSTR("error: usage: liftoff GRAMS [RAMP_MS] [HOLD_MS], GRAMS 1..5000, times "
                     "0..60000 ms"));
     return;
   }
@@ -709,6 +733,26 @@ void ReadRunApp::commandRate(char** tokens, uint8_t count) {
   say(TC_PSTR("frame rate "));
   fw::printUint(frame_hz_);
   sayLine(TC_PSTR(" Hz"));
+}
+
+}  // namespace rr
+
+namespace rr {
+
+// `divider [R1 R2]`: the battery monitor's divider (thrustcal/board_settings.hpp). A new value
+// is stored, then the calibration is loaded again against it: volts come from counts through
+// it, and a record's voltages must lie within its full scale.
+void ReadRunApp::commandDivider(char** tokens, uint8_t count) {
+  if (count > 1 && isRunning()) {
+    sayLine(TC_PSTR("error: motors are running; send stop first, then set the divider"));
+    return;
+  }
+  if (!fw::commandDivider(tokens, count, settings_)) return;
+  const uint8_t shift = bus_.shift;
+  bus_ = tc::BusVoltageFilter();  // its millivolts came through the old divider
+  bus_.shift = shift;
+  bus_sample_sane_ = false;
+  loadCalibration();
 }
 
 }  // namespace rr

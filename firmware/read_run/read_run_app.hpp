@@ -19,6 +19,12 @@
 // Safety rules, all enforced here:
 //  - a motor without a valid record (erased, bad version, bad CRC, bad content; for v2: both
 //    copies bad) is never armed: it is held at 1000 us and every command to it is refused;
+//    a record that cannot be right (thrustcal/plausibility.hpp: flat, non-monotone, pulses
+//    outside the ESC range, voltages outside the monitor's range...) is bad content, and the
+//    start-up report and `status` say which rule it broke;
+//  - the battery monitor's divider is a stored board setting (thrustcal/board_settings.hpp,
+//    `divider` command, default 100k/47k): counts -> volts and the voltage range a record may
+//    hold follow it;
 //  - failsafe: while any motor is commanded above 0 g, 500 ms without a complete command line
 //    (any line, even an empty or rejected one, is a keep-alive) stops all motors;
 //  - the lift-off sequence is its own command source (no failsafe while it runs), and any
@@ -41,7 +47,9 @@
 
 #include "console.hpp"
 #include "hal/hal.hpp"
+#include "record_report.hpp"
 #include "thrustcal/battery_monitor.hpp"
+#include "thrustcal/board_settings.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/median_filter.hpp"
@@ -58,7 +66,7 @@ static_assert(kMotors == hal::kEscChannels, "one ESC output per calibration slot
 constexpr uint16_t kArmMs = 2000;           // ESCs see 1000 us this long before any command
 constexpr uint16_t kFailsafeMs = 500;       // no command line this long while running -> stop
 constexpr uint16_t kStopPwmUs = 1000;       // ESC "motor off" pulse
-constexpr uint16_t kForceMaxG = tc::kCurveGrams;
+constexpr uint16_t kForceMaxG = tc::kRecordMaxForceG;  // 5 kg: v1 curves saturate at 500 g
 constexpr uint16_t kBatteryWindow = 101;    // thesis: median of 101 readings
 constexpr uint8_t kBatterySamplesPerFrame = 4;  // v2 filter input: mean of the middle two
 constexpr uint16_t kLiftoffDefaultRampMs = 2000;
@@ -75,6 +83,7 @@ struct Motor {
   tc::DecodeStatus record = tc::DecodeStatus::kErased;  // kOk: `model` is loaded and flown
   uint8_t v2_copy = tc::kNoCopy;                 // v2: copy flown (0 = A, 1 = B)
   tc::DecodeStatus v2_copy_status[2] = {tc::DecodeStatus::kErased, tc::DecodeStatus::kErased};
+  tc::Plausibility why;             // record kBadContent: the plausibility rule it broke
   uint16_t force_g = 0;             // commanded force
   uint16_t pwm_us = kStopPwmUs;     // last pulse written to the ESC
   uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
@@ -113,6 +122,7 @@ class ReadRunApp {
   Mode mode() const { return mode_; }
   bool isRunning() const;               // any motor commanded above 0 g
   uint16_t batteryMv() const { return battery_mv_; }  // median reading, uncompensated
+  const tc::BoardSettings& settings() const { return settings_; }
   // v2 motors' voltage: this frame's reading through the IIR filter, and its reciprocal.
   const tc::BusVoltageFilter& busFilter() const { return bus_; }
   bool busSampleSane() const { return bus_sample_sane_; }  // this frame's reading was usable
@@ -132,6 +142,7 @@ class ReadRunApp {
   void commandLiftoff(char** tokens, uint8_t count);
   void commandStream(char** tokens, uint8_t count);
   void commandRate(char** tokens, uint8_t count);
+  void commandDivider(char** tokens, uint8_t count);
 
   bool requireArmable(uint8_t index);  // prints the refusal when not
   void stopAll();                      // forces to 0, every ESC to 1000 us at once
@@ -151,7 +162,8 @@ class ReadRunApp {
 
   Motor motors_[kMotors];
   tc::MedianFilter<kBatteryWindow> battery_counts_;
-  tc::BatteryMonitor monitor_;
+  tc::BoardSettings settings_;      // the divider (EEPROM), loaded with the calibration
+  tc::BatteryMonitor monitor_;      // configured from settings_
   tc::BusVoltageFilter bus_;        // runs only while a slot flies v2 (any_v2_)
   bool bus_sample_sane_ = false;
   bool any_v2_ = false;             // some slot holds a valid v2 model

@@ -497,15 +497,25 @@ TEST_F(GatherStore, TareAtTheAdcRailIsRefused) {
 }
 
 TEST_F(GatherStore, BatteryReadingOutsideTheSaneRangeAbortsTheSweep) {
-  plant_.vbat_v = 4.0;  // divider unplugged or a flat pack
-  hal::fake::advanceMs(gs::kArmMs);
-  calibrateAndTare();
-  const std::string out = sweep();
-  EXPECT_EQ(app_->lastSweepEnd(), gs::SweepEnd::kBattery);
-  EXPECT_NE(out.find("# aborted: battery reads 4.005 V, outside 6.000 V..17.500 V"),
-            std::string::npos)
-      << out;
-  EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+  struct Row {
+    double vbat_v;
+    const char* message;
+  };
+  const Row rows[] = {
+      {2.5, "# aborted: battery reads 2.506 V, outside 3.000 V..15.637 V"},    // below one cell
+      {17.0, "# aborted: battery reads 15.638 V, outside 3.000 V..15.637 V"},  // the ADC's rail
+  };
+  for (const Row& r : rows) {
+    SCOPED_TRACE(r.vbat_v);
+    SetUp();
+    plant_.vbat_v = r.vbat_v;  // divider unplugged, a flat pack, or a pack above the divider
+    hal::fake::advanceMs(gs::kArmMs);
+    calibrateAndTare();
+    const std::string out = sweep();
+    EXPECT_EQ(app_->lastSweepEnd(), gs::SweepEnd::kBattery);
+    EXPECT_NE(out.find(r.message), std::string::npos) << out;
+    EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+  }
 }
 
 TEST_F(GatherStore, AbortLinesKeepTheCapturedLogACsvWithComments) {

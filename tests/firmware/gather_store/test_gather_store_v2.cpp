@@ -297,10 +297,12 @@ TEST_F(GatherStoreV2, StoreOneOntoAV2SlotReplacesItWithTheThesisRecordAndSaysSo)
   command("store v2");
   // when
   const Response out = command("store 1");
-  // then
-  ASSERT_EQ(out.lines.size(), 1u);
+  // then: stored, and model v2 stayed loadable (a copy in slot 1) until the record was whole
+  ASSERT_EQ(out.lines.size(), 2u);
   EXPECT_TRUE(startsWith(out.lines[0], "stored curve 1 of motor 0")) << out.lines[0];
   EXPECT_NE(out.lines[0].find("replaced model v2"), std::string::npos) << out.lines[0];
+  EXPECT_EQ(out.lines[1], "# power-fail safe: the old calibration stayed loadable (a copy in motor 1's "
+                          "slot) until the new one was complete");
   EXPECT_EQ(wroteBytes(out), static_cast<int>(out.physical_writes));
   tc::ModelV2 model;
   const tc::SlotLoad slot = load(0, model);
@@ -398,7 +400,7 @@ TEST_F(GatherStoreV2, StoreV2WithoutAForceIsRefusedWithTheReason) {
   // then
   ASSERT_EQ(out.lines.size(), 1u);
   EXPECT_EQ(out.lines[0],
-            "error: model v2 cannot use the last sweep: the force never reached 13.2 g: motor "
+            "error: model v2 cannot use the last sweep: the force never reached 5 g: motor "
             "not spinning or cell not tared?; nothing changed");
   EXPECT_EQ(eepromSnapshot(), before);
 }

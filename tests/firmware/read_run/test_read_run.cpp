@@ -480,10 +480,11 @@ TEST_F(ReadRun, LiftoffIsRefusedWhileMotorsRun) {
 
 TEST_F(ReadRun, BadInputGetsOneErrorLineAndChangesNothing) {
   const char* bad_lines[] = {
-      "f",           "f 501",        "f -1",          "f 4 100",     "f 1 2 3",
+      "f",           "f 5001",       "f -1",          "f 4 100",     "f 1 2 3",
       "f abc",       "f 1 x",        "liftoff",       "liftoff 0",   "liftoff 300 70000",
       "liftoff 9 1 2 3", "rate 49",  "rate 401",      "rate",        "rate fast",
       "stream maybe", "stream",      "xyz",           "F 100",
+      "divider 100000", "divider 100000 0", "divider 1 2 3", "divider 100000 22000",  // running
       "0123456789012345678901234567890123456789012345678901234567890",
   };
   // given: motors running at 200 g
