@@ -25,7 +25,8 @@ const char* implausibleText(Implausible rule) {
 
 namespace {
 
-Plausibility fail(Implausible rule, PlausibilityUnit unit, int32_t value, int32_t lo, int32_t hi,
+// Not inlined: one call per rule keeps the AVR images small.
+__attribute__((noinline)) Plausibility fail(Implausible rule, PlausibilityUnit unit, int32_t value, int32_t lo, int32_t hi,
                   uint8_t curve = 0, int8_t index = -1) {
   Plausibility p;
   p.rule = rule;
@@ -38,7 +39,7 @@ Plausibility fail(Implausible rule, PlausibilityUnit unit, int32_t value, int32_
   return p;
 }
 
-Plausibility malformed(uint8_t curve = 0) {
+__attribute__((noinline)) Plausibility malformed(uint8_t curve = 0) {
   Plausibility p;
   p.rule = Implausible::kMalformed;
   p.curve = curve;
