@@ -49,15 +49,6 @@ std::string describe(const Loaded& l) {
          " copy " + std::to_string(l.load.v2.copy);
 }
 
-tc::ModelV2 model(double exponent, double start_us, double rest_v) {
-  SyntheticMotor motor;
-  motor.exponent = exponent;
-  motor.start_us = start_us;
-  tc::ModelV2 m = tc_test::fittedModel(motor, rest_v);
-  EXPECT_TRUE(m.isPresent());
-  return m;
-}
-
 bool noValidSpare() {
   for (uint8_t s = 0; s < tc::kMotorSlots; ++s) {
     tc::ModelV2 m;
@@ -69,9 +60,9 @@ bool noValidSpare() {
 class EepromStore : public ::testing::Test {
  public:  // the setup tables below reach the models through the fixture
   void SetUp() override { Ee::erase(); }
-  const tc::ModelV2 m1 = model(1.8, 1097, 12.4);
-  const tc::ModelV2 m2 = model(1.6, 1080, 12.4);
-  const tc::ModelV2 m3 = model(2.0, 1110, 11.1);
+  const tc::ModelV2 m1 = tc_test::motorModel(1.8, 1097, 12.4);
+  const tc::ModelV2 m2 = tc_test::motorModel(1.6, 1080, 12.4);
+  const tc::ModelV2 m3 = tc_test::motorModel(2.0, 1110, 11.1);
   const tc::MotorCalibration cal_a = tc_test::thesisRecord(SyntheticMotor(), 12.4, 10.9);
   const tc::MotorCalibration cal_b = [] {
     SyntheticMotor m;
@@ -84,6 +75,25 @@ class EepromStore : public ::testing::Test {
     tc::writeRecord<Ee>(slot, copy);
   }
 };
+
+// The image a v1 -> v2 switch of motor 0 (to `m`) leaves when cut while its spare copy flies
+// over the still-whole v1 record; empty when no cut point does.
+std::vector<uint8_t> interruptedSwitch(const tc::ModelV2& m) {
+  const std::vector<uint8_t> start = Ee::image();
+  Ee::restore(start);  // counts from here
+  tc::storeModelV2<Ee>(0, m);
+  const int32_t total = static_cast<int32_t>(Ee::update_calls);
+  for (int32_t k = 0; k <= total; ++k) {
+    Ee::restore(start);
+    Ee::budget = k;
+    tc::storeModelV2<Ee>(0, m);
+    Ee::budget = -1;
+    tc::ModelV2 got;
+    if (tc::isSpareCopy(tc::readModelV2<Ee>(0, got).copy) && Ee::bytes[0] == tc::kLayoutVersion1)
+      return Ee::image();
+  }
+  return {};
+}
 
 // Runs `store` on `before` cut after every updateByte call (plus once complete), and checks
 // that `slot` loads `old_cal` or `new_cal` (or, when `nothing_ok`, nothing), the other slots
@@ -126,10 +136,12 @@ int cutEverywhere(const std::vector<uint8_t>& before, uint8_t slot, Calibration 
         const Loaded o = loadSlot(s);
         EXPECT_EQ(o.load.status, others[s].load.status) << "slot " << int(s);
         EXPECT_EQ(o.load.layout, others[s].load.layout) << "slot " << int(s);
-        if (others[s].load.status == tc::DecodeStatus::kOk && o.load.layout == tc::SlotLayout::kModelV2)
+        if (others[s].load.status == tc::DecodeStatus::kOk && o.load.layout == tc::SlotLayout::kModelV2) {
           EXPECT_TRUE(tc_test::sameModel(o.v2, others[s].v2)) << "slot " << int(s);
-        if (others[s].load.status == tc::DecodeStatus::kOk && o.load.layout == tc::SlotLayout::kThesisV1)
+        }
+        if (others[s].load.status == tc::DecodeStatus::kOk && o.load.layout == tc::SlotLayout::kThesisV1) {
           EXPECT_TRUE(tc_test::sameCalibration(*o.v1, *others[s].v1)) << "slot " << int(s);
+        }
       }
       // recovery (the next store's first step) keeps what flies and leaves no spare
       tc::recoverSlots<Ee>();
@@ -258,20 +270,7 @@ TEST_F(EepromStore, RecoveryCutAnywhereKeepsFlyingTheModelOfAnInterruptedSwitch)
   // given: a v1 -> v2 switch of motor 0 cut right after its spare copy was complete
   putV1(0, cal_a);
   putV1(2, cal_b);
-  const std::vector<uint8_t> start = Ee::image();
-  Ee::restore(start);  // counts from here
-  tc::storeModelV2<Ee>(0, m1);
-  const int32_t total = static_cast<int32_t>(Ee::update_calls);
-  std::vector<uint8_t> interrupted;
-  for (int32_t k = 0; k <= total && interrupted.empty(); ++k) {
-    Ee::restore(start);
-    Ee::budget = k;
-    tc::storeModelV2<Ee>(0, m1);
-    Ee::budget = -1;
-    tc::ModelV2 m;
-    if (tc::isSpareCopy(tc::readModelV2<Ee>(0, m).copy) && Ee::bytes[0] == tc::kLayoutVersion1)
-      interrupted = Ee::image();
-  }
+  const std::vector<uint8_t> interrupted = interruptedSwitch(m1);
   ASSERT_FALSE(interrupted.empty()) << "no cut point left the spare flying over the v1 record";
   EXPECT_TRUE(holds(loadSlot(0), Calibration{nullptr, &m1}));
   // when / then: recovery cut anywhere flies m1 throughout and settles it into copy A
@@ -288,18 +287,9 @@ TEST_F(EepromStore, AThesisRecordOverAHostDoesNotLoseAnInterruptedSwitchOfAnothe
   putV1(0, cal_a);
   putV1(2, cal_b);
   putV1(3, cal_b);
-  const std::vector<uint8_t> start = Ee::image();
-  Ee::restore(start);  // counts from here
-  tc::storeModelV2<Ee>(0, m1);
-  const int32_t total = static_cast<int32_t>(Ee::update_calls);
-  for (int32_t k = total - 3; k > 0; --k) {
-    Ee::restore(start);
-    Ee::budget = k;
-    tc::storeModelV2<Ee>(0, m1);
-    Ee::budget = -1;
-    tc::ModelV2 m;
-    if (tc::isSpareCopy(tc::readModelV2<Ee>(0, m).copy)) break;
-  }
+  const std::vector<uint8_t> interrupted = interruptedSwitch(m1);
+  ASSERT_FALSE(interrupted.empty());
+  Ee::restore(interrupted);
   tc::ModelV2 m;
   ASSERT_EQ(tc::spareHost(0, tc::readModelV2<Ee>(0, m).copy), 1);
   // when: a thesis record is stored into slot 1

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "synthetic_motor.hpp"
+#include "test_records.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/plausibility.hpp"
@@ -52,23 +53,7 @@ std::string describe(const tc::Plausibility& p) {
 
 // The thesis record of a synthetic motor swept 1000..2000 us at 12.4 V (curve 1) and 10.9 V
 // (curve 2), with a realistic sag table.
-tc::MotorCalibration thesisCalibration() {
-  SyntheticMotor motor;
-  tc::MotorCalibration cal;
-  for (int c = 0; c < 2; ++c) {
-    const double v = c == 0 ? 12.4 : 10.9;
-    tc::CurveBuilder<128> builder;
-    for (uint16_t pwm = 1000; pwm <= 2000; pwm += 10)
-      builder.add(pwm, static_cast<int16_t>(std::lround(motor.forceG(pwm, v) * 10)));
-    tc::ForceCurveBase& curve = c == 0 ? static_cast<tc::ForceCurveBase&>(cal.first) : cal.second;
-    EXPECT_EQ(builder.build(curve).status, tc::BuildStatus::kOk);
-    curve.start_mv = static_cast<uint16_t>(v * 1000);
-    curve.finalize();
-  }
-  cal.sag.base_pwm_us = 1000;
-  for (uint8_t i = 0; i < tc::kSagBins; ++i) cal.sag.offset_mv[i] = static_cast<int16_t>(i * 40);
-  return cal;
-}
+tc::MotorCalibration thesisCalibration() { return tc_test::thesisRecord(SyntheticMotor(), 12.4, 10.9); }
 
 tc::ModelV2 fittedModel() {
   SyntheticMotor motor;

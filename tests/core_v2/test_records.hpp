@@ -19,11 +19,13 @@ namespace tc_test {
 // it may leave a torn byte (a garbage value) behind.
 struct CutEeprom {
   static uint8_t bytes[4096];
+  static uint32_t physical_writes;  // bytes whose value changed
   static uint32_t update_calls;
   static int32_t budget;  // calls still accepted; < 0: unlimited
   static int16_t torn;    // value left by the first refused call; < 0: none
   static void erase() {
     std::memset(bytes, 0xFF, sizeof bytes);
+    physical_writes = 0;
     update_calls = 0;
     budget = -1;
     torn = -1;
@@ -46,10 +48,14 @@ struct CutEeprom {
       return;
     }
     if (budget > 0) --budget;
-    bytes[addr] = value;
+    if (bytes[addr] != value) {
+      bytes[addr] = value;
+      ++physical_writes;
+    }
   }
 };
 inline uint8_t CutEeprom::bytes[4096];
+inline uint32_t CutEeprom::physical_writes = 0;
 inline uint32_t CutEeprom::update_calls = 0;
 inline int32_t CutEeprom::budget = -1;
 inline int16_t CutEeprom::torn = -1;
@@ -71,6 +77,14 @@ inline tc::MotorCalibration thesisRecord(const SyntheticMotor& motor, double v1,
   cal.sag.base_pwm_us = 1000;
   for (uint8_t i = 0; i < tc::kSagBins; ++i) cal.sag.offset_mv[i] = static_cast<int16_t>(i * 40);
   return cal;
+}
+
+// The v2 model of a synthetic motor fitted from one sweep at rest_v.
+inline tc::ModelV2 motorModel(double exponent, double start_us, double rest_v) {
+  SyntheticMotor motor;
+  motor.exponent = exponent;
+  motor.start_us = start_us;
+  return fittedModel(motor, rest_v);
 }
 
 inline bool sameCalibration(const tc::MotorCalibration& a, const tc::MotorCalibration& b) {

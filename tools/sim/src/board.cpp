@@ -1,4 +1,5 @@
 #include "sim/board.hpp"
+#include "sim/lsan_simavr.hpp"
 
 #include <fmt/format.h>
 
