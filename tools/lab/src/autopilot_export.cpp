@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 constexpr double kTie = 1e-3;        // relative RSS within which the autopilot's default wins
 constexpr double kCellMaxV = 4.35;   // the highest per-cell voltage a LiPo (HV) is charged to
 constexpr int kMinRows = 10;
-constexpr double kMinForceG = 20;
+constexpr double kMinForceG = 1;  // a Crazyflie motor makes 12 g: the rest is the PWM span check
 constexpr double kMinSpanUs = 100;
 
 // One way to set the autopilot up: its parameters as written, and the force it assumes.
@@ -695,6 +695,7 @@ std::shared_ptr<ExportOptions> addExportOptions(CLI::App* x) {
         throw CLI::ValidationError(name, "writes the board's EEPROM image; --to writes an autopilot's parameter file: "
                                          "use one or the other");
   });
+  x->description(x->get_description() + "; or, with --to, fit an autopilot's thrust model and write its parameters");
   x->footer(x->get_footer() +
             "\nAutopilots: thrustcal lab export sweep.csv --to ardupilot -o quad.parm [--auw-g 1450 --motors 4] "
             "[--plot fit]\n  (px4: QGroundControl .params; betaflight: CLI set lines; docs/autopilot.md)");
