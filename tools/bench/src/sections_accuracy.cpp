@@ -46,8 +46,8 @@ Section accuracySection(const AccuracyConfig& config) {
                         "{:.1f} V and bench supply at {:.1f} V",
                         c.sweep.pwm_min_us, c.sweep.pwm_max_us, c.sweep.step_us, c.sweep.settle_ms,
                         c.cal_high_v, c.cal_low_v));
-  t.addNote("ArduPilot-style: parameters fitted per motor to both sweeps (better than one set for "
-            "all motors, as ArduPilot flies); voltage = the monitor reading, as for the others");
+  t.addNote("ArduPilot: its thrust model as lab export --to ardupilot computes it, fitted per motor to both "
+            "sweeps (better than one set for all motors, as ArduPilot flies); voltage = the monitor reading");
   s.json["targets"] = {{"v2_rms_pct_max", 1.0},
                        {"v2_max_pct_max", 3.0},
                        {"outside_rms_ratio_min", 3.0}};
