@@ -291,7 +291,7 @@ void fuzzImage(const std::string& image, const std::string& prompt, uint64_t see
       if (board.escPulseUs(ch) > 1000.6) {
         std::string dump = fmt::format("now {:.4f}\n", board.timeS());
         int shown = 0;
-        for (auto it = log.pulses.rbegin(); it != log.pulses.rend() && shown < 12; ++it)
+        for (auto it = log.pulses().rbegin(); it != log.pulses().rend() && shown < 12; ++it)
           if (it->channel == ch) {
             dump += fmt::format("  {:.1f} us ending {:.4f}\n", it->width_us, it->end_s);
             ++shown;

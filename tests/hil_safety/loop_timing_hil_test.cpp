@@ -119,7 +119,7 @@ TEST(LoopTiming, AStopLineTakesEffectAtTheNextFrameWhileMoreLinesKeepComing) {
   rr.board.runFor(1.0);
   // then: no pulse above 1000 us starts more than a frame (20 ms) after "f 0" arrived
   double last_wide_start = -1;
-  for (const auto& p : rr.log.pulses)
+  for (const auto& p : rr.log.pulses())
     if (p.width_us > 1000.6) last_wide_start = std::max(last_wide_start, p.end_s - p.width_us * 1e-6);
   EXPECT_LE(last_wide_start - t_f0, 0.021) << "the motors kept running after f 0";
 }

@@ -7,6 +7,7 @@
 #include <regex>
 
 #include "safety_support.hpp"
+#include "sim/elf_symbols.hpp"
 #include "sim/rigs.hpp"
 
 extern "C" {

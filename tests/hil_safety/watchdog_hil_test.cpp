@@ -24,6 +24,8 @@ struct HangCase {
   Hang how;
 };
 
+void PrintTo(const HangCase& c, std::ostream* os) { *os << c.name; }
+
 class ReadRunHang : public ::testing::TestWithParam<HangCase> {};
 
 TEST_P(ReadRunHang, StopsEveryMotorWithin100MsAndNothingSpinsAfterTheResetUntilCommanded) {
@@ -127,6 +129,8 @@ struct CauseCase {
   sim::ResetKind kind;
   const char* line;
 };
+
+void PrintTo(const CauseCase& c, std::ostream* os) { *os << c.name; }
 
 class ResetCause : public ::testing::TestWithParam<CauseCase> {};
 
