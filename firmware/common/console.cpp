@@ -316,8 +316,11 @@ void printHex2(uint8_t value) {
 void printResetCause() {
   const uint8_t flags = hal::Watchdog::resetFlags();
   hal::Uart::printP(TC_PSTR("reset: "));
-  if ((flags & 0x1F) == 0) {
-    hal::Uart::printP(TC_PSTR("power-on or external (a bootloader cleared the reset flags)"));
+  if ((flags & 0x1F) == 0) {  // a bootloader cleared MCUSR
+    hal::Uart::printP((flags & hal::Watchdog::kWasRunning)
+                          ? TC_PSTR("watchdog or external while running (a bootloader cleared "
+                                    "the reset flags)")
+                          : TC_PSTR("power-on or external (a bootloader cleared the reset flags)"));
     newline();
     return;
   }
@@ -341,9 +344,9 @@ void printResetCause() {
   newline();
 }
 
-void printHealth(const LineReader& reader) {
+void printHealth(const LineReader& reader, void (*yield)()) {
   hal::Uart::printP(TC_PSTR("stack: "));
-  printUint(hal::Stack::untouchedBytes());
+  printUint(hal::Stack::untouchedBytes(yield));
   hal::Uart::printP(TC_PSTR(" of "));
   printUint(hal::Stack::sizeBytes());
   hal::Uart::printP(reader.strict() ? TC_PSTR(" bytes never used; strict on; ")

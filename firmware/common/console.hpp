@@ -121,6 +121,7 @@ void newline();  // "\r\n"
 //   "reset: watchdog" (power-on, external, brown-out, JTAG; several comma-separated)
 void printResetCause();
 //   "stack: 1234 of 2086 bytes never used; strict off; 0 lines rejected"
-void printHealth(const LineReader& reader);
+// `yield` is passed to hal::Stack::untouchedBytes (its scan takes about 1.5 ms).
+void printHealth(const LineReader& reader, void (*yield)() = nullptr);
 
 }  // namespace fw

@@ -710,7 +710,7 @@ void ReadRunApp::commandStatus() {
   say(TC_PSTR(", failsafe trips "));
   fw::printUint(failsafe_trips_);
   fw::newline();
-  fw::printHealth(line_);
+  fw::printHealth(line_, &ReadRunApp::serviceHook);  // frames go on during the stack scan
 }
 
 void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {

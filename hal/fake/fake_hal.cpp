@@ -209,7 +209,10 @@ void Watchdog::start() { state().watchdog_started = true; }
 void Watchdog::kick() { ++state().watchdog_kicks; }
 uint8_t Watchdog::resetFlags() { return state().reset_flags; }
 uint16_t Stack::sizeBytes() { return state().stack_size; }
-uint16_t Stack::untouchedBytes() { return state().stack_untouched; }
+uint16_t Stack::untouchedBytes(void (*yield)()) {
+  if (yield != nullptr) yield();
+  return state().stack_untouched;
+}
 
 }  // namespace hal
 

@@ -3,14 +3,21 @@
 //
 // A hang is injected into the real image by patching its flash: the entry of the main loop's
 // function becomes "rjmp ." (interrupts on: the timer, UART and ADC interrupts keep running)
-// or "cli; rjmp ." (interrupts off). Time to stop = from the patch to the end of the last ESC
-// pulse wider than 1050 us, on any channel. At a reset the chip releases every pin: the pulse
+// or "cli; rjmp ." (interrupts off). Time to stop = from the moment the program runs into the
+// patch to the end of the last ESC pulse wider than 1050 us, on any channel. At a reset the chip releases every pin: the pulse
 // in progress ends there (sim::Board models that; simavr does not raise the pin change).
 // After the reset the patch is taken out again (a transient fault) and the image boots anew.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "safety_support.hpp"
+#include "sim/intel_hex.hpp"
 #include "sim/rigs.hpp"
+
+extern "C" {
+#include <simavr/sim_avr.h>
+}
 
 namespace {
 
@@ -41,9 +48,10 @@ TEST_P(ReadRunHang, StopsEveryMotorWithin100MsAndNothingSpinsAfterTheResetUntilC
   rr.board.addResetListener([&](uint64_t) { safety::unpatch(rr.board, patch); });
 
   // when: the main loop hangs
-  const double t_hang = rr.board.timeS();
   patch = safety::hangFunction(rr.board, elf, "rr::ReadRunApp::runOnce()", GetParam().how);
   rr.board.runFor(0.5);
+  const double t_hang = *patch.hung_at_s;  // when the loop ran into the patch
+  ASSERT_GE(t_hang, 0.0);
 
   // then: the watchdog reset the chip, and no pulse wider than 1050 us ended later than 100 ms
   // after the hang
@@ -97,10 +105,11 @@ TEST_P(GatherStoreHang, StopsTheSweepingMotorWithin100Ms) {
   rig.board.addResetListener([&](uint64_t) { safety::unpatch(rig.board, patch); });
 
   // when: the ADC read the sweep waits in hangs
-  const double t_hang = rig.board.timeS();
   patch = safety::hangFunction(rig.board, hil::imagePath("gather_store"),
                                "hal::Adc::readCounts(unsigned char)", GetParam().how);
   rig.board.runFor(0.5);
+  const double t_hang = *patch.hung_at_s;  // the next ADC read (after the step's settling)
+  ASSERT_GE(t_hang, 0.0);
 
   // then
   ASSERT_EQ(rig.board.resets(), 1);
@@ -122,6 +131,40 @@ INSTANTIATE_TEST_SUITE_P(Table, GatherStoreHang,
                            return info.param.how == Hang::kInterruptsOn ? "InterruptsOn"
                                                                         : "InterruptsOff";
                          });
+
+// Behind the stock Mega2560 bootloader (stk500v2) a watchdog reset runs the bootloader first: it
+// clears MCUSR, its shortcut back to the program misses (EIND = 1: the CPU runs through erased
+// flash into the bootloader again), it waits its second for an upload, then starts the program.
+// The motors stay stopped all along, and the boot line still tells a reset while running.
+TEST(WatchdogThroughTheBootloader, KeepsTheMotorsStoppedAndSaysItResetWhileRunning) {
+  HIL_REQUIRE_IMAGE("read_run");
+  const std::string hex =
+      "/usr/share/arduino/hardware/arduino/avr/bootloaders/stk500v2/stk500boot_v2_mega2560.hex";
+  if (!std::filesystem::exists(hex)) GTEST_SKIP() << hex << " missing (apt-get install arduino-core-avr)";
+  // given: read_run with the bootloader in the boot section, reset vector there (BOOTRST)
+  safety::ReadRunBoard rr(safety::calibratedEeprom());
+  const std::vector<uint8_t> flash = sim::readIntelHexFile(hex, 256 * 1024);
+  const uint32_t boot = 0x3E000;
+  rr.board.patchFlash(boot, std::vector<uint8_t>(flash.begin() + boot, flash.end()));
+  rr.board.avr()->reset_pc = boot;
+  rr.con.command("f 200");
+  rr.keepAliveFor(0.3);
+  ASSERT_GT(rr.board.escPulseUs(0), 1100.0);
+  safety::HangPatch patch;
+  rr.board.addResetListener([&](uint64_t) { safety::unpatch(rr.board, patch); });
+  // when
+  patch = safety::hangFunction(rr.board, hil::imagePath("read_run"), "rr::ReadRunApp::runOnce()",
+                               Hang::kInterruptsOn);
+  rr.board.runFor(0.2);
+  ASSERT_EQ(rr.board.resets(), 1);
+  const double t_reset = sim::cyclesToSeconds(rr.board.lastResetCycle());
+  const auto boot_lines = rr.con.waitPrompt(10.0);
+  // then
+  const std::string all = ::testing::PrintToString(boot_lines);
+  EXPECT_TRUE(contains(all, "reset: watchdog or external while running")) << rr.con.tail();
+  EXPECT_LE(rr.log.widestBetween(t_reset, rr.board.timeS()), 1000.6);
+  EXPECT_EQ(rr.board.resets(), 1) << "no reset loop";
+}
 
 // Every reset cause the boot line names, and after any of them nothing spins.
 struct CauseCase {

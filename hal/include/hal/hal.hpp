@@ -100,14 +100,15 @@ struct Uart {
 // watchdog reset the chip restarts with the watchdog on at 16 ms. start() arms it; kick()
 // restarts its count. Kicks belong where the program makes progress, never in an interrupt.
 struct Watchdog {
-  // resetFlags() bits: the ATmega2560's MCUSR flags, plus kViaBootloader when MCUSR was empty
-  // and the flags were recovered from the stock Arduino stk500v2 bootloader's hand-off.
+  // resetFlags() bits: the ATmega2560's MCUSR flags, plus kWasRunning when the program had
+  // started (and so SRAM kept its marker) before this reset. A bootloader that clears MCUSR,
+  // like the stock Mega2560 one, leaves only kWasRunning to go by.
   static constexpr uint8_t kPowerOn = 0x01;
   static constexpr uint8_t kExternal = 0x02;
   static constexpr uint8_t kBrownOut = 0x04;
   static constexpr uint8_t kWatchdog = 0x08;
   static constexpr uint8_t kJtag = 0x10;
-  static constexpr uint8_t kViaBootloader = 0x80;
+  static constexpr uint8_t kWasRunning = 0x80;
   static constexpr uint16_t kTimeoutMs = 64;
 
   static void start();
@@ -119,8 +120,10 @@ struct Watchdog {
 // .noinit) with a pattern; the stack grows down into it from the top. untouchedBytes() counts
 // the painted bytes still intact from the bottom: the headroom never used since reset.
 struct Stack {
-  static uint16_t sizeBytes();       // SRAM above the static data
-  static uint16_t untouchedBytes();  // of those, never written since reset
+  static uint16_t sizeBytes();  // SRAM above the static data
+  // Of those, the bytes never written since reset. Scans up to 2 KB (about 1.5 ms); `yield`,
+  // if given, is called every 64 bytes (read_run keeps its frames on time from there).
+  static uint16_t untouchedBytes(void (*yield)() = nullptr);
 };
 
 }  // namespace hal

@@ -297,8 +297,10 @@ TEST_F(Console, ResetCauseNamesEveryFlagSet) {
     const char* text;
   } rows[] = {
       {hal::Watchdog::kWatchdog, "reset: watchdog (the program hung; motors were stopped)\r\n"},
-      {hal::Watchdog::kWatchdog | hal::Watchdog::kViaBootloader,
+      {hal::Watchdog::kWatchdog | hal::Watchdog::kWasRunning,
        "reset: watchdog (the program hung; motors were stopped)\r\n"},
+      {hal::Watchdog::kWasRunning,
+       "reset: watchdog or external while running (a bootloader cleared the reset flags)\r\n"},
       {hal::Watchdog::kBrownOut, "reset: brown-out (the supply dipped; check the 5 V supply)\r\n"},
       {hal::Watchdog::kExternal, "reset: external\r\n"},
       {hal::Watchdog::kPowerOn, "reset: power-on\r\n"},

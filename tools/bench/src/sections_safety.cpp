@@ -3,7 +3,8 @@
 //
 // Time to stop after a hang: a hang is injected into the running image by patching its flash
 // (the main loop's function, or the ADC read a sweep waits in, becomes "rjmp ." or
-// "cli; rjmp ."); from the patch to the end of the last ESC pulse wider than 1050 us.
+// "cli; rjmp ."); from the moment the program runs into the patch (a PC probe) to the end of
+// the last ESC pulse wider than 1050 us.
 // Loop timing: read_run with all four motors at 200 g (two v1, two v2 slots) while the UART
 // delivers a flood: frame starts seen from outside (the first of each frame's four battery
 // conversions on A1), the main loop's passes and the time-critical service() calls seen by
@@ -83,11 +84,11 @@ StopRun hangReadRun(const std::string& elf, sim::Hang how) {
   }
   sim::FlashPatch patch;
   board.addResetListener([&](uint64_t) { sim::restoreFlash(board, patch); });
-  const double t_hang = board.timeS();
   patch = sim::hangFunction(board, elf, "rr::ReadRunApp::runOnce()", how);
   board.runFor(0.5);
+  const double t_hang = *patch.hung_at_s;
   StopRun r;
-  if (board.resets() == 0) return r;
+  if (board.resets() == 0 || t_hang < 0) return r;
   r.stop_s = log.lastWiderThan(1050.0) - t_hang;
   r.reset_s = sim::cyclesToSeconds(board.lastResetCycle()) - t_hang;
   con.waitPrompt(10.0);
@@ -112,10 +113,10 @@ StopRun hangGatherStoreSweep(const std::string& elf, sim::Hang how) {
     return r;
   sim::FlashPatch patch;
   board.addResetListener([&](uint64_t) { sim::restoreFlash(board, patch); });
-  const double t_hang = board.timeS();
   patch = sim::hangFunction(board, elf, "hal::Adc::readCounts(unsigned char)", how);
   board.runFor(0.5);
-  if (board.resets() == 0) return r;
+  const double t_hang = *patch.hung_at_s;
+  if (board.resets() == 0 || t_hang < 0) return r;
   r.stop_s = log.lastWiderThan(1050.0) - t_hang;
   r.reset_s = sim::cyclesToSeconds(board.lastResetCycle()) - t_hang;
   con.waitPrompt(10.0);
@@ -250,7 +251,7 @@ Section safetySection(const AvrPaths& paths) {
                        ms(worst_stop), "<= 100 ms (required 150 ms)", all_ok});
 
   Table loop("6b. Safety: read_run's loop under floods, four motors at 200 g (simavr; 2 s each)",
-             {"input", "rate", "frames", "frame interval min..max", "service() max gap",
+             {"input", "rate", "frames", "frame interval min..max", "jitter", "service() max gap",
               "runOnce() max gap", "target", "met?"});
   struct FloodSpec {
     const char* key;
@@ -264,24 +265,27 @@ Section safetySection(const AvrPaths& paths) {
       {"burst_short_lines", "300 'f 200' lines at once", repeat("f 200\r", 1800), true},
       {"burst_long_replies", "10 help + 10 status at once", repeat("help\rstatus\r", 120), true},
   };
-  double worst_late = 0;
+  double worst_jitter = 0;
   bool loop_ok = true;
   for (int hz : {50, 400}) {
     const double period = 1.0 / hz;
-    // The frame schedule runs on the 1 ms clock: 400 Hz alternates 2 and 3 ms.
-    const double allowed = hz == 50 ? 0.0215 : 0.0035;
+    // The frame schedule runs on the 1 ms clock (400 Hz alternates 2 and 3 ms): a frame may
+    // start up to 1 ms after its tick.
+    const double allowed = std::ceil(period * 1000.0 - 1e-9) / 1000.0 + 0.001;
     for (const FloodSpec& f : floods) {
       const Timing t = loopTiming(rr, hz, f.bytes, f.keep_alive);
       const bool ok = t.frame_max_s <= allowed && t.service_max_s <= 0.003;
       loop_ok = loop_ok && ok;
-      worst_late = std::max(worst_late, t.frame_max_s - period);
+      const double jitter = std::max(t.frame_max_s - period, period - t.frame_min_s);
+      worst_jitter = std::max(worst_jitter, jitter);
       loop.addRow({f.name, fmt::format("{} Hz", hz), std::to_string(t.frames),
                    fmt::format("{:.2f}..{:.2f} ms", t.frame_min_s * 1000, t.frame_max_s * 1000),
-                   ms(t.service_max_s), ms(t.loop_max_s),
+                   fmt::format("{:.2f} ms", jitter * 1000), ms(t.service_max_s), ms(t.loop_max_s),
                    fmt::format("frames <= {:.1f} ms apart", allowed * 1000), verdict(ok)});
       s.json["loop"][fmt::format("{}_{}hz", f.key, hz)] = {
           {"input", f.name}, {"rate_hz", hz}, {"frames", t.frames},
           {"frame_interval_min_ms", t.frame_min_s * 1000}, {"frame_interval_max_ms", t.frame_max_s * 1000},
+          {"frame_jitter_ms", jitter * 1000},
           {"service_max_gap_ms", t.service_max_s * 1000}, {"loop_max_gap_ms", t.loop_max_s * 1000},
           {"failsafe_tripped", t.failsafe}, {"met", ok}};
     }
@@ -292,9 +296,11 @@ Section safetySection(const AvrPaths& paths) {
                "gap is the longest single pass (one line, its whole reply)");
   loop.addNote("the flood without line ends trips the failsafe 500 ms after the last keep-alive, "
                "as it must; with bursts, keep-alives queue behind the burst's lines");
-  s.targets.push_back({"6. frames under a flood (worst over 4 inputs, 50 and 400 Hz)",
-                       fmt::format("{:.2f} ms late at most", worst_late * 1000),
-                       "<= 1.5 ms (50 Hz), <= 1 ms (400 Hz)", loop_ok});
+  loop.addNote("jitter: the largest difference between a frame interval and the nominal period "
+               "(400 Hz: 0.5 ms of it is the 1 ms clock's 2/3 ms alternation)");
+  s.targets.push_back({"6. frames under a flood (4 inputs, 50 and 400 Hz)",
+                       fmt::format("jitter {:.2f} ms at most", worst_jitter * 1000),
+                       "at most 1 ms after their 1 ms tick", loop_ok});
   s.json["available"] = true;
   s.tables.push_back(std::move(stop));
   s.tables.push_back(std::move(loop));

@@ -76,6 +76,10 @@ FlashPatch hangFunction(Board& board, const std::string& elf, const std::string&
                                         : std::vector<uint8_t>{0xF8, 0x94, 0xFF, 0xCF};  // cli; rjmp .
   p.original = board.flash(p.address, code.size());
   board.patchFlash(p.address, code);
+  std::weak_ptr<double> hung = p.hung_at_s;
+  board.watchPc(p.address, [hung](uint64_t cycle) {
+    if (auto h = hung.lock(); h && *h < 0) *h = cyclesToSeconds(cycle);
+  });
   return p;
 }
 

@@ -7,6 +7,7 @@
 //  - the console checksum (docs/console.md).
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,9 @@ enum class Hang { kInterruptsOn, kInterruptsOff };
 struct FlashPatch {
   uint32_t address = 0;
   std::vector<uint8_t> original;
+  // When the program first ran into the patched code (simulated seconds; -1: not yet): the
+  // moment it hangs, which can be later than the patch (a sweep settling calls no ADC read).
+  std::shared_ptr<double> hung_at_s = std::make_shared<double>(-1.0);
 };
 
 // Replaces the first instruction(s) of `symbol` (demangled, e.g. "rr::ReadRunApp::runOnce()")
