@@ -207,17 +207,6 @@ void send(sim::Board& board, const std::vector<Item>& items) {
   board.sendText(run);
 }
 
-// Waits until everything sent was received and answered, ends any partial line, and consumes
-// the console up to the last prompt. A sweep still running is aborted by that line end.
-void drain(sim::Console& con) {
-  sim::Board& b = con.board();
-  b.runUntil([&] { return b.pendingInput() == 0; }, sim::secondsToCycles(120));
-  b.runFor(0.1);
-  con.send("");
-  b.runFor(0.1);
-  while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);
-}
-
 int countReset(const std::string& out) {
   int n = 0;
   for (std::size_t p = 0; (p = out.find("reset: ", p)) != std::string::npos; ++p) ++n;
@@ -282,7 +271,7 @@ void fuzzImage(const std::string& image, const std::string& prompt, uint64_t see
         }
       }
     }
-    drain(con);
+    sim::drainConsole(con, 0.1);
     // Motors at 1000 us when they should be: 1 s after the last input (read_run's failsafe
     // trips 500 ms after the last keep-alive it processed; replies still queued may delay that
     // one by a few hundred ms; gather_store: no sweep is running any more).

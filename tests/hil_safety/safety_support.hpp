@@ -35,16 +35,7 @@ inline bool contains(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;
 }
 
-// After a flood: lets the input drain, ends any line it left (a damaged one is rejected: the
-// receive ring overflowed), and consumes every reply, so the next command starts clean.
-inline void drain(sim::Console& con, double quiet_s = 0.3) {
-  sim::Board& board = con.board();
-  board.runUntil([&] { return board.pendingInput() == 0; }, sim::secondsToCycles(120));
-  board.runFor(quiet_s);
-  con.send("");
-  board.runFor(0.05);
-  while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);
-}
+inline void drain(sim::Console& con, double quiet_s = 0.3) { sim::drainConsole(con, quiet_s); }
 
 // read_run on a bare board: battery on A1, nothing on A0.
 struct ReadRunBoard {

@@ -70,6 +70,27 @@ struct StopRun {
   double widest_after_us = 0;  // widest pulse from the reset to 1 s later
 };
 
+// Hangs `symbol` in the running image, runs on through the watchdog reset (the patch is taken
+// out at the reset) and the next boot, and measures.
+StopRun hangAndMeasure(sim::Board& board, sim::Console& con, const sim::PulseLog& log,
+                       const std::string& elf, const std::string& symbol, sim::Hang how) {
+  StopRun r;
+  sim::FlashPatch patch;
+  board.addResetListener([&](uint64_t) { sim::restoreFlash(board, patch); });
+  patch = sim::hangFunction(board, elf, symbol, how);
+  board.runFor(0.5);
+  const double t_hang = *patch.hung_at_s;
+  if (board.resets() == 0 || t_hang < 0) return r;
+  r.stop_s = log.lastWiderThan(1050.0) - t_hang;
+  r.reset_s = sim::cyclesToSeconds(board.lastResetCycle()) - t_hang;
+  con.waitPrompt(10.0);
+  const double t_reset = sim::cyclesToSeconds(board.lastResetCycle());
+  board.runFor(1.0);
+  r.boot_says_watchdog = board.output().find("reset: watchdog") != std::string::npos;
+  r.widest_after_us = log.widestBetween(t_reset, board.timeS());
+  return r;
+}
+
 StopRun hangReadRun(const std::string& elf, sim::Hang how) {
   sim::Board board(elf);
   board.setAdcSource([](int ch) { return ch == 1 ? sim::batteryPinMv() : 0.0; });
@@ -82,21 +103,7 @@ StopRun hangReadRun(const std::string& elf, sim::Hang how) {
     con.send("");
     board.runFor(0.2);
   }
-  sim::FlashPatch patch;
-  board.addResetListener([&](uint64_t) { sim::restoreFlash(board, patch); });
-  patch = sim::hangFunction(board, elf, "rr::ReadRunApp::runOnce()", how);
-  board.runFor(0.5);
-  const double t_hang = *patch.hung_at_s;
-  StopRun r;
-  if (board.resets() == 0 || t_hang < 0) return r;
-  r.stop_s = log.lastWiderThan(1050.0) - t_hang;
-  r.reset_s = sim::cyclesToSeconds(board.lastResetCycle()) - t_hang;
-  con.waitPrompt(10.0);
-  const double t_reset = sim::cyclesToSeconds(board.lastResetCycle());
-  board.runFor(1.0);
-  r.boot_says_watchdog = board.output().find("reset: watchdog") != std::string::npos;
-  r.widest_after_us = log.widestBetween(t_reset, board.timeS());
-  return r;
+  return hangAndMeasure(board, con, log, elf, "rr::ReadRunApp::runOnce()", how);
 }
 
 StopRun hangGatherStoreSweep(const std::string& elf, sim::Hang how) {
@@ -108,23 +115,9 @@ StopRun hangGatherStoreSweep(const std::string& elf, sim::Hang how) {
   con.command("tare", 5.0);
   con.command("settle 50");
   con.send("sweep");
-  StopRun r;
   if (!board.runUntil([&] { return board.escPulseUs(0) > 1200.0; }, sim::secondsToCycles(30)))
-    return r;
-  sim::FlashPatch patch;
-  board.addResetListener([&](uint64_t) { sim::restoreFlash(board, patch); });
-  patch = sim::hangFunction(board, elf, "hal::Adc::readCounts(unsigned char)", how);
-  board.runFor(0.5);
-  const double t_hang = *patch.hung_at_s;
-  if (board.resets() == 0 || t_hang < 0) return r;
-  r.stop_s = log.lastWiderThan(1050.0) - t_hang;
-  r.reset_s = sim::cyclesToSeconds(board.lastResetCycle()) - t_hang;
-  con.waitPrompt(10.0);
-  const double t_reset = sim::cyclesToSeconds(board.lastResetCycle());
-  board.runFor(1.0);
-  r.boot_says_watchdog = board.output().find("reset: watchdog") != std::string::npos;
-  r.widest_after_us = log.widestBetween(t_reset, board.timeS());
-  return r;
+    return StopRun{};
+  return hangAndMeasure(board, con, log, elf, "hal::Adc::readCounts(unsigned char)", how);
 }
 
 // --- loop timing under floods ----------------------------------------------------------------
@@ -323,15 +316,6 @@ int untouchedFromStatus(const std::vector<std::string>& lines, int& size) {
   return -1;
 }
 
-void drainFlood(sim::Console& con) {
-  sim::Board& b = con.board();
-  b.runUntil([&] { return b.pendingInput() == 0; }, sim::secondsToCycles(60));
-  b.runFor(0.3);
-  con.send("");
-  b.runFor(0.05);
-  while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);
-}
-
 }  // namespace
 
 void addStackHeadroom(const AvrPaths& paths, Table& t, nlohmann::json& j,
@@ -353,7 +337,7 @@ void addStackHeadroom(const AvrPaths& paths, Table& t, nlohmann::json& j,
     con.command("show", 10);
     con.command("store 1", 10);
     rig.board.sendText("help\r" + repeat("a\b", 3000));
-    drainFlood(con);
+    sim::drainConsole(con);
     gs_free = untouchedFromStatus(con.command("status", 10), gs_size);
   }
   // read_run: boot with two v2 slots (both copies decoded), a lift-off, help under a flood
@@ -371,7 +355,7 @@ void addStackHeadroom(const AvrPaths& paths, Table& t, nlohmann::json& j,
     }
     con.command("f 200");
     board.sendText("help\r" + repeat("a\b", 2000));
-    drainFlood(con);
+    sim::drainConsole(con);
     rr_free = untouchedFromStatus(con.command("status"), rr_size);
   }
   for (const auto& [name, free, size] : {std::tuple<const char*, int, int>{"gather_store", gs_free, gs_size},

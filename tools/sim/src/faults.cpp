@@ -6,6 +6,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "sim/console.hpp"
 #include "sim/elf_symbols.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
@@ -91,6 +92,15 @@ std::string withChecksum(const std::string& line) {
   uint8_t x = 0;
   for (char c : line) x ^= static_cast<uint8_t>(c);
   return fmt::format("{}*{:02X}", line, x);
+}
+
+void drainConsole(Console& con, double quiet_s) {
+  Board& board = con.board();
+  board.runUntil([&] { return board.pendingInput() == 0; }, secondsToCycles(120));
+  board.runFor(quiet_s);
+  con.send("");
+  board.runFor(0.05);
+  while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);
 }
 
 PulseLog::PulseLog(Board& board) {

@@ -41,6 +41,11 @@ void restoreFlash(Board& board, const FlashPatch& patch);
 // "f 1 37" -> "f 1 37*53": the XOR of the line's characters as two upper-case hex digits.
 std::string withChecksum(const std::string& line);
 
+// After a flood: waits until the board has received everything sent, `quiet_s` more, ends any
+// partial line (a damaged one gets its error), and consumes every reply up to the last prompt,
+// so the next command starts clean. A sweep still running is aborted by that line end.
+void drainConsole(class Console& con, double quiet_s = 0.3);
+
 struct Pulse {
   int channel;
   double width_us;
