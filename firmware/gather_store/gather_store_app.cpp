@@ -204,6 +204,7 @@ void GatherStoreApp::begin() {
   battery_ = tc::BatteryMonitor(settings_board_.batteryConfig());
   fw::newline();
   sayLine(TC_PSTR("thrustcal gather_store: Gather and Store (thesis sec. 6.4), 115200 8N1"));
+  fw::printResetCause();
   sayLine(TC_PSTR("ESCs armed at 1000 us. Load cell A0, battery A1. Type help for the commands."));
   say(TC_PSTR("battery monitor: "));
   fw::printDivider(settings_board_);
@@ -214,15 +215,11 @@ void GatherStoreApp::begin() {
 void GatherStoreApp::prompt() { say(TC_PSTR("gs> ")); }
 
 bool GatherStoreApp::poll() {
+  hal::Watchdog::kick();  // the main loop came round
   const fw::LineEvent event = reader_.poll();
   if (event == fw::LineEvent::kNone) return false;
-  if (event == fw::LineEvent::kTooLong) {
-    say(TC_PSTR("error: line longer than "));
-    fw::printUint(fw::kLineMax);
-    sayLine(TC_PSTR(" characters, ignored; nothing changed (type help for the commands)"));
-  } else {
-    execute(reader_.line());
-  }
+  // kRejected: the reader printed the one error line (damaged, not text, too long, checksum)
+  if (event == fw::LineEvent::kLine) execute(reader_.line());
   prompt();
   return true;
 }
@@ -241,6 +238,12 @@ void GatherStoreApp::execute(char* line) {
   const uint8_t n = fw::tokenize(line, args, kMaxTokens);
   if (n == 0) return;  // empty line: just a new prompt
   const char* cmd = args[0];
+  if (reader_.handleStrict(args, n)) return;
+  // Strict mode: the commands that spin the motor or write the EEPROM need a checksum.
+  const bool risky = fw::equalsP(cmd, TC_PSTR("sweep")) || fw::equalsP(cmd, TC_PSTR("store")) ||
+                     fw::equalsP(cmd, TC_PSTR("erase")) ||
+                     (n > 1 && fw::equalsP(cmd, TC_PSTR("divider")));
+  if (risky && !reader_.allowRisky()) return;
   if (fw::equalsP(cmd, TC_PSTR("help"))) {
     if (alone(cmd, n)) cmdHelp();
   } else if (fw::equalsP(cmd, TC_PSTR("motor"))) {
@@ -303,9 +306,12 @@ void GatherStoreApp::cmdHelp() {
   sayLine(TC_PSTR("                a slot's v2 model from another voltage (>= 0.5 V) is refined"));
   sayLine(TC_PSTR("  show          what the selected slot's EEPROM record holds (v1 or v2)"));
   sayLine(TC_PSTR("  erase         mark the selected slot not calibrated (v1 and both v2 copies)"));
-  sayLine(TC_PSTR("  status        settings, live force and battery, last sweep"));
+  sayLine(TC_PSTR("  status        settings, live force and battery, last sweep, stack"));
   sayLine(TC_PSTR("  divider [R1 R2] battery divider in ohm, R1 pack-A1, R2 A1-ground (default"));
   sayLine(TC_PSTR("                100000 47000: 15.638 V); read_run flies with it too"));
+  sayLine(TC_PSTR("  strict on|off sweep, store, erase and divider need a checksum (host clients)"));
+  sayLine(TC_PSTR("lines: CR, LF or CRLF, at most 48 characters; optional checksum *HH = XOR"));
+  sayLine(TC_PSTR("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
 }
 
 void GatherStoreApp::cmdMotor(char** args, uint8_t n) {
@@ -429,14 +435,19 @@ void GatherStoreApp::cmdSettle(char** args, uint8_t n) {
 
 uint16_t GatherStoreApp::medianForceCounts() {
   force_median_.reset();
-  for (uint16_t i = 0; i < kForceWindow; ++i) force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
+  for (uint16_t i = 0; i < kForceWindow; ++i) {
+    hal::Watchdog::kick();  // 201 conversions: 21 ms
+    force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
+  }
   return force_median_.median();
 }
 
 uint16_t GatherStoreApp::medianBatteryCounts() {
   battery_median_.reset();
-  for (uint16_t i = 0; i < kBatteryWindow; ++i)
+  for (uint16_t i = 0; i < kBatteryWindow; ++i) {
+    hal::Watchdog::kick();
     battery_median_.push(hal::Adc::readCounts(hal::kAdcBattery));
+  }
   return battery_median_.median();
 }
 
@@ -537,8 +548,9 @@ void GatherStoreApp::stopMotor() { hal::Esc::writePulse(settings_.slot, kStopPwm
 bool GatherStoreApp::waitOrAbort(uint16_t ms) {
   const uint32_t start = hal::Clock::millis();
   for (;;) {
+    hal::Watchdog::kick();  // settling: up to 10 s per step
     if (hal::Uart::available()) {
-      abortSweep(SweepEnd::kKey, 0);
+      abortSweep(SweepEnd::kKey, kKeyUnread);
       return false;
     }
     if (hal::Clock::millis() - start >= ms) return true;
@@ -574,8 +586,9 @@ bool GatherStoreApp::settleForce(uint16_t& counts) {
 bool GatherStoreApp::readForceCounts(uint16_t& counts) {
   force_median_.reset();
   for (uint16_t i = 0; i < kForceWindow; ++i) {
+    hal::Watchdog::kick();
     if (hal::Uart::available()) {
-      abortSweep(SweepEnd::kKey, 0);
+      abortSweep(SweepEnd::kKey, kKeyUnread);
       return false;
     }
     force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
@@ -587,8 +600,9 @@ bool GatherStoreApp::readForceCounts(uint16_t& counts) {
 bool GatherStoreApp::readBatteryCounts(uint16_t& counts) {
   battery_median_.reset();
   for (uint16_t i = 0; i < kBatteryWindow; ++i) {
+    hal::Watchdog::kick();
     if (hal::Uart::available()) {
-      abortSweep(SweepEnd::kKey, 0);
+      abortSweep(SweepEnd::kKey, kKeyUnread);
       return false;
     }
     battery_median_.push(hal::Adc::readCounts(hal::kAdcBattery));
@@ -602,8 +616,9 @@ void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
   last_end_ = why;
   sweep_.valid = false;
   sweep_.complete = false;
-  while (hal::Uart::available()) hal::Uart::read();  // the key that aborted is not a command
-  reader_.clear();
+  // The key that aborted is not a command, nor is the rest of its line (e.g. "xerase").
+  if (why == SweepEnd::kKey)
+    reader_.abortLine(value == kKeyUnread ? hal::Uart::read() : static_cast<int16_t>(value));
   say(TC_PSTR("# aborted: "));
   switch (why) {
     case SweepEnd::kKey:
@@ -733,8 +748,9 @@ bool GatherStoreApp::swallowLineFeed() {
     hal::Clock::sleepUntilInterrupt();
   }
   if (!hal::Uart::available()) return true;
-  if (hal::Uart::read() == '\n') return true;
-  abortSweep(SweepEnd::kKey, 0);  // something else: a key, the motor has not started
+  const int16_t item = hal::Uart::read();
+  if (item == '\n') return true;
+  abortSweep(SweepEnd::kKey, static_cast<uint16_t>(item));  // a key: the motor has not started
   return false;
 }
 
@@ -1241,17 +1257,18 @@ void GatherStoreApp::cmdStatus() {
   say(TC_PSTR("last sweep: "));
   if (!sweep_.valid) {
     sayLine(TC_PSTR("none kept"));
-    return;
+  } else {
+    say(TC_PSTR("motor "));
+    fw::printUint(sweep_.slot);
+    say(TC_PSTR(", "));
+    fw::printUint(sweep_.samples);
+    say(TC_PSTR(" samples, max force "));
+    fw::printFixed(sweep_.report.max_force_dg, 1);
+    say(TC_PSTR(" g, curve 1.."));
+    fw::printUint(sweep_.curve.maxGrams());
+    sayLine(TC_PSTR(" g (store 1, store 2 or store v2 saves it)"));
   }
-  say(TC_PSTR("motor "));
-  fw::printUint(sweep_.slot);
-  say(TC_PSTR(", "));
-  fw::printUint(sweep_.samples);
-  say(TC_PSTR(" samples, max force "));
-  fw::printFixed(sweep_.report.max_force_dg, 1);
-  say(TC_PSTR(" g, curve 1.."));
-  fw::printUint(sweep_.curve.maxGrams());
-  sayLine(TC_PSTR(" g (store 1, store 2 or store v2 saves it)"));
+  fw::printHealth(reader_);
 }
 
 // `divider [R1 R2]`: the battery monitor's divider (thrustcal/board_settings.hpp). The last

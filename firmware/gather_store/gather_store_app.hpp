@@ -44,9 +44,12 @@
 //  - during a sweep every line that is not CSV starts with "# ", so a captured log is a CSV
 //    file with comments (header `pwm_us,force_g,vbat_v,t_s,motor,dir`, once per sweep);
 //  - any byte received during a sweep aborts it: the motor goes to 1000 us before anything
-//    is printed. A load-cell overload (> 950 g), a reading at the ADC rail or a battery
-//    reading outside the pack range (3 V .. the smaller of 26 V and the divider's full scale)
-//    aborts it too.
+//    is printed; the rest of that key's line is discarded (docs/console.md), so "xerase"
+//    typed during a sweep erases nothing. A load-cell overload (> 950 g), a reading at the
+//    ADC rail or a battery reading outside the pack range (3 V .. the smaller of 26 V and the
+//    divider's full scale) aborts it too;
+//  - the line protocol (checksum *HH, strict on|off, damaged lines rejected whole) is
+//    fw::LineReader's; the watchdog is kicked by the main loop and inside every long wait.
 //
 // Motor slot N (0..3) drives ESC output N (D6, D7, D8, D11) and is stored at EEPROM N * 1024.
 // Host tests drive this class against the fake HAL; main.cpp is the AVR-only part.
@@ -188,6 +191,9 @@ class GatherStoreApp {
   bool readForceCounts(uint16_t& counts);  // false: a key arrived during the 201 readings
   bool readBatteryCounts(uint16_t& counts);
   void stopMotor();
+  // kKey: `value` is the key (a hal::Uart::read() item) or kKeyUnread while it is still in the
+  // receiver; the rest of its line is discarded too. Otherwise the reading that aborted.
+  static constexpr uint16_t kKeyUnread = 0xFFFF;
   void abortSweep(SweepEnd why, uint16_t value);
 
   // Readings outside a sweep.

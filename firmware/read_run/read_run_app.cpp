@@ -3,6 +3,8 @@
 
 namespace rr {
 
+ReadRunApp* ReadRunApp::active_ = nullptr;
+
 namespace {
 
 constexpr uint8_t kMaxTokens = 6;
@@ -162,6 +164,7 @@ bool parseMs(const char* token, uint16_t& ms) {
 void ReadRunApp::printBanner() {
   fw::newline();
   sayLine(TC_PSTR("read_run: force commands in grams -> ESC pulses (thrustcal, thesis Read and Run)"));
+  fw::printResetCause();
   sayLine(TC_PSTR("type help for commands; while motors run send a line at least every 500 ms"));
 }
 
@@ -176,6 +179,7 @@ uint8_t ReadRunApp::loadCalibration() {
   fw::printDivider(settings_);
   fw::newline();
   for (uint8_t i = 0; i < kMotors; ++i) {
+    hal::Watchdog::kick();  // decoding a slot reads and checks up to 1 KB of EEPROM
     Motor& m = motors_[i];
     // The loader fills the v1 calibration in place; a v2 model goes through this copy
     // (123 bytes of stack, start-up only) into the same storage.
@@ -240,15 +244,18 @@ void ReadRunApp::arm() {
   stream_every_frames_ = static_cast<uint8_t>(frame_hz_ / kStreamLinesPerSecond);
   const uint32_t start_ms = hal::Clock::millis();
   scheduleFrames(start_ms);
+  active_ = this;
+  hal::Uart::setWaitHook(&ReadRunApp::serviceHook);
   for (;;) {
     const uint32_t now_ms = hal::Clock::millis();
     if (now_ms - start_ms >= kArmMs) break;
     // Forces are 0: every frame writes 1000 us and feeds the battery median.
-    if (frameDue(now_ms)) frame(now_ms);
+    service();
     hal::Clock::sleepUntilInterrupt();
   }
+  notes_ = 0;
   bool discarded = false;
-  while (hal::Uart::read() >= 0) discarded = true;
+  while (hal::Uart::read() != hal::Uart::kNothing) discarded = true;
   line_.clear();
   mode_ = Mode::kReady;
   last_line_ms_ = hal::Clock::millis();
@@ -269,46 +276,114 @@ bool ReadRunApp::isRunning() const {
   return false;
 }
 
+// One pass: at most one input event (bounded bytes), the time-critical part (so a command
+// takes effect in the frame that follows it), then what the time-critical part had to say.
+// Whatever blocks (a long reply waiting for room in the transmit ring) runs service() from the
+// UART wait hook, so frames, the battery filter, the failsafe and the lift-off link timeout
+// stay on time.
 void ReadRunApp::runOnce() {
-  uint32_t now_ms = hal::Clock::millis();
-  if (mode_ == Mode::kLiftoff) {
-    if (hal::Uart::available()) abortLiftoff();
-  } else if (mode_ == Mode::kReady) {
-    for (;;) {
-      const fw::LineEvent event = line_.poll();
-      if (event == fw::LineEvent::kNone) break;
-      last_line_ms_ = now_ms;  // any complete line is a keep-alive
-      if (event == fw::LineEvent::kTooLong) {
-        sayLine(TC_PSTR("error: line too long (at most 48 characters); nothing changed"));
-        prompt();
-        continue;
-      }
-      char line[fw::kLineMax + 1];
-      const char* src = line_.line();
-      uint8_t n = 0;
-      while (n < fw::kLineMax && src[n] != '\0') {
-        line[n] = src[n];
-        ++n;
-      }
-      line[n] = '\0';
-      line_.clear();
-      handleLine(line);
-      if (mode_ == Mode::kLiftoff) break;  // the rest of the input is the abort key
-    }
-    checkFailsafe(now_ms);
-  }
-  now_ms = hal::Clock::millis();  // printing may have taken time on the board
-  if (frameDue(now_ms)) frame(now_ms);
+  handleInput();
+  service();
+  printNotes();
 }
 
+void ReadRunApp::serviceHook() {
+  if (active_ != nullptr) active_->service();
+}
+
+void ReadRunApp::service() {
+  if (in_service_) return;
+  in_service_ = true;
+  hal::Watchdog::kick();  // the loop (or a wait inside it) came round
+  const uint32_t now_ms = hal::Clock::millis();
+  if (frameDue(now_ms)) frame(now_ms);
+  checkFailsafe(now_ms);
+  in_service_ = false;
+}
+
+void ReadRunApp::handleInput() {
+  const uint32_t now_ms = hal::Clock::millis();
+  if (mode_ == Mode::kLiftoff) {
+    // Lift-off: a line end (an empty line) keeps it alive; any other byte aborts it, and the
+    // rest of that byte's line is discarded.
+    for (uint8_t n = 0; n < kRxBytesPerPass && hal::Uart::available(); ++n) {
+      const int16_t item = hal::Uart::read();
+      if (item == '\r' || item == '\n') {
+        last_line_ms_ = now_ms;
+        continue;
+      }
+      if (item == hal::Uart::kNothing) break;
+      abortLiftoff(item);
+      return;
+    }
+    return;
+  }
+  if (mode_ != Mode::kReady) return;
+  const fw::LineEvent event = line_.poll(kRxBytesPerPass);
+  if (event == fw::LineEvent::kRejected) {  // its error line is printed; not a keep-alive
+    prompt();
+    return;
+  }
+  if (event != fw::LineEvent::kLine) return;
+  // The keep-alive: a complete, intact line (with strict on: one with a valid checksum).
+  if (!line_.strict() || line_.checked()) last_line_ms_ = now_ms;
+  char line[fw::kLineMax + 1];
+  const char* src = line_.line();
+  uint8_t n = 0;
+  while (n < fw::kLineMax && src[n] != '\0') {
+    line[n] = src[n];
+    ++n;
+  }
+  line[n] = '\0';
+  handleLine(line);
+}
+
+// While a motor runs (lift-off included), no keep-alive for kFailsafeMs stops every motor.
 void ReadRunApp::checkFailsafe(uint32_t now_ms) {
+  if (mode_ == Mode::kLiftoff) {
+    if (now_ms - last_line_ms_ < kFailsafeMs) return;
+    stopAll();
+    mode_ = Mode::kReady;
+    ++failsafe_trips_;
+    notes_ |= kNoteLinkLost;
+    return;
+  }
   if (mode_ != Mode::kReady || !isRunning()) return;
   if (now_ms - last_line_ms_ < kFailsafeMs) return;
   stopAll();
   ++failsafe_trips_;
-  fw::newline();
-  sayLine(TC_PSTR("failsafe: no command for 500 ms, motors stopped"));
-  prompt();
+  notes_ |= kNoteFailsafe;
+}
+
+// What service() had to say, in the order it happened within a frame.
+void ReadRunApp::printNotes() {
+  const uint8_t notes = notes_;
+  notes_ = 0;
+  if (notes == 0) return;
+  if (notes & kNoteHold) {
+    say(TC_PSTR("# hold "));
+    fw::printUint(liftoff_force_g_);
+    say(TC_PSTR(" g for "));
+    fw::printUint(liftoff_hold_ms_);
+    sayLine(TC_PSTR(" ms"));
+  }
+  if (notes & kNoteProgress) printLiftoffProgress(note_ms_ - liftoff_start_ms_, note_force_g_);
+  if (notes & kNoteDone) {
+    sayLine(TC_PSTR("# liftoff done: motors stopped"));
+    prompt();
+  }
+  if (notes & kNoteLinkLost) {
+    fw::newline();
+    sayLine(TC_PSTR("# liftoff stopped: no line end for 500 ms (keep it alive with empty lines; "
+                    "any other key aborts): motors stopped"));
+    prompt();
+  }
+  if (notes & kNoteFailsafe) {
+    fw::newline();
+    sayLine(TC_PSTR("failsafe: no command for 500 ms, motors stopped"));
+    prompt();
+  }
+  if ((notes & kNoteStream) && stream_ && mode_ != Mode::kArming) streamLine(note_ms_);
 }
 
 void ReadRunApp::stopAll() {
@@ -419,16 +494,17 @@ void ReadRunApp::frame(uint32_t now_ms) {
     hal::Esc::writePulse(i, motors_[i].pwm_us);
   }
 
+  note_ms_ = now_ms;
   if (mode_ == Mode::kLiftoff) {
-    const uint32_t elapsed_ms = now_ms - liftoff_start_ms_;
     if (static_cast<int32_t>(now_ms - liftoff_next_progress_ms_) >= 0) {
       liftoff_next_progress_ms_ += kLiftoffProgressMs;
-      printLiftoffProgress(elapsed_ms, motors_[0].force_g);
+      note_force_g_ = motors_[0].force_g;
+      notes_ |= kNoteProgress;
     }
   }
   if (stream_ && mode_ != Mode::kArming) {
     if (stream_countdown_ == 0) {
-      streamLine(now_ms);
+      notes_ |= kNoteStream;
       stream_countdown_ = stream_every_frames_;
     }
     --stream_countdown_;
@@ -458,18 +534,13 @@ void ReadRunApp::updateLiftoff(uint32_t now_ms) {
   } else if (elapsed_ms < static_cast<uint32_t>(liftoff_ramp_ms_) + liftoff_hold_ms_) {
     if (!liftoff_holding_) {
       liftoff_holding_ = true;
-      say(TC_PSTR("# hold "));
-      fw::printUint(liftoff_force_g_);
-      say(TC_PSTR(" g for "));
-      fw::printUint(liftoff_hold_ms_);
-      sayLine(TC_PSTR(" ms"));
+      notes_ |= kNoteHold;
     }
   } else {
     stopAll();
     mode_ = Mode::kReady;
     last_line_ms_ = now_ms;
-    sayLine(TC_PSTR("# liftoff done: motors stopped"));
-    prompt();
+    notes_ |= kNoteDone;
     return;
   }
   for (uint8_t i = 0; i < kMotors; ++i) motors_[i].force_g = force_g;
@@ -490,11 +561,10 @@ void ReadRunApp::printLiftoffProgress(uint32_t elapsed_ms, uint16_t force_g) {
   fw::newline();
 }
 
-void ReadRunApp::abortLiftoff() {
-  while (hal::Uart::read() >= 0) {
-  }
-  line_.clear();
+void ReadRunApp::abortLiftoff(int16_t key) {
+  line_.abortLine(key);  // the rest of the key's line is not a command ("xf 2 450")
   stopAll();
+  notes_ &= static_cast<uint8_t>(~(kNoteProgress | kNoteHold));
   mode_ = Mode::kReady;
   last_line_ms_ = hal::Clock::millis();
   fw::newline();
@@ -510,6 +580,10 @@ void ReadRunApp::handleLine(char* line) {
   const uint8_t count = fw::tokenize(line, tokens, kMaxTokens);
   if (count == 0) return;  // empty line: keep-alive only, no prompt (hosts send it 2x/s+)
   const char* verb = tokens[0];
+  if (line_.handleStrict(tokens, count)) {
+    prompt();
+    return;
+  }
   if (fw::equalsP(verb, TC_PSTR("help"))) {
     commandHelp();
   } else if (fw::equalsP(verb, TC_PSTR("f"))) {
@@ -542,13 +616,18 @@ void ReadRunApp::commandHelp() {
   sayLine(TC_PSTR("stop           all motors to 0 g (1000 us)"));
   sayLine(TC_PSTR("status         per motor: force, pwm, battery, flags; v2 motors: headroom"));
   sayLine(TC_PSTR("liftoff G [RAMP_MS] [HOLD_MS]  ramp all four 0->G g (default 2000 ms),"));
-  sayLine(TC_PSTR("               hold (default 5000 ms), stop; any key aborts"));
+  sayLine(TC_PSTR("               hold (default 5000 ms), stop; empty lines keep it going,"));
+  sayLine(TC_PSTR("               any other key aborts"));
   sayLine(TC_PSTR("stream on|off  CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s"));
   sayLine(TC_PSTR("rate HZ        ESC frame rate 50..400 Hz (motors stopped)"));
   sayLine(TC_PSTR("divider [R1 R2] battery divider in ohm, R1 pack-A1, R2 A1-ground (default"));
   sayLine(TC_PSTR("               100000 47000); setting it reloads the calibration (motors stopped)"));
-  sayLine(TC_PSTR("failsafe: while a motor runs, 500 ms without a line (an empty line will do)"));
-  sayLine(TC_PSTR("stops all motors"));
+  sayLine(TC_PSTR("strict on|off  f (above 0 g), liftoff, divider R1 R2 need a checksum"));
+  sayLine(TC_PSTR("failsafe: while a motor runs, 500 ms without a line (an empty line will do;"));
+  sayLine(TC_PSTR("with strict on a checksummed one, e.g. *00) stops all motors; during liftoff"));
+  sayLine(TC_PSTR("empty lines keep it going and any other key aborts it"));
+  sayLine(TC_PSTR("lines: CR, LF or CRLF, at most 48 characters; optional checksum *HH = XOR"));
+  sayLine(TC_PSTR("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
 }
 
 bool ReadRunApp::requireArmable(uint8_t index) {
@@ -576,6 +655,7 @@ void ReadRunApp::commandForce(char** tokens, uint8_t count) {
     sayLine(TC_PSTR("error: usage: f GRAMS (all motors) or f MOTOR GRAMS, GRAMS 0..5000, MOTOR 0..3"));
     return;
   }
+  if (force_g > 0 && !line_.allowRisky()) return;  // stopping never needs a checksum
   if (motor >= 0) {
     if (!requireArmable(static_cast<uint8_t>(motor))) return;
     motors_[motor].force_g = static_cast<uint16_t>(force_g);
@@ -654,6 +734,7 @@ void ReadRunApp::commandStatus() {
   say(TC_PSTR(", failsafe trips "));
   fw::printUint(failsafe_trips_);
   fw::newline();
+  fw::printHealth(line_, &ReadRunApp::serviceHook);  // frames go on during the stack scan
 }
 
 void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
@@ -668,6 +749,7 @@ void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
                     "0..60000 ms"));
     return;
   }
+  if (!line_.allowRisky()) return;
   for (uint8_t i = 0; i < kMotors; ++i) {
     if (!motors_[i].isArmable()) {
       say(TC_PSTR("error: liftoff needs all four motors calibrated; "));
@@ -689,6 +771,7 @@ void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
   liftoff_start_ms_ = now_ms;
   liftoff_next_progress_ms_ = now_ms;
   liftoff_holding_ = false;
+  last_line_ms_ = now_ms;  // the link timeout counts from the command
   mode_ = Mode::kLiftoff;
   say(TC_PSTR("# liftoff: ramp 0 -> "));
   fw::printUint(liftoff_force_g_);
@@ -696,7 +779,8 @@ void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
   fw::printUint(ramp_ms);
   say(TC_PSTR(" ms, hold "));
   fw::printUint(hold_ms);
-  sayLine(TC_PSTR(" ms, then stop; any key aborts"));
+  sayLine(TC_PSTR(" ms, then stop; empty lines keep it going (at least every 500 ms), any "
+                  "other key aborts"));
 }
 
 void ReadRunApp::commandStream(char** tokens, uint8_t count) {
@@ -747,6 +831,7 @@ void ReadRunApp::commandDivider(char** tokens, uint8_t count) {
     sayLine(TC_PSTR("error: motors are running; send stop first, then set the divider"));
     return;
   }
+  if (count > 1 && !line_.allowRisky()) return;  // writes the EEPROM: strict needs a checksum
   if (!fw::commandDivider(tokens, count, settings_)) return;
   const uint8_t shift = bus_.shift;
   bus_ = tc::BusVoltageFilter();  // its millivolts came through the old divider

@@ -378,7 +378,7 @@ TEST_F(GatherStore, AnyKeyDuringTheSweepStopsTheMotorAtOnce) {
   hal::fake::advanceMs(gs::kArmMs);
   calibrateAndTare();
   const uint32_t key_at = hal::fake::nowMs() + 5000;  // mid-sweep (about 1240 us)
-  hal::fake::feedInputAt(key_at, "x");
+  hal::fake::feedInputAt(key_at, "x\r");  // a key, then Enter: nothing else is discarded
   std::vector<std::pair<uint32_t, uint16_t>> pulses;
   hal::fake::setTickHook([&](uint32_t now) {
     plant_.tick();
@@ -438,16 +438,46 @@ TEST_F(GatherStore, AKeyRightAfterSweepAbortsBeforeTheMotorStarts) {
   EXPECT_EQ(out.find("pwm_us,"), std::string::npos) << out;
 }
 
-TEST_F(GatherStore, AKeyDuringTheAbortedSweepDoesNotLeakIntoTheNextCommand) {
+TEST_F(GatherStore, TheLineThatAbortedTheSweepIsDiscardedUpToItsEndWithOneError) {
   hal::fake::advanceMs(gs::kArmMs);
   calibrateAndTare();
   hal::fake::feedInputAt(hal::fake::nowMs() + 3000, "tare");
   sweep();
-  // when: the next command typed
+  // when: the line goes on and ends ("tarestatus": the "t" aborted the sweep)
+  const auto rest = responseLines(run("status"));
+  // then: neither "tare" nor "status" ran; one error says so; the next line runs again
+  ASSERT_FALSE(rest.empty());
+  EXPECT_EQ(rest[0], "error: ignored the rest of the line whose first key aborted (9 characters), "
+                     "ignored; nothing changed");
   const auto lines = responseLines(run("status"));
-  // then: it is "status", not "tarestatus"
   ASSERT_FALSE(lines.empty());
   EXPECT_TRUE(startsWith(lines[0], "motor 0")) << lines[0];
+}
+
+TEST_F(GatherStore, EraseTypedDuringASweepErasesNothing) {
+  // given: slot 0 holds a curve; a sweep runs
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  sweep();
+  run("store 1");
+  const std::vector<uint8_t> before(hal::fake::eeprom(), hal::fake::eeprom() + hal::Eeprom::kSize);
+  hal::fake::feedInputAt(hal::fake::nowMs() + 3000, "x");
+  hal::fake::feedInputAt(hal::fake::nowMs() + 3002, "erase\r");  // typed after the key
+  // when
+  std::string out = sweep();
+  for (int ms = 0; ms < 100; ++ms) {  // the main loop goes on
+    app_->poll();
+    hal::Clock::sleepUntilInterrupt();
+  }
+  out += hal::fake::takeOutput();
+  // then
+  EXPECT_NE(out.find("# aborted: key pressed"), std::string::npos) << out;
+  EXPECT_EQ(out.find("erased motor"), std::string::npos) << out;
+  EXPECT_NE(out.find("error: ignored the rest of the line whose first key aborted (5"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(std::vector<uint8_t>(hal::fake::eeprom(), hal::fake::eeprom() + hal::Eeprom::kSize),
+            before);
 }
 
 TEST_F(GatherStore, LoadCellOverloadAbortsTheSweep) {

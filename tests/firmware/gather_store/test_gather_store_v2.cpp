@@ -408,7 +408,7 @@ TEST_F(GatherStoreV2, StoreV2WithoutAForceIsRefusedWithTheReason) {
 TEST_F(GatherStoreV2, StoreV2AfterAnAbortedSweepIsRefused) {
   hal::fake::advanceMs(gs::kArmMs);
   run("cal 95");
-  hal::fake::feedInputAt(hal::fake::nowMs() + 4000, "x");
+  hal::fake::feedInputAt(hal::fake::nowMs() + 4000, "x\r");
   sweep();
   const Response out = command("store v2");
   ASSERT_EQ(out.lines.size(), 1u);

@@ -74,7 +74,7 @@ void add(CLI::App& bench, const std::shared_ptr<Options>& o, const std::string& 
 
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
-      "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off; each "
+      "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, safety; each "
                "figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
@@ -86,7 +86,8 @@ void registerCommands(CLI::App& app) {
       "simulated ATmega2560 cycles for one four-motor update, thesis option 2.1 vs v2 (simavr)",
       [](const Options& o) { return std::vector<Section>{computeSection(o.paths)}; });
   add(*bench, o, "footprint",
-      "flash and static SRAM of gather_store and read_run (avr-size), SRAM of the four models, "
+      "flash and static SRAM of gather_store and read_run (avr-size), stack never used after the "
+      "deepest paths (simavr), SRAM of the four models, "
       "EEPROM per motor",
       [](const Options& o) { return std::vector<Section>{footprintSection(o.paths)}; });
   add(*bench, o, "calibration",
@@ -97,6 +98,10 @@ void registerCommands(CLI::App& app) {
       "read_run in simavr on the tethered quad for a simulated minute on a draining pack: thesis "
       "vs v2 records",
       [](const Options& o) { return std::vector<Section>{liftoffSection(o.paths, o.quick)}; });
+  add(*bench, o, "safety",
+      "issue 8 in simavr: time to stop every ESC pulse after a hang (watchdog), read_run's frame "
+      "timing under UART floods",
+      [](const Options& o) { return std::vector<Section>{safetySection(o.paths)}; });
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
         std::vector<Section> all;
@@ -105,6 +110,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(footprintSection(o.paths));
         all.push_back(calibrationSection(o.paths));
         all.push_back(liftoffSection(o.paths, o.quick));
+        all.push_back(safetySection(o.paths));
         return all;
       });
 }

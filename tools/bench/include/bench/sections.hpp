@@ -43,5 +43,11 @@ Section footprintSection(const AvrPaths& paths);
 Section calibrationSection(const AvrPaths& paths);
 // quick: 10 s hold instead of 60 s.
 Section liftoffSection(const AvrPaths& paths, bool quick);
+// Issue 8 (sections_safety.cpp): time to stop after a hang in both images, read_run's loop
+// timing under floods.
+Section safetySection(const AvrPaths& paths);
+// Footprint rows: each image's stack never used after its deepest paths (simulated).
+void addStackHeadroom(const AvrPaths& paths, Table& table, nlohmann::json& json,
+                      std::vector<TargetCheck>& targets);
 
 }  // namespace bench
