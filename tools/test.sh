@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Every test: installs what is missing (Debian packages), builds the AVR images and the host
-# tree (core/ instrumented for line coverage), runs all tests with ctest (host unit tests,
+# tree (preset `checked`: core/ instrumented for line coverage, every host object built with
+# AddressSanitizer + UndefinedBehaviorSanitizer), runs all tests with ctest (host unit tests,
 # firmware logic on the fake HAL, plant fidelity, model lab, HIL tests of the real images in
-# simavr), prints core/ line coverage, and ends with ctest's summary. Non-zero on any failure.
+# simavr, the fuzz targets' deterministic replay), prints core/ line coverage, and ends with
+# ctest's summary. Non-zero on any failure; a sanitizer finding aborts its test, which fails.
 set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
 cd "$THRUSTCAL_ROOT"
@@ -10,7 +12,12 @@ cd "$THRUSTCAL_ROOT"
 ensure_packages
 build_avr
 print_firmware_sizes
-build_host -DTHRUSTCAL_COVERAGE=ON
+build_host -DTHRUSTCAL_COVERAGE=ON -DTHRUSTCAL_SANITIZE=ON
+
+# Sanitizer findings fail the run: UBSan stops at the first one (-fno-sanitize-recover), ASan
+# always does; both print a stack. Leak checking stays on.
+export ASAN_OPTIONS="${ASAN_OPTIONS:-abort_on_error=1:detect_leaks=1:strict_string_checks=1}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 
 say "running tests"
 find build/host -name '*.gcda' -delete 2>/dev/null || true

@@ -21,32 +21,10 @@ const char* decodeStatusText(DecodeStatus status) {
 
 namespace codec_detail {
 
-namespace {
-
-bool plausibleVoltage(uint16_t mv) { return mv >= kPlausibleMinMv && mv <= kPlausibleMaxMv; }
-bool plausiblePwm(uint16_t us) { return us >= kPlausibleMinPwmUs && us <= kPlausibleMaxPwmUs; }
-
-// A present curve: plausible start voltage, PWM at 1 g and at its heaviest gram, steps
-// consistent (no real step after the end marker).
-bool validCurve(ForceCurveBase& curve) {
-  if (!plausibleVoltage(curve.start_mv) || !plausiblePwm(curve.pwm_at_1g_us)) return false;
-  if (!curve.finalize()) return false;
-  return plausiblePwm(curve.pwmForGrams(curve.maxGrams()));
-}
-
-}  // namespace
-
-DecodeStatus validate(MotorCalibration& cal) {
-  if (!validCurve(cal.first)) return DecodeStatus::kBadContent;
-  if (!plausiblePwm(cal.sag.base_pwm_us) || cal.sag.offset_mv[0] != 0)
-    return DecodeStatus::kBadContent;
-  if (cal.second.start_mv == 0) {
-    // No second curve: whatever its other bytes hold is not used.
-    cal.second.clear();
-  } else if (!validCurve(cal.second)) {
-    return DecodeStatus::kBadContent;
-  }
-  return DecodeStatus::kOk;
+DecodeStatus validate(MotorCalibration& cal, const RecordLimits& limits, Plausibility* why) {
+  const Plausibility p = checkCalibration(cal, limits);
+  if (why) *why = p;
+  return p.ok() ? DecodeStatus::kOk : DecodeStatus::kBadContent;
 }
 
 int8_t sagToByte(int16_t offset_mv) {

@@ -23,14 +23,16 @@ bool ModelV2::finalize() {
   inv_step_q22 = 0;
   inv_coarse_q22 = 0;
   split_dg = 0;
-  rest_recip_q28 = 0;
+  rest_recip_q27 = 0;
   max_force_dg = 0;
   start_q17_us = 0;
+  q16_inverse = 0;
   const bool coarse = fine_knots < knots;
   const uint32_t split = static_cast<uint32_t>(fine_knots) * step_dg;
   const uint32_t top = split + static_cast<uint32_t>(knots - fine_knots) * coarse_step_dg;
   bool ok = start_q4_us >= kStartMinQ4 && start_q4_us <= kStartMaxQ4 &&
-            step_dg >= kV2MinStepDg && knots >= 2 && knots <= kV2MaxKnots && fine_knots >= 1 &&
+            step_dg >= (coarse ? kV2MinStepDg : kV2MinStepSmallDg) && knots >= 2 &&
+            knots <= kV2MaxKnots && fine_knots >= 1 &&
             fine_knots <= knots && (coarse ? coarse_step_dg >= kV2MinStepDg : coarse_step_dg == 0) &&
             top <= 65535u && saneMv(rest_mv) && (second_mv == 0 || saneMv(second_mv));
   if (ok) {
@@ -45,12 +47,14 @@ bool ModelV2::finalize() {
     drive_512usmv[k] = 0;
     sag_10mv[k] = 0;
   }
-  inv_step_q22 = static_cast<uint16_t>(((1ul << 22) + step_dg / 2) / step_dg);
+  q16_inverse = step_dg < kV2MinStepDg ? 1 : 0;
+  const uint32_t one = q16_inverse ? (1ul << 16) : (1ul << 22);
+  inv_step_q22 = static_cast<uint16_t>((one + step_dg / 2) / step_dg);
   if (coarse) inv_coarse_q22 = static_cast<uint16_t>(((1ul << 22) + coarse_step_dg / 2) / coarse_step_dg);
   split_dg = static_cast<uint16_t>(split);
   max_force_dg = static_cast<uint16_t>(top);
   start_q17_us = static_cast<uint32_t>(start_q4_us) << 13;
-  rest_recip_q28 = static_cast<uint16_t>(kRecipOne / rest_mv);
+  rest_recip_q27 = static_cast<uint16_t>(kRecipOne / rest_mv);
   return true;
 }
 
@@ -67,9 +71,10 @@ static void placeKnots(ModelV2& m, uint16_t fmax_dg) {
     m.split_dg = static_cast<uint16_t>(16u * fine);
     return;
   }
-  // One run: floor of fmax / 32, at least the minimum step; the last knot <= fmax.
+  // One run: floor of fmax / 32, at least the minimum step; the last knot <= fmax. Below
+  // kV2MinStepDg (curves under 211 g) the knot position uses the Q16 reciprocal.
   uint16_t step = static_cast<uint16_t>(fmax_dg / kV2MaxKnots);
-  if (step < kV2MinStepDg) step = kV2MinStepDg;
+  if (step < kV2MinStepSmallDg) step = kV2MinStepSmallDg;
   const uint16_t n = static_cast<uint16_t>(fmax_dg / step);
   m.step_dg = step;
   m.knots = static_cast<uint8_t>(n > kV2MaxKnots ? kV2MaxKnots : n);
@@ -85,9 +90,9 @@ const char* fitV2StatusText(FitV2Status status) {
     case FitV2Status::kOk: return "ok";
     case FitV2Status::kTooFewSamples: return "too few samples: sweep at least 8 PWM steps";
     case FitV2Status::kNoForce:
-      return "no force: the sweep never reached 13.2 g (motor not spinning or cell not tared?)";
+      return "no force: the sweep never reached 5 g (motor not spinning or cell not tared?)";
     case FitV2Status::kBadVoltage:
-      return "battery reading outside 6-17.5 V: check the monitor wiring";
+      return "battery reading outside 3-26 V: check the monitor wiring and the divider setting";
     case FitV2Status::kStartNotFound:
       return "start threshold not found: sweep finer (<= 10 us steps) from 1000 us to full force";
     case FitV2Status::kVoltagesTooClose:
@@ -212,7 +217,7 @@ FitV2Report ModelV2FitterBase::prepare() {
     e = b - 1;
   }
   rep.max_force_dg = samples_[n - 1].force_dg;
-  if (rep.max_force_dg < static_cast<int16_t>(2 * kV2MinStepDg)) {
+  if (rep.max_force_dg < static_cast<int16_t>(10 * kRecordMinForceG)) {
     rep.status = FitV2Status::kNoForce;
     return rep;
   }
@@ -399,7 +404,7 @@ bool modelV2FromCurve(ModelV2& out, double start_us, const double* drive_usv,
     if (!(drive_usv[i] >= drive_usv[i - 1]) || !(force_g[i] >= force_g[i - 1])) return false;
   }
   const double fmax_dg = force_g[count - 1] * 10.0;
-  if (!(fmax_dg >= 2.0 * kV2MinStepDg) || !(fmax_dg <= 65535.0)) return false;
+  if (!(fmax_dg >= 10.0 * kRecordMinForceG) || !(fmax_dg <= 10.0 * kRecordMaxForceG)) return false;
   const uint16_t fmax = static_cast<uint16_t>(fmax_dg);
   if (!(start_us > 0.0 && start_us < 4000.0) || !(rest_mv > 0.0 && rest_mv < 65535.0) ||
       !(second_mv >= 0.0 && second_mv < 65535.0))

@@ -12,7 +12,7 @@ namespace tc {
 
 namespace {
 
-constexpr int32_t kNewtonLimit = 1l << 21;  // |e| above: re-seed by division (jump > 1/128)
+constexpr int32_t kNewtonLimit = 1l << 20;  // |e| above: re-seed by division (jump > 1/128)
 
 bool saneMv(uint16_t mv) { return mv >= kV2SaneMinMv && mv <= kV2SaneMaxMv; }
 
@@ -98,7 +98,7 @@ template <class Model>
 TC_INLINE KnotPos knotPos(const Model& m, uint16_t force_dg) {
   // In each run: force * inv ~ force * 2^22 / step, < 16 * 2^22 * (1 + 1/step) < 2^27 (or
   // 32 * 2^22 for a single run); times 4 < 2^29: the index in the run is the top byte, the
-  // fraction the two below.
+  // fraction the two below. (ModelV2 or ModelV2Run: the same fields.)
   // One run only: split = the last knot and inv_coarse = 0, so force == split lands on
   // index fine_knots == knots, which driveAt() reads as the last knot.
   uint8_t base = 0;
@@ -109,6 +109,9 @@ TC_INLINE KnotPos knotPos(const Model& m, uint16_t force_dg) {
     base = m.fine_knots;
   }
   uint32_t pos = mulU16(force_dg, inv);
+  // Small motors (one run, step < kV2MinStepDg): inv is 2^16 / step, 2^6 below the Q22 scale.
+  // force < 32 steps: pos < 2^21 before, < 2^29 after both shifts.
+  if (m.q16_inverse) pos <<= 6;
   pos += pos;
   pos += pos;
   KnotPos p;
@@ -133,6 +136,17 @@ TC_INLINE int16_t mulS16U16Hi(int16_t a, uint16_t b) {
   return static_cast<int16_t>(mulU16(static_cast<uint16_t>(a), b) >> 16);
 }
 
+// (a * b) / 2^15 for a signed a, rounded toward zero and saturated to +-16384. The shift by
+// 15 is a byte move, a 16-bit shift by one and one bit from the low half.
+TC_INLINE int16_t mulS16U16Shr15Sat(int16_t a, uint16_t b) {
+  const uint16_t mag = static_cast<uint16_t>(a < 0 ? -a : a);
+  const uint32_t p = mulU16(mag, b);  // < 2^31
+  uint16_t q = static_cast<uint16_t>(static_cast<uint16_t>(p >> 16) << 1);
+  q = static_cast<uint16_t>(q | (static_cast<uint16_t>(p) >> 15));
+  if (q > 16384) q = 16384;
+  return static_cast<int16_t>(a < 0 ? -static_cast<int16_t>(q) : static_cast<int16_t>(q));
+}
+
 // Sag at a knot position in 1/256 of 10 mV (< 2^16), linear between knots (origin: 0).
 TC_INLINE uint16_t sagAtQ8(const ModelV2& m, KnotPos p) {
   // (uint16_t casts before the shifts: 255 << 8 does not fit the AVR's 16-bit int.)
@@ -154,13 +168,13 @@ TC_INLINE uint16_t clampForce(const ModelV2& m, uint16_t force_dg, uint8_t& flag
   return force_dg;
 }
 
-// 2^26 / mV from the filter's 2^28 / mV: once per frame. 2^26 / 6000 < 11185.
-TC_INLINE uint16_t recip26Of(uint16_t recip_q28) {
-  return static_cast<uint16_t>((recip_q28 + 2u) >> 2);
+// 2^26 / mV from the filter's 2^27 / mV: once per frame. 2^26 / 3000 < 22370.
+TC_INLINE uint16_t recip26Of(uint16_t recip_q27) {
+  return static_cast<uint16_t>((recip_q27 + 1u) >> 1);
 }
 
 // drive (512 us*mV) * recip26 (2^26 / mV) = (drive * 512 / mV) us * 2^17: the duty in 2^-17 us.
-// drive < 2^16, recip26 < 11185: product < 2^30.
+// drive < 2^16, recip26 < 22370: product < 2^31.
 TC_INLINE uint32_t dutyQ17(uint16_t drive, uint16_t recip26) { return mulU16(drive, recip26); }
 
 struct PwmRange {
@@ -170,7 +184,7 @@ struct PwmRange {
 
 TC_INLINE ForcePwmResult finishPwm(const ModelV2& m, uint32_t duty_q17, uint8_t flags,
                                    PwmRange limits) {
-  // start <= 1800 us (< 2^28 in 2^-17 us) + duty < 2^30 + 1/2 us to round: < 2^31. The
+  // start <= 1800 us (< 2^28 in 2^-17 us) + duty < 2^31 + 1/2 us to round: < 2^32. The
   // shift by 17 is a byte move and one 16-bit shift.
   const uint32_t pwm_q17 = m.start_q17_us + duty_q17 + 0x10000ul;
   const uint16_t pwm_us = static_cast<uint16_t>(static_cast<uint16_t>(pwm_q17 >> 16) >> 1);
@@ -197,11 +211,11 @@ void BusVoltageFilter::reset(uint16_t mv_now) {
   rem = 0;
   if (!saneMv(mv_now)) {
     mv = 0;
-    recip_q28 = 0;
+    recip_q27 = 0;
     return;
   }
   mv = mv_now;
-  recip_q28 = static_cast<uint16_t>(kRecipOne / mv_now);  // the one division
+  recip_q27 = static_cast<uint16_t>(kRecipOne / mv_now);  // the one division
 }
 
 namespace {
@@ -257,20 +271,20 @@ TC_INLINE int16_t firstOrderStep(uint16_t& value, uint8_t& rem, uint16_t x, uint
   return step;
 }
 
-// x / 16 for a 16-bit x (avr-g++ -Os loops 4 times for it).
-TC_INLINE uint16_t shr4(uint16_t x) {
+// x / 8 for a 16-bit x (avr-g++ -Os loops 3 times for it).
+TC_INLINE uint16_t shr3(uint16_t x) {
 #if defined(__AVR__)
   __asm__(
-      "swap %A0\n\t"
-      "andi %A0, 0x0F\n\t"
-      "swap %B0\n\t"
-      "eor  %A0, %B0\n\t"
-      "andi %B0, 0x0F\n\t"
-      "eor  %A0, %B0"
-      : "+d"(x));
+      "lsr  %B0\n\t"
+      "ror  %A0\n\t"
+      "lsr  %B0\n\t"
+      "ror  %A0\n\t"
+      "lsr  %B0\n\t"
+      "ror  %A0"
+      : "+r"(x));
   return x;
 #else
-  return static_cast<uint16_t>(x >> 4);
+  return static_cast<uint16_t>(x >> 3);
 #endif
 }
 
@@ -286,19 +300,19 @@ void BusVoltageFilter::update(uint16_t sample_mv) {
     return;
   }
   if (firstOrderStep(mv, rem, sample_mv, shift) == 0) return;  // steady: the reciprocal holds
-  // Newton step on r = 2^28 / mv: e = 2^28 - mv * r, r += r * e / 2^28.
-  // mv * r <= 17500 * 44739 < 2^30.
-  const int32_t e = static_cast<int32_t>(kRecipOne - mulU16(mv, recip_q28));
+  // Newton step on r = 2^27 / mv: e = 2^27 - mv * r, r += r * e / 2^27.
+  // mv * r <= 26000 * 44739 < 2^31.
+  const int32_t e = static_cast<int32_t>(kRecipOne - mulU16(mv, recip_q27));
   if (e > kNewtonLimit || e < -kNewtonLimit) {
-    recip_q28 = static_cast<uint16_t>(kRecipOne / mv);
+    recip_q27 = static_cast<uint16_t>(kRecipOne / mv);
     if (reseeds != 255) ++reseeds;
     return;
   }
-  // r * e / 2^28 = ((e / 2^8) * r / 2^16) / 2^4: |e / 2^8| <= 2^13, r < 2^16: |product| < 2^29.
+  // r * e / 2^27 = ((e / 2^8) * r / 2^16) / 2^3: |e / 2^8| <= 2^12, r < 2^16: |product| < 2^28.
   const int16_t e8 = static_cast<int16_t>(e >> 8);
   const uint16_t mag = static_cast<uint16_t>(e8 < 0 ? -e8 : e8);
-  const uint16_t corr = shr4(static_cast<uint16_t>(mulU16(mag, recip_q28) >> 16));
-  recip_q28 = static_cast<uint16_t>(e8 < 0 ? recip_q28 - corr : recip_q28 + corr);
+  const uint16_t corr = shr3(static_cast<uint16_t>(mulU16(mag, recip_q27) >> 16));
+  recip_q27 = static_cast<uint16_t>(e8 < 0 ? recip_q27 - corr : recip_q27 + corr);
 }
 
 // ---- Run time ------------------------------------------------------------------------------
@@ -311,7 +325,7 @@ TC_INLINE ForcePwmResult pwmFor(const ModelV2& model, uint16_t force_dg, uint16_
   if (model.max_force_dg == 0)  // finalize() sets it for every valid model, clear() zeroes it
     return ForcePwmResult{limits.min_us, kNotCalibrated};
   if (force_dg == 0) return ForcePwmResult{limits.min_us, kStopped};
-  if (flags & kVoltageInvalid) recip26 = recip26Of(model.rest_recip_q28);
+  if (flags & kVoltageInvalid) recip26 = recip26Of(model.rest_recip_q27);
   const uint16_t drive = driveAt(model, knotPos(model, clampForce(model, force_dg, flags)));
   return finishPwm(model, dutyQ17(drive, recip26), flags, limits);
 }
@@ -320,7 +334,7 @@ TC_INLINE ForcePwmResult pwmFor(const ModelV2& model, uint16_t force_dg, uint16_
 
 ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVoltageFilter& bus,
                             const ForcePwmLimits& limits) {
-  return pwmFor(model, force_dg, recip26Of(bus.recip_q28), bus.isValid() ? 0 : kVoltageInvalid,
+  return pwmFor(model, force_dg, recip26Of(bus.recip_q27), bus.isValid() ? 0 : kVoltageInvalid,
                 PwmRange{limits.pwm_min_us, limits.pwm_max_us});
 }
 
@@ -329,9 +343,9 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
   if (model.max_force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kNotCalibrated};
   if (force_dg == 0) return ForcePwmResult{limits.pwm_min_us, kStopped};
   uint8_t flags = 0;
-  uint16_t recip = bus.recip_q28;
+  uint16_t recip = bus.recip_q27;
   if (!bus.isValid()) {
-    recip = model.rest_recip_q28;
+    recip = model.rest_recip_q27;
     flags |= kVoltageInvalid;
   }
   const KnotPos p = knotPos(model, clampForce(model, force_dg, flags));
@@ -340,18 +354,17 @@ ForcePwmResult forceToPwmV2(const ModelV2& model, uint16_t force_dg, const BusVo
     uint8_t ignored = 0;
     const KnotPos now = knotPos(model, clampForce(model, force_now_dg, ignored));
     // Extra drop expected at the command: d = sag(cmd) - sag(now), in 1/128 of 10 mV
-    // (|d| < 2^15). delta = d_mv / V in Q16 = d * (1.25 * 2^28 / mV) / 2^16: the factor
-    // 1.25 * recip fits 16 bits (< 55924 at 6 V).
+    // (|d| < 2^15). delta = d_mv / V in Q16 = d * (1.25 * 2^27 / mV) / 2^15: the factor
+    // 1.25 * recip fits 16 bits (< 55924 at 3 V). A predicted change of more than 25 % is
+    // not sag: saturated at 16384.
     const int16_t d_q7 = static_cast<int16_t>((sagAtQ8(model, p) >> 1) - (sagAtQ8(model, now) >> 1));
     const uint16_t recip_x125 = static_cast<uint16_t>(recip + (recip >> 2));
-    int16_t delta = mulS16U16Hi(d_q7, recip_x125);
-    if (delta > 16384) delta = 16384;  // a predicted change of more than 25 % is not sag
-    if (delta < -16384) delta = -16384;
+    const int16_t delta = mulS16U16Shr15Sat(d_q7, recip_x125);
     // duty / (1 - delta) ~ duty * (1 + delta + delta^2): error delta^3 (< 0.01 % at 5 %).
     const uint16_t mag = static_cast<uint16_t>(delta < 0 ? -delta : delta);
     const int16_t factor = static_cast<int16_t>(delta + static_cast<int16_t>(mulU16(mag, mag) >> 16));
     // duty * (1 + factor / 2^16), factor in -16384..20480. With duty = hi * 2^16 + lo:
-    // duty * factor / 2^16 = hi * factor + lo * factor / 2^16 (hi < 2^14): byte-aligned.
+    // duty * factor / 2^16 = hi * factor + lo * factor / 2^16 (hi < 2^15): byte-aligned.
     const uint16_t hi = static_cast<uint16_t>(duty_q17 >> 16);
     const uint16_t lo = static_cast<uint16_t>(duty_q17);
     const uint16_t fmag = static_cast<uint16_t>(factor < 0 ? -factor : factor);
@@ -402,7 +415,8 @@ bool ModelV2Run::load(const ModelV2& m) {
   fine_knots = m.fine_knots;
   knots = m.knots;
   start_round_q17_us = m.start_q17_us + 0x10000ul;  // + 1/2 us: rounds to whole us
-  rest_recip_q28 = m.rest_recip_q28;
+  rest_recip_q27 = m.rest_recip_q27;
+  q16_inverse = m.q16_inverse;
   step_dg = m.step_dg;
   coarse_step_dg = m.coarse_step_dg;
   rest_mv = m.rest_mv;
@@ -421,16 +435,19 @@ TC_INLINE void filterSag(BusSagFilter& f, uint16_t total_q4, uint8_t shift) {
   firstOrderStep(f.seen_q4, f.rem, total_q4, shift);
 }
 
-// 2^28 / V_cmd from 2^28 / V and x = V_cmd - V in 1/16 of kV2SagUnitMv: (1/V)(1 - e + e^2),
+// 2^27 / V_cmd from 2^27 / V and x = V_cmd - V in 1/16 of kV2SagUnitMv: (1/V)(1 - e + e^2),
 // e = x / V clamped to +-1/4.
-TC_INLINE uint16_t predictedRecip(uint16_t recip_q28, int16_t x_q4) {
+TC_INLINE uint16_t predictedRecip(uint16_t recip_q27, int16_t x_q4) {
   static_assert(kV2SagUnitMv == 10, "e's scale below assumes 10 mV sag units");
-  // e = x_mv / V = x_q4 * (10 / 16) * recip / 2^28 = x_q4 * (recip * 5 / 4) / 2^29: the
-  // product's top 16 bits are e in Q13 (1/8192 of V, ~1.4 mV at 11 V). recip * 5 / 4 < 55924
-  // (6 V), |x_q4| < 2^14: product < 2^30.
-  const uint16_t k = static_cast<uint16_t>(recip_q28 + (recip_q28 >> 2));
+  // e = x_mv / V = x_q4 * (10 / 16) * recip / 2^27 = x_q4 * (recip * 5 / 4) / 2^28: the
+  // product / 2^15 is e in Q13 (1/8192 of V, ~1.4 mV at 11 V). recip * 5 / 4 < 55924 (3 V),
+  // |x_q4| < 2^14: product < 2^30, / 2^15 < 2^15. The shift by 15: the top 16 bits times 2
+  // and bit 15.
+  const uint16_t k = static_cast<uint16_t>(recip_q27 + (recip_q27 >> 2));
   const uint16_t x_mag = static_cast<uint16_t>(x_q4 < 0 ? -x_q4 : x_q4);
-  uint16_t e13 = static_cast<uint16_t>(mulU16(x_mag, k) >> 16);
+  const uint32_t prod = mulU16(x_mag, k);
+  uint16_t e13 = static_cast<uint16_t>(static_cast<uint16_t>(static_cast<uint16_t>(prod >> 16) << 1) |
+                                       (static_cast<uint16_t>(prod) >> 15));
   if (e13 > 2048u) e13 = 2048u;  // a predicted change of more than 25 % is not sag
   const uint16_t e_mag = static_cast<uint16_t>(e13 << 3);  // Q16, <= 16384
   // e^2 from e rounded to 1/256 (one 8 x 8 product; e^2 is the small term): <= 4096.
@@ -439,8 +456,8 @@ TC_INLINE uint16_t predictedRecip(uint16_t recip_q28, int16_t x_q4) {
   // factor = e^2 - e: -12288..20480; recip * |factor| < 2^30.
   const int16_t factor = static_cast<int16_t>(x_q4 < 0 ? e2 + e_mag : e2 - e_mag);
   const uint16_t f_mag = static_cast<uint16_t>(factor < 0 ? -factor : factor);
-  const uint16_t corr = static_cast<uint16_t>(mulU16(recip_q28, f_mag) >> 16);
-  return static_cast<uint16_t>(factor < 0 ? recip_q28 - corr : recip_q28 + corr);  // < 58721
+  const uint16_t corr = static_cast<uint16_t>(mulU16(recip_q27, f_mag) >> 16);
+  return static_cast<uint16_t>(factor < 0 ? recip_q27 - corr : recip_q27 + corr);  // < 58721 (3 V)
 }
 
 // A frame's inputs for the portable pass.
@@ -448,7 +465,7 @@ struct FrameArgs {
   V2Lane* lanes;
   uint8_t count;
   uint8_t flags;       // ForcePwmFlag bits for every lane, plus kUseRestVoltage
-  uint16_t recip_q28;  // the bus filter's 2^28 / V
+  uint16_t recip_q27;  // the bus filter's 2^27 / V
   uint16_t min_us;
   uint16_t max_us;
   uint8_t shift;       // the bus filter's
@@ -485,7 +502,7 @@ uint16_t passPortable(const FrameArgs& a, uint16_t recip26) {
     // Bench sag in 1/16 unit, linear between the knots on the fraction's top nibble.
     const uint8_t f4 = static_cast<uint8_t>(p.frac_q16 >> 12);
     total_q4 = static_cast<uint16_t>(total_q4 + k[0].sag_10mv * (16u - f4) + k[1].sag_10mv * f4);
-    const uint16_t r26 = (a.flags & kUseRestVoltage) ? recip26Of(m.rest_recip_q28) : recip26;
+    const uint16_t r26 = (a.flags & kUseRestVoltage) ? recip26Of(m.rest_recip_q27) : recip26;
     const uint32_t pwm_q17 = l->startRoundQ17() + mulU16(drive, r26);
     uint16_t pwm_us = static_cast<uint16_t>(static_cast<uint16_t>(pwm_q17 >> 16) >> 1);
     if (pwm_us > a.max_us) {
@@ -508,7 +525,7 @@ void framePortable(V2Frame& f, uint16_t sample_mv, uint8_t extra_flags) {
   a.lanes = f.lane;
   a.count = f.count;
   a.flags = static_cast<uint8_t>(extra_flags | (f.bus.isValid() ? 0 : kVoltageInvalid | kUseRestVoltage));
-  a.recip_q28 = f.bus.recip_q28;
+  a.recip_q27 = f.bus.recip_q27;
   a.min_us = f.pwm_min_us;
   a.max_us = f.pwm_max_us;
   a.shift = f.bus.shift;
@@ -517,7 +534,7 @@ void framePortable(V2Frame& f, uint16_t sample_mv, uint8_t extra_flags) {
   // filtered reading plus the sag it shows minus the sag of those commands.
   const int16_t x_q4 = static_cast<int16_t>(sag.seen_q4 - sag.last_q4);
   filterSag(sag, sag.last_q4, a.shift);
-  uint16_t recip = a.recip_q28;
+  uint16_t recip = a.recip_q27;
   if (x_q4 != 0 && !(a.flags & kUseRestVoltage)) recip = predictedRecip(recip, x_q4);
   sag.last_q4 = passPortable(a, recip26Of(recip));
 }
@@ -547,7 +564,7 @@ static_assert(offsetof(ModelV2Run, knot) <= 63 && sizeof(ModelV2Run::Knot) == 4 
                   offsetof(ModelV2Run::Knot, sag_10mv) == 2 && (kV2MaxKnots + 1) * 4 < 256,
               "adiw reaches the knots; 4 bytes per knot, the index times 4 fits a byte");
 static_assert(offsetof(BusVoltageFilter, mv) == 0 && offsetof(BusVoltageFilter, rem) == 2 &&
-                  offsetof(BusVoltageFilter, shift) == 3 && offsetof(BusVoltageFilter, recip_q28) == 4,
+                  offsetof(BusVoltageFilter, shift) == 3 && offsetof(BusVoltageFilter, recip_q27) == 4,
               "the frame reads the bus filter at these offsets");
 static_assert(offsetof(BusSagFilter, seen_q4) == 0 && offsetof(BusSagFilter, rem) == 2 &&
                   offsetof(BusSagFilter, last_q4) == 3,
@@ -559,10 +576,11 @@ static_assert(offsetof(V2Frame, bus) == 0 && offsetof(V2Frame, sag) == 8 &&
               "the frame reaches its state at these offsets");
 static_assert(kStopped == 1 && kSaturated == 4 && kClamped == 0x40,
               "the frame writes these flags as numbers (an asm statement takes at most 30 operands)");
-static_assert(kNewtonLimit == 1l << 21, "the Newton range test below is written for 2^21");
+static_assert(kNewtonLimit == 1l << 20 && kRecipOne == 1ul << 27,
+              "the Newton step below is written for a Q27 reciprocal and a range of 2^20");
 
-// 2^28 / mv: the bus filter's re-seed after a jump (the frame's only division, rare).
-__attribute__((noinline, used)) uint16_t reseedRecipQ28(uint16_t mv) {
+// 2^27 / mv: the bus filter's re-seed after a jump (the frame's only division, rare).
+__attribute__((noinline, used)) uint16_t reseedRecipQ27(uint16_t mv) {
   return static_cast<uint16_t>(kRecipOne / mv);
 }
 
@@ -686,24 +704,24 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "add  r17, r0\n\t"
       "adc  r18, r1\n\t"
       "adc  r19, r3\n\t"
-      "subi r19, 0x10\n\t"  // D = mv * recip - 2^28 = -e
-      // |D| <= 2^21, else re-seed by division
+      "subi r19, 0x08\n\t"  // D = mv * recip - 2^27 = -e
+      // |D| <= 2^20, else re-seed by division
       "tst  r19\n\t"
       "breq 46f\n\t"
       "cpi  r19, 0xFF\n\t"
       "brne 48f\n\t"
-      "cpi  r18, 0xE0\n\t"
+      "cpi  r18, 0xF0\n\t"
       "brsh 47f\n\t"
       "rjmp 48f\n"
       "46:\n\t"
-      "cpi  r18, 0x20\n\t"
+      "cpi  r18, 0x10\n\t"
       "brlo 47f\n\t"
       "brne 48f\n\t"
       "mov  r0, r17\n\t"
       "or   r0, r16\n\t"
       "brne 48f\n"
       "47:\n\t"
-      // e / 2^8 = floor(-D / 2^8) = -T, T = (D + 255) / 2^8 in r18:r17; corr = |T| * recip / 2^20
+      // e / 2^8 = floor(-D / 2^8) = -T, T = (D + 255) / 2^8 in r18:r17; corr = |T| * recip / 2^19
       "subi r16, 0x01\n\t"
       "sbci r17, 0xFF\n\t"
       "sbci r18, 0xFF\n\t"
@@ -726,12 +744,12 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "add  r19, r0\n\t"
       "adc  r24, r1\n\t"
       "adc  r25, r3\n\t"
-      "swap r24\n\t"  // / 16
-      "andi r24, 0x0F\n\t"
-      "swap r25\n\t"
-      "eor  r24, r25\n\t"
-      "andi r25, 0x0F\n\t"
-      "eor  r24, r25\n\t"
+      "lsr  r25\n\t"  // / 8
+      "ror  r24\n\t"
+      "lsr  r25\n\t"
+      "ror  r24\n\t"
+      "lsr  r25\n\t"
+      "ror  r24\n\t"
       "sbrc r16, 7\n\t"  // T < 0 (e > 0): up; T > 0: down
       "rjmp 51f\n\t"
       "sub  r4, r24\n\t"
@@ -811,7 +829,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "ror  r20\n\t"
       "add  r20, r4\n\t"
       "adc  r21, r5\n\t"
-      "mul  r24, r20\n\t"  // e13 = |x| * k / 2^16
+      "mul  r24, r20\n\t"  // e13 = |x| * k / 2^15
       "mov  r18, r1\n\t"
       "mul  r25, r21\n\t"
       "movw r22, r0\n\t"
@@ -823,6 +841,9 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "add  r18, r0\n\t"
       "adc  r22, r1\n\t"
       "adc  r23, r3\n\t"
+      "lsl  r18\n\t"  // / 2^15: bytes 3..2 times 2 and bit 15
+      "rol  r22\n\t"
+      "rol  r23\n\t"
       "cpi  r22, 0x01\n\t"  // at most 2048 (e = 1/4)
       "ldi  r18, 0x08\n\t"
       "cpc  r23, r18\n\t"
@@ -871,11 +892,9 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "add  r4, r20\n\t"  // x < 0: the bus will sag
       "adc  r5, r21\n"
       "9:\n\t"
-      "movw r20, r4\n\t"  // recip26 = (recip + 2) / 4
-      "subi r20, 0xFE\n\t"
+      "movw r20, r4\n\t"  // recip26 = (recip + 1) / 2
+      "subi r20, 0xFF\n\t"
       "sbci r21, 0xFF\n\t"
-      "lsr  r21\n\t"
-      "ror  r20\n\t"
       "lsr  r21\n\t"
       "ror  r20\n\t"
       "movw r4, r20\n\t"
@@ -898,7 +917,26 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "ldd  r22, Z+%[o_inv]\n\t"
       "ldd  r23, Z+%[o_inv]+1\n\t"
       "clr  r17\n\t"
-      "rjmp 14f\n"
+      "ldd  r14, Z+%[o_q16]\n\t"
+      "tst  r14\n\t"
+      "breq 14f\n\t"
+      // small motor: inv = 2^16 / step, force * inv * 2^8: index = byte 2, fraction = bytes 1..0
+      "mul  r12, r22\n\t"
+      "movw r18, r0\n\t"
+      "mul  r13, r23\n\t"
+      "movw r20, r0\n\t"
+      "mul  r12, r23\n\t"
+      "add  r19, r0\n\t"
+      "adc  r20, r1\n\t"
+      "adc  r21, r3\n\t"
+      "mul  r13, r22\n\t"
+      "add  r19, r0\n\t"
+      "adc  r20, r1\n\t"
+      "adc  r21, r3\n\t"
+      "mov  r21, r20\n\t"
+      "mov  r20, r19\n\t"
+      "mov  r19, r18\n\t"
+      "rjmp 27f\n"
       "22:\n\t"  // above the curve's end: its end, saturated
       "movw r12, r18\n\t"
       "ori  r16, 4\n\t"
@@ -953,6 +991,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "rol  r20\n\t"
       "rol  r21\n\t"
       "tc_v2fly_interp:\n\t"
+      "27:\n\t"
       // Z = &knot[base + index], 4 bytes per knot
       "add  r17, r21\n\t"
       "lsl  r17\n\t"
@@ -1040,7 +1079,7 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "rjmp 10b\n"
       "tc_v2fly_rare_b:\n\t"
       // out of line, after the loop (within a branch's reach of its end)
-      "23:\n\t"  // bus not valid: this model's resting voltage, (rest_recip + 2) / 4
+      "23:\n\t"  // bus not valid: this model's resting voltage, (rest_recip + 1) / 2
       "movw r22, r26\n\t"  // the model again, from the lane
       "sbiw r26, 4\n\t"
       "ld   r30, X+\n\t"
@@ -1048,10 +1087,8 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "movw r26, r22\n\t"
       "ldd  r22, Z+%[o_rrec]\n\t"
       "ldd  r23, Z+%[o_rrec]+1\n\t"
-      "subi r22, 0xFE\n\t"
+      "subi r22, 0xFF\n\t"
       "sbci r23, 0xFF\n\t"
-      "lsr  r23\n\t"
-      "ror  r22\n\t"
       "lsr  r23\n\t"
       "ror  r22\n\t"
       "movw r4, r22\n\t"
@@ -1075,8 +1112,8 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
         [o_lanes] "I"(kOffLanes), [o_fmax] "I"(offsetof(ModelV2Run, max_force_dg)),
         [o_inv] "I"(offsetof(ModelV2Run, inv_step_q22)), [o_invc] "I"(offsetof(ModelV2Run, inv_coarse_q22)),
         [o_fine] "I"(offsetof(ModelV2Run, fine_knots)), [o_knot] "I"(offsetof(ModelV2Run, knot)),
-        [o_rrec] "I"(offsetof(ModelV2Run, rest_recip_q28)),
-        [o_reseeds] "I"(offsetof(BusVoltageFilter, reseeds)), [reseed] "i"(&reseedRecipQ28),
+        [o_rrec] "I"(offsetof(ModelV2Run, rest_recip_q27)), [o_q16] "I"(offsetof(ModelV2Run, q16_inverse)),
+        [o_reseeds] "I"(offsetof(BusVoltageFilter, reseeds)), [reseed] "i"(&reseedRecipQ27),
         [slow] "i"(&slowFilterStep), [mtab] "i"(kShiftMul), [sane_lo] "i"(kV2SaneMinMv),
         [sane_span] "i"(kV2SaneMaxMv - kV2SaneMinMv + 1), [lflags] "i"(&g_lane_flags)
       : "r0", "r2", "r4", "r5", "r6", "r7", "r8", "r9", "r10", "r11", "r12", "r13", "r14", "r15",

@@ -23,9 +23,9 @@ static_assert(kSagOffset + kV2MaxKnots == kRecordV2CrcOffset, "layout table and 
 
 }  // namespace
 
-void serializeModelV2(const ModelV2& model, uint16_t sequence, uint8_t* image) {
+void serializeModelV2(const ModelV2& model, uint16_t sequence, uint8_t* image, uint8_t magic) {
   image[0] = kLayoutVersion2;
-  image[1] = kRecordV2Magic;
+  image[1] = magic;
   putU16(image + kRecordV2SeqOffset, sequence);
   image[4] = model.knots;
   image[5] = model.flags;
@@ -43,11 +43,13 @@ void serializeModelV2(const ModelV2& model, uint16_t sequence, uint8_t* image) {
   putU16(image + kRecordV2CrcOffset, crc16CcittFalse(image, kRecordV2CrcOffset));
 }
 
-DecodeStatus parseModelV2(const uint8_t* image, ModelV2& out, uint16_t& sequence) {
+DecodeStatus parseModelV2(const uint8_t* image, ModelV2& out, uint16_t& sequence,
+                          const RecordLimits& limits, Plausibility* why, uint8_t magic) {
   out.clear();
   sequence = 0;
+  if (why) *why = Plausibility();
   if (image[0] == 0xFF) return DecodeStatus::kErased;
-  if (image[0] != kLayoutVersion2 || image[1] != kRecordV2Magic) return DecodeStatus::kBadVersion;
+  if (image[0] != kLayoutVersion2 || image[1] != magic) return DecodeStatus::kBadVersion;
   if (crc16CcittFalse(image, kRecordV2CrcOffset) != getU16(image + kRecordV2CrcOffset))
     return DecodeStatus::kBadCrc;
   ModelV2 m;
@@ -63,7 +65,14 @@ DecodeStatus parseModelV2(const uint8_t* image, ModelV2& out, uint16_t& sequence
     m.drive_512usmv[k] = getU16(image + kDriveOffset + 2 * k);
     m.sag_10mv[k] = image[kSagOffset + k];
   }
-  if (!m.finalize()) return DecodeStatus::kBadContent;
+  const Plausibility p = checkModelV2(m, limits);
+  if (!p.ok() || !m.finalize()) {
+    if (why) {
+      *why = p;
+      if (p.ok()) why->rule = Implausible::kMalformed;
+    }
+    return DecodeStatus::kBadContent;
+  }
   out = m;
   sequence = getU16(image + kRecordV2SeqOffset);
   return DecodeStatus::kOk;
@@ -76,6 +85,8 @@ const char* writeV2StatusText(WriteV2Status status) {
     case WriteV2Status::kInvalidModel: return "invalid model: nothing written (fit it again)";
     case WriteV2Status::kVerifyFailed:
       return "read-back failed: EEPROM worn? the previous calibration is kept";
+    case WriteV2Status::kImplausible:
+      return "implausible model: nothing written (it breaks a plausibility rule)";
   }
   return "unknown";
 }

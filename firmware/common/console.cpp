@@ -23,20 +23,24 @@ constexpr int32_t kInt32Min = -2147483647 - 1;
 // length_ counts what the user typed (minus backspaces), even past kLineMax; only the first
 // kLineMax characters are stored. Backspacing back under the limit therefore recovers a valid
 // line exactly: the characters beyond the buffer were the ones deleted first.
-LineEvent LineReader::feed(uint8_t byte) {
-  const bool after_cr = last_was_cr_;
-  last_was_cr_ = (byte == '\r');
+LineEvent LineReader::feed(int16_t item) {
+  if (item == hal::Uart::kRxDamaged) {
+    flags_ = static_cast<uint8_t>((flags_ | kDamagedLine) & ~kLastWasCr);
+    return LineEvent::kNone;
+  }
+  uint8_t byte = static_cast<uint8_t>(item);
+  const bool after_cr = (flags_ & kLastWasCr) != 0;
+  flags_ = static_cast<uint8_t>(byte == '\r' ? (flags_ | kLastWasCr) : (flags_ & ~kLastWasCr));
   if (byte == '\r' || byte == '\n') {
     if (byte == '\n' && after_cr) return LineEvent::kNone;  // LF of a CRLF
-    newline();
-    const bool too_long = overflow_ || length_ > kLineMax;
-    buffer_[too_long ? 0 : length_] = '\0';
-    length_ = 0;
-    overflow_ = false;
-    return too_long ? LineEvent::kTooLong : LineEvent::kLine;
+    return endLine();
+  }
+  if (flags_ & kDiscarding) {
+    if (length_ != kLengthCap) ++length_;  // counted, not echoed, not kept
+    return LineEvent::kNone;
   }
   if (byte == kBackspace || byte == kDelete) {
-    if (length_ > 0 && !overflow_) {
+    if (length_ > 0 && !(flags_ & kOverflow)) {
       --length_;
       if (length_ < kLineMax) buffer_[length_] = '\0';
       hal::Uart::write(kBackspace);
@@ -46,9 +50,16 @@ LineEvent LineReader::feed(uint8_t byte) {
     return LineEvent::kNone;
   }
   if (byte == '\t') byte = ' ';
-  if (byte < 0x20 || byte > 0x7E) return LineEvent::kNone;  // other control or 8-bit bytes
+  if (byte < 0x20 || byte > 0x7E) {  // a control or 8-bit byte: a corrupted character
+    if (!(flags_ & kNotTextLine)) {
+      flags_ |= kNotTextLine;
+      bad_byte_ = byte;
+      bad_column_ = static_cast<uint8_t>(length_ == kLengthCap ? kLengthCap : length_ + 1);
+    }
+    return LineEvent::kNone;
+  }
   if (length_ == kLengthCap) {
-    overflow_ = true;  // beyond any recovery by backspace
+    flags_ |= kOverflow;  // beyond any recovery by backspace
     return LineEvent::kNone;
   }
   if (length_ < kLineMax) {
@@ -60,11 +71,106 @@ LineEvent LineReader::feed(uint8_t byte) {
   return LineEvent::kNone;
 }
 
-LineEvent LineReader::poll() {
-  while (hal::Uart::available()) {
-    const int16_t byte = hal::Uart::read();
-    if (byte < 0) break;
-    const LineEvent event = feed(static_cast<uint8_t>(byte));
+LineEvent LineReader::endLine() {
+  const uint8_t length = length_;
+  const uint8_t flags = flags_;
+  length_ = 0;
+  flags_ = static_cast<uint8_t>(flags_ & (kStrict | kLastWasCr));  // per-line state cleared
+  reject_ = Reject::kNone;
+  if (flags & kDiscarding) {
+    buffer_[0] = '\0';
+    if (length == 0) return LineEvent::kNone;  // the abort key was the last of its line
+    newline();
+    length_ = length;  // for the message
+    return rejectLine(Reject::kAbortedRest);
+  }
+  newline();
+  const bool too_long = (flags & kOverflow) || length > kLineMax;
+  buffer_[too_long ? 0 : length] = '\0';
+  if (flags & kDamagedLine) return rejectLine(Reject::kDamaged);
+  if (flags & kNotTextLine) return rejectLine(Reject::kNotText);
+  if (too_long) return rejectLine(Reject::kTooLong);
+  const Reject sum = checkChecksum();
+  if (sum != Reject::kNone) return rejectLine(sum);
+  return LineEvent::kLine;
+}
+
+LineEvent LineReader::rejectLine(Reject why) {
+  reject_ = why;
+  if (rejected_ != 0xFFFF) ++rejected_;
+  hal::Uart::printP(TC_PSTR("error: "));
+  switch (why) {
+    case Reject::kDamaged:
+      hal::Uart::printP(TC_PSTR("line damaged in transit (bytes lost or garbled: receive "
+                                "overflow, framing or parity error)"));
+      break;
+    case Reject::kNotText:
+      hal::Uart::printP(TC_PSTR("byte 0x"));
+      printHex2(bad_byte_);
+      hal::Uart::printP(TC_PSTR(" at column "));
+      printUint(bad_column_);
+      hal::Uart::printP(TC_PSTR(" is not text (noise on the line?)"));
+      break;
+    case Reject::kTooLong:
+      hal::Uart::printP(TC_PSTR("line longer than "));
+      printUint(kLineMax);
+      hal::Uart::printP(TC_PSTR(" characters"));
+      break;
+    case Reject::kBadChecksum:
+      hal::Uart::printP(TC_PSTR("checksum *"));
+      printHex2(given_sum_);
+      hal::Uart::printP(TC_PSTR(" does not match the line (*"));
+      printHex2(wanted_sum_);
+      hal::Uart::write(')');
+      break;
+    case Reject::kMalformedChecksum:
+      hal::Uart::printP(TC_PSTR("'*' must end the line with two hex digits (checksum *HH)"));
+      break;
+    case Reject::kAbortedRest:
+      hal::Uart::printP(TC_PSTR("ignored the rest of the line whose first key aborted ("));
+      printUint(length_);
+      hal::Uart::printP(TC_PSTR(" characters)"));
+      length_ = 0;
+      break;
+    case Reject::kNone:
+      break;
+  }
+  hal::Uart::printP(TC_PSTR(", ignored; nothing changed"));
+  newline();
+  buffer_[0] = '\0';
+  return LineEvent::kRejected;
+}
+
+namespace {
+int8_t hexValue(char c) {
+  if (c >= '0' && c <= '9') return static_cast<int8_t>(c - '0');
+  if (c >= 'A' && c <= 'F') return static_cast<int8_t>(c - 'A' + 10);
+  if (c >= 'a' && c <= 'f') return static_cast<int8_t>(c - 'a' + 10);
+  return -1;
+}
+}  // namespace
+
+Reject LineReader::checkChecksum() {
+  uint8_t star = 0;
+  uint8_t sum = 0;
+  while (buffer_[star] != '\0' && buffer_[star] != '*') sum ^= static_cast<uint8_t>(buffer_[star++]);
+  if (buffer_[star] == '\0') return Reject::kNone;  // no checksum: fine unless strict requires one
+  const int8_t hi = hexValue(buffer_[star + 1]);
+  const int8_t lo = hi < 0 ? -1 : hexValue(buffer_[star + 2]);
+  if (hi < 0 || lo < 0 || buffer_[star + 3] != '\0') return Reject::kMalformedChecksum;
+  given_sum_ = static_cast<uint8_t>((hi << 4) | lo);
+  wanted_sum_ = sum;
+  if (given_sum_ != sum) return Reject::kBadChecksum;
+  buffer_[star] = '\0';
+  flags_ |= kChecked;
+  return Reject::kNone;
+}
+
+LineEvent LineReader::poll(uint8_t max_bytes) {
+  for (uint8_t n = 0; n < max_bytes && hal::Uart::available(); ++n) {
+    const int16_t item = hal::Uart::read();
+    if (item < 0) break;
+    const LineEvent event = feed(item);
     if (event != LineEvent::kNone) return event;
   }
   return LineEvent::kNone;
@@ -73,8 +179,45 @@ LineEvent LineReader::poll() {
 void LineReader::clear() {
   buffer_[0] = '\0';
   length_ = 0;
-  overflow_ = false;
-  last_was_cr_ = false;
+  flags_ = static_cast<uint8_t>(flags_ & kStrict);
+}
+
+void LineReader::abortLine(int16_t key) {
+  clear();
+  if (key == '\r') {
+    flags_ |= kLastWasCr;  // its LF, if one follows, belongs to it
+  } else if (key != '\n') {
+    flags_ |= kDiscarding;
+  }
+}
+
+void LineReader::setStrict(bool on) {
+  flags_ = static_cast<uint8_t>(on ? (flags_ | kStrict) : (flags_ & ~kStrict));
+}
+
+bool LineReader::handleStrict(char** tokens, uint8_t count) {
+  if (count == 0 || !equalsP(tokens[0], TC_PSTR("strict"))) return false;
+  if (count == 2 && equalsP(tokens[1], TC_PSTR("on"))) {
+    setStrict(true);
+    hal::Uart::printP(TC_PSTR("strict on: commands that spin a motor or write the EEPROM need "
+                              "a checksum (*HH)"));
+  } else if (count == 2 && equalsP(tokens[1], TC_PSTR("off"))) {
+    setStrict(false);
+    hal::Uart::printP(TC_PSTR("strict off: checksums optional"));
+  } else {
+    hal::Uart::printP(TC_PSTR("error: usage: strict on|off; nothing changed"));
+  }
+  newline();
+  return true;
+}
+
+bool LineReader::allowRisky() {
+  if (!strict() || checked()) return true;
+  hal::Uart::printP(TC_PSTR("error: strict mode: this command spins a motor or writes the "
+                            "EEPROM and needs a checksum (*HH, XOR of the line before '*'); "
+                            "nothing changed"));
+  newline();
+  return false;
 }
 
 uint8_t tokenize(char* line, char** tokens, uint8_t max_tokens) {
@@ -160,6 +303,57 @@ void printFixed(int32_t value, uint8_t decimals) {
   for (uint32_t div = scale / 10; div > 0; div /= 10) {
     hal::Uart::write(static_cast<uint8_t>('0' + (fraction / div) % 10));
   }
+}
+
+void printHex2(uint8_t value) {
+  for (uint8_t shift = 4;; shift = 0) {
+    const uint8_t d = static_cast<uint8_t>((value >> shift) & 0x0F);
+    hal::Uart::write(static_cast<uint8_t>(d < 10 ? '0' + d : 'A' + d - 10));
+    if (shift == 0) return;
+  }
+}
+
+void printResetCause() {
+  const uint8_t flags = hal::Watchdog::resetFlags();
+  hal::Uart::printP(TC_PSTR("reset: "));
+  if ((flags & 0x1F) == 0) {  // a bootloader cleared MCUSR
+    hal::Uart::printP((flags & hal::Watchdog::kWasRunning)
+                          ? TC_PSTR("watchdog or external while running (a bootloader cleared "
+                                    "the reset flags)")
+                          : TC_PSTR("power-on or external (a bootloader cleared the reset flags)"));
+    newline();
+    return;
+  }
+  bool first = true;
+  auto word = [&](uint8_t bit, const char* text) {
+    if ((flags & bit) == 0) return;
+    if (!first) hal::Uart::printP(TC_PSTR(", "));
+    hal::Uart::printP(text);
+    first = false;
+  };
+  word(hal::Watchdog::kWatchdog, TC_PSTR("watchdog"));
+  word(hal::Watchdog::kBrownOut, TC_PSTR("brown-out"));
+  word(hal::Watchdog::kExternal, TC_PSTR("external"));
+  word(hal::Watchdog::kPowerOn, TC_PSTR("power-on"));
+  word(hal::Watchdog::kJtag, TC_PSTR("JTAG"));
+  if (flags & hal::Watchdog::kWatchdog) {
+    hal::Uart::printP(TC_PSTR(" (the program hung; motors were stopped)"));
+  } else if (flags & hal::Watchdog::kBrownOut) {
+    hal::Uart::printP(TC_PSTR(" (the supply dipped; check the 5 V supply)"));
+  }
+  newline();
+}
+
+void printHealth(const LineReader& reader, void (*yield)()) {
+  hal::Uart::printP(TC_PSTR("stack: "));
+  printUint(hal::Stack::untouchedBytes(yield));
+  hal::Uart::printP(TC_PSTR(" of "));
+  printUint(hal::Stack::sizeBytes());
+  hal::Uart::printP(reader.strict() ? TC_PSTR(" bytes never used; strict on; ")
+                                    : TC_PSTR(" bytes never used; strict off; "));
+  printUint(reader.rejectedLines());
+  hal::Uart::printP(TC_PSTR(" lines rejected"));
+  newline();
 }
 
 void newline() {

@@ -3,6 +3,8 @@
 #include "gather_store_app.hpp"
 
 #include "hal/hal.hpp"
+#include "record_report.hpp"
+#include "thrustcal/eeprom_store.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -117,10 +119,11 @@ void printFitProblem(tc::FitV2Status status) {
       say(TC_PSTR("fewer than 8 PWM steps: widen the range or use a smaller step"));
       break;
     case tc::FitV2Status::kNoForce:
-      say(TC_PSTR("the force never reached 13.2 g: motor not spinning or cell not tared?"));
+      say(TC_PSTR("the force never reached 5 g: motor not spinning or cell not tared?"));
       break;
     case tc::FitV2Status::kBadVoltage:
-      say(TC_PSTR("a battery reading outside 6..17.5 V: check the monitor wiring on A1"));
+      say(TC_PSTR("a battery reading outside 3..26 V: check the monitor wiring on A1 and the "
+                  "divider setting"));
       break;
     case tc::FitV2Status::kStartNotFound:
       say(TC_PSTR("ESC start threshold not found: sweep from 1000 us to full force in "
@@ -175,6 +178,21 @@ void printCurve(uint8_t which, const tc::ForceCurveBase& curve) {
   fw::newline();
 }
 
+// After a store: how it kept the old calibration through a power cut (or that it could not).
+void sayStoreSafety(const tc::StoreReport& report, uint8_t slot) {
+  if (report.spare_host != tc::kNoSlot) {
+    say(TC_PSTR("# power-fail safe: the old calibration stayed loadable (a copy in motor "));
+    fw::printUint(report.spare_host);
+    sayLine(TC_PSTR("'s slot) until the new one was complete"));
+  } else if (report.unprotected) {
+    say(TC_PSTR("warning: motor "));
+    fw::printUint(slot);
+    sayLine(TC_PSTR(" was switched in place: the other three slots hold thesis records, so no "
+                    "slot could keep the old calibration meanwhile (a power cut then leaves the "
+                    "motor not calibrated, never flown wrong)"));
+  }
+}
+
 }  // namespace
 
 GatherStoreApp::GatherStoreApp() { sag_builder_.reset(settings_.pwm_min_us); }
@@ -182,24 +200,26 @@ GatherStoreApp::GatherStoreApp() { sag_builder_.reset(settings_.pwm_min_us); }
 void GatherStoreApp::begin() {
   for (uint8_t ch = 0; ch < hal::kEscChannels; ++ch) hal::Esc::writePulse(ch, kStopPwmUs);
   armed_at_ms_ = hal::Clock::millis();
+  tc::readSettings<hal::Eeprom>(settings_board_);
+  battery_ = tc::BatteryMonitor(settings_board_.batteryConfig());
   fw::newline();
   sayLine(TC_PSTR("thrustcal gather_store: Gather and Store (thesis sec. 6.4), 115200 8N1"));
+  fw::printResetCause();
   sayLine(TC_PSTR("ESCs armed at 1000 us. Load cell A0, battery A1. Type help for the commands."));
+  say(TC_PSTR("battery monitor: "));
+  fw::printDivider(settings_board_);
+  fw::newline();
   prompt();
 }
 
 void GatherStoreApp::prompt() { say(TC_PSTR("gs> ")); }
 
 bool GatherStoreApp::poll() {
+  hal::Watchdog::kick();  // the main loop came round
   const fw::LineEvent event = reader_.poll();
   if (event == fw::LineEvent::kNone) return false;
-  if (event == fw::LineEvent::kTooLong) {
-    say(TC_PSTR("error: line longer than "));
-    fw::printUint(fw::kLineMax);
-    sayLine(TC_PSTR(" characters, ignored; nothing changed (type help for the commands)"));
-  } else {
-    execute(reader_.line());
-  }
+  // kRejected: the reader printed the one error line (damaged, not text, too long, checksum)
+  if (event == fw::LineEvent::kLine) execute(reader_.line());
   prompt();
   return true;
 }
@@ -218,6 +238,12 @@ void GatherStoreApp::execute(char* line) {
   const uint8_t n = fw::tokenize(line, args, kMaxTokens);
   if (n == 0) return;  // empty line: just a new prompt
   const char* cmd = args[0];
+  if (reader_.handleStrict(args, n)) return;
+  // Strict mode: the commands that spin the motor or write the EEPROM need a checksum.
+  const bool risky = fw::equalsP(cmd, TC_PSTR("sweep")) || fw::equalsP(cmd, TC_PSTR("store")) ||
+                     fw::equalsP(cmd, TC_PSTR("erase")) ||
+                     (n > 1 && fw::equalsP(cmd, TC_PSTR("divider")));
+  if (risky && !reader_.allowRisky()) return;
   if (fw::equalsP(cmd, TC_PSTR("help"))) {
     if (alone(cmd, n)) cmdHelp();
   } else if (fw::equalsP(cmd, TC_PSTR("motor"))) {
@@ -248,6 +274,8 @@ void GatherStoreApp::execute(char* line) {
     if (alone(cmd, n)) cmdErase();
   } else if (fw::equalsP(cmd, TC_PSTR("status"))) {
     if (alone(cmd, n)) cmdStatus();
+  } else if (fw::equalsP(cmd, TC_PSTR("divider"))) {
+    cmdDivider(args, n);
   } else {
     say(TC_PSTR("error: unknown command '"));
     hal::Uart::print(cmd);
@@ -278,7 +306,12 @@ void GatherStoreApp::cmdHelp() {
   sayLine(TC_PSTR("                a slot's v2 model from another voltage (>= 0.5 V) is refined"));
   sayLine(TC_PSTR("  show          what the selected slot's EEPROM record holds (v1 or v2)"));
   sayLine(TC_PSTR("  erase         mark the selected slot not calibrated (v1 and both v2 copies)"));
-  sayLine(TC_PSTR("  status        settings, live force and battery, last sweep"));
+  sayLine(TC_PSTR("  status        settings, live force and battery, last sweep, stack"));
+  sayLine(TC_PSTR("  divider [R1 R2] battery divider in ohm, R1 pack-A1, R2 A1-ground (default"));
+  sayLine(TC_PSTR("                100000 47000: 15.638 V); read_run flies with it too"));
+  sayLine(TC_PSTR("  strict on|off sweep, store, erase and divider need a checksum (host clients)"));
+  sayLine(TC_PSTR("lines: CR, LF or CRLF, at most 48 characters; optional checksum *HH = XOR"));
+  sayLine(TC_PSTR("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
 }
 
 void GatherStoreApp::cmdMotor(char** args, uint8_t n) {
@@ -402,14 +435,19 @@ void GatherStoreApp::cmdSettle(char** args, uint8_t n) {
 
 uint16_t GatherStoreApp::medianForceCounts() {
   force_median_.reset();
-  for (uint16_t i = 0; i < kForceWindow; ++i) force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
+  for (uint16_t i = 0; i < kForceWindow; ++i) {
+    hal::Watchdog::kick();  // 201 conversions: 21 ms
+    force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
+  }
   return force_median_.median();
 }
 
 uint16_t GatherStoreApp::medianBatteryCounts() {
   battery_median_.reset();
-  for (uint16_t i = 0; i < kBatteryWindow; ++i)
+  for (uint16_t i = 0; i < kBatteryWindow; ++i) {
+    hal::Watchdog::kick();
     battery_median_.push(hal::Adc::readCounts(hal::kAdcBattery));
+  }
   return battery_median_.median();
 }
 
@@ -510,8 +548,9 @@ void GatherStoreApp::stopMotor() { hal::Esc::writePulse(settings_.slot, kStopPwm
 bool GatherStoreApp::waitOrAbort(uint16_t ms) {
   const uint32_t start = hal::Clock::millis();
   for (;;) {
+    hal::Watchdog::kick();  // settling: up to 10 s per step
     if (hal::Uart::available()) {
-      abortSweep(SweepEnd::kKey, 0);
+      abortSweep(SweepEnd::kKey, kKeyUnread);
       return false;
     }
     if (hal::Clock::millis() - start >= ms) return true;
@@ -547,8 +586,9 @@ bool GatherStoreApp::settleForce(uint16_t& counts) {
 bool GatherStoreApp::readForceCounts(uint16_t& counts) {
   force_median_.reset();
   for (uint16_t i = 0; i < kForceWindow; ++i) {
+    hal::Watchdog::kick();
     if (hal::Uart::available()) {
-      abortSweep(SweepEnd::kKey, 0);
+      abortSweep(SweepEnd::kKey, kKeyUnread);
       return false;
     }
     force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
@@ -560,8 +600,9 @@ bool GatherStoreApp::readForceCounts(uint16_t& counts) {
 bool GatherStoreApp::readBatteryCounts(uint16_t& counts) {
   battery_median_.reset();
   for (uint16_t i = 0; i < kBatteryWindow; ++i) {
+    hal::Watchdog::kick();
     if (hal::Uart::available()) {
-      abortSweep(SweepEnd::kKey, 0);
+      abortSweep(SweepEnd::kKey, kKeyUnread);
       return false;
     }
     battery_median_.push(hal::Adc::readCounts(hal::kAdcBattery));
@@ -575,8 +616,9 @@ void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
   last_end_ = why;
   sweep_.valid = false;
   sweep_.complete = false;
-  while (hal::Uart::available()) hal::Uart::read();  // the key that aborted is not a command
-  reader_.clear();
+  // The key that aborted is not a command, nor is the rest of its line (e.g. "xerase").
+  if (why == SweepEnd::kKey)
+    reader_.abortLine(value == kKeyUnread ? hal::Uart::read() : static_cast<int16_t>(value));
   say(TC_PSTR("# aborted: "));
   switch (why) {
     case SweepEnd::kKey:
@@ -706,8 +748,9 @@ bool GatherStoreApp::swallowLineFeed() {
     hal::Clock::sleepUntilInterrupt();
   }
   if (!hal::Uart::available()) return true;
-  if (hal::Uart::read() == '\n') return true;
-  abortSweep(SweepEnd::kKey, 0);  // something else: a key, the motor has not started
+  const int16_t item = hal::Uart::read();
+  if (item == '\n') return true;
+  abortSweep(SweepEnd::kKey, static_cast<uint16_t>(item));  // a key: the motor has not started
   return false;
 }
 
@@ -825,9 +868,10 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
     printBuildProblem(sweep_.report.status);  // ends the line
     return;
   }
-  const bool had_v2 = tc::probeSlotLayout<hal::Eeprom>(slot) == tc::SlotLayout::kModelV2;
+  const tc::RecordLimits limits = settings_board_.recordLimits();
+  const bool had_v2 = tc::probeSlotLayout<hal::Eeprom>(slot, limits) == tc::SlotLayout::kModelV2;
   tc::MotorCalibration& record = scratch_.startRecord();
-  const tc::DecodeStatus before = tc::readRecord<hal::Eeprom>(slot, record);
+  const tc::DecodeStatus before = tc::readRecord<hal::Eeprom>(slot, record, limits);
   if (which == 1) {
     if (before != tc::DecodeStatus::kOk) record.clear();
     record.first = sweep_.curve;
@@ -864,9 +908,27 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
     record.second = sweep_.curve;
   }
   CountingEeprom::written = 0;
-  tc::writeRecord<CountingEeprom>(slot, record);
-  const tc::DecodeStatus after = tc::readRecord<hal::Eeprom>(slot, record);
-  if (after != tc::DecodeStatus::kOk) {
+  const tc::StoreReport stored = tc::storeRecordV1<CountingEeprom>(slot, record, limits);
+  if (stored.status == tc::StoreStatus::kImplausible) {
+    say(TC_PSTR("error: curve "));
+    fw::printInt(which);
+    say(TC_PSTR(" of motor "));
+    fw::printUint(slot);
+    say(TC_PSTR(" cannot be right, "));
+    fw::printRecordStatus(tc::DecodeStatus::kBadContent, stored.why);
+    sayLine(TC_PSTR("; nothing stored: check the sweep (range, tare, divider) and sweep again"));
+    return;
+  }
+  if (stored.status == tc::StoreStatus::kSettingsNoRoom) {
+    say(TC_PSTR("error: motor "));
+    fw::printUint(slot);
+    sayLine(TC_PSTR("'s slot holds the divider setting and no other slot is free of thesis "
+                    "records: a thesis record here would lose it; store v2 instead, or set "
+                    "divider 100000 47000 first if that is the divider on A1; nothing changed"));
+    return;
+  }
+  const tc::DecodeStatus after = tc::readRecord<hal::Eeprom>(slot, record, limits);
+  if (stored.status != tc::StoreStatus::kStored || after != tc::DecodeStatus::kOk) {
     say(TC_PSTR("error: read-back of motor "));
     fw::printUint(slot);
     say(TC_PSTR("'s record failed ("));
@@ -893,6 +955,7 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
   }
   if (had_v2) say(TC_PSTR("; replaced model v2 (the slot holds the thesis record now)"));
   sayWritten();
+  sayStoreSafety(stored, slot);
 }
 
 // Model v2 (thrustcal/model_v2.hpp), fitted on the board; see the header for the rules.
@@ -912,7 +975,8 @@ void GatherStoreApp::cmdStoreV2() {
     return;
   }
   // What the slot holds now.
-  const tc::RecordV2Read now = tc::readModelV2<hal::Eeprom>(slot, model_);
+  const tc::RecordLimits limits = settings_board_.recordLimits();
+  const tc::RecordV2Read now = tc::readModelV2<hal::Eeprom>(slot, model_, limits);
   const bool had_v2 = now.status == tc::DecodeStatus::kOk;
   const bool had_v1 = !had_v2 && hal::Eeprom::readByte(tc::slotAddress(slot)) == tc::kLayoutVersion1;
   const uint16_t old_rest_mv = model_.rest_mv;
@@ -946,7 +1010,7 @@ void GatherStoreApp::cmdStoreV2() {
   }
   const bool refine = had_v2 && !near_first;
   if (refine) {
-    tc::readModelV2<hal::Eeprom>(slot, model_);  // valid a moment ago
+    tc::readModelV2<hal::Eeprom>(slot, model_, limits);  // valid a moment ago
     rep = fitter_.refine(model_);
   }
   if (rep.status != tc::FitV2Status::kOk) {
@@ -959,8 +1023,8 @@ void GatherStoreApp::cmdStoreV2() {
   }
 
   CountingEeprom::written = 0;
-  const tc::RecordV2Write w = tc::writeModelV2<CountingEeprom>(slot, model_);
-  if (w.status == tc::WriteV2Status::kUnchanged) {
+  const tc::StoreReport w = tc::storeModelV2<CountingEeprom>(slot, model_, limits);
+  if (w.status == tc::StoreStatus::kUnchanged) {
     say(TC_PSTR("motor "));
     fw::printUint(slot);
     say(TC_PSTR(" already holds this model v2 ("));
@@ -971,13 +1035,19 @@ void GatherStoreApp::cmdStoreV2() {
     sayWritten();
     return;
   }
-  if (w.status != tc::WriteV2Status::kWritten) {
+  if (w.status != tc::StoreStatus::kStored) {
     say(TC_PSTR("error: storing model v2 of motor "));
     fw::printUint(slot);
-    say(w.status == tc::WriteV2Status::kVerifyFailed
-            ? TC_PSTR(" failed: read-back of the copy just written is bad (EEPROM worn?); "
-                      "the previous copy is kept, try another slot")
-            : TC_PSTR(" failed: the model is out of range; sweep again"));
+    if (w.status == tc::StoreStatus::kImplausible) {
+      say(TC_PSTR(" refused: the model cannot be right, "));
+      fw::printRecordStatus(tc::DecodeStatus::kBadContent, w.why);
+      say(TC_PSTR("; check the sweep (range, tare, divider) and sweep again"));
+    } else {
+      say(w.status == tc::StoreStatus::kVerifyFailed
+              ? TC_PSTR(" failed: read-back of the copy just written is bad (EEPROM worn?); "
+                        "the previous copy is kept, try another slot")
+              : TC_PSTR(" failed: the model is out of range; sweep again"));
+    }
     sayWritten();
     return;
   }
@@ -1017,6 +1087,7 @@ void GatherStoreApp::cmdStoreV2() {
     printVolts(old_rest_mv);
   }
   sayWritten();
+  sayStoreSafety(w, slot);
   if (!refine) {
     say(TC_PSTR("# next: sweep at another voltage (>= 0.5 V from "));
     printVolts(rest_mv);
@@ -1025,7 +1096,7 @@ void GatherStoreApp::cmdStoreV2() {
 }
 
 void GatherStoreApp::showV2(uint8_t slot) {
-  const tc::RecordV2Read r = tc::readModelV2<hal::Eeprom>(slot, model_);
+  const tc::RecordV2Read r = tc::readModelV2<hal::Eeprom>(slot, model_, settings_board_.recordLimits());
   say(TC_PSTR("motor "));
   fw::printUint(slot);
   say(TC_PSTR(" ("));
@@ -1039,16 +1110,29 @@ void GatherStoreApp::showV2(uint8_t slot) {
       hal::Uart::write(' ');
       hal::Uart::print(tc::decodeStatusText(r.copy_status[copy]));
     }
-    sayLine(TC_PSTR(")"));
+    say(TC_PSTR(")"));
+    if (r.status == tc::DecodeStatus::kBadContent && !r.why.ok()) {
+      say(TC_PSTR(": "));
+      fw::printRecordStatus(r.status, r.why);
+    }
+    fw::newline();
     return;
   }
   say(TC_PSTR("calibrated, model v2 ("));
-  sayCopy(r.copy);
-  say(TC_PSTR(", sequence "));
-  fw::printUint(r.sequence);
-  say(TC_PSTR("; other copy "));
-  hal::Uart::print(tc::decodeStatusText(r.copy_status[r.copy ^ 1u]));
-  sayLine(TC_PSTR(")"));
+  if (tc::isSpareCopy(r.copy)) {
+    say(TC_PSTR("the copy kept in motor "));
+    fw::printUint(tc::spareHost(slot, r.copy));
+    say(TC_PSTR("'s slot, sequence "));
+    fw::printUint(r.sequence);
+    sayLine(TC_PSTR(": a store was cut short; the next store or erase settles it)"));
+  } else {
+    sayCopy(r.copy);
+    say(TC_PSTR(", sequence "));
+    fw::printUint(r.sequence);
+    say(TC_PSTR("; other copy "));
+    hal::Uart::print(tc::decodeStatusText(r.copy_status[r.copy ^ 1u]));
+    sayLine(TC_PSTR(")"));
+  }
   say(TC_PSTR("model v2: start "));
   printQ4Us(model_.start_q4_us);
   say(TC_PSTR(", curve to "));
@@ -1084,12 +1168,14 @@ void GatherStoreApp::showV2(uint8_t slot) {
 
 void GatherStoreApp::cmdShow() {
   const uint8_t slot = settings_.slot;
-  if (tc::probeSlotLayout<hal::Eeprom>(slot) == tc::SlotLayout::kModelV2) {
+  const tc::RecordLimits limits = settings_board_.recordLimits();
+  if (tc::probeSlotLayout<hal::Eeprom>(slot, limits) == tc::SlotLayout::kModelV2) {
     showV2(slot);
     return;
   }
   tc::MotorCalibration& record = scratch_.startRecord();
-  const tc::DecodeStatus status = tc::readRecord<hal::Eeprom>(slot, record);
+  tc::Plausibility why;
+  const tc::DecodeStatus status = tc::readRecord<hal::Eeprom>(slot, record, limits, &why);
   say(TC_PSTR("motor "));
   fw::printUint(slot);
   say(TC_PSTR(" ("));
@@ -1097,7 +1183,7 @@ void GatherStoreApp::cmdShow() {
   say(TC_PSTR("): "));
   if (status != tc::DecodeStatus::kOk) {
     say(TC_PSTR("not calibrated: "));
-    hal::Uart::print(tc::decodeStatusText(status));
+    fw::printRecordStatus(status, why);
     fw::newline();
     return;
   }
@@ -1122,9 +1208,9 @@ void GatherStoreApp::cmdShow() {
 void GatherStoreApp::cmdErase() {
   const uint8_t slot = settings_.slot;
   CountingEeprom::written = 0;
-  // Both v2 copies' version bytes (copy B first); copy A's is the thesis record's too.
-  tc::eraseModelV2<CountingEeprom>(slot);
-  tc::eraseRecord<CountingEeprom>(slot);
+  // Both v2 copies' version bytes (the one not holding the newest model first); copy A's is
+  // the thesis record's too.
+  tc::eraseSlot<CountingEeprom>(slot, settings_board_.recordLimits());
   say(TC_PSTR("erased motor "));
   fw::printUint(slot);
   say(TC_PSTR(" ("));
@@ -1174,17 +1260,31 @@ void GatherStoreApp::cmdStatus() {
   say(TC_PSTR("last sweep: "));
   if (!sweep_.valid) {
     sayLine(TC_PSTR("none kept"));
-    return;
+  } else {
+    say(TC_PSTR("motor "));
+    fw::printUint(sweep_.slot);
+    say(TC_PSTR(", "));
+    fw::printUint(sweep_.samples);
+    say(TC_PSTR(" samples, max force "));
+    fw::printFixed(sweep_.report.max_force_dg, 1);
+    say(TC_PSTR(" g, curve 1.."));
+    fw::printUint(sweep_.curve.maxGrams());
+    sayLine(TC_PSTR(" g (store 1, store 2 or store v2 saves it)"));
   }
-  say(TC_PSTR("motor "));
-  fw::printUint(sweep_.slot);
-  say(TC_PSTR(", "));
-  fw::printUint(sweep_.samples);
-  say(TC_PSTR(" samples, max force "));
-  fw::printFixed(sweep_.report.max_force_dg, 1);
-  say(TC_PSTR(" g, curve 1.."));
-  fw::printUint(sweep_.curve.maxGrams());
-  sayLine(TC_PSTR(" g (store 1, store 2 or store v2 saves it)"));
+  fw::printHealth(reader_);
+}
+
+// `divider [R1 R2]`: the battery monitor's divider (thrustcal/board_settings.hpp). The last
+// sweep's volts came through the old one: it is dropped when the divider changes.
+void GatherStoreApp::cmdDivider(char** args, uint8_t n) {
+  if (!fw::commandDivider(args, n, settings_board_)) return;
+  battery_ = tc::BatteryMonitor(settings_board_.batteryConfig());
+  if (sweep_.complete) {
+    sweep_.valid = false;
+    sweep_.complete = false;
+    sayLine(TC_PSTR("note: the last sweep was measured with the old divider and is dropped: "
+                    "sweep again before store"));
+  }
 }
 
 }  // namespace gs

@@ -25,6 +25,14 @@
 // store and erase prints how many EEPROM bytes it physically wrote (bytes that already
 // hold their value are skipped).
 //
+// Stores go through thrustcal/eeprom_store.hpp: a switch between the thesis record and model v2
+// keeps the old calibration loadable until the new one is complete (a copy in another slot),
+// so a power cut at any byte leaves the old or the new one; with no slot to spare (the other
+// three hold thesis records) the switch says it is unprotected. A record that cannot be right
+// (thrustcal/plausibility.hpp) is never stored, and `show` says which rule a stored one breaks.
+// The battery monitor's divider is a board setting (`divider`, default 100k/47k, stored in
+// EEPROM and shared with read_run): the sweep's volts come through it.
+//
 // SRAM (avr-size, MinSizeRel): 6106 bytes static (4929 before model v2: + 1030 fitter work
 // space for 128 samples, + 123 the ModelV2 buffer, + the flash copies of the fit reasons
 // instead of the core's SRAM strings); peak stack during store v2 1044 bytes, measured in
@@ -36,8 +44,12 @@
 //  - during a sweep every line that is not CSV starts with "# ", so a captured log is a CSV
 //    file with comments (header `pwm_us,force_g,vbat_v,t_s,motor,dir`, once per sweep);
 //  - any byte received during a sweep aborts it: the motor goes to 1000 us before anything
-//    is printed. A load-cell overload (> 950 g), a reading at the ADC rail or a battery
-//    reading outside 6..17.5 V aborts it too.
+//    is printed; the rest of that key's line is discarded (docs/console.md), so "xerase"
+//    typed during a sweep erases nothing. A load-cell overload (> 950 g), a reading at the
+//    ADC rail or a battery reading outside the pack range (3 V .. the smaller of 26 V and the
+//    divider's full scale) aborts it too;
+//  - the line protocol (checksum *HH, strict on|off, damaged lines rejected whole) is
+//    fw::LineReader's; the watchdog is kicked by the main loop and inside every long wait.
 //
 // Motor slot N (0..3) drives ESC output N (D6, D7, D8, D11) and is stored at EEPROM N * 1024.
 // Host tests drive this class against the fake HAL; main.cpp is the AVR-only part.
@@ -47,6 +59,7 @@
 #include "console.hpp"
 #include "placement_new.hpp"
 #include "thrustcal/battery_monitor.hpp"
+#include "thrustcal/board_settings.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_curve.hpp"
@@ -201,6 +214,7 @@ class GatherStoreApp {
   void showV2(uint8_t slot);  // the slot holds a v2 record (valid or not)
   void cmdErase();
   void cmdStatus();
+  void cmdDivider(char** args, uint8_t n);
 
   // Sweep parts.
   uint16_t plannedSamples() const;
@@ -220,6 +234,9 @@ class GatherStoreApp {
   bool readForceCounts(uint16_t& counts);  // false: a key arrived during the 201 readings
   bool readBatteryCounts(uint16_t& counts);
   void stopMotor();
+  // kKey: `value` is the key (a hal::Uart::read() item) or kKeyUnread while it is still in the
+  // receiver; the rest of its line is discarded too. Otherwise the reading that aborted.
+  static constexpr uint16_t kKeyUnread = 0xFFFF;
   void abortSweep(SweepEnd why, uint16_t value);
 
   // Readings outside a sweep.
@@ -239,7 +256,8 @@ class GatherStoreApp {
 
   Settings settings_;
   tc::LoadCell cell_;
-  tc::BatteryMonitor battery_;
+  tc::BoardSettings settings_board_;  // the divider (EEPROM), read at begin()
+  tc::BatteryMonitor battery_;        // configured from it
   uint16_t tare_counts_ = 0;  // load-cell reading at the last tare (the span's empty point)
   uint32_t armed_at_ms_ = 0;
 

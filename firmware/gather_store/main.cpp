@@ -20,6 +20,9 @@ int main() {
   hal::Clock::init();
   hal::Uart::init(115200);
   hal::Adc::init();
+  // The boot code (.init3) switched the watchdog off and saved why the chip reset; from here on
+  // a loop that stops coming round resets it within ~64 ms (docs/safety.md).
+  hal::Watchdog::start();
 
   app.begin();  // arm (1000 us), banner, prompt
 

@@ -3,6 +3,8 @@
 
 namespace rr {
 
+ReadRunApp* ReadRunApp::active_ = nullptr;
+
 namespace {
 
 constexpr uint8_t kMaxTokens = 6;
@@ -33,11 +35,12 @@ void sayMotor(uint8_t index) {
 
 void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
 
-// Why a motor is not armed: the decode status; for a v2 slot both copies' reasons.
+// Why a motor is not armed: the decode status (with the plausibility rule a record broke);
+// for a v2 slot both copies' reasons.
 void sayRecordStatus(const Motor& m) {
   say(TC_PSTR("not calibrated: "));
   if (m.layout != tc::SlotLayout::kModelV2) {
-    hal::Uart::print(tc::decodeStatusText(m.record));
+    fw::printRecordStatus(m.record, m.why);
     return;
   }
   say(TC_PSTR("v2 record, both copies bad ("));
@@ -48,6 +51,10 @@ void sayRecordStatus(const Motor& m) {
     hal::Uart::print(tc::decodeStatusText(m.v2_copy_status[copy]));
   }
   say(TC_PSTR(")"));
+  if (m.record == tc::DecodeStatus::kBadContent && !m.why.ok()) {
+    say(TC_PSTR(": "));
+    fw::printRecordStatus(m.record, m.why);
+  }
 }
 
 // Grams (floor) of a force in decigrams.
@@ -70,7 +77,7 @@ void sayV1Summary(const tc::MotorCalibration& cal) {
 
 // Start-up line of a v2 slot, after "motor N: ok": start threshold, the force reachable at
 // the sweep's resting voltage, the refining sweep's voltage, and a damaged other copy.
-void sayV2Summary(const Motor& m, const tc::ModelV2& v2) {
+void sayV2Summary(const Motor& m, const tc::ModelV2& v2, uint8_t index) {
   say(TC_PSTR(", model v2 (effective voltage), start "));
   fw::printFixed(static_cast<int32_t>((static_cast<uint32_t>(v2.start_q4_us) * 10u + 8u) >> 4), 1);
   say(TC_PSTR(" us, max "));
@@ -80,6 +87,13 @@ void sayV2Summary(const Motor& m, const tc::ModelV2& v2) {
   if (v2.second_mv != 0) {
     say(TC_PSTR(", refined at "));
     sayVolts(v2.second_mv);
+  }
+  if (tc::isSpareCopy(m.v2_copy)) {
+    // A store was cut short after its copy in another slot was complete.
+    say(TC_PSTR("; flying the copy kept in motor "));
+    fw::printUint(tc::spareHost(index, m.v2_copy));
+    say(TC_PSTR("'s slot (a store was cut short; the next gather_store store settles it)"));
+    return;
   }
   const uint8_t other = static_cast<uint8_t>(m.v2_copy ^ 1u);
   const tc::DecodeStatus other_status = m.v2_copy_status[other];
@@ -147,19 +161,28 @@ bool parseMs(const char* token, uint16_t& ms) {
 void ReadRunApp::printBanner() {
   fw::newline();
   sayLine(TC_PSTR("read_run: force commands in grams -> ESC pulses (thrustcal, thesis Read and Run)"));
+  fw::printResetCause();
   sayLine(TC_PSTR("type help for commands; while motors run send a line at least every 500 ms"));
 }
 
 uint8_t ReadRunApp::loadCalibration() {
   uint8_t calibrated = 0;
   v2_.count = 0;
+  // The board's divider first: counts -> volts, and the voltages a record may hold.
+  tc::readSettings<hal::Eeprom>(settings_);
+  monitor_ = tc::BatteryMonitor(settings_.batteryConfig());
+  const tc::RecordLimits limits = settings_.recordLimits();
+  say(TC_PSTR("battery monitor: "));
+  fw::printDivider(settings_);
+  fw::newline();
   for (uint8_t i = 0; i < kMotors; ++i) {
+    hal::Watchdog::kick();  // decoding a slot reads and checks up to 1 KB of EEPROM
     Motor& m = motors_[i];
     // The loader decodes into these (1.2 KB of stack, start-up only); the slot keeps the
     // compact form the frame flies (the thesis curves' steps stay in the EEPROM).
     tc::ModelV2 v2;
     tc::MotorCalibration v1;
-    const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(i, v2, v1);
+    const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(i, v2, v1, limits);
     m.layout = load.layout;
     // Neither layout recognized: copy A's status is that of the version byte at the slot
     // start (erased or unknown), which both layouts share; the loader's "most telling copy"
@@ -168,6 +191,7 @@ uint8_t ReadRunApp::loadCalibration() {
     m.v2_copy = load.v2.copy;
     m.v2_copy_status[0] = load.v2.copy_status[0];
     m.v2_copy_status[1] = load.v2.copy_status[1];
+    m.why = load.why;
     m.lane = kNoLane;
     m.model.clear();
     if (m.record == tc::DecodeStatus::kOk) {
@@ -190,7 +214,7 @@ uint8_t ReadRunApp::loadCalibration() {
       ++calibrated;
       say(TC_PSTR("ok"));
       if (m.fliesV2()) {
-        sayV2Summary(m, v2);
+        sayV2Summary(m, v2, i);
       } else {
         sayV1Summary(v1);
       }
@@ -226,15 +250,18 @@ void ReadRunApp::arm() {
   stream_every_frames_ = static_cast<uint8_t>(frame_hz_ / kStreamLinesPerSecond);
   const uint32_t start_ms = hal::Clock::millis();
   scheduleFrames(start_ms);
+  active_ = this;
+  hal::Uart::setWaitHook(&ReadRunApp::serviceHook);
   for (;;) {
     const uint32_t now_ms = hal::Clock::millis();
     if (now_ms - start_ms >= kArmMs) break;
     // Forces are 0: every frame writes 1000 us and feeds the battery median.
-    if (frameDue(now_ms)) frame(now_ms);
+    service();
     hal::Clock::sleepUntilInterrupt();
   }
+  notes_ = 0;
   bool discarded = false;
-  while (hal::Uart::read() >= 0) discarded = true;
+  while (hal::Uart::read() != hal::Uart::kNothing) discarded = true;
   line_.clear();
   mode_ = Mode::kReady;
   last_line_ms_ = hal::Clock::millis();
@@ -255,46 +282,114 @@ bool ReadRunApp::isRunning() const {
   return false;
 }
 
+// One pass: at most one input event (bounded bytes), the time-critical part (so a command
+// takes effect in the frame that follows it), then what the time-critical part had to say.
+// Whatever blocks (a long reply waiting for room in the transmit ring) runs service() from the
+// UART wait hook, so frames, the battery filter, the failsafe and the lift-off link timeout
+// stay on time.
 void ReadRunApp::runOnce() {
-  uint32_t now_ms = hal::Clock::millis();
-  if (mode_ == Mode::kLiftoff) {
-    if (hal::Uart::available()) abortLiftoff();
-  } else if (mode_ == Mode::kReady) {
-    for (;;) {
-      const fw::LineEvent event = line_.poll();
-      if (event == fw::LineEvent::kNone) break;
-      last_line_ms_ = now_ms;  // any complete line is a keep-alive
-      if (event == fw::LineEvent::kTooLong) {
-        sayLine(TC_PSTR("error: line too long (at most 48 characters); nothing changed"));
-        prompt();
-        continue;
-      }
-      char line[fw::kLineMax + 1];
-      const char* src = line_.line();
-      uint8_t n = 0;
-      while (n < fw::kLineMax && src[n] != '\0') {
-        line[n] = src[n];
-        ++n;
-      }
-      line[n] = '\0';
-      line_.clear();
-      handleLine(line);
-      if (mode_ == Mode::kLiftoff) break;  // the rest of the input is the abort key
-    }
-    checkFailsafe(now_ms);
-  }
-  now_ms = hal::Clock::millis();  // printing may have taken time on the board
-  if (frameDue(now_ms)) frame(now_ms);
+  handleInput();
+  service();
+  printNotes();
 }
 
+void ReadRunApp::serviceHook() {
+  if (active_ != nullptr) active_->service();
+}
+
+void ReadRunApp::service() {
+  if (in_service_) return;
+  in_service_ = true;
+  hal::Watchdog::kick();  // the loop (or a wait inside it) came round
+  const uint32_t now_ms = hal::Clock::millis();
+  if (frameDue(now_ms)) frame(now_ms);
+  checkFailsafe(now_ms);
+  in_service_ = false;
+}
+
+void ReadRunApp::handleInput() {
+  const uint32_t now_ms = hal::Clock::millis();
+  if (mode_ == Mode::kLiftoff) {
+    // Lift-off: a line end (an empty line) keeps it alive; any other byte aborts it, and the
+    // rest of that byte's line is discarded.
+    for (uint8_t n = 0; n < kRxBytesPerPass && hal::Uart::available(); ++n) {
+      const int16_t item = hal::Uart::read();
+      if (item == '\r' || item == '\n') {
+        last_line_ms_ = now_ms;
+        continue;
+      }
+      if (item == hal::Uart::kNothing) break;
+      abortLiftoff(item);
+      return;
+    }
+    return;
+  }
+  if (mode_ != Mode::kReady) return;
+  const fw::LineEvent event = line_.poll(kRxBytesPerPass);
+  if (event == fw::LineEvent::kRejected) {  // its error line is printed; not a keep-alive
+    prompt();
+    return;
+  }
+  if (event != fw::LineEvent::kLine) return;
+  // The keep-alive: a complete, intact line (with strict on: one with a valid checksum).
+  if (!line_.strict() || line_.checked()) last_line_ms_ = now_ms;
+  char line[fw::kLineMax + 1];
+  const char* src = line_.line();
+  uint8_t n = 0;
+  while (n < fw::kLineMax && src[n] != '\0') {
+    line[n] = src[n];
+    ++n;
+  }
+  line[n] = '\0';
+  handleLine(line);
+}
+
+// While a motor runs (lift-off included), no keep-alive for kFailsafeMs stops every motor.
 void ReadRunApp::checkFailsafe(uint32_t now_ms) {
+  if (mode_ == Mode::kLiftoff) {
+    if (now_ms - last_line_ms_ < kFailsafeMs) return;
+    stopAll();
+    mode_ = Mode::kReady;
+    ++failsafe_trips_;
+    notes_ |= kNoteLinkLost;
+    return;
+  }
   if (mode_ != Mode::kReady || !isRunning()) return;
   if (now_ms - last_line_ms_ < kFailsafeMs) return;
   stopAll();
   ++failsafe_trips_;
-  fw::newline();
-  sayLine(TC_PSTR("failsafe: no command for 500 ms, motors stopped"));
-  prompt();
+  notes_ |= kNoteFailsafe;
+}
+
+// What service() had to say, in the order it happened within a frame.
+void ReadRunApp::printNotes() {
+  const uint8_t notes = notes_;
+  notes_ = 0;
+  if (notes == 0) return;
+  if (notes & kNoteHold) {
+    say(TC_PSTR("# hold "));
+    fw::printUint(liftoff_force_g_);
+    say(TC_PSTR(" g for "));
+    fw::printUint(liftoff_hold_ms_);
+    sayLine(TC_PSTR(" ms"));
+  }
+  if (notes & kNoteProgress) printLiftoffProgress(note_ms_ - liftoff_start_ms_, note_force_g_);
+  if (notes & kNoteDone) {
+    sayLine(TC_PSTR("# liftoff done: motors stopped"));
+    prompt();
+  }
+  if (notes & kNoteLinkLost) {
+    fw::newline();
+    sayLine(TC_PSTR("# liftoff stopped: no line end for 500 ms (keep it alive with empty lines; "
+                    "any other key aborts): motors stopped"));
+    prompt();
+  }
+  if (notes & kNoteFailsafe) {
+    fw::newline();
+    sayLine(TC_PSTR("failsafe: no command for 500 ms, motors stopped"));
+    prompt();
+  }
+  if ((notes & kNoteStream) && stream_ && mode_ != Mode::kArming) streamLine(note_ms_);
 }
 
 void ReadRunApp::stopAll() {
@@ -402,16 +497,17 @@ void ReadRunApp::frame(uint32_t now_ms) {
     hal::Esc::writePulse(i, motors_[i].pwm_us);
   }
 
+  note_ms_ = now_ms;
   if (mode_ == Mode::kLiftoff) {
-    const uint32_t elapsed_ms = now_ms - liftoff_start_ms_;
     if (static_cast<int32_t>(now_ms - liftoff_next_progress_ms_) >= 0) {
       liftoff_next_progress_ms_ += kLiftoffProgressMs;
-      printLiftoffProgress(elapsed_ms, motors_[0].force_g);
+      note_force_g_ = motors_[0].force_g;
+      notes_ |= kNoteProgress;
     }
   }
   if (stream_ && mode_ != Mode::kArming) {
     if (stream_countdown_ == 0) {
-      streamLine(now_ms);
+      notes_ |= kNoteStream;
       stream_countdown_ = stream_every_frames_;
     }
     --stream_countdown_;
@@ -441,18 +537,13 @@ void ReadRunApp::updateLiftoff(uint32_t now_ms) {
   } else if (elapsed_ms < static_cast<uint32_t>(liftoff_ramp_ms_) + liftoff_hold_ms_) {
     if (!liftoff_holding_) {
       liftoff_holding_ = true;
-      say(TC_PSTR("# hold "));
-      fw::printUint(liftoff_force_g_);
-      say(TC_PSTR(" g for "));
-      fw::printUint(liftoff_hold_ms_);
-      sayLine(TC_PSTR(" ms"));
+      notes_ |= kNoteHold;
     }
   } else {
     stopAll();
     mode_ = Mode::kReady;
     last_line_ms_ = now_ms;
-    sayLine(TC_PSTR("# liftoff done: motors stopped"));
-    prompt();
+    notes_ |= kNoteDone;
     return;
   }
   for (uint8_t i = 0; i < kMotors; ++i) setForce(i, force_g);
@@ -473,11 +564,10 @@ void ReadRunApp::printLiftoffProgress(uint32_t elapsed_ms, uint16_t force_g) {
   fw::newline();
 }
 
-void ReadRunApp::abortLiftoff() {
-  while (hal::Uart::read() >= 0) {
-  }
-  line_.clear();
+void ReadRunApp::abortLiftoff(int16_t key) {
+  line_.abortLine(key);  // the rest of the key's line is not a command ("xf 2 450")
   stopAll();
+  notes_ &= static_cast<uint8_t>(~(kNoteProgress | kNoteHold));
   mode_ = Mode::kReady;
   last_line_ms_ = hal::Clock::millis();
   fw::newline();
@@ -493,6 +583,10 @@ void ReadRunApp::handleLine(char* line) {
   const uint8_t count = fw::tokenize(line, tokens, kMaxTokens);
   if (count == 0) return;  // empty line: keep-alive only, no prompt (hosts send it 2x/s+)
   const char* verb = tokens[0];
+  if (line_.handleStrict(tokens, count)) {
+    prompt();
+    return;
+  }
   if (fw::equalsP(verb, TC_PSTR("help"))) {
     commandHelp();
   } else if (fw::equalsP(verb, TC_PSTR("f"))) {
@@ -509,6 +603,8 @@ void ReadRunApp::handleLine(char* line) {
     if (stream_) return;  // no prompt: the next line is a CSV row, and must start clean
   } else if (fw::equalsP(verb, TC_PSTR("rate"))) {
     commandRate(tokens, count);
+  } else if (fw::equalsP(verb, TC_PSTR("divider"))) {
+    commandDivider(tokens, count);
   } else {
     say(TC_PSTR("error: unknown command \""));
     hal::Uart::print(verb);
@@ -518,16 +614,23 @@ void ReadRunApp::handleLine(char* line) {
 }
 
 void ReadRunApp::commandHelp() {
-  sayLine(TC_PSTR("f G            all calibrated motors to G grams (0..500)"));
+  sayLine(TC_PSTR("f G            all calibrated motors to G grams (0..5000)"));
   sayLine(TC_PSTR("f N G          motor N (0..3) to G grams"));
   sayLine(TC_PSTR("stop           all motors to 0 g (1000 us)"));
   sayLine(TC_PSTR("status         per motor: force, pwm, battery, flags; v2 motors: headroom"));
   sayLine(TC_PSTR("liftoff G [RAMP_MS] [HOLD_MS]  ramp all four 0->G g (default 2000 ms),"));
-  sayLine(TC_PSTR("               hold (default 5000 ms), stop; any key aborts"));
+  sayLine(TC_PSTR("               hold (default 5000 ms), stop; empty lines keep it going,"));
+  sayLine(TC_PSTR("               any other key aborts"));
   sayLine(TC_PSTR("stream on|off  CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s"));
   sayLine(TC_PSTR("rate HZ        ESC frame rate 50..400 Hz (motors stopped)"));
-  sayLine(TC_PSTR("failsafe: while a motor runs, 500 ms without a line (an empty line will do)"));
-  sayLine(TC_PSTR("stops all motors"));
+  sayLine(TC_PSTR("divider [R1 R2] battery divider in ohm, R1 pack-A1, R2 A1-ground (default"));
+  sayLine(TC_PSTR("               100000 47000); setting it reloads the calibration (motors stopped)"));
+  sayLine(TC_PSTR("strict on|off  f (above 0 g), liftoff, divider R1 R2 need a checksum"));
+  sayLine(TC_PSTR("failsafe: while a motor runs, 500 ms without a line (an empty line will do;"));
+  sayLine(TC_PSTR("with strict on a checksummed one, e.g. *00) stops all motors; during liftoff"));
+  sayLine(TC_PSTR("empty lines keep it going and any other key aborts it"));
+  sayLine(TC_PSTR("lines: CR, LF or CRLF, at most 48 characters; optional checksum *HH = XOR"));
+  sayLine(TC_PSTR("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
 }
 
 bool ReadRunApp::requireArmable(uint8_t index) {
@@ -552,9 +655,10 @@ void ReadRunApp::commandForce(char** tokens, uint8_t count) {
          fw::parseInt(tokens[2], 0, kForceMaxG, force_g);
   }
   if (!ok) {
-    sayLine(TC_PSTR("error: usage: f GRAMS (all motors) or f MOTOR GRAMS, GRAMS 0..500, MOTOR 0..3"));
+    sayLine(TC_PSTR("error: usage: f GRAMS (all motors) or f MOTOR GRAMS, GRAMS 0..5000, MOTOR 0..3"));
     return;
   }
+  if (force_g > 0 && !line_.allowRisky()) return;  // stopping never needs a checksum
   if (motor >= 0) {
     if (!requireArmable(static_cast<uint8_t>(motor))) return;
     setForce(static_cast<uint8_t>(motor), static_cast<uint16_t>(force_g));
@@ -633,6 +737,7 @@ void ReadRunApp::commandStatus() {
   say(TC_PSTR(", failsafe trips "));
   fw::printUint(failsafe_trips_);
   fw::newline();
+  fw::printHealth(line_, &ReadRunApp::serviceHook);  // frames go on during the stack scan
 }
 
 void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
@@ -643,10 +748,11 @@ void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
                   (count < 3 || parseMs(tokens[2], ramp_ms)) &&
                   (count < 4 || parseMs(tokens[3], hold_ms));
   if (!ok) {
-    sayLine(TC_PSTR("error: usage: liftoff GRAMS [RAMP_MS] [HOLD_MS], GRAMS 1..500, times "
+    sayLine(TC_PSTR("error: usage: liftoff GRAMS [RAMP_MS] [HOLD_MS], GRAMS 1..5000, times "
                     "0..60000 ms"));
     return;
   }
+  if (!line_.allowRisky()) return;
   for (uint8_t i = 0; i < kMotors; ++i) {
     if (!motors_[i].isArmable()) {
       say(TC_PSTR("error: liftoff needs all four motors calibrated; "));
@@ -668,6 +774,7 @@ void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
   liftoff_start_ms_ = now_ms;
   liftoff_next_progress_ms_ = now_ms;
   liftoff_holding_ = false;
+  last_line_ms_ = now_ms;  // the link timeout counts from the command
   mode_ = Mode::kLiftoff;
   say(TC_PSTR("# liftoff: ramp 0 -> "));
   fw::printUint(liftoff_force_g_);
@@ -675,7 +782,8 @@ void ReadRunApp::commandLiftoff(char** tokens, uint8_t count) {
   fw::printUint(ramp_ms);
   say(TC_PSTR(" ms, hold "));
   fw::printUint(hold_ms);
-  sayLine(TC_PSTR(" ms, then stop; any key aborts"));
+  sayLine(TC_PSTR(" ms, then stop; empty lines keep it going (at least every 500 ms), any "
+                  "other key aborts"));
 }
 
 void ReadRunApp::commandStream(char** tokens, uint8_t count) {
@@ -712,6 +820,28 @@ void ReadRunApp::commandRate(char** tokens, uint8_t count) {
   say(TC_PSTR("frame rate "));
   fw::printUint(frame_hz_);
   sayLine(TC_PSTR(" Hz"));
+}
+
+}  // namespace rr
+
+namespace rr {
+
+// `divider [R1 R2]`: the battery monitor's divider (thrustcal/board_settings.hpp). A new value
+// is stored, then the calibration is loaded again against it: volts come from counts through
+// it, and a record's voltages must lie within its full scale.
+void ReadRunApp::commandDivider(char** tokens, uint8_t count) {
+  if (count > 1 && isRunning()) {
+    sayLine(TC_PSTR("error: motors are running; send stop first, then set the divider"));
+    return;
+  }
+  if (count > 1 && !line_.allowRisky()) return;  // writes the EEPROM: strict needs a checksum
+  if (!fw::commandDivider(tokens, count, settings_)) return;
+  const uint8_t shift = v2_.bus.shift;
+  v2_.bus = tc::BusVoltageFilter();  // its millivolts came through the old divider
+  v2_.bus.shift = shift;
+  v2_.sag = tc::BusSagFilter();
+  bus_sample_sane_ = false;
+  loadCalibration();
 }
 
 }  // namespace rr

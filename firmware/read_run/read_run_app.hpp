@@ -19,10 +19,26 @@
 // Safety rules, all enforced here:
 //  - a motor without a valid record (erased, bad version, bad CRC, bad content; for v2: both
 //    copies bad) is never armed: it is held at 1000 us and every command to it is refused;
-//  - failsafe: while any motor is commanded above 0 g, 500 ms without a complete command line
-//    (any line, even an empty or rejected one, is a keep-alive) stops all motors;
-//  - the lift-off sequence is its own command source (no failsafe while it runs), and any
-//    received byte aborts it and stops the motors.
+//    a record that cannot be right (thrustcal/plausibility.hpp: flat, non-monotone, pulses
+//    outside the ESC range, voltages outside the monitor's range...) is bad content, and the
+//    start-up report and `status` say which rule it broke;
+//  - the battery monitor's divider is a stored board setting (thrustcal/board_settings.hpp,
+//    `divider` command, default 100k/47k): counts -> volts and the voltage range a record may
+//    hold follow it;
+//  - failsafe: while any motor is commanded above 0 g, 500 ms without a keep-alive stops all
+//    motors. The keep-alive is a complete, intact line (fw::LineReader: nothing lost or
+//    garbled, text only, within 48 characters, checksum right when present), even an empty one
+//    or one whose command is refused; with strict on only a line with a valid checksum counts
+//    (an empty line: "*00"). Stray bytes and damaged lines keep nothing alive;
+//  - the lift-off sequence drives the motors itself: empty lines (a bare CR, LF or CRLF) keep
+//    it going, 500 ms without one stops it (loss of link), and any other byte aborts it at
+//    once; the rest of that byte's line is discarded, never executed ("xf 2 450");
+//  - commands that spin a motor (f above 0 g, liftoff) need a checksum with strict on;
+//  - the main loop's period is bounded: one pass handles at most one input event of at most
+//    kRxBytesPerPass bytes, serves the ESC frame, the failsafe and the lift-off timeout
+//    (service()), then prints what service() noted. A reply longer than the transmit ring blocks in
+//    hal::Uart::write, which runs service() from its wait hook, so frames stay on time;
+//  - service() kicks the watchdog; nothing else in the loop does (docs/safety.md).
 //
 // The per-frame path (battery samples, voltage filter, both models, ESC write) is integer
 // only; the image links no floating-point routine at all.
@@ -41,7 +57,9 @@
 
 #include "console.hpp"
 #include "hal/hal.hpp"
+#include "record_report.hpp"
 #include "thrustcal/battery_monitor.hpp"
+#include "thrustcal/board_settings.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/median_filter.hpp"
@@ -60,7 +78,7 @@ static_assert(kMotors == hal::kEscChannels, "one ESC output per calibration slot
 constexpr uint16_t kArmMs = 2000;           // ESCs see 1000 us this long before any command
 constexpr uint16_t kFailsafeMs = 500;       // no command line this long while running -> stop
 constexpr uint16_t kStopPwmUs = 1000;       // ESC "motor off" pulse
-constexpr uint16_t kForceMaxG = tc::kCurveGrams;
+constexpr uint16_t kForceMaxG = tc::kRecordMaxForceG;  // 5 kg: v1 curves saturate at 500 g
 constexpr uint16_t kBatteryWindow = 101;    // thesis: median of 101 readings
 constexpr uint8_t kBatterySamplesPerFrame = 4;  // v2 filter input: mean of the middle two
 constexpr uint16_t kLiftoffDefaultRampMs = 2000;
@@ -69,6 +87,8 @@ constexpr uint16_t kLiftoffMaxMs = 60000;
 constexpr uint16_t kLiftoffProgressMs = 500;  // one "# " progress line this often
 constexpr uint8_t kStreamLinesPerSecond = 10;
 constexpr uint8_t kNoLane = 0xFF;             // a motor that does not fly v2
+// Received bytes one loop pass handles at most: one longest line and its CR LF.
+constexpr uint8_t kRxBytesPerPass = fw::kLineMax + 2;
 
 // One motor as the thesis's motor_struct: the model loaded from EEPROM plus the controller's
 // run-time state.
@@ -79,6 +99,7 @@ struct Motor {
   uint8_t v2_copy = tc::kNoCopy;                 // v2: copy flown (0 = A, 1 = B)
   tc::DecodeStatus v2_copy_status[2] = {tc::DecodeStatus::kErased, tc::DecodeStatus::kErased};
   uint8_t lane = kNoLane;           // v2: its lane in the frame (command in, pulse out)
+  tc::Plausibility why;             // record kBadContent: the plausibility rule it broke
   uint16_t force_g = 0;             // commanded force
   uint16_t pwm_us = kStopPwmUs;     // last pulse written to the ESC
   uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
@@ -105,8 +126,9 @@ class ReadRunApp {
   // Holds every ESC at 1000 us for kArmMs while the battery median fills; input received
   // meanwhile is discarded (a command typed before "armed" never spins a motor). Blocks.
   void arm();
-  // One pass of the main loop: commands (or lift-off abort), failsafe, and the ESC frame when
-  // it is due. Does not sleep: the caller sleeps until the next interrupt afterwards.
+  // One pass of the main loop: at most one input event (a line, or the lift-off's keep-alives
+  // and abort key), service(), then the notes service() left. Does not sleep: the caller
+  // sleeps until the next interrupt afterwards.
   void runOnce();
 
   // Observers (status command, tests).
@@ -114,6 +136,7 @@ class ReadRunApp {
   Mode mode() const { return mode_; }
   bool isRunning() const;               // any motor commanded above 0 g
   uint16_t batteryMv() const { return battery_mv_; }  // median reading, uncompensated
+  const tc::BoardSettings& settings() const { return settings_; }
   // v2 motors' voltage: this frame's reading through the IIR filter, and its reciprocal.
   const tc::BusVoltageFilter& busFilter() const { return v2_.bus; }
   bool busSampleSane() const { return bus_sample_sane_; }  // this frame's reading was usable
@@ -121,6 +144,7 @@ class ReadRunApp {
   const tc::BusSagFilter& sagFilter() const { return v2_.sag; }
   bool isStreaming() const { return stream_; }
   uint32_t failsafeTrips() const { return failsafe_trips_; }
+  const fw::LineReader& console() const { return line_; }
 
  private:
   void handleLine(char* line);
@@ -131,11 +155,20 @@ class ReadRunApp {
   void commandLiftoff(char** tokens, uint8_t count);
   void commandStream(char** tokens, uint8_t count);
   void commandRate(char** tokens, uint8_t count);
+  void commandDivider(char** tokens, uint8_t count);
 
   bool requireArmable(uint8_t index);  // prints the refusal when not
   void stopAll();                      // forces to 0, every ESC to 1000 us at once
+
+  // The time-critical part of a pass, also run from inside a blocked write (the UART wait
+  // hook): kicks the watchdog, the ESC frame when due (battery filter, models, pulses), the
+  // failsafe and the lift-off link timeout. Prints nothing: it leaves notes_ for printNotes().
+  void service();
+  static void serviceHook();
+  void handleInput();
+  void printNotes();
   void checkFailsafe(uint32_t now_ms);
-  void abortLiftoff();
+  void abortLiftoff(int16_t key);
   void updateLiftoff(uint32_t now_ms);
   void printLiftoffProgress(uint32_t elapsed_ms, uint16_t force_g);
 
@@ -151,14 +184,28 @@ class ReadRunApp {
 
   Motor motors_[kMotors];
   tc::MedianFilter<kBatteryWindow> battery_counts_;
-  tc::BatteryMonitor monitor_;
+  tc::BoardSettings settings_;      // the divider (EEPROM), loaded with the calibration
+  tc::BatteryMonitor monitor_;      // configured from settings_
   tc::V2Frame v2_;                  // the motors flying v2: bus filter, sag, their lanes
   bool bus_sample_sane_ = false;
   fw::LineReader line_;
   Mode mode_ = Mode::kBoot;
   uint16_t battery_mv_ = 0;
-  uint32_t last_line_ms_ = 0;
+  uint32_t last_line_ms_ = 0;      // last keep-alive (lift-off: last line end)
   uint32_t failsafe_trips_ = 0;
+
+  // service() -> printNotes()
+  static constexpr uint8_t kNoteHold = 0x01;
+  static constexpr uint8_t kNoteProgress = 0x02;
+  static constexpr uint8_t kNoteDone = 0x04;
+  static constexpr uint8_t kNoteLinkLost = 0x08;
+  static constexpr uint8_t kNoteFailsafe = 0x10;
+  static constexpr uint8_t kNoteStream = 0x20;
+  uint8_t notes_ = 0;
+  bool in_service_ = false;
+  uint16_t note_force_g_ = 0;   // lift-off progress: force at that frame
+  uint32_t note_ms_ = 0;        // time of the frame the notes are about
+  static ReadRunApp* active_;   // the instance the UART wait hook serves
 
   // ESC frame schedule: period 1000/hz ms as whole ms plus a remainder, so 400 Hz averages
   // exactly 2.5 ms on a 1 ms clock.

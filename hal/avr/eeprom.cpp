@@ -1,7 +1,10 @@
 // 4 KB EEPROM through avr-libc. eeprom_update_* reads each byte first and only programs the
 // bytes that change (3.4 ms and one of ~100k erase/write cycles each). Addresses past the end
 // are ignored (reads return 0xFF, the erased value) instead of wrapping around.
+// Each byte written kicks the watchdog: a byte write waits for the previous one (3.4 ms on the
+// chip), and a v2 store writes hundreds of bytes, far longer than the watchdog's 64 ms.
 #include <avr/eeprom.h>
+#include <avr/wdt.h>
 
 #include "hal/hal.hpp"
 
@@ -19,6 +22,7 @@ uint8_t Eeprom::readByte(uint16_t addr) {
 }
 
 void Eeprom::updateByte(uint16_t addr, uint8_t value) {
+  wdt_reset();
   if (fits(addr, 1)) eeprom_update_byte(cell(addr), value);
 }
 
@@ -32,7 +36,9 @@ void Eeprom::readBlock(uint16_t addr, void* dst, uint16_t length) {
 }
 
 void Eeprom::updateBlock(uint16_t addr, const void* src, uint16_t length) {
-  if (fits(addr, length)) eeprom_update_block(src, cell(addr), length);
+  if (!fits(addr, length)) return;
+  const uint8_t* in = static_cast<const uint8_t*>(src);
+  for (uint16_t i = 0; i < length; ++i) updateByte(static_cast<uint16_t>(addr + i), in[i]);
 }
 
 }  // namespace hal

@@ -20,13 +20,23 @@ uint16_t topFor(uint16_t frame_hz) {
   return static_cast<uint16_t>(kTicksPerSecond / frame_hz - 1);
 }
 
+// Writes ticks ^ 1 first, then ticks. On the chip only the second counts: OCRnx is double
+// buffered in mode 14 and both writes land within a few cycles (if BOTTOM fell in between,
+// one pulse would be 0.5 us off). simavr 1.6 needs it: its OCRnx write hook sits on the low
+// byte and compares the old value read after the high byte was already stored, so a change
+// that keeps the low byte is missed. Seen in tests/console_fuzz: read_run at 349 Hz wrote
+// OCR1A = 0x07CF (1000 us) every frame while Timer1 went on with 0x0BCF (1512 us) after the
+// failsafe; with this, the same run stops at 1000 us.
 void writeCompare(uint8_t channel, uint16_t ticks) {
   ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {  // 16-bit registers share the TEMP byte
-    switch (channel) {
-      case 0: OCR4A = ticks; break;
-      case 1: OCR4B = ticks; break;
-      case 2: OCR4C = ticks; break;
-      default: OCR1A = ticks; break;
+    for (uint16_t value = ticks ^ 1u;; value = ticks) {
+      switch (channel) {
+        case 0: OCR4A = value; break;
+        case 1: OCR4B = value; break;
+        case 2: OCR4C = value; break;
+        default: OCR1A = value; break;
+      }
+      if (value == ticks) break;
     }
   }
 }

@@ -2,8 +2,9 @@
 // millisecond clock, controlled and observed through fake.hpp. Host only (STL allowed).
 //
 // Differences from the AVR backend, on purpose:
-//  - the UART receive buffer is unbounded (the AVR ring buffer holds 64 bytes and drops the
-//    rest): tests may feed whole scripts at once;
+//  - the UART receive buffer is unbounded (the AVR ring buffer holds 64 bytes and marks what it
+//    loses as damage): tests may feed whole scripts at once, and damage with feedDamage();
+//  - transmitting takes no time and never waits (so the wait hook is never called);
 //  - an EEPROM address outside 0..4095 throws std::out_of_range (the AVR would wrap around
 //    silently): such an access is a bug in the code under test;
 //  - an ADC conversion takes no simulated time (104 us on the AVR).
@@ -40,9 +41,17 @@ struct FakeState {
   uint8_t eeprom[hal::Eeprom::kSize];
   uint32_t eeprom_writes = 0;
 
-  std::deque<uint8_t> rx;
+  std::deque<int16_t> rx;  // bytes and hal::Uart::kRxDamaged marks
   std::vector<ScheduledInput> scheduled;  // in the order they were fed
   std::string tx;
+  hal::Uart::WaitHook wait_hook = nullptr;
+  uint16_t rx_damage = 0;
+
+  uint8_t reset_flags = hal::Watchdog::kPowerOn;
+  bool watchdog_started = false;
+  uint32_t watchdog_kicks = 0;
+  uint16_t stack_size = 2048;
+  uint16_t stack_untouched = 1536;
 
   FakeState() {
     for (auto& b : eeprom) b = 0xFF;
@@ -181,10 +190,10 @@ bool Uart::available() { return !state().rx.empty(); }
 
 int16_t Uart::read() {
   auto& rx = state().rx;
-  if (rx.empty()) return -1;
-  const uint8_t byte = rx.front();
+  if (rx.empty()) return kNothing;
+  const int16_t item = rx.front();
   rx.pop_front();
-  return byte;
+  return item;
 }
 
 void Uart::write(uint8_t byte) { state().tx.push_back(static_cast<char>(byte)); }
@@ -192,6 +201,18 @@ void Uart::print(const char* text) {
   if (text) state().tx.append(text);
 }
 void Uart::printP(const char* progmem_text) { print(progmem_text); }
+void Uart::setWaitHook(WaitHook hook) { state().wait_hook = hook; }
+uint16_t Uart::rxDamageCount() { return state().rx_damage; }
+
+// ---- Watchdog, Stack ----
+void Watchdog::start() { state().watchdog_started = true; }
+void Watchdog::kick() { ++state().watchdog_kicks; }
+uint8_t Watchdog::resetFlags() { return state().reset_flags; }
+uint16_t Stack::sizeBytes() { return state().stack_size; }
+uint16_t Stack::untouchedBytes(void (*yield)()) {
+  if (yield != nullptr) yield();
+  return state().stack_untouched;
+}
 
 }  // namespace hal
 
@@ -225,6 +246,20 @@ uint32_t eepromWrites() { return state().eeprom_writes; }
 void resetEepromWrites() { state().eeprom_writes = 0; }
 
 void feedInput(const std::string& text) { pushInput(text); }
+
+void feedDamage() {
+  state().rx.push_back(hal::Uart::kRxDamaged);
+  ++state().rx_damage;
+}
+
+void setResetFlags(uint8_t flags) { state().reset_flags = flags; }
+bool watchdogStarted() { return state().watchdog_started; }
+uint32_t watchdogKicks() { return state().watchdog_kicks; }
+void setStack(uint16_t size_bytes, uint16_t untouched_bytes) {
+  state().stack_size = size_bytes;
+  state().stack_untouched = untouched_bytes;
+}
+hal::Uart::WaitHook waitHook() { return state().wait_hook; }
 
 void feedInputAt(uint32_t at_ms, const std::string& text) {
   if (at_ms <= state().now_ms) {

@@ -17,6 +17,7 @@ avr-g++ -mmcu=atmega2560 -DF_CPU=16000000UL -Os -std=gnu++14 -fno-exceptions -fn
   "$root"/core/src/model_v2.cpp "$root"/core/src/model_v2_runtime.cpp "$root"/core/src/force_pwm.cpp "$root"/core/src/force_curve.cpp \
   "$root"/core/src/curve_builder.cpp "$root"/core/src/motor_calibration.cpp \
   "$root"/core/src/battery_monitor.cpp "$root"/core/src/record_v2.cpp "$root"/core/src/crc16.cpp \
+  "$root"/core/src/plausibility.cpp \
   -o "$out/v2_cycles.elf"
 g++ -O2 -std=c++17 $(pkg-config --cflags simavr) "$here/avr_cycles/run_cycles.cpp" \
   $(pkg-config --libs simavr) -lelf -o "$out/run_cycles"
@@ -24,6 +25,7 @@ g++ -O2 -std=c++17 -I"$root/core/include" "$here/avr_cycles/scenario_host.cpp" \
   "$root"/core/src/model_v2.cpp "$root"/core/src/model_v2_runtime.cpp "$root"/core/src/force_pwm.cpp "$root"/core/src/force_curve.cpp \
   "$root"/core/src/curve_builder.cpp "$root"/core/src/motor_calibration.cpp \
   "$root"/core/src/battery_monitor.cpp "$root"/core/src/record_v2.cpp "$root"/core/src/crc16.cpp \
+  "$root"/core/src/plausibility.cpp \
   -o "$out/scenario_host"
 "$out/run_cycles" "$out/v2_cycles.elf" "$out/avr.hex"
 "$out/scenario_host" > "$out/host.hex"

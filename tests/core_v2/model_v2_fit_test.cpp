@@ -166,7 +166,7 @@ TEST(ModelV2Fit, PlacesSixteenFineKnotsBelowAQuarterOfTheRangeAndSixteenCoarseAb
   };
   const Row rows[] = {
       {"~900 g at 12.4 V: two runs", 600.0, true},
-      {"a small motor (~135 g): one run of the minimum step", 90.0, false},
+      {"a small motor (~135 g): one run of 32 knots, Q16 knot position", 90.0, false},
   };
   for (const Row& r : rows) {
     SCOPED_TRACE(r.name);
@@ -185,10 +185,12 @@ TEST(ModelV2Fit, PlacesSixteenFineKnotsBelowAQuarterOfTheRangeAndSixteenCoarseAb
       EXPECT_EQ(model.knotForceDg(15), 16 * model.step_dg);
       EXPECT_EQ(model.knotForceDg(16), 16 * model.step_dg + model.coarse_step_dg);
     } else {
-      EXPECT_EQ(model.step_dg, tc::kV2MinStepDg);
+      EXPECT_EQ(model.step_dg, rep.max_force_dg / 32);
+      EXPECT_LT(model.step_dg, tc::kV2MinStepDg);
+      EXPECT_EQ(model.q16_inverse, 1);
       EXPECT_EQ(model.fine_knots, model.knots);
       EXPECT_EQ(model.coarse_step_dg, 0);
-      EXPECT_GE(model.knots, 15);
+      EXPECT_EQ(model.knots, 32);
     }
     EXPECT_LE(model.maxForceDg(), rep.max_force_dg) << "the last knot is a measured force";
     EXPECT_GT(model.maxForceDg(), rep.max_force_dg - 2 * 16 * model.step_dg / 16 - 32);
@@ -257,13 +259,13 @@ TEST(ModelV2Fit, RefusesSweepsItCannotFitAndClearsTheModel) {
   std::vector<tc::SweepPointV2> flat, low_battery, short_sweep;
   for (uint16_t p = 1000; p <= 2000; p += 20) {
     flat.push_back({p, 3, 12000});                                    // motor never spins
-    low_battery.push_back({p, static_cast<int16_t>(p - 1000), 3000});  // monitor unplugged
+    low_battery.push_back({p, static_cast<int16_t>(p - 1000), 2900});  // monitor unplugged
   }
   for (uint16_t p = 1000; p < 1070; p += 10) short_sweep.push_back({p, 100, 12000});
   const Row rows[] = {
       {"7 samples", short_sweep, tc::FitV2Status::kTooFewSamples},
       {"no force", flat, tc::FitV2Status::kNoForce},
-      {"monitor reads 3 V", low_battery, tc::FitV2Status::kBadVoltage},
+      {"monitor reads 2.9 V (below one cell)", low_battery, tc::FitV2Status::kBadVoltage},
   };
   for (const Row& r : rows) {
     SCOPED_TRACE(r.name);
@@ -348,15 +350,16 @@ TEST(ModelV2FromCurve, LabCurveInDoublesFlysWithin0p3PercentOfTheTruth) {
 
 TEST(ModelV2FromCurve, RefusesCurvesItCannotStore) {
   const double d_ok[] = {100.0, 5000.0}, f_ok[] = {1.0, 500.0};
-  const double d_down[] = {5000.0, 100.0}, f_small[] = {1.0, 10.0};
+  const double d_down[] = {5000.0, 100.0}, f_small[] = {1.0, 4.0}, f_big[] = {1.0, 5001.0};
   tc::ModelV2 model;
   EXPECT_TRUE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_ok, 2, 12000.0));
   EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_ok, 1, 12000.0)) << "one point";
   EXPECT_FALSE(model.isPresent());
   EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_down, f_ok, 2, 12000.0)) << "descending";
-  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_small, 2, 12000.0)) << "10 g max";
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_small, 2, 12000.0)) << "4 g max";
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_big, 2, 12000.0)) << "5001 g max";
   EXPECT_FALSE(tc::modelV2FromCurve(model, 300.0, d_ok, f_ok, 2, 12000.0)) << "start 300 us";
-  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_ok, 2, 3000.0)) << "rest 3 V";
+  EXPECT_FALSE(tc::modelV2FromCurve(model, 1097.0, d_ok, f_ok, 2, 2900.0)) << "rest 2.9 V";
 }
 
 TEST(ModelV2Fit, SweepThatStartsWithTheMotorAlreadyPushingIsRefused) {

@@ -84,7 +84,7 @@ TEST(V2Frame, BusFilterStepIsBusVoltageFilterUpdate) {
     // then
     ASSERT_EQ(in_frame.mv, alone.mv) << frame;
     ASSERT_EQ(in_frame.rem, alone.rem) << frame;
-    ASSERT_EQ(in_frame.recip_q28, alone.recip_q28) << frame;
+    ASSERT_EQ(in_frame.recip_q27, alone.recip_q27) << frame;
   }
   EXPECT_EQ(in_frame.reseeds, alone.reseeds);
   EXPECT_EQ(in_frame.rejected, alone.rejected);

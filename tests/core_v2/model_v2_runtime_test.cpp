@@ -33,13 +33,13 @@ const tc::ModelV2& model12V4() {
 TEST(BusVoltageFilter, IsInvalidUntilTheFirstSaneSample) {
   tc::BusVoltageFilter bus;
   EXPECT_FALSE(bus.isValid());
-  bus.update(3000);  // below 6 V: ignored
+  bus.update(2900);  // below 3 V (one empty cell): ignored
   EXPECT_FALSE(bus.isValid());
   EXPECT_EQ(bus.rejected, 1);
   bus.update(11100);
   EXPECT_TRUE(bus.isValid());
   EXPECT_EQ(bus.mv, 11100);
-  EXPECT_EQ(bus.recip_q28, exactRecip(11100));
+  EXPECT_EQ(bus.recip_q27, exactRecip(11100));
 }
 
 TEST(BusVoltageFilter, MovesOneEighthOfTheWayPerFrameAndSettlesExactly) {
@@ -68,7 +68,7 @@ TEST(BusVoltageFilter, ReciprocalTracksADrainingPackWithoutDivisions) {
   for (int i = 0; i <= 3000; ++i) {
     const uint16_t sample = static_cast<uint16_t>(12600 - (2700 * i) / 3000 + ((i * 7) % 31) - 15);
     bus.update(sample);
-    worst_lsb = std::max(worst_lsb, std::abs(int(bus.recip_q28) - int(exactRecip(bus.mv))));
+    worst_lsb = std::max(worst_lsb, std::abs(int(bus.recip_q27) - int(exactRecip(bus.mv))));
   }
   // then: the Newton step alone kept the reciprocal within 1 LSB (relative 2e-5 at 10 V)
   EXPECT_LE(worst_lsb, 1);
@@ -81,12 +81,12 @@ TEST(BusVoltageFilter, ReseedsByDivisionAfterAJumpAndIgnoresInsaneSamples) {
   bus.update(8000);  // -33 %: beyond a Newton step
   EXPECT_EQ(bus.mv, 8000);
   EXPECT_EQ(bus.reseeds, 1);
-  EXPECT_EQ(bus.recip_q28, exactRecip(8000));
-  bus.update(20000);  // above 17.5 V: ignored
+  EXPECT_EQ(bus.recip_q27, exactRecip(8000));
+  bus.update(26100);  // above 26 V (six full cells and the divider's tolerance): ignored
   bus.update(0);
   EXPECT_EQ(bus.mv, 8000);
   EXPECT_EQ(bus.rejected, 2);
-  bus.reset(5000);  // insane reset: invalid
+  bus.reset(2500);  // insane reset: invalid
   EXPECT_FALSE(bus.isValid());
 }
 

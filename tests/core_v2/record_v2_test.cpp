@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "synthetic_motor.hpp"
+#include "test_records.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/record_v2.hpp"
@@ -15,64 +16,18 @@ using tc_test::SyntheticMotor;
 
 namespace {
 
-// 4 KB EEPROM in RAM. updateByte skips equal bytes like the board's; a power cut is modelled
-// by a budget of updateByte calls: once spent, writes are dropped, and the call that spends
-// it may leave a torn byte (a garbage value) behind.
-struct RamEeprom {
-  static uint8_t bytes[4096];
-  static uint32_t physical_writes;
-  static uint32_t update_calls;
-  static int32_t budget;   // calls still accepted; < 0: unlimited
-  static int16_t torn;     // value left by the first refused call; < 0: none
-  static void erase() {
-    std::memset(bytes, 0xFF, sizeof bytes);
-    physical_writes = 0;
-    update_calls = 0;
-    budget = -1;
-    torn = -1;
-  }
-  static uint8_t readByte(uint16_t addr) { return bytes[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) {
-    ++update_calls;
-    if (budget == 0) {
-      if (torn >= 0) {
-        bytes[addr] = static_cast<uint8_t>(torn);
-        torn = -1;
-      }
-      return;
-    }
-    if (budget > 0) --budget;
-    if (bytes[addr] != value) {
-      bytes[addr] = value;
-      ++physical_writes;
-    }
-  }
-};
-uint8_t RamEeprom::bytes[4096];
-uint32_t RamEeprom::physical_writes = 0;
-uint32_t RamEeprom::update_calls = 0;
-int32_t RamEeprom::budget = -1;
-int16_t RamEeprom::torn = -1;
-
-using Ee = RamEeprom;
+using Ee = tc_test::CutEeprom;
 
 tc::ModelV2 motorModel(double exponent, double start_us, double rest_v) {
-  SyntheticMotor motor;
-  motor.exponent = exponent;
-  motor.start_us = start_us;
-  tc::ModelV2 m = tc_test::fittedModel(motor, rest_v);
+  const tc::ModelV2 m = tc_test::motorModel(exponent, start_us, rest_v);
   EXPECT_TRUE(m.isPresent());
   return m;
 }
 
 bool sameModel(const tc::ModelV2& a, const tc::ModelV2& b) {
-  if (a.start_q4_us != b.start_q4_us || a.step_dg != b.step_dg || a.knots != b.knots ||
-      a.flags != b.flags || a.rest_mv != b.rest_mv || a.second_mv != b.second_mv)
-    return false;
-  for (uint8_t k = 0; k < tc::kV2MaxKnots; ++k)
-    if (a.drive_512usmv[k] != b.drive_512usmv[k] || a.sag_10mv[k] != b.sag_10mv[k]) return false;
-  return a.inv_step_q22 == b.inv_step_q22 && a.rest_recip_q28 == b.rest_recip_q28 &&
-         a.max_force_dg == b.max_force_dg && a.start_q17_us == b.start_q17_us;
+  return tc_test::sameModel(a, b) && a.inv_step_q22 == b.inv_step_q22 &&
+         a.rest_recip_q27 == b.rest_recip_q27 && a.max_force_dg == b.max_force_dg &&
+         a.start_q17_us == b.start_q17_us;
 }
 
 class RecordV2 : public ::testing::Test {
@@ -357,16 +312,7 @@ TEST_F(RecordV2, EraseClearsBothCopies) {
 
 namespace {
 
-tc::MotorCalibration thesisCalibration() {
-  SyntheticMotor motor;
-  tc::MotorCalibration cal;
-  tc::CurveBuilder<128> builder;
-  for (uint16_t pwm = 1000; pwm <= 2000; pwm += 10)
-    builder.add(pwm, static_cast<int16_t>(std::lround(motor.forceG(pwm, 12.4) * 10)));
-  EXPECT_EQ(builder.build(cal.first).status, tc::BuildStatus::kOk);
-  cal.first.start_mv = 12400;
-  return cal;
-}
+tc::MotorCalibration thesisCalibration() { return tc_test::thesisRecord(SyntheticMotor(), 12.4); }
 
 }  // namespace
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstdlib>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -22,8 +23,11 @@ namespace hil {
 namespace fs = std::filesystem;
 
 // <avr build>/firmware/<name>/<name>.elf (CMake's layout), or <avr build>/firmware/<name>.elf.
+// The environment variable THRUSTCAL_AVR_BUILD_DIR, when set, overrides the configured tree
+// (e.g. to run the tests against another commit's images).
 inline std::string imagePath(const std::string& name) {
-  const fs::path dir = fs::path(THRUSTCAL_AVR_BUILD_DIR) / "firmware";
+  const char* env = std::getenv("THRUSTCAL_AVR_BUILD_DIR");
+  const fs::path dir = fs::path(env && *env ? env : THRUSTCAL_AVR_BUILD_DIR) / "firmware";
   const fs::path flat = dir / (name + ".elf");
   const fs::path nested = dir / name / (name + ".elf");
   return (fs::exists(nested) || !fs::exists(flat) ? nested : flat).string();

@@ -83,6 +83,12 @@ INSTANTIATE_TEST_SUITE_P(
                       BadHex{":0200000055A9\n:00000001FF\n", "length byte says 2"},
                       BadHex{":01004000556A\n:00000001FF\n", "beyond the 64-byte image"},
                       BadHex{":0100000055AA\n", "no end-of-file record"},
-                      BadHex{":00000001FF\n:0100000055AA\n", "after the end-of-file"}));
+                      BadHex{":00000001FF\n:0100000055AA\n", "after the end-of-file"},
+                      // extended linear address FFFF + offset FFFF: 32-bit wrap (issue 8 segfault)
+                      BadHex{":02000004FFFFFC\n:01FFFF0042BF\n:00000001FF\n",
+                             "data at 0xFFFFFFFF..0xFFFFFFFF lies beyond the 64-byte image"},
+                      BadHex{":02000004FFFFFC\n:10FFF000000102030405060708090A0B0C0D0E0F89\n:00000001FF\n",
+                             "lies beyond the 64-byte image"},
+                      BadHex{":020000021000EC\n:0100000055AA\n:00000001FF\n", "lies beyond"}));
 
 }  // namespace

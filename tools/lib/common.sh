@@ -13,13 +13,19 @@ THRUSTCAL_PACKAGES=(
   libeigen3-dev libcli11-dev libmuparser-dev nlohmann-json3-dev libfmt-dev
   gnuplot-nox gcovr jq
 )
+# What tools/fuzz.sh adds (libFuzzer ships with Debian's clang runtime).
+THRUSTCAL_FUZZ_PACKAGES=(clang libclang-rt-14-dev)
 
 say() { printf '\033[1m==> %s\033[0m\n' "$*" >&2; }
 die() { printf 'error: %s\n' "$*" >&2; exit 1; }
 
+# ensure_packages [PACKAGE...]: installs the given packages (default THRUSTCAL_PACKAGES)
+# that are missing.
 ensure_packages() {
   local missing=() p
-  for p in "${THRUSTCAL_PACKAGES[@]}"; do
+  local wanted=("$@")
+  [ ${#wanted[@]} -eq 0 ] && wanted=("${THRUSTCAL_PACKAGES[@]}")
+  for p in "${wanted[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   [ ${#missing[@]} -eq 0 ] && return 0

@@ -19,12 +19,14 @@
 //   uint8_t readByte(uint16_t addr);  void updateByte(uint16_t addr, uint8_t value);
 // (hal::Eeprom on the board, a RAM array in tests and host tools). Never memcpy structs.
 // Decoding never yields garbage: erased, wrong version, bad CRC or implausible content all
-// decode as "not calibrated" (out.clear()) with the reason in the status.
+// decode as "not calibrated" (out.clear()) with the reason in the status; for implausible
+// content the rule that failed (thrustcal/plausibility.hpp) in the optional `why`.
 #pragma once
 #include <stdint.h>
 
 #include "thrustcal/crc16.hpp"
 #include "thrustcal/motor_calibration.hpp"
+#include "thrustcal/plausibility.hpp"
 
 namespace tc {
 
@@ -33,12 +35,7 @@ constexpr uint16_t kRecordBytes = 1024;
 constexpr uint8_t kMotorSlots = 4;
 constexpr uint16_t kRecordCrcOffset = kRecordBytes - 2;
 constexpr int16_t kSagUnitMv = 10;
-// What a decoded record may hold (anything else is kBadContent): start voltages of a 1S..6S
-// pack or bench supply, PWMs of a servo-style ESC pulse.
-constexpr uint16_t kPlausibleMinMv = 3000;
-constexpr uint16_t kPlausibleMaxMv = 30000;
-constexpr uint16_t kPlausibleMinPwmUs = 500;
-constexpr uint16_t kPlausibleMaxPwmUs = 2500;
+// What a decoded record may hold (anything else is kBadContent): thrustcal/record_limits.hpp.
 
 // Where each curve's steps lie in a v1 record (the layout above): read_run reads them from the
 // EEPROM on demand (thesis_runtime.hpp).
@@ -64,12 +61,10 @@ const char* decodeStatusText(DecodeStatus status);
 
 namespace codec_detail {
 
-// Checks the decoded fields (voltages, PWMs, step sequences) and finalizes the curves.
-// kBadContent when: the first curve is missing or its start voltage, PWM at 1 g or PWM at its
-// heaviest gram is implausible, or its steps continue after the end marker; the sag base PWM
-// is implausible or offset 0 is not 0; a present second curve fails the same checks as the
-// first. An absent second curve (start_mv 0) is cleared whatever its other bytes hold.
-DecodeStatus validate(MotorCalibration& cal);
+// Checks the decoded fields (tc::checkCalibration: voltages, PWMs, flat curves, step
+// sequences, sag) and finalizes the curves: kOk or kBadContent, the broken rule in `why`
+// (may be null). An absent second curve (start_mv 0) is cleared whatever its other bytes hold.
+DecodeStatus validate(MotorCalibration& cal, const RecordLimits& limits, Plausibility* why);
 // Sag offset in mV -> stored byte: nearest multiple of kSagUnitMv, saturated to int8.
 int8_t sagToByte(int16_t offset_mv);
 
@@ -124,10 +119,15 @@ void writeRecord(uint8_t slot, const MotorCalibration& cal) {
   w.u16(crc);
 }
 
+// Decodes the v1 record of `slot` into `out` (cleared unless kOk). `limits`: the board's
+// battery monitor (voltages above its full scale are implausible); `why` (may be null): the
+// plausibility rule a kBadContent record broke.
 template <class Storage>
-DecodeStatus readRecord(uint8_t slot, MotorCalibration& out) {
+DecodeStatus readRecord(uint8_t slot, MotorCalibration& out,
+                        const RecordLimits& limits = RecordLimits(), Plausibility* why = nullptr) {
   codec_detail::Reader<Storage> r{slotAddress(slot), 0xFFFF};
   out.clear();
+  if (why) *why = Plausibility();
   const uint8_t version = r.u8();
   if (version == 0xFF) return DecodeStatus::kErased;
   if (version != kLayoutVersion1) return DecodeStatus::kBadVersion;
@@ -146,9 +146,20 @@ DecodeStatus readRecord(uint8_t slot, MotorCalibration& out) {
     out.clear();
     return DecodeStatus::kBadCrc;
   }
-  const DecodeStatus status = codec_detail::validate(out);
+  const DecodeStatus status = codec_detail::validate(out, limits, why);
   if (status != DecodeStatus::kOk) out.clear();
   return status;
+}
+
+// True when the slot's version byte says v1 and its CRC matches: the bytes of a complete v1
+// record (its content is readRecord's question). Streams the slot, no buffer.
+template <class Storage>
+bool recordCrcOk(uint8_t slot) {
+  codec_detail::Reader<Storage> r{slotAddress(slot), 0xFFFF};
+  if (r.u8() != kLayoutVersion1) return false;
+  for (uint16_t i = 1; i < kRecordCrcOffset; ++i) r.u8();
+  const uint16_t computed = r.crc;
+  return r.u16() == computed;
 }
 
 // Marks a slot as not calibrated (version byte 0xFF; only that byte is written).

@@ -20,14 +20,16 @@
 //   to 1.2 % of force at 100 g on the virtual bench's plant; fine steps there and coarse
 //   ones where the curve is straight keep every knot's error about equal (plant, two sweeps:
 //   0.32 % RMS / 1.41 % max with one run, 0.19 % / 0.85 % with two). Curves that end below
-//   422 g (fine step under kV2MinStepDg) get one even run;
+//   422 g (fine step under kV2MinStepDg) get one even run; below 211 g its step is under
+//   kV2MinStepDg and the knot position uses a Q16 reciprocal instead (q16_inverse), so motors
+//   down to kRecordMinForceG (5 g) keep up to 32 knots;
 // - the battery sag the monitor saw on the bench at each knot (10 mV units) and the resting
 //   voltage, used to predict the bus voltage at a commanded operating point that differs
 //   from the present one (command steps), see forceToPwmV2(..., force_now_dg).
 //
 // Run time (forceToPwmV2 here; read_run flies its four motors with one tc::V2Frame::fly call,
 // model_v2_runtime.hpp, the same arithmetic): no float, no division. The bus voltage filter
-// (BusVoltageFilter) keeps the filtered millivolts AND their reciprocal (2^28 / mV), updated
+// (BusVoltageFilter) keeps the filtered millivolts AND their reciprocal (2^27 / mV), updated
 // by one Newton step (two 16x16 multiplications) in the frames where the filtered value
 // moves; a jump of more than 1/128 re-seeds it with one 32/16 division. Per motor: three
 // 16x16->32 multiplications (knot position, interpolation, drive * reciprocal; inline
@@ -58,18 +60,21 @@
 #include <stdint.h>
 
 #include "thrustcal/force_pwm.hpp"
+#include "thrustcal/record_limits.hpp"
 
 namespace tc {
 
 constexpr uint8_t kV2MaxKnots = 32;
 constexpr uint16_t kDriveUnitUsMv = 512;   // one stored drive unit = 512 us*mV
 constexpr uint8_t kV2SagUnitMv = 10;       // sag table unit
-constexpr uint16_t kV2MinStepDg = 66;      // 2^22 / step must fit 16 bits
-constexpr uint32_t kRecipOne = 1ul << 28;  // reciprocal scale: recip_q28 = 2^28 / mV
+constexpr uint16_t kV2MinStepDg = 66;      // 2^22 / step must fit 16 bits (Q22 reciprocal)
+constexpr uint16_t kV2MinStepSmallDg = 2;  // 2^16 / step must fit 16 bits (Q16, one run only)
+// Reciprocal scale: recip_q27 = 2^27 / mV fits 16 bits down to kPackMinMv (3.0 V, one cell).
+constexpr uint32_t kRecipOne = 1ul << 27;
 // Bus / monitor readings model v2 accepts (the filter ignores others, a model whose resting
-// reading lies outside does not finalize).
-constexpr uint16_t kV2SaneMinMv = 6000;
-constexpr uint16_t kV2SaneMaxMv = 17500;
+// reading lies outside does not finalize): 1S..6S packs.
+constexpr uint16_t kV2SaneMinMv = kPackMinMv;
+constexpr uint16_t kV2SaneMaxMv = kPackMaxMv;
 
 struct ModelV2 {
   // Stored fields (record_v2.hpp serializes exactly these). Field order: everything the
@@ -85,12 +90,14 @@ struct ModelV2 {
   uint16_t second_mv = 0;     // resting reading of the refining sweep; 0 = single sweep
 
   // Derived by finalize() (not stored).
-  uint16_t inv_step_q22 = 0;    // round(2^22 / step_dg), < 2^16 as step >= kV2MinStepDg
+  uint16_t inv_step_q22 = 0;    // round(2^22 / step_dg), < 2^16 as step >= kV2MinStepDg;
+                                // round(2^16 / step_dg) when q16_inverse
   uint16_t inv_coarse_q22 = 0;  // round(2^22 / coarse_step_dg), 0 without coarse knots
   uint16_t split_dg = 0;        // fine_knots * step_dg: where the coarse knots begin
-  uint16_t rest_recip_q28 = 0;  // 2^28 / rest_mv: the voltage used when the bus reading is bad
+  uint16_t rest_recip_q27 = 0;  // 2^27 / rest_mv: the voltage used when the bus reading is bad
   uint16_t max_force_dg = 0;    // force of the last knot
   uint32_t start_q17_us = 0;    // start threshold in 2^-17 us
+  uint8_t q16_inverse = 0;      // 1: step_dg < kV2MinStepDg, inv_step_q22 holds 2^16 / step
 
   // Stored tables.
   uint16_t drive_512usmv[kV2MaxKnots] = {};  // drive at each knot, non-decreasing, > 0
@@ -103,11 +110,14 @@ struct ModelV2 {
     return k < fine_knots ? static_cast<uint16_t>((k + 1) * step_dg)
                           : static_cast<uint16_t>(split_dg + (k + 1 - fine_knots) * coarse_step_dg);
   }
-  // Checks the stored fields and computes the derived ones. False (model cleared) when a
-  // field is out of range: start outside 800..1800 us, a step < kV2MinStepDg (coarse: or
-  // not 0 without coarse knots), knots outside 2..32, fine_knots outside 1..knots,
-  // rest_mv / second_mv outside 6000..17500 (second_mv may be 0), drive not increasing (a
-  // knot lower than the one before, or the first knot 0).
+  // Checks the stored fields against what the fixed-point maths needs and computes the
+  // derived ones. False (model cleared) when a field is out of range: start outside
+  // 800..1800 us, a step below kV2MinStepDg with coarse knots or below kV2MinStepSmallDg in
+  // one run (coarse: at least kV2MinStepDg, or 0 without coarse knots), knots outside 2..32,
+  // fine_knots outside 1..knots, rest_mv / second_mv outside kPackMinMv..kPackMaxMv
+  // (second_mv may be 0), drive not increasing (a knot lower than the one before, or the
+  // first knot 0). Whether the model is physically right is checkModelV2's question
+  // (thrustcal/plausibility.hpp).
   bool finalize();
   void clear();
 };
@@ -116,13 +126,14 @@ enum : uint8_t { kV2Refined = 1u << 0 };
 
 // Battery reading filter: first-order IIR, y += (x - y) / 2^shift per frame (default 1/8),
 // exact in steady state (`rem` keeps the fraction below 1 mV), plus the reciprocal of y for
-// division-free PWM. Samples outside 6000..17500 mV are ignored (the last good value stays)
+// division-free PWM. Samples outside kPackMinMv..kPackMaxMv (3.0..26.0 V: 1S..6S) are ignored
+// (the last good value stays)
 // and counted; until the first good sample isValid() is false.
 struct BusVoltageFilter {
   uint16_t mv = 0;           // filtered millivolts (floor of y)
   uint8_t rem = 0;           // fraction of y below 1 mV, in 1/256 mV
   uint8_t shift = 3;         // alpha = 1 / 2^shift, 0..6
-  uint16_t recip_q28 = 0;    // 2^28 / mv (within 1 LSB after the first update in steady state)
+  uint16_t recip_q27 = 0;    // 2^27 / mv (within 1 LSB after the first update in steady state)
   uint8_t rejected = 0;      // samples ignored as insane (saturates at 255)
   uint8_t reseeds = 0;       // divisions spent on big jumps (saturates at 255)
 
@@ -176,8 +187,8 @@ struct SweepPointV2 {
 enum class FitV2Status : uint8_t {
   kOk = 0,
   kTooFewSamples,    // fewer than 8 samples
-  kNoForce,          // the sweep never reached 2 * kV2MinStepDg (13.2 g): motor not spinning?
-  kBadVoltage,       // a sample's vbat_mv outside 6000..17500: monitor not connected
+  kNoForce,          // the sweep never reached kRecordMinForceG (5 g): motor not spinning?
+  kBadVoltage,       // a sample's vbat_mv outside kPackMinMv..kPackMaxMv: monitor not connected
   kStartNotFound,    // no usable force triple / voltage pair: sweep too coarse or too short
   kVoltagesTooClose, // refine: the two sweeps' resting voltages differ by < 500 mV
   kNoModel,          // refine: the model to refine is absent
@@ -241,7 +252,8 @@ class ModelV2Fitter : public ModelV2FitterBase {
 // Points (drive_usv[i], force_g[i]) with drive = (pwm - start) * V in us*V, ascending; dense
 // points are best (the curve is resampled linearly onto the knots). sag_mv[i] (may be null)
 // is the monitor drop at force_g[i]. Returns false (out cleared) when the points are fewer
-// than 2, not ascending, the largest force is below 13.2 g, or a field is out of range
+// than 2, not ascending, the largest force is outside kRecordMinForceG..kRecordMaxForceG, or
+// a field is out of range
 // (see ModelV2::finalize).
 bool modelV2FromCurve(ModelV2& out, double start_us, const double* drive_usv,
                       const double* force_g, uint16_t count, double rest_mv,

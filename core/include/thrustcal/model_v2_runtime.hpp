@@ -51,8 +51,9 @@ struct ModelV2Run {
   uint16_t inv_coarse_q22 = 0;
   uint8_t fine_knots = 0;
   uint8_t knots = 0;
+  uint8_t q16_inverse = 0;      // inv_step_q22 holds 2^16 / step (ModelV2::q16_inverse)
   uint32_t start_round_q17_us = 0;  // start threshold + 1/2 us, 2^-17 us
-  uint16_t rest_recip_q28 = 0;  // the voltage flown while the bus reading is not valid
+  uint16_t rest_recip_q27 = 0;  // the voltage flown while the bus reading is not valid
   // Status only (headroom): the knots' forces and the resting reading.
   uint16_t step_dg = 0;
   uint16_t coarse_step_dg = 0;

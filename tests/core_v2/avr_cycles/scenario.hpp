@@ -123,7 +123,7 @@ void run(State& s) {
     s.frame.fly(sample_mv);
     Io::markEnd();
     emit16<Io>(s.frame.bus.mv);
-    emit16<Io>(s.frame.bus.recip_q28);
+    emit16<Io>(s.frame.bus.recip_q27);
     emit16<Io>(s.frame.sag.last_q4);
     for (uint8_t m = 0; m < 4; ++m) emitResult<Io>(s.frame.lane[m].result());
 

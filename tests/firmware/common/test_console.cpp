@@ -1,4 +1,5 @@
-// Shared console helpers: line editor, tokenizer, integer parsing, number printing.
+// Shared console helpers: the line protocol (docs/console.md), tokenizer, integer parsing,
+// number printing.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -25,11 +26,17 @@ class Console : public ::testing::Test {
     }
     return events;
   }
+  // Lines of the output that start with "error: ".
+  static int errorLines(const std::string& out) {
+    int n = 0;
+    for (std::size_t pos = 0; (pos = out.find("error: ", pos)) != std::string::npos; ++pos) ++n;
+    return n;
+  }
 };
 
 using Events = std::vector<std::pair<fw::LineEvent, std::string>>;
 constexpr fw::LineEvent kLine = fw::LineEvent::kLine;
-constexpr fw::LineEvent kTooLong = fw::LineEvent::kTooLong;
+constexpr fw::LineEvent kRejected = fw::LineEvent::kRejected;
 
 struct LineRow {
   const char* name;
@@ -47,8 +54,9 @@ TEST_F(Console, LineReaderEndsLinesOnCrLfOrCrLfAndHandlesEditing) {
       {"backspace", "hx\blp\r", {{kLine, "hlp"}}},
       {"delete key", "ab\x7f\x7f\x7f" "c\r", {{kLine, "c"}}},
       {"tab is a space", "motor\t2\r", {{kLine, "motor 2"}}},
-      {"control bytes ignored", "a\x01\x1b" "b\r", {{kLine, "ab"}}},
-      {"8-bit bytes ignored", "a\xe5z\r", {{kLine, "az"}}},
+      {"a control byte rejects the line", "a\x01\x1b" "b\r", {{kRejected, ""}}},
+      {"an 8-bit byte rejects the line", "f 1 3\xe5" "7\r", {{kRejected, ""}}},
+      {"the next line is fine again", "a\x01\rok\r", {{kRejected, ""}, {kLine, "ok"}}},
   };
   for (const auto& row : rows) {
     fw::LineReader reader;
@@ -68,9 +76,9 @@ TEST_F(Console, LineReaderRejectsAnOverLongLineWholeAndRecoversOnTheNextLine) {
   const std::string too_long(fw::kLineMax + 1, 'y');
   // when
   const Events events = feedAll(reader, too_long + "\rtare\r");
-  // then: one kTooLong with nothing usable in line(), then the next line intact
+  // then: one rejection (too long) with nothing usable in line(), then the next line intact
   ASSERT_EQ(events.size(), 2u);
-  EXPECT_EQ(events[0].first, kTooLong);
+  EXPECT_EQ(events[0].first, kRejected);
   EXPECT_EQ(events[0].second, "");
   EXPECT_EQ(events[1], (std::pair<fw::LineEvent, std::string>{kLine, "tare"}));
 }
@@ -86,7 +94,8 @@ TEST_F(Console, LineReaderOverflowPast255TypedCharactersStaysTooLong) {
   std::string text(300, 'z');
   text += std::string(300, '\b');
   text += "\r";
-  EXPECT_EQ(feedAll(reader, text), (Events{{kTooLong, ""}}));
+  EXPECT_EQ(feedAll(reader, text), (Events{{kRejected, ""}}));
+  EXPECT_EQ(reader.reject(), fw::Reject::kTooLong);
 }
 
 TEST_F(Console, LineReaderEchoesTypingBackspaceAndLineEnd) {
@@ -127,6 +136,193 @@ TEST_F(Console, ClearForgetsAPartialLine) {
   feedAll(reader, "xyz");
   reader.clear();
   EXPECT_EQ(feedAll(reader, "ok\r"), (Events{{kLine, "ok"}}));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The line protocol: damage, checksum, strict mode, aborts
+
+TEST_F(Console, ADamageMarkRejectsItsWholeLineWithOneErrorAndTheNextLineIsFine) {
+  // given: "f 1 37" with bytes lost after "f 1" (what the AVR receiver reports on overflow)
+  fw::LineReader reader;
+  hal::fake::feedInput("f 1");
+  hal::fake::feedDamage();
+  hal::fake::feedInput("7\rstatus\r");
+  // when
+  const fw::LineEvent first = reader.poll();
+  const std::string out = hal::fake::output();
+  const fw::LineEvent second = reader.poll();
+  // then
+  EXPECT_EQ(first, kRejected);
+  EXPECT_EQ(reader.reject(), fw::Reject::kNone);  // the second line was fine
+  EXPECT_EQ(second, kLine);
+  EXPECT_STREQ(reader.line(), "status");
+  EXPECT_EQ(errorLines(out), 1) << out;
+  EXPECT_NE(out.find("error: line damaged in transit"), std::string::npos) << out;
+  EXPECT_EQ(reader.rejectedLines(), 1u);
+}
+
+TEST_F(Console, ADamageMarkBetweenLinesRejectsTheLineAfterIt) {
+  // The lost bytes may have held the start of the next line: it is not executed.
+  fw::LineReader reader;
+  hal::fake::feedInput("a\r");
+  hal::fake::feedDamage();
+  hal::fake::feedInput("1 37\r");
+  EXPECT_EQ(reader.poll(), kLine);
+  EXPECT_STREQ(reader.line(), "a");
+  EXPECT_EQ(reader.poll(), kRejected);
+  EXPECT_EQ(reader.reject(), fw::Reject::kDamaged);
+}
+
+struct ChecksumRow {
+  const char* name;
+  std::string input;
+  fw::LineEvent event;
+  std::string line;
+  bool checked;
+  fw::Reject reject;
+};
+
+TEST_F(Console, AChecksumSuffixIsVerifiedAndRemoved) {
+  // "f 1 37": XOR = 0x66 ^ 0x20 ^ 0x31 ^ 0x20 ^ 0x33 ^ 0x37 = 0x53; "f 9": 0x7F
+  const ChecksumRow rows[] = {
+      {"good", "f 1 37*53\r", kLine, "f 1 37", true, fw::Reject::kNone},
+      {"good, upper case", "f 9*7F\r", kLine, "f 9", true, fw::Reject::kNone},
+      {"good, lower case", "f 9*7f\r", kLine, "f 9", true, fw::Reject::kNone},
+      {"empty line *00", "*00\r", kLine, "", true, fw::Reject::kNone},
+      {"no checksum", "f 1 37\r", kLine, "f 1 37", false, fw::Reject::kNone},
+      {"wrong", "f 1 37*54\r", kRejected, "", false, fw::Reject::kBadChecksum},
+      {"a digit changed in transit", "f 1 77*53\r", kRejected, "", false, fw::Reject::kBadChecksum},
+      {"one digit", "f 1 37*5\r", kRejected, "", false, fw::Reject::kMalformedChecksum},
+      {"three digits", "f 1 37*530\r", kRejected, "", false, fw::Reject::kMalformedChecksum},
+      {"not hex", "f 1 37*5G\r", kRejected, "", false, fw::Reject::kMalformedChecksum},
+      {"star alone", "f*\r", kRejected, "", false, fw::Reject::kMalformedChecksum},
+  };
+  for (const auto& row : rows) {
+    SCOPED_TRACE(row.name);
+    hal::fake::takeOutput();
+    fw::LineReader reader;
+    const Events events = feedAll(reader, row.input);
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events[0].first, row.event);
+    EXPECT_EQ(events[0].second, row.line);
+    EXPECT_EQ(reader.checked(), row.checked);
+    EXPECT_EQ(reader.reject(), row.reject);
+    EXPECT_EQ(errorLines(hal::fake::output()), row.event == kRejected ? 1 : 0) << hal::fake::output();
+  }
+}
+
+TEST_F(Console, AWrongChecksumSaysWhatTheLineShouldHaveCarried) {
+  fw::LineReader reader;
+  feedAll(reader, "f 1 37*54\r");
+  EXPECT_NE(hal::fake::output().find("error: checksum *54 does not match the line (*53)"),
+            std::string::npos)
+      << hal::fake::output();
+}
+
+TEST_F(Console, StrictModeRefusesRiskyCommandsWithoutAValidChecksum) {
+  // given
+  fw::LineReader reader;
+  char strict_on[] = "strict on";
+  char* tokens[3];
+  ASSERT_TRUE(reader.handleStrict(tokens, fw::tokenize(strict_on, tokens, 3)));
+  ASSERT_TRUE(reader.strict());
+  // when / then: a plain line is refused with one error, a checksummed one allowed
+  feedAll(reader, "f 1 37\r");
+  hal::fake::takeOutput();
+  EXPECT_FALSE(reader.allowRisky());
+  EXPECT_EQ(errorLines(hal::fake::output()), 1);
+  feedAll(reader, "f 1 37*53\r");
+  EXPECT_TRUE(reader.allowRisky());
+  // strict off: anything goes again
+  char strict_off[] = "strict off";
+  ASSERT_TRUE(reader.handleStrict(tokens, fw::tokenize(strict_off, tokens, 3)));
+  feedAll(reader, "f 1 37\r");
+  EXPECT_TRUE(reader.allowRisky());
+}
+
+TEST_F(Console, HandleStrictIgnoresOtherVerbsAndRejectsBadArguments) {
+  fw::LineReader reader;
+  char other[] = "status";
+  char bad[] = "strict maybe";
+  char* tokens[3];
+  EXPECT_FALSE(reader.handleStrict(tokens, fw::tokenize(other, tokens, 3)));
+  EXPECT_TRUE(reader.handleStrict(tokens, fw::tokenize(bad, tokens, 3)));
+  EXPECT_FALSE(reader.strict());
+  EXPECT_NE(hal::fake::output().find("error: usage: strict on|off"), std::string::npos);
+}
+
+TEST_F(Console, AfterAnAbortKeyTheRestOfItsLineIsDiscardedWithOneError) {
+  // given: "xerase" arrives while a sweep runs; the sweep consumed the "x" and aborted
+  fw::LineReader reader;
+  reader.abortLine('x');
+  // when
+  const Events events = feedAll(reader, "erase\rshow\r");
+  // then: "erase" is never a line; the error says what happened; "show" is a line again
+  EXPECT_EQ(events, (Events{{kRejected, ""}, {kLine, "show"}}));
+  EXPECT_EQ(errorLines(hal::fake::output()), 1);
+  EXPECT_NE(hal::fake::output().find("ignored the rest of the line whose first key aborted (5"),
+            std::string::npos)
+      << hal::fake::output();
+}
+
+TEST_F(Console, AnAbortKeyThatEndsItsLineDiscardsNothingMore) {
+  const struct {
+    int16_t key;
+    const char* then;
+    Events expected;
+  } rows[] = {
+      {'\r', "\nshow\r", {{kLine, "show"}}},  // the LF of its CRLF belongs to it
+      {'\n', "show\r", {{kLine, "show"}}},
+      {'x', "\rshow\r", {{kLine, "show"}}},     // "x" then Enter: nothing to report
+  };
+  for (const auto& row : rows) {
+    fw::LineReader reader;
+    reader.abortLine(row.key);
+    EXPECT_EQ(feedAll(reader, row.then), row.expected) << row.key;
+    EXPECT_EQ(errorLines(hal::fake::output()), 0);
+  }
+}
+
+TEST_F(Console, PollHandlesAtMostMaxBytesPerCall) {
+  fw::LineReader reader;
+  hal::fake::feedInput("status\r");
+  EXPECT_EQ(reader.poll(4), fw::LineEvent::kNone);  // "stat"
+  EXPECT_EQ(reader.poll(4), kLine);                 // "us\r"
+  EXPECT_STREQ(reader.line(), "status");
+}
+
+TEST_F(Console, ResetCauseNamesEveryFlagSet) {
+  const struct {
+    uint8_t flags;
+    const char* text;
+  } rows[] = {
+      {hal::Watchdog::kWatchdog, "reset: watchdog (the program hung; motors were stopped)\r\n"},
+      {hal::Watchdog::kWatchdog | hal::Watchdog::kWasRunning,
+       "reset: watchdog (the program hung; motors were stopped)\r\n"},
+      {hal::Watchdog::kWasRunning,
+       "reset: watchdog or external while running (a bootloader cleared the reset flags)\r\n"},
+      {hal::Watchdog::kBrownOut, "reset: brown-out (the supply dipped; check the 5 V supply)\r\n"},
+      {hal::Watchdog::kExternal, "reset: external\r\n"},
+      {hal::Watchdog::kPowerOn, "reset: power-on\r\n"},
+      {hal::Watchdog::kPowerOn | hal::Watchdog::kBrownOut,
+       "reset: brown-out, power-on (the supply dipped; check the 5 V supply)\r\n"},
+      {0, "reset: power-on or external (a bootloader cleared the reset flags)\r\n"},
+  };
+  for (const auto& row : rows) {
+    hal::fake::takeOutput();
+    hal::fake::setResetFlags(row.flags);
+    fw::printResetCause();
+    EXPECT_EQ(hal::fake::output(), row.text) << int(row.flags);
+  }
+}
+
+TEST_F(Console, HealthLineReportsTheStackHeadroomAndTheConsole) {
+  fw::LineReader reader;
+  feedAll(reader, "a\x01\r");
+  hal::fake::takeOutput();
+  hal::fake::setStack(2086, 1042);
+  fw::printHealth(reader);
+  EXPECT_EQ(hal::fake::output(), "stack: 1042 of 2086 bytes never used; strict off; 1 lines rejected\r\n");
 }
 
 struct TokenRow {

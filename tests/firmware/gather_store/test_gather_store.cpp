@@ -405,7 +405,7 @@ TEST_F(GatherStore, AnyKeyDuringTheSweepStopsTheMotorAtOnce) {
   hal::fake::advanceMs(gs::kArmMs);
   calibrateAndTare();
   const uint32_t key_at = hal::fake::nowMs() + 5000;  // mid-sweep (about 1240 us)
-  hal::fake::feedInputAt(key_at, "x");
+  hal::fake::feedInputAt(key_at, "x\r");  // a key, then Enter: nothing else is discarded
   std::vector<std::pair<uint32_t, uint16_t>> pulses;
   hal::fake::setTickHook([&](uint32_t now) {
     plant_.tick();
@@ -465,16 +465,46 @@ TEST_F(GatherStore, AKeyRightAfterSweepAbortsBeforeTheMotorStarts) {
   EXPECT_EQ(out.find("pwm_us,"), std::string::npos) << out;
 }
 
-TEST_F(GatherStore, AKeyDuringTheAbortedSweepDoesNotLeakIntoTheNextCommand) {
+TEST_F(GatherStore, TheLineThatAbortedTheSweepIsDiscardedUpToItsEndWithOneError) {
   hal::fake::advanceMs(gs::kArmMs);
   calibrateAndTare();
   hal::fake::feedInputAt(hal::fake::nowMs() + 3000, "tare");
   sweep();
-  // when: the next command typed
+  // when: the line goes on and ends ("tarestatus": the "t" aborted the sweep)
+  const auto rest = responseLines(run("status"));
+  // then: neither "tare" nor "status" ran; one error says so; the next line runs again
+  ASSERT_FALSE(rest.empty());
+  EXPECT_EQ(rest[0], "error: ignored the rest of the line whose first key aborted (9 characters), "
+                     "ignored; nothing changed");
   const auto lines = responseLines(run("status"));
-  // then: it is "status", not "tarestatus"
   ASSERT_FALSE(lines.empty());
   EXPECT_TRUE(startsWith(lines[0], "motor 0")) << lines[0];
+}
+
+TEST_F(GatherStore, EraseTypedDuringASweepErasesNothing) {
+  // given: slot 0 holds a curve; a sweep runs
+  hal::fake::advanceMs(gs::kArmMs);
+  calibrateAndTare();
+  sweep();
+  run("store 1");
+  const std::vector<uint8_t> before(hal::fake::eeprom(), hal::fake::eeprom() + hal::Eeprom::kSize);
+  hal::fake::feedInputAt(hal::fake::nowMs() + 3000, "x");
+  hal::fake::feedInputAt(hal::fake::nowMs() + 3002, "erase\r");  // typed after the key
+  // when
+  std::string out = sweep();
+  for (int ms = 0; ms < 100; ++ms) {  // the main loop goes on
+    app_->poll();
+    hal::Clock::sleepUntilInterrupt();
+  }
+  out += hal::fake::takeOutput();
+  // then
+  EXPECT_NE(out.find("# aborted: key pressed"), std::string::npos) << out;
+  EXPECT_EQ(out.find("erased motor"), std::string::npos) << out;
+  EXPECT_NE(out.find("error: ignored the rest of the line whose first key aborted (5"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(std::vector<uint8_t>(hal::fake::eeprom(), hal::fake::eeprom() + hal::Eeprom::kSize),
+            before);
 }
 
 TEST_F(GatherStore, LoadCellOverloadAbortsTheSweep) {
@@ -524,15 +554,25 @@ TEST_F(GatherStore, TareAtTheAdcRailIsRefused) {
 }
 
 TEST_F(GatherStore, BatteryReadingOutsideTheSaneRangeAbortsTheSweep) {
-  plant_.vbat_v = 4.0;  // divider unplugged or a flat pack
-  hal::fake::advanceMs(gs::kArmMs);
-  calibrateAndTare();
-  const std::string out = sweep();
-  EXPECT_EQ(app_->lastSweepEnd(), gs::SweepEnd::kBattery);
-  EXPECT_NE(out.find("# aborted: battery reads 4.005 V, outside 6.000 V..17.500 V"),
-            std::string::npos)
-      << out;
-  EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+  struct Row {
+    double vbat_v;
+    const char* message;
+  };
+  const Row rows[] = {
+      {2.5, "# aborted: battery reads 2.506 V, outside 3.000 V..15.637 V"},    // below one cell
+      {17.0, "# aborted: battery reads 15.638 V, outside 3.000 V..15.637 V"},  // the ADC's rail
+  };
+  for (const Row& r : rows) {
+    SCOPED_TRACE(r.vbat_v);
+    SetUp();
+    plant_.vbat_v = r.vbat_v;  // divider unplugged, a flat pack, or a pack above the divider
+    hal::fake::advanceMs(gs::kArmMs);
+    calibrateAndTare();
+    const std::string out = sweep();
+    EXPECT_EQ(app_->lastSweepEnd(), gs::SweepEnd::kBattery);
+    EXPECT_NE(out.find(r.message), std::string::npos) << out;
+    EXPECT_EQ(hal::fake::pulseUs(0), 1000u);
+  }
 }
 
 TEST_F(GatherStore, AbortLinesKeepTheCapturedLogACsvWithComments) {

@@ -3,6 +3,7 @@
 // ADC with its interrupt wake-up, the EEPROM, and idle sleep. A minimal libsimavr harness of
 // its own (no dependency on tools/sim) so a HAL regression shows up here, by name.
 // Budgets are simulated cycles only: deterministic, no wall-clock assertions.
+#include "sim/lsan_simavr.hpp"
 #include <gtest/gtest.h>
 
 #include <simavr/avr_adc.h>

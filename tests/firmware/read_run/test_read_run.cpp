@@ -412,9 +412,9 @@ TEST_F(ReadRun, LiftoffRampsAllFourMotorsThenHoldsThenStops) {
     pwm3.push_back(fake::pulseUs(3));
   });
 
-  // when: 300 g, 1000 ms ramp, 2000 ms hold, no input at all for 3.5 s
+  // when: 300 g, 1000 ms ramp, 2000 ms hold, then only keep-alive empty lines for 3.5 s
   fake::feedInput("liftoff 300 1000 2000\n");
-  runFor(3500);
+  runFor(3500, true);
 
   // then
   const std::string out = fake::output();
@@ -443,7 +443,7 @@ TEST_F(ReadRun, AnyKeyAbortsTheLiftoffAndStopsTheMotorsAtOnce) {
   storeFourMotors();
   boot();
   fake::feedInput("liftoff 300 500 5000\n");
-  runFor(1500);
+  runFor(1500, true);
   ASSERT_GT(pulse(0), 1400);
 
   // when: one key, no newline
@@ -457,6 +457,60 @@ TEST_F(ReadRun, AnyKeyAbortsTheLiftoffAndStopsTheMotorsAtOnce) {
   runFor(6000);
   EXPECT_EQ(pulse(0), 1000) << "the sequence does not resume";
   EXPECT_FALSE(contains(fake::output(), "# liftoff done"));
+}
+
+TEST_F(ReadRun, LiftoffStopsWhenNoLineEndArrivesFor500Ms) {
+  // given: a lift-off kept alive for a second
+  storeFourMotors();
+  boot();
+  fake::feedInput("liftoff 300 500 5000\n");
+  runFor(1000, true);
+  ASSERT_GT(pulse(0), 1400);
+
+  // when: the link goes quiet
+  const uint32_t quiet_ms = fake::nowMs();
+  uint32_t stopped_ms = 0;
+  fake::setTickHook([&](uint32_t now) {
+    if (stopped_ms == 0 && fake::pulseUs(0) == 1000) stopped_ms = now;
+  });
+  runFor(1000);
+
+  // then: every motor stops 500 ms after the last line end (+ one 20 ms frame)
+  for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), 1000) << "motor " << int(m);
+  EXPECT_GE(stopped_ms - quiet_ms, 480u);
+  EXPECT_LE(stopped_ms - quiet_ms, 521u);
+  EXPECT_TRUE(contains(fake::output(), "# liftoff stopped: no line end for 500 ms")) << fake::output();
+  EXPECT_EQ(app_->mode(), rr::Mode::kReady);
+  EXPECT_EQ(app_->failsafeTrips(), 1u);
+}
+
+TEST_F(ReadRun, TheRestOfTheLineThatAbortedALiftoffIsNotACommand) {
+  // given
+  storeFourMotors();
+  boot();
+  fake::feedInput("liftoff 300 500 5000\n");
+  runFor(1000, true);
+  // when: "xf 2 450" arrives
+  fake::feedInput("xf 2 450\n");
+  runFor(500, true);
+  // then
+  for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), 1000) << "motor " << int(m);
+  EXPECT_TRUE(contains(fake::output(), "error: ignored the rest of the line whose first key aborted"))
+      << fake::output();
+}
+
+TEST_F(ReadRun, StrictModeRefusesSpinningWithoutAChecksumButAlwaysAllowsStopping) {
+  storeFourMotors();
+  boot();
+  command("strict on");
+  EXPECT_TRUE(contains(command("f 200"), "error: strict mode")) << fake::output();
+  EXPECT_EQ(app_->motor(0).force_g, 0);
+  EXPECT_TRUE(contains(command("liftoff 200"), "error: strict mode"));
+  EXPECT_EQ(app_->mode(), rr::Mode::kReady);
+  command("f 200*74");  // XOR of "f 200"
+  EXPECT_EQ(app_->motor(0).force_g, 200);
+  command("f 0");
+  EXPECT_EQ(app_->motor(0).force_g, 0);
 }
 
 TEST_F(ReadRun, LiftoffIsRefusedWhileMotorsRun) {
@@ -480,10 +534,11 @@ TEST_F(ReadRun, LiftoffIsRefusedWhileMotorsRun) {
 
 TEST_F(ReadRun, BadInputGetsOneErrorLineAndChangesNothing) {
   const char* bad_lines[] = {
-      "f",           "f 501",        "f -1",          "f 4 100",     "f 1 2 3",
+      "f",           "f 5001",       "f -1",          "f 4 100",     "f 1 2 3",
       "f abc",       "f 1 x",        "liftoff",       "liftoff 0",   "liftoff 300 70000",
       "liftoff 9 1 2 3", "rate 49",  "rate 401",      "rate",        "rate fast",
       "stream maybe", "stream",      "xyz",           "F 100",
+      "divider 100000", "divider 100000 0", "divider 1 2 3", "divider 100000 22000",  // running
       "0123456789012345678901234567890123456789012345678901234567890",
   };
   // given: motors running at 200 g

@@ -6,7 +6,6 @@
 #include <memory>
 #include <stdexcept>
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
 
 #include "plant/actuator.hpp"
@@ -21,7 +20,7 @@ namespace bench {
 
 namespace {
 
-constexpr double kPwmMinUs = 1000, kPwmMaxUs = 2000;
+constexpr double kPwmMinUs = 1000;
 
 struct Accum {
   double sum = 0, sum_sq = 0, max_abs = 0;
@@ -115,80 +114,43 @@ nlohmann::json ErrorStats::toJson() const {
   return {{"rms_pct", rms_pct}, {"max_pct", max_pct}, {"points", points}};
 }
 
-double ExpoModel::liftMax_g() const {
-  const double x = (spin_max_us - spin_min_us) * v_max;
-  return c1 * x + c2 * x * x;
-}
-double ExpoModel::expo() const {
-  const double x = (spin_max_us - spin_min_us) * v_max;
-  const double lift = liftMax_g();
-  return lift > 0 ? c2 * x * x / lift : 0.0;
+double ExpoModel::spinMin_us() const {
+  return params.pwm_min_us + params.spin_min * (params.pwm_max_us - params.pwm_min_us);
 }
 double ExpoModel::thrust_g(double pwm_us, double bus_v) const {
-  const double x = std::max(0.0, pwm_us - spin_min_us) * bus_v;
-  return c1 * x + c2 * x * x;
+  return full_g * lab::autopilot::ardupilot::thrustFraction(params, pwm_us, bus_v);
 }
 double ExpoModel::pwmFor_us(double force_g, double bus_v) const {
-  if (force_g <= 0 || bus_v <= 0) return kPwmMinUs;
-  double x;
-  if (std::fabs(c2) < 1e-18) {
-    x = force_g / c1;
-  } else {
-    const double disc = c1 * c1 + 4 * c2 * force_g;
-    x = disc > 0 ? (-c1 + std::sqrt(disc)) / (2 * c2) : -c1 / (2 * c2);
-  }
-  return std::clamp(spin_min_us + x / bus_v, kPwmMinUs, kPwmMaxUs);
+  return lab::autopilot::ardupilot::pwmForThrust(params, full_g > 0 ? force_g / full_g : 0.0, bus_v);
 }
 
 ExpoModel fitExpo(const std::vector<SweepPoint>& points) {
-  std::vector<const SweepPoint*> used;
-  for (const SweepPoint& p : points)
-    if (p.force_dg >= 100 && p.force_dg <= 6000) used.push_back(&p);
-  if (used.size() < 6)
+  std::vector<lab::autopilot::Row> rows;
+  int used = 0;
+  for (const SweepPoint& p : points) {
+    lab::autopilot::Row r;
+    r.pwm_us = p.pwm_us;
+    r.force_g = p.force_dg / 10.0;
+    r.vbat_v = p.vbat_mv / 1000.0;
+    const bool in = p.force_dg >= 100 && p.force_dg <= 6000;
+    r.weight = in ? 1.0 / (r.force_g * r.force_g) : 0.0;
+    used += in;
+    rows.push_back(r);
+  }
+  if (used < 6)
     throw std::runtime_error(fmt::format(
-        "ArduPilot-style fit: only {} samples between 10 g and 600 g (need 6); sweep higher",
-        used.size()));
-  const auto n = static_cast<Eigen::Index>(used.size());
-  auto solve = [&](double spin_min, ExpoModel& m) {
-    Eigen::MatrixXd a(n, 2);
-    Eigen::VectorXd b(n);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const SweepPoint& p = *used[static_cast<size_t>(i)];
-      const double f = p.force_dg / 10.0;
-      const double x = std::max(0.0, p.pwm_us - spin_min) * p.vbat_mv / 1000.0;
-      a(i, 0) = x / f;
-      a(i, 1) = x * x / f;
-      b(i) = 1.0;
-    }
-    const Eigen::Vector2d c = a.colPivHouseholderQr().solve(b);
-    m.spin_min_us = spin_min;
-    m.c1 = c(0);
-    m.c2 = c(1);
-    const double rms = std::sqrt((a * c - b).squaredNorm() / static_cast<double>(n));
-    m.rms_fit_pct = 100.0 * rms;
-    return rms;
-  };
-  // spin-min: coarse scan, then golden-section refinement around the best point.
-  // spin-min lies below every sample used (x >= 0 there) and not far below the sweep's start
-  uint16_t first_used_us = used.front()->pwm_us, sweep_start_us = points.front().pwm_us;
-  for (const SweepPoint* p : used) first_used_us = std::min(first_used_us, p->pwm_us);
-  for (const SweepPoint& p : points) sweep_start_us = std::min(sweep_start_us, p.pwm_us);
-  const double lowest = static_cast<double>(sweep_start_us) - 100.0;
-  const double highest = static_cast<double>(first_used_us) - 1.0;
-  ExpoModel best, m;
-  double best_rms = 1e300, best_s = lowest;
-  for (double s = lowest; s <= highest; s += 2.0) {
-    const double r = solve(s, m);
-    if (r < best_rms) best_rms = r, best_s = s;
-  }
-  double lo = std::max(lowest, best_s - 2.0), hi = std::min(highest, best_s + 2.0);
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  for (int i = 0; i < 40; ++i) {
-    const double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
-    if (solve(a, m) < solve(b, m)) hi = b; else lo = a;
-  }
-  solve(0.5 * (lo + hi), best);
-  return best;
+        "ArduPilot fit: only {} samples between 10 g and 600 g (need 6); sweep higher", used));
+  lab::autopilot::FitSetup setup;
+  setup.cells = 3;                     // MOT_BAT_VOLT_MAX 12.6 V
+  setup.bat_volt_min_per_cell = 2.52;  // MOT_BAT_VOLT_MIN 7.56 V, the lowest ArduPilot uses: the
+                                       // current-limited supply sags below 9.9 V near full throttle
+  setup.fit_spin_max = false;
+  const lab::autopilot::ArduPilotFit fit = lab::autopilot::fitArduPilot(rows, setup);
+  ExpoModel m;
+  m.params = fit.params;
+  m.full_g = fit.scale.full_g;
+  m.rms_fit_pct = 100.0 * std::sqrt(fit.scale.rss / used);
+  return m;
 }
 
 const ModelAccuracy& AccuracyResult::model(const std::string& key) const {
@@ -288,7 +250,7 @@ AccuracyResult runAccuracy(const AccuracyConfig& config) {
     both.insert(both.end(), low.points.begin(), low.points.end());
     m->expo = fitExpo(both);
     summary.expo = m->expo.expo();
-    summary.expo_spin_min_us = m->expo.spin_min_us;
+    summary.expo_spin_min_us = m->expo.spinMin_us();
     summary.expo_lift_max_g = m->expo.liftMax_g();
     summary.expo_fit_rms_pct = m->expo.rms_fit_pct;
     result.motors.push_back(summary);
@@ -312,7 +274,7 @@ AccuracyResult runAccuracy(const AccuracyConfig& config) {
        [&](const MotorModels&, int f, uint16_t) { return generic_pwm[static_cast<size_t>(f)]; }},
       {"thesis_2_1", "thesis option 2.1 (two curves, sag offsets)",
        [](const MotorModels& m, int f, uint16_t mv) { return thesisPwm(m.cal, f, mv); }},
-      {"ardupilot", "ArduPilot-style expo + voltage scaling, fitted",
+      {"ardupilot", "ArduPilot's thrust model (expo + voltage scaling), fitted",
        [](const MotorModels& m, int f, uint16_t mv) { return m.expo.pwmFor_us(f, mv / 1000.0); }},
       {"v2", "model v2 (effective voltage, fit + refine)",
        [](const MotorModels& m, int f, uint16_t mv) { return v2Pwm(m.v2, f, mv); }},

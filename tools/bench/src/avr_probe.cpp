@@ -1,3 +1,4 @@
+#include "sim/lsan_simavr.hpp"
 #include "bench/avr_probe.hpp"
 
 #include <simavr/sim_avr.h>

@@ -74,8 +74,8 @@ void add(CLI::App& bench, const std::shared_ptr<Options>& o, const std::string& 
 
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
-      "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime; "
-               "each figure next to its target");
+      "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime, "
+               "safety; each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -86,7 +86,8 @@ void registerCommands(CLI::App& app) {
       "simulated ATmega2560 cycles for one four-motor update, thesis option 2.1 vs v2 (simavr)",
       [](const Options& o) { return std::vector<Section>{computeSection(o.paths)}; });
   add(*bench, o, "footprint",
-      "flash and static SRAM of gather_store and read_run (avr-size), SRAM of the four models, "
+      "flash and static SRAM of gather_store and read_run (avr-size), stack never used after the "
+      "deepest paths (simavr), SRAM of the four models, "
       "EEPROM per motor",
       [](const Options& o) { return std::vector<Section>{footprintSection(o.paths)}; });
   add(*bench, o, "calibration",
@@ -101,6 +102,10 @@ void registerCommands(CLI::App& app) {
       "read_run's CPU load, frame cycles and worst loop period in simavr at 50 and 400 Hz (lift-off "
       "on the tethered quad)",
       [](const Options& o) { return std::vector<Section>{runtimeSection(o.paths)}; });
+  add(*bench, o, "safety",
+      "issue 8 in simavr: time to stop every ESC pulse after a hang (watchdog), read_run's frame "
+      "timing under UART floods",
+      [](const Options& o) { return std::vector<Section>{safetySection(o.paths)}; });
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
         std::vector<Section> all;
@@ -110,6 +115,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(calibrationSection(o.paths));
         all.push_back(liftoffSection(o.paths, o.quick));
         all.push_back(runtimeSection(o.paths));
+        all.push_back(safetySection(o.paths));
         return all;
       });
 }

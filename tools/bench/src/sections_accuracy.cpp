@@ -64,8 +64,8 @@ Section accuracySection(const AccuracyConfig& config) {
                         "{:.1f} V and bench supply at {:.1f} V",
                         c.sweep.pwm_min_us, c.sweep.pwm_max_us, c.sweep.step_us, c.sweep.settle_ms,
                         c.cal_high_v, c.cal_low_v));
-  t.addNote("ArduPilot-style: parameters fitted per motor to both sweeps (better than one set for "
-            "all motors, as ArduPilot flies); voltage = the monitor reading, as for the others");
+  t.addNote("ArduPilot: its thrust model as lab export --to ardupilot computes it, fitted per motor to both "
+            "sweeps (better than one set for all motors, as ArduPilot flies); voltage = the monitor reading");
   t.addNote("default sweeps: gather_store's default since issue 11, settle auto (next step once three "
             "force medians 20 ms apart agree, at most 500 ms), the force and the tare read as the mean of the "
             "middle 65 of the 201 readings (1/16 count); 200 ms: the thesis's fixed timing (settle 200); the "

@@ -277,6 +277,8 @@ Section footprintSection(const AvrPaths& paths) {
   } else {
     t.addRow({"models' SRAM: not available (AVR probe not built, avr-g++ missing)", "", "", "<= 1024", "-"});
   }
+  if (std::filesystem::exists(paths.elf("gather_store")) && std::filesystem::exists(paths.elf("read_run")))
+    addStackHeadroom(paths, t, s.json, s.targets);
   t.addRow({"EEPROM per motor, thesis v1 record", std::to_string(tc::kRecordBytes), "1024", "-", "-"});
   t.addRow({fmt::format("EEPROM per motor, v2 (two copies of {})", tc::kRecordV2Bytes),
             std::to_string(2 * tc::kRecordV2Bytes), "1024", "-", "-"});

@@ -13,6 +13,7 @@
 #include "sim/intel_hex.hpp"
 
 #include "lab/analysis.hpp"
+#include "lab/autopilot_export.hpp"
 #include "lab/dataset.hpp"
 #include "lab/export.hpp"
 #include "lab/generate.hpp"
@@ -381,8 +382,11 @@ void registerCommands(CLI::App& app) {
   x->add_option("--map", ex->maps, "column mapping TARGET=SOURCE[*K|/K|+K|-K...], repeatable");
   x->footer("Example: thrustcal lab export sag.csv --model curve+deadband+voltage+sag --slot 0 --eeprom board.hex\n"
             "Then: avrdude -p m2560 -c wiring -P PORT -U eeprom:w:board.hex:i");
-  x->callback([ex] {
-    const int rc = guarded([&] { return runExport(*ex); });
+  const auto ap = autopilot::addExportOptions(x);  // --to ardupilot|px4|betaflight -o FILE
+  x->callback([ex, ap] {
+    const int rc = guarded([&] {
+      return ap->to.empty() ? runExport(*ex) : autopilot::runExport(*ap, ex->files, ex->maps, ex->motor, ex->model);
+    });
     if (rc) throw CLI::RuntimeError(rc);
   });
 

@@ -1,4 +1,5 @@
 #include "sim/board.hpp"
+#include "sim/lsan_simavr.hpp"
 
 #include <fmt/format.h>
 
@@ -29,6 +30,11 @@ constexpr uint16_t kUbrr0l = 0xC4;
 constexpr uint16_t kUbrr0h = 0xC5;
 constexpr uint8_t kRxen0Bit = 4;
 constexpr uint8_t kU2x0Bit = 1;
+constexpr uint16_t kMcusr = 0x54;  // I/O 0x34
+constexpr uint8_t kPorf = 0x01, kExtrf = 0x02, kBorf = 0x04;
+constexpr uint16_t kEecr = 0x3F;   // I/O 0x1F
+constexpr uint8_t kEepeBit = 1, kEempeBit = 2;
+constexpr uint16_t kSramStart = 0x200;
 
 struct EscWire {
   char port;
@@ -81,6 +87,11 @@ Board::Board(const std::string& elf_path) {
   }
   avr_init(avr_);
   avr_->log = LOG_ERROR;
+  // Every later reset (the watchdog's, or reset()) passes through onCoreReset: the harness's
+  // cycle timers are gone then and the pins released.
+  avr_->custom.data = this;
+  core_reset_ = avr_->reset;
+  avr_->reset = &Board::onCoreReset;
   avr_->sleep = noSleep;  // idle sleep skips ahead instead of waiting on the wall clock
   {
     std::vector<uint8_t> erased(kEepromBytes, 0xFF);
@@ -140,6 +151,66 @@ uint64_t Board::tickTimer(avr_t*, uint64_t when, void* param) {
   auto* self = static_cast<Board*>(param);
   if (self->tick_hook_) self->tick_hook_(cyclesToSeconds(when));
   return when + self->tick_period_;
+}
+
+// --- reset ---
+
+void Board::onCoreReset(avr_t* avr) {
+  auto* self = static_cast<Board*>(avr->custom.data);
+  if (self->core_reset_) self->core_reset_(avr);
+  self->afterReset();
+}
+
+void Board::afterReset() {
+  ++resets_;
+  last_reset_cycle_ = avr_->cycle;
+  // At reset every pin becomes an input: a pulse in progress ends here (simavr does not raise
+  // the pin change itself).
+  for (int ch = 0; ch < kEscChannels; ++ch)
+    if (esc_[ch].high) escEdge(ch, false);
+  // avr_reset() cancelled every cycle timer, the harness's too.
+  if (tick_armed_) avr_cycle_timer_register(avr_, tick_period_, &Board::tickTimer, this);
+  rx_armed_ = false;
+  xoff_ = false;
+  armRx();
+  for (auto& listener : reset_listeners_) listener(avr_->cycle);
+}
+
+void Board::reset(ResetKind kind) {
+  if (kind == ResetKind::kPowerOn) {
+    // SRAM holds no data after power-up: fill it with deterministic noise.
+    uint32_t x = 0x2545F491u;
+    for (uint32_t a = kSramStart; a <= avr_->ramend; ++a) {
+      x ^= x << 13;
+      x ^= x >> 17;
+      x ^= x << 5;
+      avr_->data[a] = static_cast<uint8_t>(x);
+    }
+  }
+  avr_reset(avr_);  // runs onCoreReset
+  avr_->data[kMcusr] = kind == ResetKind::kPowerOn    ? kPorf
+                       : kind == ResetKind::kExternal ? kExtrf
+                                                      : kBorf;
+}
+
+// --- flash ---
+
+void Board::patchFlash(uint32_t byte_address, const std::vector<uint8_t>& bytes) {
+  if (byte_address % 2 != 0 || byte_address + bytes.size() > avr_->flashend + 1)
+    throw std::invalid_argument(fmt::format("patchFlash: 0x{:05X}+{} is not inside the flash",
+                                            byte_address, bytes.size()));
+  for (std::size_t i = 0; i < bytes.size(); ++i) avr_->flash[byte_address + i] = bytes[i];
+}
+
+std::vector<uint8_t> Board::flash(uint32_t byte_address, std::size_t length) const {
+  if (byte_address + length > avr_->flashend + 1)
+    throw std::invalid_argument(fmt::format("flash: 0x{:05X}+{} is not inside the flash",
+                                            byte_address, length));
+  return std::vector<uint8_t>(avr_->flash + byte_address, avr_->flash + byte_address + length);
+}
+
+void Board::watchPc(uint32_t byte_address, std::function<void(uint64_t cycle)> probe) {
+  pc_watches_.push_back(PcWatch{byte_address, std::move(probe)});
 }
 
 // --- ESC ---
@@ -230,6 +301,11 @@ void Board::sendText(const std::string& text) {
   armRx();
 }
 
+void Board::sendFramingError(uint8_t byte) {
+  input_.push_back(static_cast<uint16_t>(byte | UART_INPUT_FE));
+  armRx();
+}
+
 void Board::armRx() {
   if (rx_armed_ || input_.empty()) return;
   rx_armed_ = true;
@@ -244,9 +320,9 @@ uint64_t Board::rxTimer(avr_t* avr, uint64_t when, void* param) {
   }
   const bool rx_enabled = (avr->data[kUcsr0b] >> kRxen0Bit) & 1;
   if (rx_enabled && !self->xoff_) {
-    const uint8_t byte = self->input_.front();
+    const uint16_t item = self->input_.front();
     self->input_.pop_front();
-    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT), byte);
+    avr_raise_irq(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT), item);
   }
   if (self->input_.empty()) {
     self->rx_armed_ = false;
@@ -273,6 +349,28 @@ void Board::setEeprom(const std::vector<uint8_t>& image) {
   avr_ioctl(avr_, AVR_IOCTL_EEPROM_SET, &d);
 }
 
+void Board::setEepromWriteTime(double seconds) {
+  eeprom_write_cycles_ = secondsToCycles(seconds);
+  if (!eecr_hooked_ && eeprom_write_cycles_ > 0) {
+    // After simavr's own EECR handler (it writes the byte and clears EEPE at once).
+    avr_register_io_write(avr_, kEecr, &Board::onEecrWrite, this);
+    eecr_hooked_ = true;
+  }
+}
+
+void Board::onEecrWrite(avr_t* avr, uint16_t, uint8_t value, void* param) {
+  auto* self = static_cast<Board*>(param);
+  const uint8_t write = (1u << kEepeBit) | (1u << kEempeBit);
+  if (self->eeprom_write_cycles_ == 0 || (value & write) != write) return;
+  avr->data[kEecr] = static_cast<uint8_t>(avr->data[kEecr] | (1u << kEepeBit));
+  avr_cycle_timer_register(avr, self->eeprom_write_cycles_, &Board::eepeClear, self);
+}
+
+uint64_t Board::eepeClear(avr_t* avr, uint64_t, void*) {
+  avr->data[kEecr] = static_cast<uint8_t>(avr->data[kEecr] & ~(1u << kEepeBit));
+  return 0;
+}
+
 // --- running ---
 
 uint64_t Board::cycle() const { return avr_->cycle; }
@@ -282,6 +380,8 @@ void Board::run(uint64_t cycles) {
   const uint64_t start = avr_->cycle;
   const uint64_t end = start + cycles;
   while (avr_->cycle < end) {
+    for (const PcWatch& w : pc_watches_)
+      if (avr_->pc == w.byte_address) w.probe(avr_->cycle);
     const int state = avr_run(avr_);
     if (state == cpu_Done || state == cpu_Crashed) {
       const double t = timeS();

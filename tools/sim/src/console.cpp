@@ -21,6 +21,18 @@ void Console::onByte(uint8_t byte) {
 
 void Console::send(const std::string& line) { board_.sendText(line + "\r"); }
 
+void Console::setKeepAlive(double period_s, std::string line) {
+  keepalive_period_s_ = period_s;
+  keepalive_line_ = std::move(line);
+  next_keepalive_s_ = board_.timeS() + period_s;
+}
+
+void Console::keepAlive() {
+  if (keepalive_period_s_ <= 0 || board_.timeS() < next_keepalive_s_) return;
+  send(keepalive_line_);
+  next_keepalive_s_ = board_.timeS() + keepalive_period_s_;
+}
+
 bool Console::findIn(const std::regex* re, const std::string* literal,
                      std::vector<std::string>& groups) {
   const std::string& out = board_.output();
@@ -74,7 +86,8 @@ std::vector<std::string> Console::expect(const std::string& regex, double budget
   std::vector<std::string> groups;
   scanned_ = consumed_;
   const double t0 = board_.timeS();
-  if (!board_.runUntil([&] { return findIn(&re, nullptr, groups); }, secondsToCycles(budget_s)))
+  if (!board_.runUntil([&] { keepAlive(); return findIn(&re, nullptr, groups); },
+                       secondsToCycles(budget_s)))
     throw ExpectTimeout(fmt::format(
         "the board did not print a line matching /{}/ within {:g} s (simulated, from t = {:.3f} s)"
         "; last lines of the console:\n{}",
@@ -86,7 +99,8 @@ void Console::expectText(const std::string& text, double budget_s) {
   std::vector<std::string> groups;
   scanned_ = consumed_;
   const double t0 = board_.timeS();
-  if (!board_.runUntil([&] { return findIn(nullptr, &text, groups); }, secondsToCycles(budget_s)))
+  if (!board_.runUntil([&] { keepAlive(); return findIn(nullptr, &text, groups); },
+                       secondsToCycles(budget_s)))
     throw ExpectTimeout(fmt::format(
         "the board did not print \"{}\" within {:g} s (simulated, from t = {:.3f} s); last lines "
         "of the console:\n{}",
@@ -105,7 +119,7 @@ std::vector<std::string> Console::command(const std::string& line, double budget
   std::vector<std::string> groups;
   scanned_ = consumed_;
   const double t0 = board_.timeS();
-  if (!board_.runUntil([&] { return findIn(nullptr, &prompt_, groups); },
+  if (!board_.runUntil([&] { keepAlive(); return findIn(nullptr, &prompt_, groups); },
                        secondsToCycles(budget_s)))
     throw ExpectTimeout(fmt::format(
         "command \"{}\": no prompt \"{}\" within {:g} s (simulated, from t = {:.3f} s); last "

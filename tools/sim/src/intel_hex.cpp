@@ -63,10 +63,11 @@ std::vector<uint8_t> parseIntelHex(const std::string& text, std::size_t size_byt
     const uint8_t* data = bytes.data() + 4;
     switch (type) {
       case 0x00: {
-        const uint32_t addr = base + offset;
+        // 64-bit: an extended address FFFF plus an offset near FFFF would wrap 32 bits.
+        const uint64_t addr = static_cast<uint64_t>(base) + offset;
         if (addr + count > size_bytes)
           throw fail(fmt::format("data at 0x{:04X}..0x{:04X} lies beyond the {}-byte image", addr,
-                                 addr + count - 1, size_bytes));
+                                 addr + count - (count ? 1 : 0), size_bytes));
         for (uint8_t i = 0; i < count; ++i) image[addr + i] = data[i];
         break;
       }

@@ -101,8 +101,11 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
   const double t_cmd = rig->board.timeS();
   con.send(fmt::format("liftoff {} {} {}", static_cast<int>(std::lround(o.force_g)), o.ramp_ms,
                        o.hold_ms));
-  const auto end = con.expect("^(# liftoff (done|aborted).*|error: .*)$",
+  // The lift-off stops when the link goes quiet for 500 ms: an empty line every 200 ms keeps it.
+  con.setKeepAlive(0.2);
+  const auto end = con.expect("^(# liftoff (done|aborted|stopped).*|error: .*)$",
                               (o.ramp_ms + o.hold_ms) / 1000.0 + 5.0);
+  con.setKeepAlive(0);
   if (end[0].rfind("error:", 0) == 0)
     throw std::runtime_error(fmt::format("read_run refused the lift-off: {}", end[0]));
   con.waitPrompt(1.0);

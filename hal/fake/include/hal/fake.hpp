@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "hal/hal.hpp"
+
 namespace hal::fake {
 
 // Everything back to power-on: time 0, ADC 0 counts, pulses 0, EEPROM erased (0xFF), write
@@ -36,8 +38,20 @@ void resetEepromWrites();
 // UART.
 void feedInput(const std::string& text);                     // now
 void feedInputAt(uint32_t at_ms, const std::string& text);   // when the clock reaches at_ms
+// A damage mark (what the AVR receiver reports for lost or garbled bytes), now.
+void feedDamage();
 const std::string& output();                                 // everything written so far
 std::string takeOutput();                                    // returns and clears it
+
+// The wait hook the code under test registered (nullptr: none).
+hal::Uart::WaitHook waitHook();
+
+// Watchdog and stack: the reset flags the next boot reports (default kPowerOn), whether the
+// watchdog was started and how often it was kicked; the stack figures Stack:: returns.
+void setResetFlags(uint8_t flags);
+bool watchdogStarted();
+uint32_t watchdogKicks();
+void setStack(uint16_t size_bytes, uint16_t untouched_bytes);
 
 // Time.
 uint32_t nowMs();

@@ -5,9 +5,9 @@
 //                 11.1 V, no voltage term (what a generic thrust table gives);
 //   thesis 2.1    tc::CurveBuilder curves per sweep, tc::forceToPwm (option 2.1) with the sag
 //                 offsets of the first sweep added to the reading, as read_run flies it;
-//   ardupilot     thrust = (1 - e) u + e u^2 (MOT_THST_EXPO e), u = a V / V_max, a the
-//                 throttle between spin-min and spin-max; spin-min, e and the lift at V_max
-//                 fitted per motor to both sweeps by weighted least squares (relative error);
+//   ardupilot     ArduPilot's own thrust model (lab/autopilot.hpp): thrust = (1 - e) y + e y^2,
+//                 y = t V / V_max, t the throttle between spin-min and spin-max; spin-min, e and
+//                 the full thrust fitted per motor to both sweeps (relative error);
 //   v2            tc::ModelV2Fitter: fit on the first sweep, refine with the second.
 // Then each motor runs in steady state (plant::Actuator::steadyState) on a grid of commands
 // and bus voltages; every model is given the battery monitor's reading of that voltage
@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/sweeps.hpp"
+#include "lab/autopilot.hpp"
 
 namespace bench {
 
@@ -54,24 +55,23 @@ struct ModelAccuracy {
   double mean_pct = 0;      // signed mean over the grid (bias)
 };
 
-// ArduPilot-style expo thrust model with voltage scaling, in physical units:
-//   thrust_g = c1 x + c2 x^2,  x = (pwm - spin_min_us) * V   [us*V]
-// which is (1 - e) u + e u^2 scaled by the lift at V_max with u = (pwm - spin_min) V /
-// ((spin_max - spin_min) V_max); expo() and liftMax_g() give ArduPilot's parameters.
+// ArduPilot's thrust model, computed by the one implementation the lab's `export --to
+// ardupilot` also uses (lab/autopilot.hpp: AP_Motors_Thrust_Linearization's forward function,
+// clamps and PWM truncation included): MOT_THST_EXPO and MOT_SPIN_MIN fitted, MOT_SPIN_MAX 0.95,
+// MOT_PWM 1000..2000, voltage compensation for a 3S pack (MOT_BAT_VOLT_MAX 12.6 V, MIN 9.9 V).
 struct ExpoModel {
-  double spin_min_us = 1100;
-  double c1 = 0, c2 = 0;
-  double spin_max_us = 1950;  // MOT_SPIN_MAX 0.95 of 1000-2000 us
-  double v_max = 12.6;        // MOT_BAT_VOLT_MAX
-  double rms_fit_pct = 0;     // relative RMS residual of the fit
-  double liftMax_g() const;
-  double expo() const;
+  lab::autopilot::ArduPilotParams params;
+  double full_g = 0;       // the force at MOT_SPIN_MAX on a full battery (V >= MOT_BAT_VOLT_MAX)
+  double rms_fit_pct = 0;  // relative RMS residual of the fit
+  double spinMin_us() const;
+  double liftMax_g() const { return full_g; }
+  double expo() const { return params.thst_expo; }
   double thrust_g(double pwm_us, double bus_v) const;
-  double pwmFor_us(double force_g, double bus_v) const;  // exact inverse, clamped 1000..2000
+  // The PWM ArduPilot sends for this force at this voltage (its own int16 truncation).
+  double pwmFor_us(double force_g, double bus_v) const;
 };
-// Least squares over spin-min (search) and c1, c2 (linear, Eigen), rows weighted by 1/force so
-// the residual is relative; samples between 10 g and 600 g. Throws std::runtime_error when
-// fewer than 6 samples qualify.
+// lab::autopilot::fitArduPilot on the samples between 10 g and 600 g, weighted 1 / force^2 so
+// the residual is relative. Throws std::runtime_error when fewer than 6 samples qualify.
 ExpoModel fitExpo(const std::vector<SweepPoint>& points);
 
 struct MotorSummary {

@@ -55,5 +55,11 @@ Section calibrationSection(const AvrPaths& paths);
 Section liftoffSection(const AvrPaths& paths, bool quick);
 // read_run's CPU load, frame cycles and loop period in simavr at 50 and 400 Hz.
 Section runtimeSection(const AvrPaths& paths);
+// Issue 8 (sections_safety.cpp): time to stop after a hang in both images, read_run's loop
+// timing under floods.
+Section safetySection(const AvrPaths& paths);
+// Footprint rows: each image's stack never used after its deepest paths (simulated).
+void addStackHeadroom(const AvrPaths& paths, Table& table, nlohmann::json& json,
+                      std::vector<TargetCheck>& targets);
 
 }  // namespace bench

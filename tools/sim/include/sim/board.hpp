@@ -6,7 +6,11 @@
 //   UART0     bytes out are collected (and passed to listeners); bytes in are paced at the
 //             line rate (one byte per character time at the firmware's baud) and held back
 //             while the receiver is off or simavr's input FIFO signals XOFF.
-//   EEPROM    4 KiB, moved in and out whole.
+//   EEPROM    4 KiB, moved in and out whole; writes are instant (simavr) unless
+//             setEepromWriteTime() asks for the chip's 3.4 ms per byte.
+//   Reset     a watchdog reset (simavr's) or one the host asks for (external, brown-out,
+//             power-on) restarts the firmware in the same board: every pin is released (a pulse
+//             in progress ends there), the reset flags say why, SRAM survives except at power-on.
 // A periodic tick (default 1 ms simulated) lets a plant model advance in step with the CPU.
 //
 // Time is simulated cycles only: the firmware's idle sleep skips ahead (the sleep callback is
@@ -34,6 +38,9 @@ constexpr std::size_t kEepromBytes = 4096;
 inline uint64_t secondsToCycles(double s) { return static_cast<uint64_t>(s * kCpuHz + 0.5); }
 inline double cyclesToSeconds(uint64_t c) { return static_cast<double>(c) / kCpuHz; }
 
+// Why the chip reset (the MCUSR flag the reset sets).
+enum class ResetKind { kPowerOn, kExternal, kBrownOut };
+
 // The firmware stopped (crashed, or returned from main with interrupts off) or could not be
 // loaded; what() says which and what to do.
 class BoardError : public std::runtime_error {
@@ -60,6 +67,8 @@ class Board {
   // Called for every complete ESC pulse: channel, width in us, time of its falling edge.
   using PulseListener = std::function<void(int channel, double width_us, double t_s)>;
   using ByteListener = std::function<void(uint8_t byte)>;
+  // Called after every reset (watchdog or reset()), with the cycle it happened at.
+  using ResetListener = std::function<void(uint64_t cycle)>;
 
   // Loads `elf_path` into a fresh ATmega2560 (the MCU and clock in the ELF's .mmcu tag win if
   // present; otherwise atmega2560 at 16 MHz, 5 V). Throws BoardError if the file cannot be read
@@ -76,6 +85,7 @@ class Board {
   void setTickHook(TickHook hook, uint64_t period_cycles = kCpuHz / 1000);
   void addPulseListener(PulseListener listener) { pulse_listeners_.push_back(std::move(listener)); }
   void addOutputListener(ByteListener listener) { output_listeners_.push_back(std::move(listener)); }
+  void addResetListener(ResetListener listener) { reset_listeners_.push_back(std::move(listener)); }
 
   // --- ESC pins ---
   const EscPin& escPin(int channel) const { return esc_.at(channel); }
@@ -86,6 +96,8 @@ class Board {
   // --- UART0 ---
   // Queues bytes for the firmware's receiver; they arrive at the line rate while the board runs.
   void sendText(const std::string& text);
+  // Queues one byte that arrives with a framing error (a garbled character: FE0 set).
+  void sendFramingError(uint8_t byte);
   std::size_t pendingInput() const { return input_.size(); }
   // Everything the firmware has written to UART0 since reset.
   const std::string& output() const { return output_; }
@@ -94,6 +106,21 @@ class Board {
   std::vector<uint8_t> eeprom() const;
   // Loads a whole image (exactly kEepromBytes bytes; throws std::invalid_argument otherwise).
   void setEeprom(const std::vector<uint8_t>& image);
+  // Each EEPROM byte write keeps EEPE set this long (the chip: 3.4 ms; simavr: 0).
+  void setEepromWriteTime(double seconds);
+
+  // --- flash (fault injection) ---
+  // Overwrites program memory at a byte address (even), e.g. with "rjmp ." to hang a function.
+  void patchFlash(uint32_t byte_address, const std::vector<uint8_t>& bytes);
+  std::vector<uint8_t> flash(uint32_t byte_address, std::size_t length) const;
+  // Calls `probe` whenever an instruction at `byte_address` is about to execute.
+  void watchPc(uint32_t byte_address, std::function<void(uint64_t cycle)> probe);
+
+  // --- reset ---
+  // Resets the chip as `kind` does; runs the reset listeners.
+  void reset(ResetKind kind);
+  int resets() const { return resets_; }  // watchdog and requested resets since construction
+  uint64_t lastResetCycle() const { return last_reset_cycle_; }
 
   // --- running ---
   uint64_t cycle() const;
@@ -122,6 +149,10 @@ class Board {
   static void onUartXoff(avr_irq_t* irq, uint32_t value, void* param);
   static uint64_t tickTimer(avr_t* avr, uint64_t when, void* param);
   static uint64_t rxTimer(avr_t* avr, uint64_t when, void* param);
+  static void onCoreReset(avr_t* avr);
+  static void onEecrWrite(avr_t* avr, uint16_t addr, uint8_t value, void* param);
+  static uint64_t eepeClear(avr_t* avr, uint64_t when, void* param);
+  void afterReset();
 
   void escEdge(int channel, bool level);
   void armRx();
@@ -134,13 +165,24 @@ class Board {
   bool tick_armed_ = false;
   std::vector<PulseListener> pulse_listeners_;
   std::vector<ByteListener> output_listeners_;
+  std::vector<ResetListener> reset_listeners_;
+  void (*core_reset_)(avr_t*) = nullptr;
+  int resets_ = 0;
+  uint64_t last_reset_cycle_ = 0;
+  uint64_t eeprom_write_cycles_ = 0;
+  bool eecr_hooked_ = false;
+  struct PcWatch {
+    uint32_t byte_address;
+    std::function<void(uint64_t)> probe;
+  };
+  std::vector<PcWatch> pc_watches_;
   std::array<EscPin, kEscChannels> esc_{};
   struct EdgeParam {
     Board* board;
     int channel;
   };
   std::array<EdgeParam, kEscChannels> edge_params_{};
-  std::deque<uint8_t> input_;
+  std::deque<uint16_t> input_;  // bytes, | 0x8000 (simavr's UART_INPUT_FE) for a framing error
   bool rx_armed_ = false;
   bool xoff_ = false;
   std::string output_;

@@ -41,6 +41,10 @@ class Console {
   std::vector<std::string> command(const std::string& line, double budget_s = 5.0);
   // Waits for the prompt; returns the lines before it.
   std::vector<std::string> waitPrompt(double budget_s);
+  // While expect()/command()/waitPrompt() wait, sends `line` + "\r" every `period_s` simulated
+  // seconds (read_run's keep-alive: an empty line; a lift-off needs one at least every
+  // 500 ms). period_s <= 0 turns it off (the default).
+  void setKeepAlive(double period_s, std::string line = "");
 
   // Every complete output line, as it arrives (progress display, CSV capture).
   void onLine(std::function<void(const std::string&)> listener) {
@@ -58,6 +62,7 @@ class Console {
 
  private:
   bool findIn(const std::regex* re, const std::string* literal, std::vector<std::string>& groups);
+  void keepAlive();
   std::vector<std::string> linesBetween(std::size_t from, std::size_t to) const;
   void onByte(uint8_t byte);
 
@@ -68,6 +73,9 @@ class Console {
   std::size_t match_begin_ = 0;  // output offset where the last match began
   std::vector<std::function<void(const std::string&)>> line_listeners_;
   std::string current_line_;
+  double keepalive_period_s_ = 0;
+  double next_keepalive_s_ = 0;
+  std::string keepalive_line_;
 };
 
 }  // namespace sim

@@ -1,0 +1,96 @@
+// Record and settings reports shared by gather_store and read_run (record_report.hpp).
+#include "record_report.hpp"
+
+#include "console.hpp"
+#include "hal/hal.hpp"
+#include "thrustcal/eeprom_store.hpp"
+
+namespace fw {
+
+namespace {
+
+// tc::printPlausibility's output: flash texts and fixed-point numbers on the UART.
+struct UartOut {
+  void flash(const char* text) { hal::Uart::printP(text); }
+  void fixed(int32_t value, uint8_t decimals) { printFixed(value, decimals); }
+};
+
+void sayLine(const char* progmem) {
+  hal::Uart::printP(progmem);
+  newline();
+}
+
+}  // namespace
+
+void printRecordStatus(tc::DecodeStatus status, const tc::Plausibility& why) {
+  if (status == tc::DecodeStatus::kBadContent && !why.ok()) {
+    hal::Uart::printP(TC_PSTR("implausible: "));
+    UartOut out;
+    tc::printPlausibility(why, out);
+    return;
+  }
+  hal::Uart::print(tc::decodeStatusText(status));
+}
+
+void printDivider(const tc::BoardSettings& settings) {
+  hal::Uart::printP(TC_PSTR("divider "));
+  printUint(settings.divider_top_ohm);
+  hal::Uart::write('/');
+  printUint(settings.divider_bottom_ohm);
+  hal::Uart::printP(TC_PSTR(" ohm, full scale "));
+  printFixed(settings.fullScaleMv(), 3);
+  hal::Uart::printP(TC_PSTR(" V"));
+  if (settings.isDefault()) hal::Uart::printP(TC_PSTR(" (thesis default)"));
+}
+
+bool commandDivider(char** tokens, uint8_t count, tc::BoardSettings& settings) {
+  if (count == 1) {
+    printDivider(settings);
+    newline();
+    return false;
+  }
+  int32_t top = 0;
+  int32_t bottom = 0;
+  if (count != 3 || !parseInt(tokens[1], 0, static_cast<int32_t>(tc::kDividerMaxOhm), top) ||
+      !parseInt(tokens[2], 0, static_cast<int32_t>(tc::kDividerMaxOhm), bottom)) {
+    sayLine(TC_PSTR("error: usage: divider [R1_OHM R2_OHM], R1 from the pack to A1, R2 from A1 "
+                    "to ground, 0..10000000 (thesis: divider 100000 47000); nothing changed"));
+    return false;
+  }
+  tc::BoardSettings wanted;
+  wanted.divider_top_ohm = static_cast<uint32_t>(top);
+  wanted.divider_bottom_ohm = static_cast<uint32_t>(bottom);
+  if (!wanted.isValid()) {
+    hal::Uart::printP(TC_PSTR("error: divider "));
+    printUint(wanted.divider_top_ohm);
+    hal::Uart::write('/');
+    printUint(wanted.divider_bottom_ohm);
+    sayLine(TC_PSTR(" ohm gives a full scale outside 5..60 V or R2 below 100 ohm: check the "
+                    "resistors; nothing changed"));
+    return false;
+  }
+  const tc::SettingsWrite w = tc::storeSettings<hal::Eeprom>(wanted);
+  if (w.status == tc::SettingsWriteStatus::kNoRoom) {
+    sayLine(TC_PSTR("error: no room for the setting: all four slots hold thesis (v1) records, "
+                    "which fill the EEPROM; store one motor as model v2 or erase one slot, then "
+                    "set the divider again; nothing changed"));
+    return false;
+  }
+  if (w.status == tc::SettingsWriteStatus::kVerifyFailed) {
+    sayLine(TC_PSTR("error: read-back of the setting failed (EEPROM worn?); the previous divider "
+                    "is kept"));
+    return false;
+  }
+  settings = wanted;
+  printDivider(settings);
+  hal::Uart::printP(w.status == tc::SettingsWriteStatus::kUnchanged ? TC_PSTR(", already stored")
+                                                                      : TC_PSTR(", stored"));
+  hal::Uart::printP(TC_PSTR(" (motor "));
+  printUint(w.host);
+  hal::Uart::printP(TC_PSTR("'s slot, copy "));
+  hal::Uart::write(w.copy == 0 ? 'A' : 'B');
+  sayLine(TC_PSTR(")"));
+  return w.status == tc::SettingsWriteStatus::kWritten;
+}
+
+}  // namespace fw

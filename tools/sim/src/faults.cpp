@@ -1,0 +1,131 @@
+#include "sim/faults.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "sim/console.hpp"
+#include "sim/elf_symbols.hpp"
+#include "thrustcal/curve_builder.hpp"
+#include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/model_v2.hpp"
+#include "thrustcal/record_v2.hpp"
+
+namespace sim {
+
+namespace {
+
+struct ImageStorage {
+  static std::vector<uint8_t>* image;
+  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
+  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
+};
+std::vector<uint8_t>* ImageStorage::image = nullptr;
+
+double plantForceG(double k, int pwm_us, double v) {
+  if (pwm_us <= 1080) return 0.0;
+  const double x = (pwm_us - 1080) / 1000.0 * v;
+  return k * x * x;
+}
+
+}  // namespace
+
+double batteryPinMv(double volts) { return volts * 1000.0 * 47.0 / 147.0; }
+
+std::vector<uint8_t> calibratedTestEeprom() {
+  std::vector<uint8_t> image(kEepromBytes, 0xFF);
+  ImageStorage::image = &image;
+  for (uint8_t slot = 0; slot < 4; ++slot) {
+    const double k = 12.5 + slot;
+    if (slot < 2) {
+      auto cal = std::make_unique<tc::MotorCalibration>();
+      const std::pair<tc::ForceCurveBase*, double> curves[] = {{&cal->first, 12.0},
+                                                               {&cal->second, 10.5}};
+      for (const auto& [curve, v] : curves) {
+        auto builder = std::make_unique<tc::CurveBuilder<128>>();
+        for (int pwm = 1000; pwm <= 2000; pwm += 10)
+          builder->add(static_cast<uint16_t>(pwm),
+                       static_cast<int16_t>(std::lround(plantForceG(k, pwm, v) * 10.0)));
+        if (builder->build(*curve).status != tc::BuildStatus::kOk)
+          throw std::logic_error("calibratedTestEeprom: the curve did not build");
+        curve->start_mv = static_cast<uint16_t>(v * 1000);
+      }
+      cal->sag.base_pwm_us = 1000;
+      tc::writeRecord<ImageStorage>(slot, *cal);
+    } else {
+      auto fitter = std::make_unique<tc::ModelV2Fitter<128>>();
+      for (int pwm = 1000; pwm <= 2000; pwm += 10)
+        fitter->add(static_cast<uint16_t>(pwm),
+                    static_cast<int16_t>(std::lround(plantForceG(k, pwm, 12.0) * 10.0)), 12000);
+      tc::ModelV2 model;
+      if (fitter->fit(model).status != tc::FitV2Status::kOk ||
+          tc::writeModelV2<ImageStorage>(slot, model).status != tc::WriteV2Status::kWritten)
+        throw std::logic_error("calibratedTestEeprom: model v2 did not fit or store");
+    }
+  }
+  ImageStorage::image = nullptr;
+  return image;
+}
+
+FlashPatch hangFunction(Board& board, const std::string& elf, const std::string& symbol, Hang how) {
+  FlashPatch p;
+  p.address = elfSymbol(elf, symbol).address;
+  const std::vector<uint8_t> code = how == Hang::kInterruptsOn
+                                        ? std::vector<uint8_t>{0xFF, 0xCF}               // rjmp .
+                                        : std::vector<uint8_t>{0xF8, 0x94, 0xFF, 0xCF};  // cli; rjmp .
+  p.original = board.flash(p.address, code.size());
+  board.patchFlash(p.address, code);
+  std::weak_ptr<double> hung = p.hung_at_s;
+  board.watchPc(p.address, [hung](uint64_t cycle) {
+    if (auto h = hung.lock(); h && *h < 0) *h = cyclesToSeconds(cycle);
+  });
+  return p;
+}
+
+void restoreFlash(Board& board, const FlashPatch& patch) {
+  if (!patch.original.empty()) board.patchFlash(patch.address, patch.original);
+}
+
+std::string withChecksum(const std::string& line) {
+  uint8_t x = 0;
+  for (char c : line) x ^= static_cast<uint8_t>(c);
+  return fmt::format("{}*{:02X}", line, x);
+}
+
+void drainConsole(Console& con, double quiet_s) {
+  Board& board = con.board();
+  board.runUntil([&] { return board.pendingInput() == 0; }, secondsToCycles(120));
+  board.runFor(quiet_s);
+  con.send("");
+  board.runFor(0.05);
+  while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);
+}
+
+PulseLog::PulseLog(Board& board) {
+  board.addPulseListener([this](int ch, double w, double t) { pulses_.push_back({ch, w, t}); });
+}
+
+double PulseLog::lastWiderThan(double width_us) const {
+  double t = -1;
+  for (const Pulse& p : pulses_)
+    if (p.width_us > width_us && p.end_s > t) t = p.end_s;
+  return t;
+}
+
+double PulseLog::widestBetween(double from_s, double to_s, int channel) const {
+  double w = 0;
+  for (const Pulse& p : pulses_)
+    if (p.end_s >= from_s && p.end_s < to_s && (channel < 0 || p.channel == channel) && p.width_us > w)
+      w = p.width_us;
+  return w;
+}
+
+int PulseLog::countBetween(double from_s, double to_s) const {
+  int n = 0;
+  for (const Pulse& p : pulses_) n += (p.end_s >= from_s && p.end_s < to_s) ? 1 : 0;
+  return n;
+}
+
+}  // namespace sim
