@@ -48,7 +48,7 @@ tc::BusVoltageFilter busAt(uint16_t mv) {
 TEST(V2Frame, SteadyFrameIsForceToPwmV2ForEveryForce) {
   // given: four models; the sag filter settled on the commands (no change predicted)
   Fleet fleet(0.08);
-  for (const uint16_t mv : {6000, 9900, 11100, 12600, 17500}) {
+  for (const uint16_t mv : {3000, 6000, 9900, 11100, 12600, 17500, 26000}) {
     for (uint16_t f = 0; f <= fleet.run[3].max_force_dg + 200; f = static_cast<uint16_t>(f + 3)) {
       for (int i = 0; i < 4; ++i) fleet.lane[i].force_dg = static_cast<uint16_t>(f + 37 * i);
       fleet.frame.bus = busAt(mv);
@@ -66,6 +66,98 @@ TEST(V2Frame, SteadyFrameIsForceToPwmV2ForEveryForce) {
       }
     }
   }
+}
+
+// A motor at the edges of what model v2 holds, from a curve in doubles (as lab export makes
+// one): force ~ drive^1.8 up to max_g, bench sag up to sag_mv at the top.
+tc::ModelV2 edgeModel(double max_g, double start_us, double rest_mv, double sag_mv) {
+  double drive[41], force[41], sag[41];
+  const double top_usv = 900.0 * rest_mv / 1000.0;  // 900 us above start at the resting voltage
+  for (int i = 0; i <= 40; ++i) {
+    drive[i] = top_usv * (i + 1) / 41.0;
+    force[i] = max_g * std::pow((i + 1) / 41.0, 1.8);
+    sag[i] = sag_mv * (i + 1) / 41.0;
+  }
+  tc::ModelV2 m;
+  EXPECT_TRUE(tc::modelV2FromCurve(m, start_us, drive, force, 41, rest_mv, sag)) << max_g << " g";
+  return m;
+}
+
+TEST(V2Frame, RangeEdgesAreForceToPwmV2ToTheBit) {
+  // given: a 5 g motor on 1S (one run of small steps: the Q16 knot position), a 5 kg motor on
+  // 6S (16 fine + 16 coarse knots up to 50000 dg), a 15 g one (Q16) and a 2 kg one
+  tc::ModelV2 model[4] = {edgeModel(5.0, 1040.0, 3700.0, 60.0), edgeModel(5000.0, 1120.0, 25000.0, 2400.0),
+                          edgeModel(15.0, 1060.0, 4100.0, 90.0), edgeModel(2000.0, 1100.0, 16000.0, 900.0)};
+  ASSERT_EQ(model[0].q16_inverse, 1);
+  ASSERT_EQ(model[2].q16_inverse, 1);
+  ASSERT_EQ(model[1].q16_inverse, 0);
+  ASSERT_GT(model[1].maxForceDg(), 49000);
+  ASSERT_LE(model[0].maxForceDg(), 50);
+  tc::ModelV2Run run[4];
+  tc::V2Frame frame;
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(run[i].load(model[i]));
+    frame.lane[i].setModel(&run[i]);
+  }
+  frame.count = 4;
+  // the bus at the ends of 1S..6S and between; every force of the small motors, a dense grid of
+  // the big ones, past the curves' ends
+  for (const uint16_t mv : {3000, 3001, 3300, 4200, 8400, 12600, 16800, 25200, 25999, 26000}) {
+    for (uint32_t f = 0; f <= 50100; f += 1) {
+      const uint16_t fd[4] = {static_cast<uint16_t>(f % 60), static_cast<uint16_t>(f),
+                              static_cast<uint16_t>(f % 170), static_cast<uint16_t>((f * 7) % 20300)};
+      if (f > 200 && f % 7 != 0) continue;  // every force below 20 g, then every 7th decigram
+      for (int i = 0; i < 4; ++i) frame.lane[i].force_dg = fd[i];
+      frame.bus = busAt(mv);
+      frame.sag = tc::BusSagFilter();
+      // when: the same commands twice at a steady reading (the second frame predicts nothing)
+      frame.fly(mv);
+      frame.sag.seen_q4 = frame.sag.last_q4;
+      frame.sag.rem = 0;
+      frame.fly(mv);
+      // then
+      for (int i = 0; i < 4; ++i) {
+        const tc::ForcePwmResult want = tc::forceToPwmV2(model[i], fd[i], frame.bus);
+        ASSERT_EQ(frame.lane[i].pwm_us, want.pwm_us) << "motor " << i << ", " << fd[i] << " dg, " << mv << " mV";
+        ASSERT_EQ(frame.lane[i].flags, want.flags) << "motor " << i << ", " << fd[i] << " dg, " << mv << " mV";
+      }
+    }
+  }
+  // and: the bus never valid flies each model's resting voltage, as forceToPwmV2
+  frame.bus = tc::BusVoltageFilter();
+  for (int i = 0; i < 4; ++i) frame.lane[i].force_dg = static_cast<uint16_t>(model[i].maxForceDg() / 2);
+  frame.fly(2999);  // below one cell: ignored
+  for (int i = 0; i < 4; ++i) {
+    const tc::ForcePwmResult want = tc::forceToPwmV2(model[i], frame.lane[i].force_dg, tc::BusVoltageFilter());
+    EXPECT_EQ(frame.lane[i].pwm_us, want.pwm_us) << i;
+    EXPECT_EQ(frame.lane[i].flags, want.flags) << i;
+    EXPECT_TRUE(want.flags & tc::kVoltageInvalid);
+  }
+}
+
+TEST(V2Frame, BusFilterAtTheRangeEndsIsBusVoltageFilterUpdate) {
+  // given: readings jumping between 3.0 and 26.0 V, ramps across the range, just-outside ones
+  Fleet fleet;
+  tc::BusVoltageFilter alone;
+  const uint16_t ends[] = {3000, 26000, 3000, 25999, 3001, 12600, 26000};
+  for (int frame = 0; frame < 4000; ++frame) {
+    uint16_t mv = ends[(frame / 40) % 7];
+    if (frame >= 2000) mv = static_cast<uint16_t>(3000 + ((frame - 2000) * 23) % 23001);  // ramps
+    if (frame % 301 == 5) mv = frame % 2 ? 2999 : 26001;  // just outside: ignored
+    if (frame == 3000) fleet.frame.bus.shift = alone.shift = 6;
+    for (int i = 0; i < 4; ++i) fleet.lane[i].force_dg = static_cast<uint16_t>((frame * 131 + i * 877) % 4000);
+    // when
+    fleet.fly(mv);
+    alone.update(mv);
+    // then
+    ASSERT_EQ(fleet.frame.bus.mv, alone.mv) << frame;
+    ASSERT_EQ(fleet.frame.bus.rem, alone.rem) << frame;
+    ASSERT_EQ(fleet.frame.bus.recip_q27, alone.recip_q27) << frame;
+    const int exact = static_cast<int>(tc::kRecipOne / alone.mv);  // Newton: within (1/128)^2
+    ASSERT_LE(std::abs(int(alone.recip_q27) - exact), 1 + exact / 8192) << frame;
+  }
+  EXPECT_GE(alone.reseeds, 10);
+  EXPECT_GE(alone.rejected, 10);
 }
 
 TEST(V2Frame, BusFilterStepIsBusVoltageFilterUpdate) {

@@ -13,7 +13,8 @@
 //     real hal::Eeprom (hal/avr/eeprom.cpp is linked in);
 //   - the battery readings: the median of 101 (v1, status) and the middle two of four (v2).
 // The frame's assembly is also checked against its portable C++ (V2Frame::flyPortable) on
-// frames with insane readings and jumps (key kFrameMismatches must read 0).
+// frames with insane readings and jumps, and at the edges of the range (3.0 and 26.0 V, a 5 g
+// and a 5 kg motor) (key kFrameMismatches must read 0).
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <avr/sleep.h>
@@ -224,6 +225,62 @@ int main() {
     if (frame == 1500) bench_frame.bus.shift = 6;  // 400 Hz
     if (frame == 1800) bench_frame.bus.shift = 0;  // no filtering
     const uint8_t extra = (frame % 7 == 0) ? tc::kVoltageInvalid : 0;
+    memcpy(&reference, &bench_frame, sizeof reference);
+    reference.flyPortable(mv, extra);
+    bench_frame.fly(mv, extra);
+    bool same = memcmp(&reference.bus, &bench_frame.bus, sizeof reference.bus) == 0 &&
+                reference.sag.seen_q4 == bench_frame.sag.seen_q4 &&
+                reference.sag.rem == bench_frame.sag.rem && reference.sag.last_q4 == bench_frame.sag.last_q4;
+    for (uint8_t m = 0; m < 4; ++m)
+      same = same && reference.lane[m].pwm_us == bench_frame.lane[m].pwm_us &&
+             reference.lane[m].flags == bench_frame.lane[m].flags;
+    if (!same) ++mismatches;
+    ++checked;
+  }
+
+  // ---- the same at the edges of the range model v2 accepts (1S..6S, 5 g..5 kg): a 5 g motor
+  // (one run of 2 dg steps: the Q16 knot position), a 5 kg one (its largest knot at 50000 dg)
+  // and two fitted above; bus readings from 3.0 to 26.0 V, jumps between the ends (re-seeds)
+  static const uint16_t kEdgeMv[] = {3000, 3001, 3000, 4200, 8400, 12600, 16800, 21000,
+                                     25200, 26000, 25999, 26000, 3000, 26000, 3000, 3100};
+  for (uint8_t e = 0; e < 2; ++e) {
+    tc::ModelV2& mdl = models[e];
+    mdl.clear();
+    mdl.start_q4_us = e == 0 ? 1050u * 16u : 1120u * 16u;
+    mdl.rest_mv = e == 0 ? 4100 : 25000;
+    if (e == 0) {  // 5 g: one run, step 2 dg, 25 knots
+      mdl.step_dg = 2;
+      mdl.knots = 25;
+      mdl.fine_knots = 25;
+    } else {  // 5 kg: 16 fine knots of 781 dg, 16 coarse of 2344 dg
+      mdl.step_dg = 781;
+      mdl.knots = 32;
+      mdl.fine_knots = 16;
+      mdl.coarse_step_dg = 2344;
+    }
+    for (uint8_t k = 0; k < mdl.knots; ++k) {
+      // rising drive: 8600 at the last knot (5 g), 44590 (5 kg: ~900 us above start at 25 V)
+      mdl.drive_512usmv[k] = static_cast<uint16_t>(e == 0 ? 200u + 350u * k : 1500u + 1390u * k);
+      mdl.sag_10mv[k] = static_cast<uint8_t>(e == 0 ? k : 7u * k);
+    }
+    if (!mdl.finalize()) ++failures;
+    if (!bench_slots[e].setV2(mdl)) ++failures;
+    bench_frame.lane[e].setModel(&bench_slots[e].v2());
+  }
+  bench_frame.bus = tc::BusVoltageFilter();
+  bench_frame.sag = tc::BusSagFilter();
+  for (uint16_t frame = 0; frame < 1200; ++frame) {
+    for (uint8_t m = 0; m < 4; ++m) {
+      const uint16_t top = static_cast<uint16_t>(bench_slots[m].v2().max_force_dg + 40u);
+      bench_frame.lane[m].force_dg =
+          (frame % 50 < 2) ? 0 : static_cast<uint16_t>((frame * (m == 1 ? 977u : 7u) + m * 13u) % top);
+    }
+    uint16_t mv = kEdgeMv[(frame / 8) % (sizeof kEdgeMv / sizeof kEdgeMv[0])];
+    if (frame % 3 == 1) mv = static_cast<uint16_t>(mv + (mv < 26000 ? frame % 5 : 0) - (mv > 3000 ? frame % 7 : 0));
+    if (frame % 89 == 40) mv = frame % 2 ? 2999 : 26001;  // just outside: rejected, flagged
+    if (frame == 600) bench_frame.bus.shift = 6;
+    if (frame == 900) bench_frame.bus.shift = 0;
+    const uint8_t extra = (frame % 11 == 0) ? tc::kVoltageInvalid : 0;
     memcpy(&reference, &bench_frame, sizeof reference);
     reference.flyPortable(mv, extra);
     bench_frame.fly(mv, extra);
