@@ -982,8 +982,12 @@ void GatherStoreApp::cmdStoreV2() {
   const uint16_t old_start_q4 = model_.start_q4_us;
   const bool old_refined = had_v2 && (model_.flags & tc::kV2Refined) != 0;
 
-  // This sweep alone (also gives its resting voltage).
+  // This sweep alone (also gives its resting voltage). Each step below is shorter than the
+  // watchdog's 64 ms (fit ~31 ms, refine ~17 ms, a slot read with its checks a few ms), the
+  // whole command is not: the watchdog is kicked between them.
+  hal::Watchdog::kick();
   tc::FitV2Report rep = fitter_.fit(model_);
+  hal::Watchdog::kick();
   if (rep.status == tc::FitV2Status::kTooFewSamples || rep.status == tc::FitV2Status::kNoForce ||
       rep.status == tc::FitV2Status::kBadVoltage) {
     say(TC_PSTR("error: model v2 cannot use the last sweep: "));
@@ -1009,7 +1013,9 @@ void GatherStoreApp::cmdStoreV2() {
   const bool refine = had_v2 && !near_first;
   if (refine) {
     tc::readModelV2<hal::Eeprom>(slot, model_, limits);  // valid a moment ago
+    hal::Watchdog::kick();
     rep = fitter_.refine(model_);
+    hal::Watchdog::kick();
   }
   if (rep.status != tc::FitV2Status::kOk) {
     say(refine ? TC_PSTR("error: refining motor ") : TC_PSTR("error: fitting model v2 of motor "));
