@@ -99,7 +99,7 @@ TEST(LabCli, LadderJsonListsTheStepsInOrderAndTheReportIsWritten) {
   EXPECT_TRUE(steps[3].contains("bic"));
   // the report: a page, and each plot as PNG and SVG
   EXPECT_TRUE(fs::exists(dir + "/report.md"));
-  for (const char* img : {"ladder", "measured_vs_model", "residual_vs_current_a"}) {
+  for (const char* img : {"ladder", "measured_vs_model", "residual_vs_vbat_v"}) {
     for (const char* ext : {".png", ".svg"}) {
       const std::string p = dir + "/" + img + ext;
       ASSERT_TRUE(fs::exists(p)) << p;
