@@ -365,8 +365,8 @@ int runExport(const ExportArgs& a) {
 void addExportChecks(CLI::App* x, ExportArgs& ex) {
   x->add_option("--where", ex.where, "keep only the rows where EXPR holds, e.g. 'pwm_us < 1840' (as for diagnose)");
   x->add_option("--max-error-pct", ex.max_error_pct,
-                "refuse a fit whose RMS error on its own data, or whose record's departure from it, exceeds this "
-                "percentage of the largest force")
+                "refuse a fit whose RMS error on its own data, or whose record flown at the data's PWMs, exceeds "
+                "this percentage of the largest force")
       ->capture_default_str();
 }
 

@@ -51,21 +51,39 @@ Cell parseCell(std::string_view field, bool decimal_comma, double& value) {
   std::string_view t = unquote(field);
   value = kNaN;
   if (t.empty()) return Cell::kMissing;
-  if (t.size() <= 3) {
-    std::string l = lower(std::string(t));
-    if (l == "nan" || l == "na") return Cell::kMissing;
-    if (l == "inf" || l == "-inf" || l == "+inf") return Cell::kNotFinite;
+  // the common case: a plain decimal number, parsed in place
+  if (!decimal_comma && t.front() != '+' && (std::isdigit(static_cast<unsigned char>(t.front())) || t.front() == '-' ||
+                                             t.front() == '.')) {
+    const auto r = std::from_chars(t.data(), t.data() + t.size(), value);
+    if (r.ec == std::errc() && r.ptr == t.data() + t.size()) {
+      if (std::isfinite(value)) return Cell::kNumber;
+      value = kNaN;
+    }
   }
+  auto is = [&](const char* word) {
+    const std::size_t n = std::char_traits<char>::length(word);
+    if (t.size() != n) return false;
+    for (std::size_t i = 0; i < n; ++i)
+      if (std::tolower(static_cast<unsigned char>(t[i])) != word[i]) return false;
+    return true;
+  };
+  if (is("nan") || is("-nan") || is("na")) return Cell::kMissing;
   char buf[64];
   if (t.size() >= sizeof(buf)) return Cell::kText;
   std::size_t n = 0;
+  bool inf = false;
   for (char c : t) {
     if (decimal_comma && c == ',') c = '.';
     if (!(std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '+' || c == 'e' ||
-          c == 'E'))
-      return lower(std::string(t)).find("inf") != std::string::npos ? Cell::kNotFinite : Cell::kText;
+          c == 'E')) {
+      const char l = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      inf = inf || l == 'i' || l == 'n' || l == 'f';
+      if (!inf) return Cell::kText;
+    }
     buf[n++] = c;
   }
+  if (inf) return (is("inf") || is("-inf") || is("+inf") || is("infinity") || is("-infinity")) ? Cell::kNotFinite
+                                                                                                : Cell::kText;
   buf[n] = '\0';
   const char* begin = buf;
   if (*begin == '+') ++begin;

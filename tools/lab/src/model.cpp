@@ -118,7 +118,6 @@ void cumulativeBSpline(double u, const std::vector<double>& t, double* s) {
   const int p = kSplineDegree;
   const int n = static_cast<int>(t.size()) - p - 1;  // basis functions
   u = std::clamp(u, 0.0, 1.0);
-  double b[64] = {};
   // span index
   int k = p;
   while (k < n - 1 && u >= t[static_cast<std::size_t>(k + 1)]) ++k;
@@ -137,12 +136,16 @@ void cumulativeBSpline(double u, const std::vector<double>& t, double* s) {
     }
     N[j] = saved;
   }
-  for (int j = 0; j <= p; ++j) b[k - p + j] = N[j];
+  // S_j = sum over m >= j of B_m: 1 below the span's first non-zero function (the functions sum
+  // to one), the partial sums of N within the span, 0 above it.
+  const int first = k - p;
+  for (int j = 1; j <= std::min(first, n - 1); ++j) s[j - 1] = 1.0;
   double acc = 0;
-  for (int j = n - 1; j >= 1; --j) {
-    acc += b[j];
-    s[j - 1] = acc;
+  for (int m = k; m >= std::max(first, 1); --m) {
+    acc += N[m - first];
+    s[m - 1] = acc;
   }
+  for (int j = k + 1; j <= n - 1; ++j) s[j - 1] = 0.0;
 }
 
 double softPlus(double u, double s) {
@@ -382,14 +385,12 @@ struct Model::Impl {
     for (const auto& e : spec.effects) {
       if (e == "deadband") {
         // start: the highest PWM below which the force stays under 3 % of the maximum
+        double first_up = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < pwm.size(); ++i)
+          if (f[i] > 0.03 * fmax) first_up = std::min(first_up, pwm[i]);
         double start = pmin;
-        std::vector<std::pair<double, double>> pf;
-        for (std::size_t i = 0; i < pwm.size(); ++i) pf.emplace_back(pwm[i], f[i]);
-        std::sort(pf.begin(), pf.end());
-        for (const auto& p : pf) {
-          if (p.second > 0.03 * fmax) break;
-          start = p.first;
-        }
+        for (std::size_t i = 0; i < pwm.size(); ++i)
+          if (pwm[i] < first_up || (pwm[i] == first_up && f[i] <= 0.03 * fmax)) start = std::max(start, pwm[i]);
         i_start = addParam("pwm_start_us", "us", e, start, 0.01 * span, pmin - 0.05 * span, pmax, pmin);
       } else if (e == "voltage") {
         require(e, "vbat_v");
@@ -932,9 +933,38 @@ struct Model::Impl {
     return out;
   }
 
-  double rssAt(const Bound& b, const Eigen::VectorXd& target, const Eigen::VectorXd& th) const {
+  double rssAt(const Bound& b, const Eigen::VectorXd& target, const Eigen::VectorXd& th,
+               Eigen::VectorXd* coef_out = nullptr) const {
     Eigen::VectorXd c;
-    const double rss = (target - predictWith(b, th, c, true, &target)).squaredNorm();
+    double rss;
+    if (!thesis && b.n > kMaxFitRows) {
+      // Many rows: RSS = r'r - 2 c'h + c'Gc from the normal equations, one pass over the rows.
+      Eigen::VectorXd mul, add;
+      const std::vector<double> x = drive(b, th);
+      factors(b, th, x, mul, add);
+      const int nb = basisSize();
+      Eigen::MatrixXd G = Eigen::MatrixXd::Zero(nb, nb);
+      Eigen::VectorXd h = Eigen::VectorXd::Zero(nb);
+      double rr = 0, row[64];
+      for (std::size_t i = 0; i < b.n; ++i) {
+        const auto r = static_cast<Eigen::Index>(i);
+        const double rhs = target[r] - add[r];
+        basisRow(x[i], mul[r], row);
+        rr += rhs * rhs;
+        for (int a = 0; a < nb; ++a) {
+          h[a] += row[a] * rhs;
+          for (int k = 0; k <= a; ++k) G(a, k) += row[a] * row[k];
+        }
+      }
+      G = G.selfadjointView<Eigen::Lower>();
+      std::vector<bool> nonneg(static_cast<std::size_t>(nb), true);
+      nonneg[0] = false;
+      c = nnlsGram(G, h, nonneg);
+      rss = std::max(0.0, rr - 2.0 * c.dot(h) + c.dot(G * c));
+    } else {
+      rss = (target - predictWith(b, th, c, true, &target)).squaredNorm();
+    }
+    if (coef_out) *coef_out = c;
     return std::isfinite(rss) ? rss : std::numeric_limits<double>::infinity();
   }
 
@@ -1009,7 +1039,9 @@ struct Model::Impl {
   // The starting point from a smaller model's fit: its parameters, and each new parameter at
   // the value that switches its effect off, so the start predicts exactly what the smaller
   // model did.
-  Eigen::VectorXd warmStart(const std::vector<Param>& warm) const {
+  // `neutral` false: the new parameters at their starting guesses instead (the effect switched
+  // on), where LM finds a gradient (a lag at its lower bound has none).
+  Eigen::VectorXd warmStart(const std::vector<Param>& warm, bool neutral = true) const {
     Eigen::VectorXd start = initialTheta();
     for (std::size_t i = 0; i < defs.size(); ++i) {
       const auto& d = defs[i];
@@ -1019,7 +1051,7 @@ struct Model::Impl {
           start[static_cast<Eigen::Index>(i)] = w.value;
           found = true;
         }
-      if (!found && std::isfinite(d.neutral)) start[static_cast<Eigen::Index>(i)] = d.neutral;
+      if (!found && neutral && std::isfinite(d.neutral)) start[static_cast<Eigen::Index>(i)] = d.neutral;
     }
     return start;
   }
@@ -1051,11 +1083,11 @@ struct Model::Impl {
         candidates.push_back(runLm(cold, r));
       }
       if (have_warm) {
-        // Warm start from a smaller model's optimum, the new effects switched off: the start
-        // itself is a candidate, so a model with an added effect never fits worse than the
-        // model without it.
-        const Eigen::VectorXd start = warmStart(*warm);
-        candidates.push_back(start);
+        // Warm start from a smaller model's optimum: with the new effects switched off it is
+        // itself a candidate, so a model with an added effect never fits worse than the model
+        // without it; LM starts from it with the new effects switched on.
+        candidates.push_back(warmStart(*warm));
+        const Eigen::VectorXd start = warmStart(*warm, /*neutral=*/false);
         // A generic probe asks whether anything is left in a variable: the model's own
         // parameters stay where they are, only the probe's move (cheap, and it cannot borrow
         // from the effects already fitted).
@@ -1070,15 +1102,41 @@ struct Model::Impl {
       double best = std::numeric_limits<double>::infinity();
       theta = candidates.front();
       for (const auto& th : candidates) {
-        const double rss = fit_data ? rssAt(train_bound, y, th) : rssAt(fit_bound, y_fit, th);
-        if (rss < best) {
-          best = rss;
+        Eigen::VectorXd c;
+        const double rss = rssAt(train_bound, y, th, &c);
+        if (rss < best || best == std::numeric_limits<double>::infinity()) {
+          best = std::min(best, rss);
           theta = th;
+          coef = c;
         }
       }
+    } else {
+      rssAt(train_bound, y, theta, &coef);
     }
-    const Eigen::VectorXd pred = predictWith(train_bound, theta, coef, true, &y);
     fitted = true;
+    if (!uncertainties && fit_data && !thesis) {
+      // A quick fit on many rows (continuation, ranking): the parameters and the error, not
+      // every row's prediction.
+      r.n = static_cast<std::size_t>(y.size());
+      r.k = static_cast<int>(coef.size() + np);
+      r.rss = rssAt(train_bound, y, theta);
+      const double n = static_cast<double>(r.n);
+      r.rmse_g = std::sqrt(r.rss / n);
+      r.max_g = r.max_pct = kNaN;
+      r.rmse_pct = 100 * r.rmse_g / std::max(y.cwiseAbs().maxCoeff(), 1e-9);
+      const double ll = n * std::log(std::max(r.rss / n, 1e-300));
+      r.aic = ll + 2.0 * r.k;
+      r.bic = ll + std::log(n) * r.k;
+      for (Eigen::Index j = 0; j < coef.size(); ++j)
+        r.params.push_back({j == 0 ? "offset_g" : fmt::format("c{}", j), "g", "curve", coef[j], kNaN});
+      for (Eigen::Index j = 0; j < np; ++j) {
+        const auto& d = defs[static_cast<std::size_t>(j)];
+        r.params.push_back({d.name, d.unit, d.effect, theta[j], kNaN});
+      }
+      return r;
+    }
+    Eigen::VectorXd pred_c = coef;
+    const Eigen::VectorXd pred = predictWith(train_bound, theta, pred_c, thesis, &y);
 
     r.n = static_cast<std::size_t>(y.size());
     const Eigen::Index nl = thesis ? 0 : coef.size();

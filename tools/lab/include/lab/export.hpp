@@ -66,8 +66,9 @@ void checkExportData(const Dataset& data);
 // `eeprom` (kEepromBytes) as a power-fail-safe next-sequence write; other slots untouched.
 // Refuses (std::invalid_argument naming the failing limit, its value and what to do) an effect
 // the firmware cannot run, data that cannot make a right record (see checkExportData, force
-// falling as the drive rises), a fit whose error on its own data or whose record's departure
-// from it exceeds `max_error_pct` of the largest force, and a record outside core's limits;
+// falling as the drive rises), a fit whose error on its own data, or whose record flown at the
+// data's PWMs and voltages, misses the measured force by more than `max_error_pct` of the
+// largest force (RMS), and a record outside core's limits;
 // std::runtime_error when the write did not verify. `eeprom` is untouched on any failure.
 ExportResult exportModel(const Dataset& data, const ModelSpec& spec, uint8_t slot,
                          std::vector<uint8_t>& eeprom, double max_error_pct = kDefaultMaxErrorPct);
