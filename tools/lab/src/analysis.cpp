@@ -104,11 +104,15 @@ Advice adviceFor(const std::string& var, double mean, const ModelSpec& spec, con
     }
   } else if (v == "temp_c" || startsWith(v, "temp")) {
     // thermal uses the temperature itself; density uses it through rho_kg_m3 (ranked there)
-    if (fresh("thermal")) a.trials.push_back("thermal");
-    if (!a.trials.empty() || fresh("density")) {
-      a.suggest = a.trials.empty() ? "density" : a.trials.front();
+    if (fresh("thermal")) {
+      a.trials.push_back("thermal");
+      a.suggest = "thermal";
       a.words = "residual follows " + var + ": the motor's temperature (copper and magnets) or the air density "
-                "changes the force; add `thermal`, or `density` if a pressure column is logged";
+                "changes the force; add `thermal`" +
+                std::string(fresh("density") ? ", or `density` if a pressure column is logged" : "");
+    } else if (fresh("density")) {
+      a.words = stillFollows(var, {"thermal"}, fit, "the air density may change with it: log a pressure column "
+                                                    "and add `density`");
     } else {
       a.words = stillFollows(var, {"thermal", "density"}, fit, "the temperature logged is not the motor's");
     }
@@ -521,10 +525,9 @@ std::vector<ForceCollapse> findForceCollapse(const Dataset& data) {
       if (med[k].second > med[peak].second) peak = k;
     const double drop = std::max(0.03 * med[peak].second, 1e-9);
     if (peak + 1 >= med.size() || !(med[peak].second > 0)) continue;
-    // every bin above the peak stays down, and the top one is down by more than 3 %
+    // every bin above the peak stays below it, and the top one is down by more than 3 %
     bool down = med.back().second < med[peak].second - drop;
-    for (std::size_t k = peak + 1; k < med.size() && down; ++k)
-      down = med[k].second < med[peak].second - 0.5 * drop;
+    for (std::size_t k = peak + 1; k < med.size() && down; ++k) down = med[k].second < med[peak].second;
     if (!down) continue;
     out.push_back({data.run_labels[r], med[peak].first, med[peak].second, med.back().first, med.back().second});
   }

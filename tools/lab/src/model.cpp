@@ -882,8 +882,54 @@ struct Model::Impl {
     return out;
   }
 
-  // Prediction with the linear coefficients solved (when `solve`) or taken from `c`. The
-  // normal equations are summed row by row: the n x k design matrix is never stored.
+  using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+  // The normal equations of the curve's coefficients, G = B'B, h = B'r, rr = r'r with
+  // r = target - add, summed over blocks of rows (vectorised rank updates; the n x k matrix B is
+  // not kept unless `keep` asks for it, row-major). False when a row is not finite.
+  bool normalEquations(const Bound& b, const std::vector<double>& x, const Eigen::VectorXd& mul,
+                       const Eigen::VectorXd& add, const Eigen::VectorXd& target, Eigen::MatrixXd& G,
+                       Eigen::VectorXd& h, double& rr, std::vector<double>* keep) const {
+    const int nb = basisSize();
+    constexpr Eigen::Index kBlock = 512;
+    G = Eigen::MatrixXd::Zero(nb, nb);
+    h = Eigen::VectorXd::Zero(nb);
+    rr = 0;
+    RowMatrix blk(kBlock, nb);
+    Eigen::VectorXd rblk(kBlock);
+    if (keep) keep->resize(b.n * static_cast<std::size_t>(nb));
+    Eigen::Index k = 0;
+    auto flush = [&] {
+      if (k == 0) return;
+      G.selfadjointView<Eigen::Lower>().rankUpdate(blk.topRows(k).transpose());
+      h.noalias() += blk.topRows(k).transpose() * rblk.head(k);
+      rr += rblk.head(k).squaredNorm();
+      k = 0;
+    };
+    for (std::size_t i = 0; i < b.n; ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      const double rhs = target[r] - add[r];
+      double* row = blk.row(k).data();
+      basisRow(x[i], mul[r], row);
+      bool finite = std::isfinite(rhs);
+      for (int a = 0; a < nb && finite; ++a) finite = std::isfinite(row[a]);
+      if (!finite) return false;
+      if (keep) std::copy(row, row + nb, keep->data() + i * static_cast<std::size_t>(nb));
+      rblk[k++] = rhs;
+      if (k == kBlock) flush();
+    }
+    flush();
+    G = G.selfadjointView<Eigen::Lower>();
+    return true;
+  }
+
+  Eigen::VectorXd solveCurve(const Eigen::MatrixXd& G, const Eigen::VectorXd& h) const {
+    std::vector<bool> nonneg(static_cast<std::size_t>(G.cols()), true);
+    nonneg[0] = false;  // the offset is free
+    return nnlsGram(G, h, nonneg);
+  }
+
+  // Prediction with the linear coefficients solved (when `solve`) or taken from `c`.
   Eigen::VectorXd predictWith(const Bound& b, const Eigen::VectorXd& th, Eigen::VectorXd& c, bool solve,
                               const Eigen::VectorXd* target) const {
     Eigen::VectorXd mul, add;
@@ -891,41 +937,28 @@ struct Model::Impl {
     factors(b, th, x, mul, add);
     if (thesis) return mul.cwiseProduct(thesisBase(b, th)) + add;
     const int nb = basisSize();
-    double row_buf[64];
     // the rows of the design matrix are kept between the two passes when they are few
     thread_local std::vector<double> cache;
-    const bool cached = b.n * static_cast<std::size_t>(nb) <= (1u << 20);
-    if (cached) cache.resize(b.n * static_cast<std::size_t>(nb));
+    const bool cached = solve && b.n * static_cast<std::size_t>(nb) <= (1u << 20);
     if (solve) {
-      Eigen::MatrixXd G = Eigen::MatrixXd::Zero(nb, nb);
-      Eigen::VectorXd h = Eigen::VectorXd::Zero(nb);
-      for (std::size_t i = 0; i < b.n; ++i) {
-        const auto r = static_cast<Eigen::Index>(i);
-        const double rhs = (*target)[r] - add[r];
-        double* row = cached ? cache.data() + i * static_cast<std::size_t>(nb) : row_buf;
-        basisRow(x[i], mul[r], row);
-        bool finite = std::isfinite(rhs);
-        for (int a = 0; a < nb && finite; ++a) finite = std::isfinite(row[a]);
-        if (!finite) {
-          c = Eigen::VectorXd::Zero(nb);
-          return Eigen::VectorXd::Constant(static_cast<Eigen::Index>(b.n), kNaN);
-        }
-        for (int a = 0; a < nb; ++a) {
-          h[a] += row[a] * rhs;
-          for (int k = 0; k <= a; ++k) G(a, k) += row[a] * row[k];
-        }
+      Eigen::MatrixXd G;
+      Eigen::VectorXd h;
+      double rr;
+      if (!normalEquations(b, x, mul, add, *target, G, h, rr, cached ? &cache : nullptr)) {
+        c = Eigen::VectorXd::Zero(nb);
+        return Eigen::VectorXd::Constant(static_cast<Eigen::Index>(b.n), kNaN);
       }
-      G = G.selfadjointView<Eigen::Lower>();
-      std::vector<bool> nonneg(static_cast<std::size_t>(nb), true);
-      nonneg[0] = false;
-      c = nnlsGram(G, h, nonneg);
+      c = solveCurve(G, h);
+    }
+    if (cached) {
+      const Eigen::Map<const RowMatrix> B(cache.data(), static_cast<Eigen::Index>(b.n), nb);
+      return B * c + add;
     }
     Eigen::VectorXd out(static_cast<Eigen::Index>(b.n));
+    double row[64];
     for (std::size_t i = 0; i < b.n; ++i) {
       const auto r = static_cast<Eigen::Index>(i);
-      double* row = row_buf;
-      if (cached && solve) row = cache.data() + i * static_cast<std::size_t>(nb);
-      else basisRow(x[i], mul[r], row);
+      basisRow(x[i], mul[r], row);
       double v = add[r];
       for (int a = 0; a < nb; ++a) v += row[a] * c[a];
       out[r] = v;
@@ -942,25 +975,16 @@ struct Model::Impl {
       Eigen::VectorXd mul, add;
       const std::vector<double> x = drive(b, th);
       factors(b, th, x, mul, add);
-      const int nb = basisSize();
-      Eigen::MatrixXd G = Eigen::MatrixXd::Zero(nb, nb);
-      Eigen::VectorXd h = Eigen::VectorXd::Zero(nb);
-      double rr = 0, row[64];
-      for (std::size_t i = 0; i < b.n; ++i) {
-        const auto r = static_cast<Eigen::Index>(i);
-        const double rhs = target[r] - add[r];
-        basisRow(x[i], mul[r], row);
-        rr += rhs * rhs;
-        for (int a = 0; a < nb; ++a) {
-          h[a] += row[a] * rhs;
-          for (int k = 0; k <= a; ++k) G(a, k) += row[a] * row[k];
-        }
+      Eigen::MatrixXd G;
+      Eigen::VectorXd h;
+      double rr;
+      if (normalEquations(b, x, mul, add, target, G, h, rr, nullptr)) {
+        c = solveCurve(G, h);
+        rss = std::max(0.0, rr - 2.0 * c.dot(h) + c.dot(G * c));
+      } else {
+        c = Eigen::VectorXd::Zero(basisSize());
+        rss = kNaN;
       }
-      G = G.selfadjointView<Eigen::Lower>();
-      std::vector<bool> nonneg(static_cast<std::size_t>(nb), true);
-      nonneg[0] = false;
-      c = nnlsGram(G, h, nonneg);
-      rss = std::max(0.0, rr - 2.0 * c.dot(h) + c.dot(G * c));
     } else {
       rss = (target - predictWith(b, th, c, true, &target)).squaredNorm();
     }
