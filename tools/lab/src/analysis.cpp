@@ -312,7 +312,7 @@ std::vector<Suspect> rankVariables(const Dataset& data_in, const FitResult& fit_
     std::vector<std::pair<double, std::string>> scored;
     for (const auto& [label, t] : trials) {
       try {
-        const FitResult r = fitModel(*work, t, &fit.params, /*warm_only=*/true, /*uncertainties=*/false);
+        const FitResult r = fitModel(*work, t, &fit.params, /*warm_only=*/true, /*uncertainties=*/false, fit.rss);
         if (!std::isfinite(r.rss)) continue;
         const double dk = std::max(1, r.k - fit.k);
         const double score =
@@ -455,7 +455,8 @@ std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,
       spec = combine(spec, added);
     }
     step.spec = spec;
-    step.fit = fitModel(data, spec, steps.empty() ? nullptr : &steps.back().fit.params);
+    step.fit = steps.empty() ? fitModel(data, spec)
+                             : fitModel(data, spec, &steps.back().fit.params, false, true, steps.back().fit.rss);
     // the diagnosis of the first and the last step (the report and the text use those)
     if (s == 0 || s == adds.size()) step.variables = rankVariables(data, step.fit, spec);
     step.holdout_rmse_g = holdoutRmse(data, spec, holdout);

@@ -206,6 +206,13 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
     r.notes.push_back(fmt::format("gamma {:.3f}: the firmware's drive is (pwm - start) * V (gamma 1); away "
                                   "from {:.2f} V the export follows the firmware's physics, not the fit",
                                   r.gamma, r.rest_v));
+#ifdef LAB_CORE_RECORD_LIMITS
+  if (r.rest_v * 1000.0 > tc::kDefaultFullScaleMv)
+    r.notes.push_back(fmt::format(
+        "the record holds a resting voltage of {:.2f} V; the battery monitor reads up to {:.2f} V with the default "
+        "divider ({} k / {} k): set the board's divider for this pack before flying, or read_run refuses the record",
+        r.rest_v, tc::kDefaultFullScaleMv / 1000.0, tc::kDefaultDividerTopOhm / 1000, tc::kDefaultDividerBottomOhm / 1000));
+#endif
   const double pmax = *std::max_element(pw.begin(), pw.end());
   if (!(pmax > r.start_us + 10))
     refuse(fmt::format("the fitted start threshold {:.1f} us is at the data's top PWM {:.1f} us: no curve to "

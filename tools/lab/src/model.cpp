@@ -1060,6 +1060,17 @@ struct Model::Impl {
     return th;
   }
 
+  // The smaller model's curve coefficients (offset_g, c1..), when it has all of them.
+  bool warmCurve(const std::vector<Param>& warm, Eigen::VectorXd& c) const {
+    c = Eigen::VectorXd::Constant(basisSize(), kNaN);
+    for (const auto& w : warm) {
+      if (w.effect != "curve") continue;
+      const int j = w.name == "offset_g" ? 0 : (w.name.size() > 1 && w.name[0] == 'c') ? std::atoi(w.name.c_str() + 1) : -1;
+      if (j >= 0 && j < c.size()) c[j] = w.value;
+    }
+    return c.allFinite();
+  }
+
   // The starting point from a smaller model's fit: its parameters, and each new parameter at
   // the value that switches its effect off, so the start predicts exactly what the smaller
   // model did.
@@ -1080,38 +1091,51 @@ struct Model::Impl {
     return start;
   }
 
-  FitResult fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties) {
+  // `warm_rss`: the smaller model's RSS on these rows (its curve coefficients are in `warm`),
+  // so its optimum need not be evaluated again; NaN: evaluate it.
+  FitResult fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties, double warm_rss) {
     FitResult r;
     r.model = spec.text();
     const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    const double inf = std::numeric_limits<double>::infinity();
     theta = initialTheta();
+    double best_rss = inf;
     if (np > 0) {
       const bool have_warm = warm && !warm->empty();
-      std::vector<Eigen::VectorXd> candidates;
-      if (!(warm_only && have_warm)) {
-        Eigen::VectorXd cold = initialTheta();
-        if (i_start >= 0) {
-          // The start threshold has local minima (the curve can bend to mimic a later start):
-          // scan from the lowest PWM to the first guess with the linear solve alone and start
-          // LM at the best.
-          const double hi = cold[i_start];
-          double best = std::numeric_limits<double>::infinity(), best_start = hi;
-          for (int k = 0; k <= 16; ++k) {
-            Eigen::VectorXd th = cold;
-            th[i_start] = pmin + (hi - pmin) * k / 16.0;
-            const double rss = rssAt(fit_bound, y_fit, th);
-            if (rss < best) best = rss, best_start = th[i_start];
-          }
-          cold[i_start] = best_start;
+      std::vector<Eigen::VectorXd> searched;  // LM results
+      // The start threshold has local minima (the curve can bend to mimic a later start): when
+      // it is new, scan it from the lowest PWM to the first guess with the linear solve alone
+      // and start LM at the best.
+      auto scanStart = [&](Eigen::VectorXd th) {
+        const double hi = initialTheta()[i_start];
+        double best = inf, best_start = hi;
+        for (int k = 0; k <= 16; ++k) {
+          th[i_start] = pmin + (hi - pmin) * k / 16.0;
+          const double rss = rssAt(fit_bound, y_fit, th);
+          if (rss < best) best = rss, best_start = th[i_start];
         }
-        candidates.push_back(runLm(cold, r));
-      }
+        th[i_start] = best_start;
+        return th;
+      };
+      auto atBound = [&](const Eigen::VectorXd& th) {
+        for (std::size_t j = 0; j < defs.size(); ++j) {
+          const double tol = 1e-6 * std::fabs(defs[j].scale);
+          if (th[static_cast<Eigen::Index>(j)] <= defs[j].lo + tol || th[static_cast<Eigen::Index>(j)] >= defs[j].hi - tol)
+            return true;
+        }
+        return false;
+      };
+      bool cold = !have_warm;
+      Eigen::VectorXd neutral;
       if (have_warm) {
         // Warm start from a smaller model's optimum: with the new effects switched off it is
         // itself a candidate, so a model with an added effect never fits worse than the model
         // without it; LM starts from it with the new effects switched on.
-        candidates.push_back(warmStart(*warm));
-        const Eigen::VectorXd start = warmStart(*warm, /*neutral=*/false);
+        neutral = warmStart(*warm);
+        Eigen::VectorXd start = warmStart(*warm, /*neutral=*/false);
+        bool start_is_new = i_start >= 0;
+        for (const auto& w : *warm) start_is_new = start_is_new && w.name != "pwm_start_us";
+        if (start_is_new) start = scanStart(start);
         // A generic probe asks whether anything is left in a variable: the model's own
         // parameters stay where they are, only the probe's move (cheap, and it cannot borrow
         // from the effects already fitted).
@@ -1120,22 +1144,37 @@ struct Model::Impl {
           fixed.assign(defs.size(), false);
           for (std::size_t i = 0; i < defs.size(); ++i) fixed[i] = defs[i].effect != "probe";
         }
-        candidates.push_back(runLm(start, r, warm_only, fixed.empty() ? nullptr : &fixed));
+        searched.push_back(runLm(start, r, warm_only, fixed.empty() ? nullptr : &fixed));
+        // Multi-start where the continuation looks stuck: a parameter ended at a bound.
+        cold = !warm_only && atBound(searched.back());
       }
-      // the best on every row
-      double best = std::numeric_limits<double>::infinity();
-      theta = candidates.front();
-      for (const auto& th : candidates) {
+      if (cold) searched.push_back(runLm(i_start >= 0 ? scanStart(initialTheta()) : initialTheta(), r));
+      // the best search result on the fit rows, then on every row against the smaller model
+      double best_fit_rows = inf;
+      theta = searched.front();
+      for (const auto& th : searched) {
         Eigen::VectorXd c;
-        const double rss = rssAt(train_bound, y, th, &c);
-        if (rss < best || best == std::numeric_limits<double>::infinity()) {
-          best = std::min(best, rss);
+        const double rss = rssAt(fit_bound, y_fit, th, &c);
+        if (rss < best_fit_rows) {
+          best_fit_rows = rss;
           theta = th;
           coef = c;
         }
       }
+      best_rss = fit_data ? rssAt(train_bound, y, theta, &coef) : best_fit_rows;
+      if (have_warm) {
+        Eigen::VectorXd c;
+        double rss = inf;
+        if (std::isfinite(warm_rss) && !thesis && warmCurve(*warm, c)) rss = warm_rss;
+        else rss = rssAt(train_bound, y, neutral, &c);
+        if (rss < best_rss || !std::isfinite(best_rss)) {
+          best_rss = rss;
+          theta = neutral;
+          coef = c;
+        }
+      }
     } else {
-      rssAt(train_bound, y, theta, &coef);
+      best_rss = rssAt(train_bound, y, theta, &coef);
     }
     fitted = true;
     if (!uncertainties && fit_data && !thesis) {
@@ -1143,7 +1182,7 @@ struct Model::Impl {
       // every row's prediction.
       r.n = static_cast<std::size_t>(y.size());
       r.k = static_cast<int>(coef.size() + np);
-      r.rss = rssAt(train_bound, y, theta);
+      r.rss = best_rss;
       const double n = static_cast<double>(r.n);
       r.rmse_g = std::sqrt(r.rss / n);
       r.max_g = r.max_pct = kNaN;
@@ -1313,7 +1352,7 @@ ModelSpec smallerSpec(const ModelSpec& spec) {
 }
 }  // namespace
 
-FitResult Model::fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties) {
+FitResult Model::fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties, double warm_rss) {
   if (!warm) {
     // Continuation: fit the model one effect smaller (recursively, down to the base) and
     // start from its optimum as well as cold. A direct fit then equals the ladder that adds
@@ -1329,20 +1368,20 @@ FitResult Model::fit(const std::vector<Param>* warm, bool warm_only, bool uncert
       }
       if (m) {
         const FitResult prev = m->fit(nullptr, false, false);
-        return impl_->fit(&prev.params, false, uncertainties);
+        return impl_->fit(&prev.params, false, uncertainties, prev.rss);
       }
     }
   }
-  return impl_->fit(warm, warm_only, uncertainties);
+  return impl_->fit(warm, warm_only, uncertainties, warm_rss);
 }
 std::vector<double> Model::predict(const Dataset& data) const { return impl_->predict(data); }
 std::vector<double> Model::motorVoltage(const Dataset& data) const { return impl_->motorVolts(data); }
 double Model::startUs() const { return impl_->startUs(); }
 
 FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm,
-                   bool warm_only, bool uncertainties) {
+                   bool warm_only, bool uncertainties, double warm_rss) {
   Model m(spec, data);
-  return m.fit(warm, warm_only, uncertainties);
+  return m.fit(warm, warm_only, uncertainties, warm_rss);
 }
 
 }  // namespace lab

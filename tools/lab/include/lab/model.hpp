@@ -10,6 +10,7 @@
 //   M       = product of the multiplicative effects   (motor, thermal, density, drift, mul:)
 //   A       = sum of the additive effects             (add:)
 #pragma once
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -98,8 +99,11 @@ class Model {
   // the model one effect smaller is fitted first (recursively) and used as the warm start: a
   // direct fit equals the ladder adding the same effects one by one. On more than 20,000 rows
   // the nonlinear parameters are searched on evenly spaced rows; the curve, the errors and the
-  // uncertainties use every row. `uncertainties` false skips them (ranking refits).
-  FitResult fit(const std::vector<Param>* warm = nullptr, bool warm_only = false, bool uncertainties = true);
+  // uncertainties use every row. `uncertainties` false skips them (continuation, ranking refits;
+  // on more than 20,000 rows the per-row predictions too). `warm_rss`: the smaller model's RSS
+  // on these data (saves evaluating its optimum again), NaN when not known.
+  FitResult fit(const std::vector<Param>* warm = nullptr, bool warm_only = false, bool uncertainties = true,
+                double warm_rss = std::numeric_limits<double>::quiet_NaN());
   // Prediction of the fitted model on other data (same columns needed). NaN where it cannot.
   std::vector<double> predict(const Dataset& data) const;
   // The voltage the motor sees per row (vbat_v after the fitted sag; NaN without vbat_v):
@@ -116,7 +120,8 @@ class Model {
 
 // Fits `spec` on `data`.
 FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm = nullptr,
-                   bool warm_only = false, bool uncertainties = true);
+                   bool warm_only = false, bool uncertainties = true,
+                   double warm_rss = std::numeric_limits<double>::quiet_NaN());
 
 // Adds derived candidate columns: rho_kg_m3 (from temp_c and a pressure column) and dpwm_us
 // (the PWM step from the previous sample of the same run: what a lag responds to).
