@@ -475,10 +475,15 @@ struct Model::Impl {
     // fits). The drive stays below ~1.05 (start >= pmin - 5 % span, V <= V_ref).
     if (!thesis) {
       xtop = 1.1;
-      // knots at quantiles of the drive where the motor turns
+      // knots at quantiles of the PWMs where the motor turns (force above 3 % of the largest),
+      // and one where it starts turning, so a curve without `deadband` can bend there too
       std::vector<double> u;
+      double turn_on = std::numeric_limits<double>::infinity();
       for (std::size_t i = 0; i < pwm.size(); ++i)
-        if (f[i] > 0.03 * fmax) u.push_back(softPlus(pwm[i] - pmin, kSoftStartUs) / span / xtop);
+        if (f[i] > 0.03 * fmax) {
+          u.push_back(softPlus(pwm[i] - pmin, kSoftStartUs) / span / xtop);
+          turn_on = std::min(turn_on, u.back());
+        }
       if (u.size() < 2) {
         u.clear();
         for (double p : pwm) u.push_back(softPlus(p - pmin, kSoftStartUs) / span / xtop);
@@ -486,6 +491,10 @@ struct Model::Impl {
       std::sort(u.begin(), u.end());
       knots.assign(kSplineDegree + 1, 0.0);
       double last = 0;
+      if (std::isfinite(turn_on) && turn_on > 0.02 && turn_on < 0.9) {
+        knots.push_back(turn_on);
+        last = turn_on;
+      }
       for (int k = 1; k <= kInteriorKnots && !u.empty(); ++k) {
         const double q = u[std::min(u.size() - 1, u.size() * static_cast<std::size_t>(k) / (kInteriorKnots + 1))];
         if (q > last + 0.02 && q < 0.98) {
@@ -1117,14 +1126,6 @@ struct Model::Impl {
         th[i_start] = best_start;
         return th;
       };
-      auto atBound = [&](const Eigen::VectorXd& th) {
-        for (std::size_t j = 0; j < defs.size(); ++j) {
-          const double tol = 1e-6 * std::fabs(defs[j].scale);
-          if (th[static_cast<Eigen::Index>(j)] <= defs[j].lo + tol || th[static_cast<Eigen::Index>(j)] >= defs[j].hi - tol)
-            return true;
-        }
-        return false;
-      };
       bool cold = !have_warm;
       Eigen::VectorXd neutral;
       if (have_warm) {
@@ -1145,8 +1146,9 @@ struct Model::Impl {
           for (std::size_t i = 0; i < defs.size(); ++i) fixed[i] = defs[i].effect != "probe";
         }
         searched.push_back(runLm(start, r, warm_only, fixed.empty() ? nullptr : &fixed));
-        // Multi-start where the continuation looks stuck: a parameter ended at a bound.
-        cold = !warm_only && atBound(searched.back());
+        // and from a cold start too (multi-start): the start threshold and the voltage exponent
+        // have local minima the continuation can end in
+        cold = !warm_only;
       }
       if (cold) searched.push_back(runLm(i_start >= 0 ? scanStart(initialTheta()) : initialTheta(), r));
       // the best search result on the fit rows, then on every row against the smaller model
