@@ -211,7 +211,7 @@ TEST(LabRealLayout, ADuplicatedColumnNameIsRefusedNotFirstCopyWins) {
   }
 }
 
-TEST(LabRealLayout, NotFiniteNumbersAreRefusedAndRowsWithoutAForceAreDroppedWithANote) {
+TEST(LabRealLayout, NotFiniteDrivesOrForcesAreRefusedOtherCellsAndRowsWithoutAForceAreNotedAndDropped) {
   for (const char* bad : {"inf", "-inf", "1e400", "Infinity"}) {
     try {
       parseText(std::string("pwm_us,force_g\n1100,5\n1200,") + bad + "\n", "nan.csv", ReadOptions());
@@ -222,6 +222,10 @@ TEST(LabRealLayout, NotFiniteNumbersAreRefusedAndRowsWithoutAForceAreDroppedWith
       EXPECT_NE(std::string(e.what()).find("not a finite number"), std::string::npos) << e.what();
     }
   }
+  // in a column the lab does not use (a stand's efficiency over zero power), not logged there
+  const Dataset eff = parseText("pwm_us,force_g,eff_g_per_w\n1100,5,inf\n1200,9,3.1\n", "eff.csv", ReadOptions());
+  EXPECT_TRUE(std::isnan(eff.col("eff_g_per_w")[0]));
+  EXPECT_TRUE(anyNote(eff, "column 'eff_g_per_w' has 1 cell(s) that are not finite numbers ('inf' on line 2)"));
   const Dataset d = parseText("pwm_us,force_g,vbat_v\n1100,5,12\n1200,nan,12\n1300,,12\n1400,30,NaN\n", "gaps.csv",
                               ReadOptions());
   EXPECT_EQ(d.rows(), 2u);

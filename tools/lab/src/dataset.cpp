@@ -276,6 +276,8 @@ struct RawColumn {
   std::string first_text;
   std::size_t first_text_line = 0;
   std::size_t first_missing_line = 0, first_missing_column = 0;  // an empty cell
+  std::size_t not_finite = 0, not_finite_line = 0, not_finite_column = 0;  // inf, 1e400
+  std::string not_finite_text;
 };
 
 std::string joinHeaders(const std::vector<std::string>& names) {
@@ -422,10 +424,14 @@ Dataset parseStream(std::istream& in, const std::string& file, const ReadOptions
           if (!rc.first_missing_line) rc.first_missing_line = no, rc.first_missing_column = fields[c].column;
           break;
         case Cell::kNotFinite:
-          throw InputError(file, no, fields[c].column,
-                           fmt::format("'{}' in column '{}' is not a finite number; fix the cell or "
-                                       "delete the row",
-                                       trimView(fields[c].text), rc.header));
+          // refused if the column is used as the drive or the force, else read as not logged
+          if (!rc.not_finite++) {
+            rc.not_finite_line = no;
+            rc.not_finite_column = fields[c].column;
+            rc.not_finite_text = std::string(trimView(fields[c].text));
+          }
+          v = kNaN;
+          break;
         case Cell::kText:
           if (rc.kind == RawColumn::Kind::kNumeric)
             throw InputError(file, no, fields[c].column,
@@ -627,6 +633,22 @@ Dataset parseStream(std::istream& in, const std::string& file, const ReadOptions
     source_of.erase(source_of.begin() + c);
     out.names.erase(out.names.begin() + c);
     out.columns.erase(out.columns.begin() + c);
+  }
+
+  // Numbers that are not finite (inf, 1e400): an error in the drive or the force, else that
+  // cell is not logged, with a note.
+  std::set<const RawColumn*> noted;
+  for (std::size_t c = 0; c < out.names.size(); ++c) {
+    const RawColumn* rc = c < source_of.size() ? source_of[c] : nullptr;
+    if (!rc || !rc->not_finite) continue;
+    if (out.names[c] == "pwm_us" || out.names[c] == "force_g")
+      throw InputError(file, rc->not_finite_line, rc->not_finite_column,
+                       fmt::format("'{}' in column '{}' is not a finite number; fix the cell or delete the row",
+                                   rc->not_finite_text, rc->header));
+    if (!noted.insert(rc).second) continue;
+    out.notes.push_back(fmt::format("{}: column '{}' has {} cell(s) that are not finite numbers ('{}' on line {}); "
+                                    "read as not logged there",
+                                    file, rc->header, rc->not_finite, rc->not_finite_text, rc->not_finite_line));
   }
 
   // 6. Rows without a drive or a force: dropped with a note saying which; a file without any is

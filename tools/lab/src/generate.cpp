@@ -94,9 +94,9 @@ std::string toStandCsv(const Dataset& d, const StandLayout& l) {
                          -torque[r] * kt);
     out += fmt::format("{:.8g},{:.6g},{:.6g},{:.0f},0,{:.6g},", thrust, v[r], i_a[r], rpm[r], elec);
     if (big)
-      out += fmt::format("{:.6g},{:.6g},{:.6g},", mech, elec > 0 ? 100.0 * mech / elec : 0.0,
-                         mech > 0 ? std::fabs(thrust) / mech : 0.0);
-    out += fmt::format("{:.6g},", elec > 0 ? std::fabs(thrust) / elec : 0.0);
+      out += fmt::format("{:.6g},{:.6g},{:.6g},", mech, elec > 1e-3 ? 100.0 * mech / elec : 0.0,
+                         mech > 1e-3 ? std::fabs(thrust) / mech : 0.0);
+    out += fmt::format("{:.6g},", elec > 1e-3 ? std::fabs(thrust) / elec : 0.0);
     if (big) out += fmt::format("{:.4g},", 0.05 + 3e-6 * rpm[r]);
     out += (r == 0 && l.tare_message ? "Tare done" : "");
     out += ",\n";
