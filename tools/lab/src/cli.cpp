@@ -397,9 +397,12 @@ std::string effectsText() {
     s += "    parameters: " + wrap(e.parameters, 82, 16) + "\n";
   }
   s += "\nData columns: pwm_us and force_g are required; t_s, motor, vbat_v, current_a, rpm, temp_c,\n"
-       "dir are known; any other numeric column is a candidate variable for the diagnosis.\n"
-       "RCbenchmark/Tyto exports are read as they are; other CSVs need --map, e.g. the Crazyflie data:\n"
-       "  --map force_g=weight[g]/4 --map pwm_us=pwm --map vbat_v=vbat[V]\n";
+       "dir are known; any other numeric column is a candidate variable for the diagnosis (a cause;\n"
+       "current, speed, torque, power, vibration are the motor's responses: listed, never suspects).\n"
+       "RCbenchmark/Tyto exports are read as they come (trailing commas, µs, N/kgf/gf/lbf/ozf, App\n"
+       "message), each known column renamed to the lab's name and unit; other CSVs need --map, e.g.\n"
+       "the Crazyflie data: --map force_g=weight[g]/4 --map pwm_us=pwm --map vbat_v=vbat[V]\n"
+       "Every note of the reader is printed (stderr) and in --json (\"notes\").\n";
   return s;
 }
 

@@ -95,7 +95,8 @@ const std::vector<EffectInfo> kCatalogue = {
     {"mul: EXPR",
      "User effect: the force is multiplied by EXPR (muParser syntax). Identifiers that are "
      "columns take the row's value; any other identifier that is not a function or constant is "
-     "a free parameter, fitted, starting at 0. Example: mul: 1 + a*(temp_c - 25).",
+     "a free parameter, fitted, starting at 0; write EXPR so that 0 means no effect (1 + a*..., "
+     "not a*...), then a ladder step adding it never fits worse. Example: mul: 1 + a*(temp_c - 25).",
      "the columns EXPR names", "the free identifiers [unit of what they multiply]"},
     {"add: EXPR",
      "User effect: EXPR grams are added to the force. Same rules as mul:. Example: "
