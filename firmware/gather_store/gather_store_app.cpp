@@ -2,6 +2,7 @@
 // Every constant string goes through TC_PSTR so it stays in flash on the AVR.
 #include "gather_store_app.hpp"
 
+#include "eeprom_console.hpp"
 #include "hal/hal.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/record_v2.hpp"
@@ -248,6 +249,8 @@ void GatherStoreApp::execute(char* line) {
     if (alone(cmd, n)) cmdErase();
   } else if (fw::equalsP(cmd, TC_PSTR("status"))) {
     if (alone(cmd, n)) cmdStatus();
+  } else if (fw::isEepromCommand(cmd)) {
+    fw::eepromCommand(args, n);
   } else {
     say(TC_PSTR("error: unknown command '"));
     hal::Uart::print(cmd);
@@ -279,6 +282,7 @@ void GatherStoreApp::cmdHelp() {
   sayLine(TC_PSTR("  show          what the selected slot's EEPROM record holds (v1 or v2)"));
   sayLine(TC_PSTR("  erase         mark the selected slot not calibrated (v1 and both v2 copies)"));
   sayLine(TC_PSTR("  status        settings, live force and battery, last sweep"));
+  sayLine(TC_PSTR("  eeprom crc|dump  EEPROM CRC-16 per slot and whole, or all of it as Intel HEX"));
 }
 
 void GatherStoreApp::cmdMotor(char** args, uint8_t n) {

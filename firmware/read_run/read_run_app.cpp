@@ -1,6 +1,8 @@
 // Read and Run: see read_run_app.hpp for the flow and the safety rules.
 #include "read_run_app.hpp"
 
+#include "eeprom_console.hpp"
+
 namespace rr {
 
 namespace {
@@ -506,6 +508,12 @@ void ReadRunApp::handleLine(char* line) {
     if (stream_) return;  // no prompt: the next line is a CSV row, and must start clean
   } else if (fw::equalsP(verb, TC_PSTR("rate"))) {
     commandRate(tokens, count);
+  } else if (fw::isEepromCommand(verb)) {
+    if (isRunning()) {
+      sayLine(TC_PSTR("error: eeprom: motors are running; send stop first"));
+    } else {
+      fw::eepromCommand(tokens, count);
+    }
   } else {
     say(TC_PSTR("error: unknown command \""));
     hal::Uart::print(verb);
@@ -523,6 +531,7 @@ void ReadRunApp::commandHelp() {
   sayLine(TC_PSTR("               hold (default 5000 ms), stop; any key aborts"));
   sayLine(TC_PSTR("stream on|off  CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s"));
   sayLine(TC_PSTR("rate HZ        ESC frame rate 50..400 Hz (motors stopped)"));
+  sayLine(TC_PSTR("eeprom crc|dump  EEPROM CRC-16 per slot and whole, or Intel HEX (stopped)"));
   sayLine(TC_PSTR("failsafe: while a motor runs, 500 ms without a line (an empty line will do)"));
   sayLine(TC_PSTR("stops all motors"));
 }
