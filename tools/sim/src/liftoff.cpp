@@ -18,8 +18,22 @@ namespace sim {
 
 QuadRig::QuadRig(const std::string& elf, const plant::QuadFrameParams& params,
                  const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s)
-    : board(elf), quad(params, motors), vsense(plant::BatterySensorParams{}),
+    : owned(std::make_unique<Board>(elf)), board(*owned), quad(params, motors),
+      vsense(plant::BatterySensorParams{}),
       sample_every(std::max<int>(1, static_cast<int>(std::lround(sample_period_s * 1000)))) {
+  wire();
+}
+
+QuadRig::QuadRig(Board& existing, const plant::QuadFrameParams& params,
+                 const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s)
+    : board(existing), quad(params, motors), vsense(plant::BatterySensorParams{}),
+      sample_every(std::max<int>(1, static_cast<int>(std::lround(sample_period_s * 1000)))) {
+  wire();
+}
+
+void QuadRig::wire() {
+  board.clearPlantWiring();
+  last_t = board.timeS();
   board.addPulseListener(
       [this](int ch, double width_us, double t_s) { quad.setPulse(ch, width_us, t_s); });
   board.setAdcSource([this](int ch) { return ch == 1 ? vsense.adcMillivolts() : 0.0; });
