@@ -107,6 +107,10 @@ SweepLog runSweep(ConsoleClient& con, const CalibrateOptions& o, Operator& op, i
   try {
     con.command("sweep", sweepLimits(o), on_line);
   } catch (const PortError& e) {
+    if (abortOnReturningPort(con.port().path(), 3.0))
+      throw PortError(fmt::format("{}\nThe port came back: opening it reset the board and the "
+                                  "abort key went out, so the motor is stopped. Nothing was stored.",
+                                  e.what()));
     throw PortError(fmt::format(
         "{}\nThe sweep on motor {} may still be running on the board: gather_store goes on to "
         "{} us unless a key arrives. Cut the motor's power (or press the board's reset button).",

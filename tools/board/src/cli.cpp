@@ -234,9 +234,9 @@ void addEeprom(CLI::App& board) {
         to.progress = info;
         const EepromPutResult r = putEeprom(*port, *file, to);
         if (r.written)
-          std::printf("wrote %s to the EEPROM on %s (avrdude %.1f s; %zu bytes from the file, "
-                      "%zu kept from the board) and verified it through %s: %s\n",
-                      file->c_str(), port->c_str(), r.avrdude.wall_s, r.given_bytes,
+          std::printf("wrote %s to the EEPROM on %s in %.1f s (avrdude %.1f s; %zu bytes from the "
+                      "file, %zu kept from the board) and verified it through %s: %s\n",
+                      file->c_str(), port->c_str(), r.wall_s, r.avrdude.wall_s, r.given_bytes,
                       kEepromBytes - r.given_bytes, imageName(r.image), r.crcs.text().c_str());
         else
           std::printf("the EEPROM on %s already holds %s (%s); nothing written\n", port->c_str(),
@@ -272,8 +272,9 @@ void addCalibrate(CLI::App& board) {
       "plate, range, step, settle, cal W (tares), sweep -> store 1 (v1) or store v2; with\n"
       "--second-sweep you change the supply, then tare, sweep -> store 2 / store v2; show. Each\n"
       "sweep is streamed to a CSV with a progress bar; asks before a propeller spins (--yes\n"
-      "skips); Ctrl-C, a time-out or a lost port send the abort key. Ends with the model lab's\n"
-      "diagnosis of the captured sweeps.");
+      "skips); Ctrl-C and a time-out send the abort key; a lost port is opened again if it comes\n"
+      "back within 3 s (the open resets the board) and the abort key sent. Ends with the model\n"
+      "lab's diagnosis of the captured sweeps.");
   auto port = std::make_shared<std::string>();
   auto o = std::make_shared<CalibrateOptions>();
   auto range = std::make_shared<std::vector<int>>();

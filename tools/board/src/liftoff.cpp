@@ -73,8 +73,19 @@ LiftoffLog flyLiftoff(ConsoleClient& con, const LiftoffOptions& o,
     }
   };
   const double expected_s = (o.ramp_ms + o.hold_ms) / 1000.0;
-  const auto lines = con.command(fmt::format("liftoff {} {} {}", o.force_g, o.ramp_ms, o.hold_ms),
-                                 CommandLimits{expected_s * 1.5 + 10.0, 3.0, true}, take);
+  std::vector<std::string> lines;
+  try {
+    lines = con.command(fmt::format("liftoff {} {} {}", o.force_g, o.ramp_ms, o.hold_ms),
+                        CommandLimits{expected_s * 1.5 + 10.0, 3.0, true}, take);
+  } catch (const PortError& e) {
+    if (abortOnReturningPort(con.port().path(), 3.0))
+      throw PortError(fmt::format("{}\nThe port came back: opening it reset the board and the "
+                                  "abort key went out, so the motors are stopped.",
+                                  e.what()));
+    throw PortError(fmt::format("{}\nThe lift-off may still be running: read_run ends it after "
+                                "its hold ({} ms ramp + {} ms hold). Cut the motors' power.",
+                                e.what(), o.ramp_ms, o.hold_ms));
+  }
   for (const auto& l : lines)
     if (startsWith(l, "error: ")) {
       con.command("stream off", CommandLimits{5.0});

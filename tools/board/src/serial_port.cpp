@@ -7,6 +7,8 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <climits>
+#include <cstdlib>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -47,6 +49,25 @@ void requirePort(const std::string& path) {
   if (!S_ISCHR(st.st_mode))
     throw PortError(fmt::format("{}: not a serial port (not a character device); {}", path,
                                 kPortAdvice));
+}
+
+bool abortOnReturningPort(const std::string& path, double within_s) {
+  // A pseudo-terminal that went away (a simulated board ended) never comes back, and its
+  // number may already belong to another one: never open it again.
+  char real[PATH_MAX];
+  if (::realpath(path.c_str(), real) == nullptr || std::strncmp(real, "/dev/pts/", 9) == 0)
+    return false;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < within_s) {
+    try {
+      SerialPort again(path);  // the open pulses DTR: the board resets, its ESC outputs stop
+      again.write("\r");       // and the abort key, for a board that did not reset
+      return true;
+    } catch (const PortError&) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  }
+  return false;
 }
 
 SerialPort::SerialPort(const std::string& path, unsigned baud, bool reset) : path_(path) {

@@ -103,7 +103,7 @@ void addGather(CLI::App& sim) {
       ->capture_default_str();
   cmd->add_option("--eeprom", *eeprom,
                   "Intel HEX EEPROM image: read if it exists (other slots are kept), written "
-                  "after the run (avrdude -U eeprom:w:FILE:i puts it on a real board)");
+                  "after the run (thrustcal board eeprom put puts it on a real board)");
   cmd->add_option("--log-dir", o->log_dir,
                   "write gather_slotK_curve{1,2}.csv (the streamed sweeps + current_a, rpm, temp_c) and "
                   "gather_slotK_curves.csv (stored vs true PWM per gram)");
@@ -427,8 +427,10 @@ void addBoard(CLI::App& sim) {
         writeIntelHexFile(*eeprom, sb.board().eeprom());
         fmt::print("EEPROM saved: {}\n", *eeprom);
       }
-      fmt::print("{:.1f} s simulated, {} reset(s) by clients\n", sb.board().simulatedSeconds(),
-                 sb.link().clientResets());
+      fmt::print("{:.1f} s simulated, {} reset(s) by clients; the simulation alone ran at {:.1f}x "
+                 "real time\n",
+                 sb.board().simulatedSeconds(), sb.link().clientResets(),
+                 sb.board().realtimeFactor());
     });
   });
 }
@@ -442,7 +444,7 @@ void addFleet(CLI::App& sim) {
       "  sim_summary.json   calibration.curve_error_max_g, calibration.motors[],\n"
       "                     liftoff.{calibrated,uncalibrated}.{thrust_spread_pct,\n"
       "                     force_error_rms_pct,hold_thrust_g,...}, sim.realtime_factor\n"
-      "  eeprom.hex         the calibrated EEPROM (avrdude -U eeprom:w:eeprom.hex:i)\n"
+      "  eeprom.hex         the calibrated EEPROM (thrustcal board eeprom put --port P eeprom.hex)\n"
       "  gather_slotK_curve1.csv, gather_slotK_curve2.csv   the streamed sweeps\n"
       "  gather_slotK_curves.csv                            stored vs true PWM per gram\n"
       "  liftoff_calibrated.csv, liftoff_uncalibrated.csv   10 ms time series");

@@ -42,6 +42,11 @@ class SerialPort {
   int fd_ = -1;
 };
 
+// After a lost port (a USB glitch): tries to open `path` again for up to `within_s`; when it
+// opens, that open resets the board (DTR) and the abort key is sent too. True if it did.
+// Never for a pseudo-terminal (a simulated board does not come back; its number is reused).
+bool abortOnReturningPort(const std::string& path, double within_s);
+
 // Throws PortError unless `path` names an existing character device (a serial port or a pty),
 // with what to do: the board's usual names, a simulated board's link.
 void requirePort(const std::string& path);
