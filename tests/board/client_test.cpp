@@ -72,6 +72,7 @@ TEST(SweepLog, CsvKeepsHeaderRowsAndCommentsInOrderAndCommentsOtherLines) {
 #include <poll.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <functional>
 #include <mutex>
@@ -98,6 +99,11 @@ class FakeFirmware {
     if (master_ >= 0) ::close(master_);
   }
   const std::string& path() const { return path_; }
+  // Printed right after the prompt that ends an answer (read_run's next streamed row).
+  void setAfterPrompt(const std::string& text) {
+    std::lock_guard<std::mutex> l(m_);
+    after_prompt_ = text;
+  }
   // What a board prints after a reset: a banner and the prompt.
   void boot() { say("thrustcal fake firmware\r\n" + prompt_); }
   void say(const std::string& text) {
@@ -133,6 +139,7 @@ class FakeFirmware {
           out_ += cur + "\r\n";
           if (!cur.empty()) out_ += answer_(cur);
           out_ += prompt_;
+          if (!cur.empty()) out_ += after_prompt_;
           cur.clear();
         } else {
           cur.push_back(buf[i]);
@@ -157,6 +164,7 @@ class FakeFirmware {
   std::mutex m_;
   std::string out_, raw_;
   std::vector<std::string> lines_;
+  std::string after_prompt_;
 };
 
 // What gather_store of today says to `strict on`; what one with strict mode says.
@@ -240,6 +248,23 @@ TEST(ConsoleClient, ATimeOutOfAMotorCommandSendsTheAbortKeyThenOneEmptyLine) {
   EXPECT_EQ(fw.raw(), "sweep\r\r\r");
   // and the console is in step again
   EXPECT_EQ(con.mustCommand("show"), std::vector<std::string>{"answer to show"});
+}
+
+TEST(ConsoleClient, APromptFollowedAtOnceByAStreamRowStillEndsTheAnswer) {
+  // given: read_run streaming: its next CSV row comes right after the prompt, on the same line
+  FakeFirmware fw("rr> ", [](const std::string&) {
+    return std::string("# liftoff done: motors stopped\r\n");
+  });
+  board::SerialPort port(fw.path());
+  board::ConsoleClient con(port);
+  fw.boot();
+  con.waitForBoot(5);
+  fw.setAfterPrompt("0.100,1000,1000,1000,1000,12.550\r\n");
+  // when
+  const auto lines = con.command("liftoff 300", board::CommandLimits{3.0});
+  // then: the answer ends at the prompt, whatever followed it
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(std::find(lines.begin(), lines.end(), "# liftoff done: motors stopped"), lines.end());
 }
 
 TEST(ConsoleClient, ALostPortIsAPortError) {

@@ -343,6 +343,7 @@ struct LiftoffFigures {
 LiftoffFigures flyLiftoff(const std::string& elf, const MethodRun& m, double soc, int hold_ms,
                           double force_g) {
   sim::LiftoffOptions o;
+  o.link = sim::GatherLink::kInProcess;  // reproducible figures (see gatherWith)
   o.elf_path = elf;
   o.eeprom = m.eeprom;
   o.preset = kPreset;

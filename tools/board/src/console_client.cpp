@@ -89,9 +89,12 @@ std::string ConsoleClient::takeLine() {
   return line;
 }
 
-bool ConsoleClient::promptPending() const {
-  if (prompt_.empty()) return false;
-  return buffer_ == prompt_;
+// The prompt at the start of the unfinished line. While read_run streams, the next CSV row can
+// follow the prompt on the same line ("rr> 30.468,1000,..."): the prompt still ends the answer.
+bool ConsoleClient::promptPending() const { return startsWithPrompt(buffer_); }
+
+bool ConsoleClient::startsWithPrompt(const std::string& text) const {
+  return !prompt_.empty() && text.compare(0, prompt_.size(), prompt_) == 0;
 }
 
 std::vector<std::string> ConsoleClient::waitForBoot(double timeout_s) {
@@ -157,6 +160,11 @@ std::vector<std::string> ConsoleClient::command(const std::string& line, const C
       if (first) {
         first = false;
         if (l == sent || endsWith(l, sent)) continue;  // the echo of what we typed
+      }
+      if (startsWithPrompt(l)) {  // the prompt, and a streamed row after it on its line
+        remember(l);
+        buffer_.clear();
+        return lines;
       }
       remember(l);
       lines.push_back(l);

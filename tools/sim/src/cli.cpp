@@ -182,7 +182,9 @@ void addLiftoff(CLI::App& sim) {
       "quad frame tied to the floor, one LiPo, 'liftoff G RAMP HOLD', no attitude controller.\n"
       "calibrated: each slot's own record; uncalibrated: the reference slot's record in all\n"
       "four slots, so every ESC gets the same PWM (one generic curve). Reports per-motor thrust\n"
-      "in the hold, their spread, the force error, moments and tilt.");
+      "in the hold, their spread, the force error, moments and tilt. The board boots from the\n"
+      "Mega2560's bootloader behind a pty and `thrustcal board liftoff`'s client flies it\n"
+      "(--via in-process: typed into the simulated UART, reproducible byte for byte).");
   auto o = std::make_shared<LiftoffOptions>();
   auto eeprom = std::make_shared<std::string>();
   auto json = std::make_shared<std::string>();
@@ -191,7 +193,11 @@ void addLiftoff(CLI::App& sim) {
   auto uncal = std::make_shared<bool>(false);
   auto label = std::make_shared<std::string>();
   auto seeds = std::make_shared<std::vector<uint64_t>>(std::vector<uint64_t>{1, 2, 3, 4});
+  auto via = std::make_shared<std::string>("pty");
   o->elf_path = defaultElf("read_run");
+  cmd->add_option("--via", *via, "pty (bootloader + pty + the board client) or in-process")
+      ->check(CLI::IsMember({"pty", "in-process"}))
+      ->capture_default_str();
   cmd->add_option("--elf", o->elf_path, "read_run ELF image")->capture_default_str();
   cmd->add_option("--eeprom", *eeprom, "Intel HEX EEPROM image with the four calibrated slots")
       ->required()
@@ -237,11 +243,12 @@ void addLiftoff(CLI::App& sim) {
       if (!out_dir->empty()) fs::create_directories(*out_dir);
       nlohmann::json j;
       j["scenario"] = "liftoff";
-      double sim_s = 0, wall_s = 0;
+      double sim_s = 0, wall_s = 0, session_s = 0;
       for (const auto& mm : modes) {
         LiftoffOptions opt = *o;
         for (int i = 0; i < 4; ++i) opt.seeds[i] = (*seeds)[i];
         opt.eeprom = loadEepromOrErased(*eeprom, true);
+        opt.link = *via == "in-process" ? GatherLink::kInProcess : GatherLink::kPty;
         opt.uncalibrated = mm == "uncalibrated";
         if (!opt.uncalibrated) opt.label = *label;
         const std::string name = opt.label.empty() ? mm : opt.label;
@@ -251,6 +258,7 @@ void addLiftoff(CLI::App& sim) {
         j["liftoff"][name] = r.toJson();
         sim_s += r.simulated_s;
         wall_s += r.wall_s;
+        session_s += r.session_wall_s;
         fmt::print("liftoff {}: thrust {:.1f} {:.1f} {:.1f} {:.1f} g for {:.0f} g: spread {:.2f} %, "
                    "rms error {:.2f} %, tilt {:.2f} deg (max {:.2f})\n",
                    name, r.hold_thrust_g[0], r.hold_thrust_g[1], r.hold_thrust_g[2],
@@ -261,8 +269,9 @@ void addLiftoff(CLI::App& sim) {
                   {"simulated_s", sim_s},
                   {"wall_s", wall_s}};
       writeJson(*json, j);
-      fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time\n", sim_s, wall_s,
-                 wall_s > 0 ? sim_s / wall_s : 0);
+      fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time; {:.1f} s wall in "
+                 "all, via {}\n",
+                 sim_s, wall_s, wall_s > 0 ? sim_s / wall_s : 0, session_s, *via);
     });
   });
 }

@@ -99,7 +99,8 @@ class ConsoleClient {
 
  private:
   bool pumpOnce(double timeout_s);  // reads; splits into lines_; true if anything came
-  bool promptPending() const;       // the unfinished line is exactly the prompt
+  bool promptPending() const;       // the unfinished line starts with the prompt
+  bool startsWithPrompt(const std::string& text) const;
   std::string takeLine();           // the oldest complete line ("" if none)
   void remember(const std::string& line);
 

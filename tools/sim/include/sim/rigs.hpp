@@ -49,6 +49,8 @@ struct QuadRig {
 
   QuadRig(const std::string& elf, const plant::QuadFrameParams& params,
           const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s = 0.01);
+  QuadRig(const FlashImages& images, const plant::QuadFrameParams& params,
+          const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s = 0.01);
   QuadRig(Board& existing, const plant::QuadFrameParams& params,
           const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s = 0.01);
 

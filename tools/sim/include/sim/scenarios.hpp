@@ -15,7 +15,8 @@
 //          the model); the stored model is checked at each sweep's conditions the same way.
 // liftoff: read_run on the tethered quad (plant::QuadFrame, four varied motors, one LiPo):
 //          "liftoff G RAMP HOLD"; thrust, moments and tilt are logged; the hold phase is
-//          summarized. Uncalibrated = every slot holds the reference slot's record, so all four
+//          summarized. Over the pty (kPty, default) the board boots from the bootloader and
+//          `thrustcal board liftoff`'s client code flies it (stream on, liftoff, stream off). Uncalibrated = every slot holds the reference slot's record, so all four
 //          ESCs get the same PWM (what one generic curve gives).
 #pragma once
 #include <array>
@@ -124,6 +125,9 @@ GatherResult runGather(const GatherOptions& options);
 
 struct LiftoffOptions {
   std::string elf_path;                       // read_run.elf
+  GatherLink link = GatherLink::kPty;         // how the scenario reaches read_run
+  std::string bootloader_hex =                // kPty: the bootloader in the boot section
+      "/usr/share/arduino/hardware/arduino/avr/bootloaders/stk500v2/stk500boot_v2_mega2560.hex";
   std::vector<uint8_t> eeprom;                // calibrated image (from gather)
   std::string preset = "kv1100_9x4.7";
   std::array<uint64_t, 4> seeds = {1, 2, 3, 4};  // the same seeds as at gather, per slot
@@ -160,6 +164,8 @@ struct LiftoffResult {
   std::vector<std::string> calibration_report;  // read_run's boot lines about the slots
   std::vector<LiftoffSample> samples;
   double simulated_s = 0, wall_s = 0, realtime_factor = 0;
+  double session_wall_s = 0;              // wall clock of the whole run (pty: boot included)
+  GatherLink link = GatherLink::kPty;
   std::string csv_path;
   nlohmann::json toJson() const;
 };
