@@ -2,6 +2,7 @@
 // Every constant string goes through TC_PSTR so it stays in flash on the AVR.
 #include "gather_store_app.hpp"
 
+#include "eeprom_console.hpp"
 #include "hal/hal.hpp"
 #include "record_report.hpp"
 #include "thrustcal/eeprom_store.hpp"
@@ -276,6 +277,8 @@ void GatherStoreApp::execute(char* line) {
     if (alone(cmd, n)) cmdStatus();
   } else if (fw::equalsP(cmd, TC_PSTR("divider"))) {
     cmdDivider(args, n);
+  } else if (fw::isEepromCommand(cmd)) {
+    fw::eepromCommand(args, n);
   } else {
     say(TC_PSTR("error: unknown command '"));
     hal::Uart::print(cmd);
@@ -307,6 +310,7 @@ void GatherStoreApp::cmdHelp() {
   sayLine(TC_PSTR("  show          what the selected slot's EEPROM record holds (v1 or v2)"));
   sayLine(TC_PSTR("  erase         mark the selected slot not calibrated (v1 and both v2 copies)"));
   sayLine(TC_PSTR("  status        settings, live force and battery, last sweep, stack"));
+  sayLine(TC_PSTR("  eeprom crc|dump  EEPROM CRC-16 per slot and whole, or all of it as Intel HEX"));
   sayLine(TC_PSTR("  divider [R1 R2] battery divider in ohm, R1 pack-A1, R2 A1-ground (default"));
   sayLine(TC_PSTR("                100000 47000: 15.638 V); read_run flies with it too"));
   sayLine(TC_PSTR("  strict on|off sweep, store, erase and divider need a checksum (host clients)"));

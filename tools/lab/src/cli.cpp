@@ -358,7 +358,8 @@ int runExport(const ExportArgs& a) {
               "measured force, %.3f g (max %.2f g) against the lab model\n",
               r.v2_rmse_g, r.v2_max_g, r.v2_vs_lab_rmse_g, r.v2_vs_lab_max_g);
   for (const auto& n : r.notes) std::printf("  note: %s\n", n.c_str());
-  std::printf("flash: avrdude -p m2560 -c wiring -P PORT -U eeprom:w:%s:i\n", a.eeprom.c_str());
+  // not avrdude -U eeprom:w: its verify fails on every stock Mega2560 (docs/board.md)
+  std::printf("to the board: thrustcal board eeprom put --port PORT %s\n", a.eeprom.c_str());
   return 0;
 }
 
@@ -471,7 +472,7 @@ void registerCommands(CLI::App& app) {
   addExportChecks(x, *ex);
   x->add_option("--map", ex->maps, "column mapping TARGET=SOURCE[*K|/K|+K|-K...], repeatable");
   x->footer("Example: thrustcal lab export sag.csv --model curve+deadband+voltage+sag --slot 0 --eeprom board.hex\n"
-            "Then: avrdude -p m2560 -c wiring -P PORT -U eeprom:w:board.hex:i");
+            "Then: thrustcal board eeprom put --port PORT board.hex (docs/board.md)");
   const auto ap = autopilot::addExportOptions(x);  // --to ardupilot|px4|betaflight -o FILE
   x->callback([ex, ap] {
     const int rc = guarded([&] {
