@@ -2,6 +2,7 @@
 // Every constant string goes through TC_PSTR so it stays in flash on the AVR.
 #include "gather_store_app.hpp"
 
+#include "eeprom_console.hpp"
 #include "hal/hal.hpp"
 #include "record_report.hpp"
 #include "thrustcal/eeprom_store.hpp"
@@ -276,6 +277,8 @@ void GatherStoreApp::execute(char* line) {
     if (alone(cmd, n)) cmdStatus();
   } else if (fw::equalsP(cmd, TC_PSTR("divider"))) {
     cmdDivider(args, n);
+  } else if (fw::isEepromCommand(cmd)) {
+    fw::eepromCommand(args, n);
   } else {
     say(TC_PSTR("error: unknown command '"));
     hal::Uart::print(cmd);
@@ -307,6 +310,7 @@ void GatherStoreApp::cmdHelp() {
   sayLine(TC_PSTR("  show          what the selected slot's EEPROM record holds (v1 or v2)"));
   sayLine(TC_PSTR("  erase         mark the selected slot not calibrated (v1 and both v2 copies)"));
   sayLine(TC_PSTR("  status        settings, live force and battery, last sweep, stack"));
+  sayLine(TC_PSTR("  eeprom crc|dump  EEPROM CRC-16 per slot and whole, or all of it as Intel HEX"));
   sayLine(TC_PSTR("  divider [R1 R2] battery divider in ohm, R1 pack-A1, R2 A1-ground (default"));
   sayLine(TC_PSTR("                100000 47000: 15.638 V); read_run flies with it too"));
   sayLine(TC_PSTR("  strict on|off sweep, store, erase and divider need a checksum (host clients)"));
@@ -984,8 +988,12 @@ void GatherStoreApp::cmdStoreV2() {
   const uint16_t old_start_q4 = model_.start_q4_us;
   const bool old_refined = had_v2 && (model_.flags & tc::kV2Refined) != 0;
 
-  // This sweep alone (also gives its resting voltage).
+  // This sweep alone (also gives its resting voltage). Each step below is shorter than the
+  // watchdog's 64 ms (fit ~31 ms, refine ~17 ms, a slot read with its checks a few ms), the
+  // whole command is not: the watchdog is kicked between them.
+  hal::Watchdog::kick();
   tc::FitV2Report rep = fitter_.fit(model_);
+  hal::Watchdog::kick();
   if (rep.status == tc::FitV2Status::kTooFewSamples || rep.status == tc::FitV2Status::kNoForce ||
       rep.status == tc::FitV2Status::kBadVoltage) {
     say(TC_PSTR("error: model v2 cannot use the last sweep: "));
@@ -1011,7 +1019,9 @@ void GatherStoreApp::cmdStoreV2() {
   const bool refine = had_v2 && !near_first;
   if (refine) {
     tc::readModelV2<hal::Eeprom>(slot, model_, limits);  // valid a moment ago
+    hal::Watchdog::kick();
     rep = fitter_.refine(model_);
+    hal::Watchdog::kick();
   }
   if (rep.status != tc::FitV2Status::kOk) {
     say(refine ? TC_PSTR("error: refining motor ") : TC_PSTR("error: fitting model v2 of motor "));

@@ -1,6 +1,8 @@
 // Read and Run: see read_run_app.hpp for the flow and the safety rules.
 #include "read_run_app.hpp"
 
+#include "eeprom_console.hpp"
+
 namespace rr {
 
 ReadRunApp* ReadRunApp::active_ = nullptr;
@@ -605,6 +607,12 @@ void ReadRunApp::handleLine(char* line) {
     commandRate(tokens, count);
   } else if (fw::equalsP(verb, TC_PSTR("divider"))) {
     commandDivider(tokens, count);
+  } else if (fw::isEepromCommand(verb)) {
+    if (isRunning()) {
+      sayLine(TC_PSTR("error: eeprom: motors are running; send stop first"));
+    } else {
+      fw::eepromCommand(tokens, count);
+    }
   } else {
     say(TC_PSTR("error: unknown command \""));
     hal::Uart::print(verb);
@@ -623,6 +631,7 @@ void ReadRunApp::commandHelp() {
   sayLine(TC_PSTR("               any other key aborts"));
   sayLine(TC_PSTR("stream on|off  CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s"));
   sayLine(TC_PSTR("rate HZ        ESC frame rate 50..400 Hz (motors stopped)"));
+  sayLine(TC_PSTR("eeprom crc|dump  EEPROM CRC-16 per slot and whole, or Intel HEX (stopped)"));
   sayLine(TC_PSTR("divider [R1 R2] battery divider in ohm, R1 pack-A1, R2 A1-ground (default"));
   sayLine(TC_PSTR("               100000 47000); setting it reloads the calibration (motors stopped)"));
   sayLine(TC_PSTR("strict on|off  f (above 0 g), liftoff, divider R1 R2 need a checksum"));

@@ -5,11 +5,13 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "lab/cli.hpp"
 #include "lab/dataset.hpp"
 #include "lab/generate.hpp"
+#include "lab/report.hpp"
 
 namespace {
 
@@ -99,7 +101,7 @@ TEST(LabCli, LadderJsonListsTheStepsInOrderAndTheReportIsWritten) {
   EXPECT_TRUE(steps[3].contains("bic"));
   // the report: a page, and each plot as PNG and SVG
   EXPECT_TRUE(fs::exists(dir + "/report.md"));
-  for (const char* img : {"ladder", "measured_vs_model", "residual_vs_current_a"}) {
+  for (const char* img : {"ladder", "measured_vs_model", "residual_vs_vbat_v"}) {
     for (const char* ext : {".png", ".svg"}) {
       const std::string p = dir + "/" + img + ext;
       ASSERT_TRUE(fs::exists(p)) << p;
@@ -117,6 +119,96 @@ TEST(LabCli, BadInputIsAnErrorExitNotACrash) {
   EXPECT_NE(run({"lab", "diagnose", bad, "--model", "nonsense"}, out), 0);
   const std::string err = testing::internal::GetCapturedStderr();
   EXPECT_NE(err.find("bad.csv:3:6"), std::string::npos) << err;
+}
+
+// The sag data as an RCbenchmark 1585 export (thrust logged negative in newtons, App message),
+// logged at `log_hz` while each point settles (0: one row per point).
+std::string standFile(const std::string& name, double log_hz = 0) {
+  lab::GenerateOptions o;
+  o.hidden = "sag";
+  o.noise_g = 0.5;
+  o.log_hz = log_hz;
+  lab::StandLayout l;
+  l.series = "1585";
+  l.thrust_unit = "N";
+  l.negative_thrust = true;
+  const std::string path = tmp(name);
+  std::ofstream(path) << lab::toStandCsv(lab::generate(o), l);
+  return path;
+}
+
+bool contains(const nlohmann::json& list, const std::string& text) {
+  for (const auto& n : list)
+    if (n.get<std::string>().find(text) != std::string::npos) return true;
+  return false;
+}
+
+TEST(LabCli, EveryReaderNoteAndDataWarningIsInTheJson) {
+  // given a raw RCbenchmark export, rows selected with --where
+  const std::string file = standFile("stand_notes.csv");
+  std::string out;
+  ASSERT_EQ(run({"lab", "diagnose", file, "--model", "curve+deadband+voltage", "--where", "pwm_us < 1800 and t_s >= 0",
+                 "--json"},
+                out),
+            0);
+  const auto j = nlohmann::json::parse(out);
+  // then the sign flip, the text and empty columns and the selection are in "notes"
+  EXPECT_TRUE(contains(j.at("notes"), "sign flipped")) << j.at("notes").dump();
+  EXPECT_TRUE(contains(j.at("notes"), "'App message' holds text ('Tare done'"));
+  EXPECT_TRUE(contains(j.at("notes"), "are empty; ignored"));
+  EXPECT_TRUE(contains(j.at("notes"), "--where 'pwm_us < 1800 and t_s >= 0': kept 256 of 296 rows, dropped 40"))
+      << j.at("notes").dump();
+  // and the responses are listed apart from the suspects
+  EXPECT_TRUE(contains(j.at("responses"), "current_a"));
+  EXPECT_TRUE(contains(j.at("responses"), "torque_nm"));
+  for (const auto& s : j.at("suspects")) EXPECT_NE(s.at("variable"), "current_a");
+}
+
+TEST(LabCli, HoldoutOnOneRunIsAnErrorNotNan) {
+  const std::string file = standFile("stand_one_run.csv");
+  std::string out;
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"lab", "diagnose", file, "--model", "curve+deadband", "--holdout", "runs"}, out), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("needs at least two runs"), std::string::npos) << err;
+  EXPECT_EQ(out.find("nan"), std::string::npos) << out;
+}
+
+TEST(LabCli, ReportIsOneSelfContainedPageWithUnitsAndStaysSmallOnLargeData) {
+  // given 14,800 rows (each point logged at 100 Hz while it settles) in the 1585 layout
+  const std::string file = standFile("stand_100hz.csv", 100);
+  const std::string dir = tmp("report_100hz");
+  fs::remove_all(dir);
+  std::string out;
+  // when the ladder writes its report
+  ASSERT_EQ(run({"lab", "ladder", file, "--model", "curve+deadband+voltage", "--add", "sag", "--report", dir, "--json"},
+                out),
+            0);
+  const auto j = nlohmann::json::parse(out);
+  // then report.html carries every plot inside, and the whole report is small
+  std::ifstream html_file(dir + "/report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("<img alt=\"ladder\" src=\"data:image/png;base64,"), std::string::npos);
+  EXPECT_EQ(html.find("src=\"ladder.png\""), std::string::npos);
+  EXPECT_LT(j.at("report").at("bytes").get<double>(), 20e6);
+  std::uintmax_t total = 0;
+  for (const auto& e : fs::directory_iterator(dir)) total += fs::file_size(e.path());
+  EXPECT_LT(total, 20u * 1000u * 1000u);
+  // the plots' axes carry the file's names and units, and the samples are thinned
+  std::ifstream gp_file(dir + "/plots.gp");
+  const std::string gp((std::istreambuf_iterator<char>(gp_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(gp.find("set xlabel 'ESC signal (\xC2\xB5s)'"), std::string::npos);
+  EXPECT_NE(gp.find("set ylabel 'Thrust (g), logged in N'"), std::string::npos);
+  EXPECT_NE(gp.find("of 14800 samples shown"), std::string::npos);
+  std::ifstream tsv(dir + "/data.tsv");
+  std::size_t lines = 0;
+  for (std::string l; std::getline(tsv, l);) ++lines;
+  EXPECT_LE(lines, lab::kMaxPlotRows + 1);
+  // and the ladder's verdicts are on the page
+  std::ifstream md_file(dir + "/report.md");
+  const std::string md((std::istreambuf_iterator<char>(md_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(md.find("| verdict |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| earns its parameters |"), std::string::npos) << md;
 }
 
 TEST(LabCli, EffectsListingDocumentsTheWholeCatalogue) {

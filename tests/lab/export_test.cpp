@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 #include "lab/cli.hpp"
@@ -169,8 +170,10 @@ TEST(LabExport, SecondExportIsTheNextSequenceInTheOtherCopyAndTheFirstStaysValid
   fs::remove(hex);
   ASSERT_EQ(thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "2", "--eeprom", hex}).rc, 0);
 
-  // when a different model goes into the same slot
-  const CliRun r = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "2", "--eeprom", hex});
+  // when a different model goes into the same slot (one that misses the sag: 3.7 % RMS, let
+  // through by a looser limit)
+  const CliRun r = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "2", "--eeprom", hex,
+                              "--max-error-pct", "5"});
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("wrote slot 2 copy B, sequence 2"), std::string::npos) << r.out;
 
@@ -233,6 +236,103 @@ TEST(LabExport, SeveralMotorsAreRefusedUnlessMotorPicksOne) {
   g_image = sim::readIntelHexFile(hex, lab::kEepromBytes);
   tc::ModelV2 v2;
   EXPECT_EQ(tc::readModelV2<Image>(0, v2).status, tc::DecodeStatus::kOk);
+}
+
+}  // namespace
+
+namespace {
+
+// A CSV of the sag data with one column changed by `edit` (row, name, value) -> new value.
+std::string editedCsv(const std::string& name, const std::function<void(lab::Dataset&)>& edit) {
+  lab::GenerateOptions o;
+  o.hidden = "sag";
+  o.noise_g = 0.5;
+  lab::Dataset d = lab::generate(o);
+  edit(d);
+  const std::string path = tmp(name);
+  std::ofstream(path) << lab::toCsv(d, {"edited for export_test"});
+  return path;
+}
+
+void scale(lab::Dataset& d, const char* column, double k) {
+  std::vector<double> v = d.col(column);
+  for (auto& x : v) x *= k;
+  d.set(column, v);
+}
+
+struct Refusal {
+  const char* name;
+  const char* model;
+  std::function<void(lab::Dataset&)> edit;
+  std::vector<std::string> extra_args;
+  std::vector<const char*> says;  // the failing limit, its value, what to do
+};
+
+TEST(LabExport, DataOrFitsThatCannotMakeARightRecordAreRefusedNamingTheLimitAndNothingIsWritten) {
+  const lab::RecordLimitsForExport lim = lab::recordLimits();
+  const Refusal cases[] = {
+      {"one absurd pwm", kSpec, [](lab::Dataset& d) { std::vector<double> p = d.col("pwm_us"); p[7] = 1e300; d.set("pwm_us", p); },
+       {}, {"outside the ESC pulse range", "1e+300", "--where"}},
+      {"too few rows", kSpec,
+       [](lab::Dataset& d) {
+         std::vector<bool> keep(d.rows(), false);
+         for (std::size_t i = 20; i < 30; ++i) keep[i] = true;
+         d = d.subset(keep);
+       },
+       {}, {"too few", "10 rows", "measure a whole sweep"}},
+      {"fit misses its data (no sag)", "curve+deadband+voltage", [](lab::Dataset&) {}, {"--max-error-pct", "1"},
+       {"misses its own data", "limit --max-error-pct 1 %", "diagnose"}},
+      {"volts logged as millivolts", kSpec, [](lab::Dataset& d) { scale(d, "vbat_v", 1000.0); }, {},
+       {"resting voltage 12599", "pack range", "unit"}},
+      {"force below the smallest record", kSpec, [](lab::Dataset& d) { scale(d, "force_g", 0.002); }, {},
+       {"largest force", "is outside", "tare and unit"}},
+      {"force in the wrong unit", kSpec, [](lab::Dataset& d) { scale(d, "force_g", 1000.0); }, {},
+       {"largest force", "is outside", "check the force column's unit"}},
+  };
+  for (const auto& c : cases) {
+    // given data (or a fit) that would make a record that cannot be right, and an image in use
+    const std::string csv = editedCsv(std::string("refuse_") + c.name + ".csv", c.edit);
+    const std::string hex = tmp("refuse.hex");
+    sim::writeIntelHexFile(hex, patterned());
+    const std::string before = slurp(hex);
+    // when exported
+    std::vector<std::string> args = {"lab", "export", csv, "--model", c.model, "--slot", "1", "--eeprom", hex};
+    args.insert(args.end(), c.extra_args.begin(), c.extra_args.end());
+    const CliRun r = thrustcal(args);
+    // then refused with what failed, its value and what to do, and nothing written
+    EXPECT_EQ(r.rc, 2) << c.name << "\n" << r.out;
+    EXPECT_NE(r.err.find("cannot export"), std::string::npos) << c.name << ": " << r.err;
+    for (const char* s : c.says) EXPECT_NE(r.err.find(s), std::string::npos) << c.name << " lacks '" << s << "': " << r.err;
+    EXPECT_TRUE(slurp(hex) == before) << c.name;
+    EXPECT_FALSE(fs::exists(hex + ".tmp")) << c.name;
+  }
+  // the limits are core's record limits
+  EXPECT_GT(lim.force_max_g, lim.force_min_g);
+  EXPECT_GT(lim.rest_max_v, lim.rest_min_v);
+}
+
+TEST(LabExport, ForceThatFallsAsTheDriveRisesIsRefusedUntilWhereCutsItOff) {
+  // given a sweep whose thrust collapses above 1800 us (an ESC current limit)
+  const std::string csv = editedCsv("collapse.csv", [](lab::Dataset& d) {
+    std::vector<double> f = d.col("force_g");
+    const auto& p = d.col("pwm_us");
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (p[i] > 1800) f[i] *= 1.0 - (p[i] - 1800) / 400.0;
+    d.set("force_g", f);
+  });
+  const std::string hex = tmp("collapse.hex");
+  fs::remove(hex);
+  // when exported as is, then refused with the PWM where it starts and the --where that helps
+  const CliRun all = thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex});
+  EXPECT_EQ(all.rc, 2);
+  EXPECT_NE(all.err.find("the force falls while the drive rises"), std::string::npos) << all.err;
+  EXPECT_NE(all.err.find("--where 'pwm_us < 1800'"), std::string::npos) << all.err;
+  EXPECT_FALSE(fs::exists(hex));
+  // when the rows below the collapse are exported, then the record lands
+  const CliRun cut = thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex, "--where",
+                                "pwm_us < 1800"});
+  EXPECT_EQ(cut.rc, 0) << cut.err;
+  EXPECT_NE(cut.err.find("kept"), std::string::npos) << cut.err;
 }
 
 }  // namespace

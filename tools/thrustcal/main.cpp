@@ -12,6 +12,9 @@
 #ifdef THRUSTCAL_HAVE_LAB
 #include "lab/cli.hpp"
 #endif
+#ifdef THRUSTCAL_HAVE_BOARD
+#include "board/cli.hpp"
+#endif
 #ifdef THRUSTCAL_HAVE_BENCH
 #include "bench/cli.hpp"
 #endif
@@ -31,6 +34,9 @@ int main(int argc, char** argv) {
 #endif
 #ifdef THRUSTCAL_HAVE_LAB
   lab::registerCommands(app);
+#endif
+#ifdef THRUSTCAL_HAVE_BOARD
+  board::registerCommands(app);
 #endif
 #ifdef THRUSTCAL_HAVE_BENCH
   bench::registerCommands(app);

@@ -728,4 +728,20 @@ TEST_F(GatherStore, EmptyLinesOnlyRepeatThePrompt) {
   EXPECT_EQ(out, "\r\ngs> ");
 }
 
+TEST_F(GatherStore, EepromCrcAndDumpAnswerAtThePromptAndHelpListsThem) {
+  // given: a stored curve, so the slot differs from the erased ones
+  calibrateAndTare();
+  sweep();
+  run("store 1");
+  // when
+  const auto crc = responseLines(run("eeprom crc"));
+  const std::string dump = run("eeprom dump");
+  // then
+  ASSERT_EQ(crc.size(), 1u);
+  EXPECT_EQ(crc[0].rfind("eeprom crc slot0 ", 0), 0u) << crc[0];
+  EXPECT_NE(dump.find(":00000001FF\r\ngs> "), std::string::npos);
+  EXPECT_EQ(countLinesStartingWith(dump, ":10"), 256);
+  EXPECT_NE(run("help").find("eeprom crc|dump"), std::string::npos);
+}
+
 }  // namespace

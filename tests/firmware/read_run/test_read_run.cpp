@@ -195,6 +195,28 @@ TEST_F(ReadRun, ForceForOneMotorLeavesTheOthersStopped) {
   EXPECT_EQ(pulse(3), 1000);
 }
 
+TEST_F(ReadRun, EepromCommandsAreRefusedWhileAMotorRunsAndAnsweredOnceStopped) {
+  // given: a motor running
+  storeFourMotors();
+  boot();
+  command("f 1 250");
+  ASSERT_GT(pulse(1), 1000);
+  // when / then: refused, the motor keeps its force (no output burst while it flies)
+  for (const char* line : {"eeprom crc", "eeprom dump"}) {
+    const std::string out = command(line);
+    EXPECT_TRUE(contains(out, "error: eeprom: motors are running; send stop first")) << out;
+    EXPECT_FALSE(contains(out, "eeprom crc slot0")) << out;
+    EXPECT_FALSE(contains(out, ":10000000")) << out;
+    EXPECT_EQ(pulse(1), storedCalibration(1)->first.pwmForGrams(250));
+  }
+  // stopped: answered
+  command("stop");
+  EXPECT_TRUE(contains(command("eeprom crc"), "eeprom crc slot0 ")) ;
+  const std::string dump = command("eeprom dump");
+  EXPECT_TRUE(contains(dump, ":10000000")) << dump.substr(0, 200);
+  EXPECT_TRUE(contains(dump, ":00000001FF\r\nrr> ")) << dump.substr(dump.size() - 100);
+}
+
 TEST_F(ReadRun, StopSendsEveryEscTo1000UsAtOnce) {
   // given
   storeFourMotors();

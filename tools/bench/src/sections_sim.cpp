@@ -189,6 +189,9 @@ MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::s
   o.settle_ms = settle_ms;
   o.settle_auto = settle_auto;
   o.model = model;
+  // Typed into the simulated UART, simulated time only: the figures are reproducible byte for
+  // byte (the pty path of `sim gather` paces idle time by the wall clock) and 4x quicker.
+  o.link = sim::GatherLink::kInProcess;
   o.progress = [](const std::string&) {};
   std::cerr << fmt::format("bench: gather_store in simavr, {} ({} us steps, {}{} ms settle, store {}), 4 motors\n",
                            key, step_us, settle_auto ? "auto, cap " : "", settle_ms, sim::gatherModelName(model));
@@ -295,6 +298,7 @@ struct LiftoffFigures {
 LiftoffFigures flyLiftoff(const std::string& elf, const MethodRun& m, double soc, int hold_ms,
                           double force_g) {
   sim::LiftoffOptions o;
+  o.link = sim::GatherLink::kInProcess;  // reproducible figures (see gatherWith)
   o.elf_path = elf;
   o.eeprom = m.eeprom;
   o.preset = kPreset;

@@ -34,6 +34,7 @@ struct Common {
   std::string report_dir;
   std::string holdout = "none";
   bool no_motor_split = false;
+  std::string where;
 };
 
 void addCommon(CLI::App* cmd, Common& c) {
@@ -46,8 +47,11 @@ void addCommon(CLI::App* cmd, Common& c) {
                   "user effects as 'mul: EXPR' / 'add: EXPR' (see `thrustcal lab effects`)")
       ->required();
   cmd->add_option("--map", c.maps,
-                  "column mapping TARGET=SOURCE[*K|/K|+K|-K...], repeatable, e.g. "
-                  "--map force_g=weight[g]/4 --map pwm_us=pwm --map vbat_v=vbat[V]");
+                  "column mapping TARGET=[-]SOURCE[*K|/K|+K|-K...], repeatable, e.g. "
+                  "--map force_g=weight[g]/4 --map pwm_us=pwm --map 'force_g=-Thrust (N)*101.97'");
+  cmd->add_option("--where", c.where,
+                  "keep only the rows where EXPR holds, e.g. 'pwm_us < 1840 and dir > 0' (muParser over the "
+                  "column names and `run`); the counts kept and dropped are printed");
   cmd->add_option("--holdout", c.holdout,
                   "validation: none, runs (fit without each run, predict it) or voltage (without "
                   "each voltage level)")
@@ -57,11 +61,26 @@ void addCommon(CLI::App* cmd, Common& c) {
   cmd->add_flag("--no-motor-split", c.no_motor_split, "one run per file even with a motor column");
 }
 
-Dataset load(const Common& c) {
+// Rows selected with --where (the count kept and dropped goes to the notes) and warnings about
+// data a fit should not be asked to explain (force falling as the drive rises).
+void selectAndCheck(Dataset& d, const std::string& where, std::vector<std::string>& warnings) {
+  if (!where.empty()) {
+    const std::size_t before = d.rows();
+    const RowSelection sel = selectRows(d, where);
+    d.notes.push_back(fmt::format("--where '{}': kept {} of {} rows, dropped {}{}", where, sel.kept, before,
+                                  sel.dropped,
+                                  sel.undefined ? fmt::format(" ({} where it could not be evaluated)", sel.undefined)
+                                                : std::string()));
+  }
+  for (const auto& c : findForceCollapse(d)) warnings.push_back(describe(c));
+}
+
+Dataset load(const Common& c, std::vector<std::string>& warnings) {
   ReadOptions ro;
   for (const auto& m : c.maps) ro.maps.push_back(parseColumnMap(m));
   ro.split_by_motor = !c.no_motor_split;
   Dataset d = readFiles(c.files, ro);
+  selectAndCheck(d, c.where, warnings);
   addDerivedColumns(d);
   return d;
 }
@@ -79,11 +98,42 @@ json paramsJson(const FitResult& f) {
 json suspectsJson(const std::vector<Suspect>& vars, bool significant) {
   json a = json::array();
   for (const auto& s : vars) {
-    if (s.significant != significant) continue;
+    if (s.role != Role::kCause || !s.tested || s.significant != significant) continue;
     a.push_back({{"variable", s.variable}, {"score", num(s.score)}, {"effects", s.effects},
                  {"p_value", num(s.p_value)}, {"advice", s.advice}});
   }
   return a;
+}
+
+// The variables that were not refitted, by reason: responses of the motor, copies of the drive,
+// causes that could not be tested here (time in a ramp).
+void addUntestedJson(json& j, const std::vector<Suspect>& vars) {
+  json responses = json::array(), copies = json::array(), untested = json::array();
+  for (const auto& s : vars) {
+    if (s.role == Role::kResponse) responses.push_back(s.variable);
+    else if (s.role == Role::kDriveCopy) copies.push_back(s.variable);
+    else if (!s.tested && s.variable != "pwm_us") untested.push_back({{"variable", s.variable}, {"advice", s.advice}});
+  }
+  j["responses"] = responses;
+  j["drive_copies"] = copies;
+  j["not_tested"] = untested;
+}
+
+void printUntested(const std::vector<Suspect>& vars) {
+  std::string responses, copies;
+  for (const auto& s : vars) {
+    if (s.role == Role::kResponse) responses += (responses.empty() ? "" : ", ") + s.variable;
+    else if (s.role == Role::kDriveCopy) copies += (copies.empty() ? "" : ", ") + s.variable;
+    else if (!s.tested && s.variable != "pwm_us") std::printf("not tested: %s\n", s.advice.c_str());
+  }
+  if (!responses.empty())
+    std::printf("responses of the motor (they follow the drive; not suspects): %s\n", responses.c_str());
+  if (!copies.empty()) std::printf("copies of the drive (not suspects): %s\n", copies.c_str());
+}
+
+void printNotesAndWarnings(const Dataset& d, const std::vector<std::string>& warnings) {
+  for (const auto& n : d.notes) std::fprintf(stderr, "note: %s\n", n.c_str());
+  for (const auto& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 }
 
 std::string fmtSigma(const Param& p) {
@@ -107,8 +157,17 @@ void printFit(const FitResult& f) {
   for (const auto& w : f.warnings) std::printf("  note: %s\n", w.c_str());
 }
 
-void printNotes(const Dataset& d) {
-  for (const auto& n : d.notes) std::fprintf(stderr, "note: %s\n", n.c_str());
+std::vector<std::string> reportNotes(const Dataset& d, const std::vector<std::string>& warnings) {
+  std::vector<std::string> n = d.notes;
+  for (const auto& w : warnings) n.push_back("warning: " + w);
+  return n;
+}
+
+void printReport(const ReportFiles& rep) {
+  std::printf("report: %s and %s (%.1f MB in all%s)\n", rep.page.c_str(), rep.html.c_str(), rep.bytes / 1e6,
+              rep.images.empty() ? ", no plots" : "");
+  if (!rep.images.empty())
+    std::printf("  plots: %s ... (%zu files, PNG and SVG)\n", rep.images.front().c_str(), rep.images.size());
 }
 
 std::string commandLine(const std::string& sub, const Common& c, const std::vector<std::string>& adds) {
@@ -116,12 +175,14 @@ std::string commandLine(const std::string& sub, const Common& c, const std::vect
   for (const auto& f : c.files) s += " " + f;
   for (const auto& m : c.maps) s += " --map '" + m + "'";
   s += " --model '" + c.model + "'";
+  if (!c.where.empty()) s += " --where '" + c.where + "'";
   for (const auto& a : adds) s += " --add '" + a + "'";
   return s;
 }
 
 int runDiagnose(const Common& c) {
-  const Dataset data = load(c);
+  std::vector<std::string> warnings;
+  const Dataset data = load(c, warnings);
   const ModelSpec spec = parseSpec(c.model);
   const Diagnosis d = diagnose(data, spec, parseHoldout(c.holdout));
   ReportFiles rep;
@@ -131,61 +192,71 @@ int runDiagnose(const Common& c) {
     step.fit = d.fit;
     step.variables = d.variables;
     step.holdout_rmse_g = d.holdout_rmse_g;
-    rep = writeReport(c.report_dir, data, {step}, commandLine("diagnose", c, {}));
+    step.verdict = "start";
+    rep = writeReport(c.report_dir, data, {step}, commandLine("diagnose", c, {}), reportNotes(data, warnings));
   }
   if (c.json_out) {
     json j = {{"model", d.fit.model}, {"rmse_g", num(d.fit.rmse_g)}, {"n", d.fit.n},
               {"max_g", num(d.fit.max_g)}, {"rmse_pct", num(d.fit.rmse_pct)}, {"max_pct", num(d.fit.max_pct)},
               {"k", d.fit.k}, {"aic", num(d.fit.aic)}, {"bic", num(d.fit.bic)}, {"runs", data.runs()},
               {"params", paramsJson(d.fit)}, {"suspects", suspectsJson(d.variables, true)},
-              {"not_significant", suspectsJson(d.variables, false)}, {"warnings", d.fit.warnings}};
+              {"not_significant", suspectsJson(d.variables, false)}, {"notes", data.notes}};
+    std::vector<std::string> all_warnings = warnings;
+    all_warnings.insert(all_warnings.end(), d.fit.warnings.begin(), d.fit.warnings.end());
+    j["warnings"] = all_warnings;
+    addUntestedJson(j, d.variables);
     if (c.holdout != "none")
       j["holdout"] = {{"kind", c.holdout}, {"groups", d.holdout_groups}, {"rmse_g", num(d.holdout_rmse_g)}};
-    if (!rep.page.empty()) j["report"] = {{"page", rep.page}, {"images", rep.images}};
+    if (!rep.page.empty()) j["report"] = {{"page", rep.page}, {"html", rep.html}, {"images", rep.images}, {"bytes", rep.bytes}};
     std::cout << j.dump(2) << "\n";
     return 0;
   }
-  printNotes(data);
+  printNotesAndWarnings(data, warnings);
   std::printf("model %s on %zu samples in %zu run(s)\n", d.fit.model.c_str(), d.fit.n, data.runs());
   printFit(d.fit);
   if (c.holdout != "none")
     std::printf("hold-out (%s, %d groups): RMSE %.3f g on data the fit did not see\n", c.holdout.c_str(),
                 d.holdout_groups, d.holdout_rmse_g);
-  std::printf("where it fails (variables ranked by how much of the residual they explain):\n");
+  std::printf("where it fails (causes ranked by how much of the residual they explain):\n");
   int k = 0;
   std::string first_effect;
   for (const auto& s : d.variables) {
-    if (!s.significant) continue;
-    std::printf("  %d. %-16s score %.3f (p %.1e) -> %s\n     %s\n", ++k, s.variable.c_str(), s.score, s.p_value,
-                fmt::format("{}", fmt::join(s.effects, ", ")).c_str(), s.advice.c_str());
+    if (!s.significant || s.role != Role::kCause) continue;
+    std::printf("  %d. %-16s score %.3f (p %.1e)%s\n     %s\n", ++k, s.variable.c_str(), s.score, s.p_value,
+                s.effects.empty() ? "" : fmt::format(" -> {}", fmt::join(s.effects, ", ")).c_str(), s.advice.c_str());
     if (first_effect.empty() && !s.effects.empty()) first_effect = s.effects.front();
   }
   if (k == 0) std::printf("  nothing: no variable explains a significant part of the residual (it looks like noise)\n");
   std::string quiet;
   for (const auto& s : d.variables)
-    if (!s.significant) quiet += (quiet.empty() ? "" : ", ") + s.variable;
+    if (!s.significant && s.tested && s.role == Role::kCause) quiet += (quiet.empty() ? "" : ", ") + s.variable;
   if (!quiet.empty()) std::printf("not significant: %s\n", quiet.c_str());
+  printUntested(d.variables);
   if (!first_effect.empty()) {
     std::string files;
     for (const auto& f : c.files) files += f + " ";
-    std::printf("next: thrustcal lab ladder %s--model '%s' --add '%s'\n", files.c_str(), c.model.c_str(),
-                first_effect.c_str());
+    std::string maps;
+    for (const auto& m : c.maps) maps += " --map '" + m + "'";
+    if (!c.where.empty()) maps += " --where '" + c.where + "'";
+    std::printf("next: thrustcal lab ladder %s--model '%s'%s --add '%s'\n", files.c_str(), c.model.c_str(),
+                maps.c_str(), first_effect.c_str());
   }
   if (!rep.page.empty()) {
-    std::printf("report: %s\n", rep.page.c_str());
-    for (const auto& i : rep.images) std::printf("  %s\n", i.c_str());
+    printReport(rep);
   }
   for (const auto& w : rep.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   return 0;
 }
 
 int runLadder(const Common& c, const std::vector<std::string>& adds) {
-  const Dataset data = load(c);
+  std::vector<std::string> warnings;
+  const Dataset data = load(c, warnings);
   const ModelSpec spec = parseSpec(c.model);
   for (const auto& a : adds) parseSpec(a);  // fail early on a typo
   const auto steps = ladder(data, spec, adds, parseHoldout(c.holdout));
   ReportFiles rep;
-  if (!c.report_dir.empty()) rep = writeReport(c.report_dir, data, steps, commandLine("ladder", c, adds));
+  if (!c.report_dir.empty())
+    rep = writeReport(c.report_dir, data, steps, commandLine("ladder", c, adds), reportNotes(data, warnings));
   if (c.json_out) {
     json s = json::array();
     for (std::size_t i = 0; i < steps.size(); ++i) {
@@ -194,17 +265,19 @@ int runLadder(const Common& c, const std::vector<std::string>& adds) {
                 {"max_g", num(st.fit.max_g)}, {"rmse_pct", num(st.fit.rmse_pct)}, {"n", st.fit.n},
                 {"k", st.fit.k}, {"aic", num(st.fit.aic)}, {"bic", num(st.fit.bic)},
                 {"delta_bic", i ? num(st.delta_bic) : json(nullptr)}, {"delta_aic", i ? num(st.delta_aic) : json(nullptr)},
-                {"earns", i ? json(st.earns) : json(nullptr)}, {"params", paramsJson(st.fit)},
+                {"earns", i ? json(st.earns) : json(nullptr)}, {"verdict", st.verdict},
+                {"at_bound", st.at_bound}, {"params", paramsJson(st.fit)},
                 {"suspects", suspectsJson(st.variables, true)}, {"warnings", st.fit.warnings}};
       if (c.holdout != "none") j["holdout_rmse_g"] = num(st.holdout_rmse_g);
       s.push_back(j);
     }
-    json out = {{"steps", s}};
-    if (!rep.page.empty()) out["report"] = {{"page", rep.page}, {"images", rep.images}};
+    json out = {{"steps", s}, {"notes", data.notes}, {"warnings", warnings}};
+    addUntestedJson(out, steps.back().variables);
+    if (!rep.page.empty()) out["report"] = {{"page", rep.page}, {"html", rep.html}, {"images", rep.images}, {"bytes", rep.bytes}};
     std::cout << out.dump(2) << "\n";
     return 0;
   }
-  printNotes(data);
+  printNotesAndWarnings(data, warnings);
   std::printf("error ladder on %zu samples in %zu run(s); BIC = n ln(RSS/n) + k ln n, an effect earns its\n"
               "parameters when BIC falls by more than 2\n\n", data.rows(), data.runs());
   std::printf("%-4s %-34s %4s %10s %9s %8s %11s %9s  %s\n", "step", "model", "k", "RMSE g", "max g", "RMSE %",
@@ -214,7 +287,7 @@ int runLadder(const Common& c, const std::vector<std::string>& adds) {
     const std::string name = i == 0 ? st.spec.text() : "+" + st.added;
     std::printf("%-4zu %-34s %4d %10.3f %9.2f %8.2f %11.1f %9s  %s\n", i, name.c_str(), st.fit.k, st.fit.rmse_g,
                 st.fit.max_g, st.fit.rmse_pct, st.fit.bic, i ? fmt::format("{:.1f}", st.delta_bic).c_str() : "",
-                i ? (st.earns ? "earns its parameters" : "does NOT earn its parameters") : "start");
+                st.verdict.c_str());
     if (c.holdout != "none") std::printf("     hold-out (%s) RMSE %.3f g\n", c.holdout.c_str(), st.holdout_rmse_g);
   }
   const auto& last = steps.back();
@@ -222,14 +295,14 @@ int runLadder(const Common& c, const std::vector<std::string>& adds) {
   printFit(last.fit);
   int k = 0;
   for (const auto& s : last.variables) {
-    if (!s.significant || k >= 3) continue;
+    if (!s.significant || s.role != Role::kCause || k >= 3) continue;
     if (k++ == 0) std::printf("still in the residual:\n");
     std::printf("  %-16s score %.3f -> %s\n", s.variable.c_str(), s.score, s.advice.c_str());
   }
-  if (k == 0) std::printf("the residual of the last step depends on no logged variable: it looks like noise\n");
+  if (k == 0) std::printf("the residual of the last step depends on no logged cause: it looks like noise\n");
+  printUntested(last.variables);
   if (!rep.page.empty()) {
-    std::printf("report: %s\n", rep.page.c_str());
-    for (const auto& i : rep.images) std::printf("  %s\n", i.c_str());
+    printReport(rep);
   }
   for (const auto& w : rep.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   return 0;
@@ -242,6 +315,8 @@ struct ExportArgs {
   int slot = -1;
   std::string eeprom;
   long motor = -1;
+  std::string where;
+  double max_error_pct = kDefaultMaxErrorPct;
 };
 
 int runExport(const ExportArgs& a) {
@@ -252,17 +327,19 @@ int runExport(const ExportArgs& a) {
   ReadOptions ro;
   for (const auto& m : a.maps) ro.maps.push_back(parseColumnMap(m));
   Dataset data = readFiles(a.files, ro);
+  std::vector<std::string> warnings;
+  selectAndCheck(data, a.where, warnings);  // a force collapse is refused by exportModel
   if (a.motor >= 0) data = selectMotor(data, a.motor);
   const bool existed = std::filesystem::exists(a.eeprom);
   std::vector<uint8_t> image = existed ? sim::readIntelHexFile(a.eeprom, kEepromBytes)
                                        : std::vector<uint8_t>(kEepromBytes, 0xFF);
-  const ExportResult r = exportModel(data, spec, static_cast<uint8_t>(a.slot), image);
+  const ExportResult r = exportModel(data, spec, static_cast<uint8_t>(a.slot), image, a.max_error_pct);
   if (r.write.status == tc::WriteV2Status::kWritten || !existed) {
     const std::string tmp = a.eeprom + ".tmp";
     sim::writeIntelHexFile(tmp, image);
     std::filesystem::rename(tmp, a.eeprom);
   }
-  printNotes(data);
+  for (const auto& n : data.notes) std::fprintf(stderr, "note: %s\n", n.c_str());
   const tc::ModelV2& m = r.model;
   std::printf("model %s on %zu samples in %zu run(s): lab fit RMSE %.3f g, max %.2f g\n", r.fit.model.c_str(),
               r.fit.n, data.runs(), r.fit.rmse_g, r.fit.max_g);
@@ -281,8 +358,18 @@ int runExport(const ExportArgs& a) {
               "measured force, %.3f g (max %.2f g) against the lab model\n",
               r.v2_rmse_g, r.v2_max_g, r.v2_vs_lab_rmse_g, r.v2_vs_lab_max_g);
   for (const auto& n : r.notes) std::printf("  note: %s\n", n.c_str());
-  std::printf("flash: avrdude -p m2560 -c wiring -P PORT -U eeprom:w:%s:i\n", a.eeprom.c_str());
+  // not avrdude -U eeprom:w: its verify fails on every stock Mega2560 (docs/board.md)
+  std::printf("to the board: thrustcal board eeprom put --port PORT %s\n", a.eeprom.c_str());
   return 0;
+}
+
+// Export's data selection and the error a fit may have on its own data.
+void addExportChecks(CLI::App* x, ExportArgs& ex) {
+  x->add_option("--where", ex.where, "keep only the rows where EXPR holds, e.g. 'pwm_us < 1840' (as for diagnose)");
+  x->add_option("--max-error-pct", ex.max_error_pct,
+                "refuse a fit whose RMS error on its own data, or whose record flown at the data's PWMs, exceeds "
+                "this percentage of the largest force")
+      ->capture_default_str();
 }
 
 // Wraps `text` at `width` columns, continuation lines indented by `indent` spaces.
@@ -312,9 +399,12 @@ std::string effectsText() {
     s += "    parameters: " + wrap(e.parameters, 82, 16) + "\n";
   }
   s += "\nData columns: pwm_us and force_g are required; t_s, motor, vbat_v, current_a, rpm, temp_c,\n"
-       "dir are known; any other numeric column is a candidate variable for the diagnosis.\n"
-       "RCbenchmark/Tyto exports are read as they are; other CSVs need --map, e.g. the Crazyflie data:\n"
-       "  --map force_g=weight[g]/4 --map pwm_us=pwm --map vbat_v=vbat[V]\n";
+       "dir are known; any other numeric column is a candidate variable for the diagnosis (a cause;\n"
+       "current, speed, torque, power, vibration are the motor's responses: listed, never suspects).\n"
+       "RCbenchmark/Tyto exports are read as they come (trailing commas, µs, N/kgf/gf/lbf/ozf, App\n"
+       "message), each known column renamed to the lab's name and unit; other CSVs need --map, e.g.\n"
+       "the Crazyflie data: --map force_g=weight[g]/4 --map pwm_us=pwm --map vbat_v=vbat[V]\n"
+       "Every note of the reader is printed (stderr) and in --json (\"notes\").\n";
   return s;
 }
 
@@ -379,9 +469,10 @@ void registerCommands(CLI::App& app) {
                 "created erased")
       ->required();
   x->add_option("--motor", ex->motor, "use only this motor's rows (data with a motor column)");
+  addExportChecks(x, *ex);
   x->add_option("--map", ex->maps, "column mapping TARGET=SOURCE[*K|/K|+K|-K...], repeatable");
   x->footer("Example: thrustcal lab export sag.csv --model curve+deadband+voltage+sag --slot 0 --eeprom board.hex\n"
-            "Then: avrdude -p m2560 -c wiring -P PORT -U eeprom:w:board.hex:i");
+            "Then: thrustcal board eeprom put --port PORT board.hex (docs/board.md)");
   const auto ap = autopilot::addExportOptions(x);  // --to ardupilot|px4|betaflight -o FILE
   x->callback([ex, ap] {
     const int rc = guarded([&] {
@@ -403,11 +494,35 @@ void registerCommands(CLI::App& app) {
   g->add_option("--seed", gen->seed, "random seed (parts, noise)")->capture_default_str();
   g->add_option("--preset", gen->preset, "plant preset (motor + propeller)")->capture_default_str();
   g->add_option("--output,-o", *out, "CSV file to write (default: standard output)");
-  g->callback([gen, out] {
+  g->add_option("--log-hz", gen->log_hz, "log rows at this rate while each PWM point settles (0: one row per point)")
+      ->capture_default_str();
+  g->add_option("--settle-s", gen->settle_s, "seconds per PWM point (0: the hidden effect's default)")
+      ->capture_default_str();
+  auto layout = std::make_shared<std::string>("project");
+  auto stand = std::make_shared<StandLayout>();
+  g->add_option("--layout", *layout,
+                "file layout: project (the lab's CSV), rcbenchmark-1520 or rcbenchmark-1585 (an RCbenchmark / Tyto "
+                "export as its software writes it: trailing commas, µs, App message)")
+      ->capture_default_str();
+  g->add_option("--thrust-unit", stand->thrust_unit, "thrust unit of an RCbenchmark layout: N, kgf, gf, lbf, ozf")
+      ->capture_default_str();
+  g->add_option("--torque-unit", stand->torque_unit, "torque unit of the 1585 layout: N·m or ozf·in")
+      ->capture_default_str();
+  g->add_flag("--negative-thrust", stand->negative_thrust, "log thrust negative (a stand pulling the other way)");
+  g->callback([gen, out, layout, stand] {
     const int rc = guarded([&] {
       std::vector<std::string> comments;
       const Dataset d = generate(*gen, &comments);
-      const std::string csv = toCsv(d, comments);
+      std::string csv;
+      if (*layout == "project") {
+        csv = toCsv(d, comments);
+      } else if (layout->rfind("rcbenchmark-", 0) == 0) {
+        StandLayout l = *stand;
+        l.series = layout->substr(12);
+        csv = toStandCsv(d, l);
+      } else {
+        throw std::invalid_argument("--layout '" + *layout + "': project, rcbenchmark-1520 or rcbenchmark-1585");
+      }
       if (out->empty()) {
         std::fputs(csv.c_str(), stdout);
       } else {

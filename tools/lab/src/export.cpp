@@ -4,9 +4,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 
+#include "lab/analysis.hpp"
+
 #include "thrustcal/model_v2.hpp"
+// The record's limits are core's (thrustcal/record_limits.hpp, "never fly a record that cannot
+// be right"); until that header exists in this tree the values core's model_v2.cpp checks today
+// stand in, so the messages follow core either way.
+#if __has_include("thrustcal/record_limits.hpp")
+#include "thrustcal/record_limits.hpp"
+#define LAB_CORE_RECORD_LIMITS 1
+#endif
 
 namespace lab {
 
@@ -62,7 +72,55 @@ double param(const FitResult& f, const char* name, double fallback) {
   return fallback;
 }
 
+// Refusals: what failed, its value, the limit (and where it comes from), what to do.
+[[noreturn]] void refuse(const std::string& what) { throw std::invalid_argument("cannot export: " + what); }
+
 }  // namespace
+
+RecordLimitsForExport recordLimits() {
+  RecordLimitsForExport l;
+#ifdef LAB_CORE_RECORD_LIMITS
+  l.start_min_us = tc::kStartMinUs;
+  l.start_max_us = tc::kStartMaxUs;
+  l.rest_min_v = tc::kPackMinMv / 1000.0;
+  l.rest_max_v = tc::kPackMaxMv / 1000.0;
+  l.force_min_g = tc::kRecordMinForceG;
+  l.force_max_g = tc::kRecordMaxForceG;
+  l.pwm_min_us = tc::kEscMinPulseUs;
+  l.pwm_max_us = tc::kEscMaxPulseUs;
+  l.max_sag_pct = tc::kMaxSagPercent;
+  l.source = "core's thrustcal/record_limits.hpp";
+#else
+  l.source = "core's model_v2.cpp (ModelV2::finalize)";
+#endif
+  return l;
+}
+
+void checkExportData(const Dataset& data) {
+  const RecordLimitsForExport lim = recordLimits();
+  const auto& pw = data.col("pwm_us");
+  std::size_t outside = 0;
+  double worst = 0;
+  for (double p : pw) {
+    if (!std::isfinite(p)) refuse("pwm_us holds a value that is not a number; the reader should have refused it");
+    if (p < lim.pwm_min_us || p > lim.pwm_max_us) {
+      if (!outside || std::fabs(p - 1500) > std::fabs(worst - 1500)) worst = p;
+      ++outside;
+    }
+  }
+  if (outside)
+    refuse(fmt::format("{} row(s) have pwm_us outside the ESC pulse range {:.0f}..{:.0f} us (e.g. {:.6g} us; limit "
+                       "from {}): the record maps force to servo pulses. If the drive is not in microseconds, map "
+                       "it (--map pwm_us=...); else drop those rows (--where 'pwm_us >= {:.0f} and pwm_us <= {:.0f}')",
+                       outside, lim.pwm_min_us, lim.pwm_max_us, worst, lim.source, lim.pwm_min_us, lim.pwm_max_us));
+  std::set<long> levels;
+  for (double p : pw) levels.insert(std::lround(p));
+  const std::size_t min_rows = 20;
+  if (data.rows() < min_rows || levels.size() < kMinExportPwmLevels)
+    refuse(fmt::format("{} rows at {} distinct PWMs are too few for a record that will fly (at least {} rows at {} "
+                       "PWMs): measure a whole sweep, start to full throttle",
+                       data.rows(), levels.size(), min_rows, kMinExportPwmLevels));
+}
 
 void checkExportable(const ModelSpec& spec, bool motor_selected) {
   for (const auto& e : spec.effects) {
@@ -91,7 +149,7 @@ Dataset selectMotor(const Dataset& data, long motor_id) {
 }
 
 ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t slot,
-                         std::vector<uint8_t>& eeprom) {
+                         std::vector<uint8_t>& eeprom, double max_error_pct) {
   if (slot >= kEepromSlots)
     throw std::invalid_argument(fmt::format("--slot {}: the EEPROM holds slots 0..{}", slot, kEepromSlots - 1));
   if (eeprom.size() != kEepromBytes)
@@ -112,10 +170,30 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
         "log it (or --map vbat_v=...) and fit again");
   for (double v : data.col("vbat_v"))
     if (!std::isfinite(v)) throw std::invalid_argument("export needs vbat_v on every row; some rows have none");
+  checkExportData(data);
+  const RecordLimitsForExport lim = recordLimits();
+  const auto collapses = findForceCollapse(data);
+  if (!collapses.empty()) refuse(describe(collapses.front()));
 
   ExportResult r;
   Model model(spec, data);
   r.fit = model.fit();
+  // A fit that cannot be right on its own data: not finite, or far from it.
+  for (const auto& p : r.fit.params)
+    if (!std::isfinite(p.value))
+      refuse(fmt::format("the fit's {} is not a number; the data cannot carry this model", p.name));
+  if (!std::isfinite(r.fit.rmse_g)) refuse("the fit's error is not a number; check the data (thrustcal lab diagnose)");
+  const double top_force = [&] {
+    double m = 0;
+    for (double f : data.col("force_g")) m = std::max(m, f);
+    return m;
+  }();
+  if (r.fit.rmse_g > max_error_pct / 100.0 * top_force)
+    refuse(fmt::format("the fit misses its own data by {:.3g} g RMS, {:.2f} % of the largest force {:.4g} g (limit "
+                       "--max-error-pct {:.3g} %): the model lacks something the data show or the data hold "
+                       "something a record should not (run `thrustcal lab diagnose` on them; cut bad rows with "
+                       "--where)",
+                       r.fit.rmse_g, 100.0 * r.fit.rmse_g / top_force, top_force, max_error_pct));
   r.start_us = model.startUs();
   r.gamma = spec.has("voltage") ? param(r.fit, "gamma", 1.0) : 1.0;
   const auto& vb = data.col("vbat_v");
@@ -128,10 +206,29 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
     r.notes.push_back(fmt::format("gamma {:.3f}: the firmware's drive is (pwm - start) * V (gamma 1); away "
                                   "from {:.2f} V the export follows the firmware's physics, not the fit",
                                   r.gamma, r.rest_v));
+#ifdef LAB_CORE_RECORD_LIMITS
+  if (r.rest_v * 1000.0 > tc::kDefaultFullScaleMv)
+    r.notes.push_back(fmt::format(
+        "the record holds a resting voltage of {:.2f} V; the battery monitor reads up to {:.2f} V with the default "
+        "divider ({} k / {} k): set the board's divider for this pack before flying, or read_run refuses the record",
+        r.rest_v, tc::kDefaultFullScaleMv / 1000.0, tc::kDefaultDividerTopOhm / 1000, tc::kDefaultDividerBottomOhm / 1000));
+#endif
   const double pmax = *std::max_element(pw.begin(), pw.end());
   if (!(pmax > r.start_us + 10))
-    throw std::invalid_argument(fmt::format("the fitted start threshold {:.1f} us is at the data's top PWM "
-                                            "{:.1f} us: no curve to export", r.start_us, pmax));
+    refuse(fmt::format("the fitted start threshold {:.1f} us is at the data's top PWM {:.1f} us: no curve to "
+                       "export; measure up to full throttle", r.start_us, pmax));
+  if (r.start_us < lim.start_min_us || r.start_us > lim.start_max_us)
+    refuse(fmt::format("the ESC start threshold {:.1f} us is outside {:.0f}..{:.0f} us (limit from {}): {}", r.start_us,
+                       lim.start_min_us, lim.start_max_us, lim.source,
+                       r.start_us < lim.start_min_us
+                           ? "the motor would push at the stop pulse; fit with `deadband` (and check the ESC's "
+                             "calibration), or drop the rows below the start"
+                           : "the ESC starts too late (check its throttle calibration) or the fit went wrong; fit "
+                             "with `deadband` on data from the stop pulse up"));
+  if (r.rest_v < lim.rest_min_v || r.rest_v > lim.rest_max_v)
+    refuse(fmt::format("the resting voltage {:.2f} V is outside the pack range {:.1f}..{:.1f} V (limit from {}): "
+                       "check the voltage column's unit (--map vbat_v=...) and the pack",
+                       r.rest_v, lim.rest_min_v, lim.rest_max_v, lim.source));
 
   // The curve: a PWM sweep at the resting voltage, nothing else on the battery.
   const std::size_t n = 256;
@@ -194,14 +291,25 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
     else
       sag.push_back(1000.0 * (r.rest_v - v_motor[i]));
   }
+  if (fmax < lim.force_min_g || fmax > lim.force_max_g)
+    refuse(fmt::format("the largest force {:.4g} g is outside {:.4g}..{:.4g} g (limit from {}): {}", fmax,
+                       lim.force_min_g, lim.force_max_g, lim.source,
+                       fmax < lim.force_min_g ? "the motor barely pushed; check the load cell's tare and unit "
+                                                "(--map force_g=...) and measure to full throttle"
+                                              : "check the force column's unit (N or kgf logged as grams?)"));
+  for (std::size_t i = 0; i < sag.size(); ++i)
+    if (sag[i] > lim.max_sag_pct / 100.0 * 1000.0 * r.rest_v)
+      refuse(fmt::format("the battery sag at {:.4g} g is {:.2f} V, more than {:.0f} % of the resting {:.2f} V (limit "
+                         "from {}): a wiring or supply fault, or a sag fit gone wrong (r_sag_ohm {:.3g})",
+                         force[i], sag[i] / 1000.0, lim.max_sag_pct, r.rest_v, lim.source, r_sag));
   tc::ModelV2 m;
   if (drive.size() < 2 ||
       !tc::modelV2FromCurve(m, r.start_us, drive.data(), force.data(), static_cast<uint16_t>(drive.size()),
                             1000.0 * r.rest_v, sag.data()))
-    throw std::invalid_argument(fmt::format(
-        "the fitted curve does not fit a v2 record (start {:.1f} us must lie in 800..1800, resting voltage "
-        "{:.2f} V in 6..17.5, largest force {:.1f} g at least 13.2 and at most 6553.5)",
-        r.start_us, r.rest_v, fmax));
+    refuse(fmt::format("core's modelV2FromCurve refused the curve (start {:.1f} us, resting voltage {:.2f} V, largest "
+                       "force {:.4g} g, {} points): a limit of the record not checked above; please report it with "
+                       "the data",
+                       r.start_us, r.rest_v, fmax, drive.size()));
   r.model = m;
 
   // Faithful? Fly the record at every row's PWM and the voltage the monitor reads there.
@@ -221,6 +329,16 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
   r.v2_max_g = maxAbs(e_meas);
   r.v2_vs_lab_rmse_g = rms(e_lab);
   r.v2_vs_lab_max_g = maxAbs(e_lab);
+  if (r.v2_rmse_g > max_error_pct / 100.0 * top_force)
+    refuse(fmt::format("the record, flown at the data's PWMs and voltages, misses the measured force by {:.3g} g RMS, "
+                       "{:.2f} % of the largest force {:.4g} g (limit --max-error-pct {:.3g} %; the lab fit alone: "
+                       "{:.3g} g): {}",
+                       r.v2_rmse_g, 100.0 * r.v2_rmse_g / top_force, top_force, max_error_pct, r.fit.rmse_g,
+                       std::fabs(r.gamma - 1.0) > 0.05
+                           ? fmt::format("the fit needs what the firmware does not do (gamma {:.3f}, the firmware's "
+                                         "is 1); fit curve+deadband+voltage+sag and check gamma",
+                                         r.gamma)
+                           : std::string("export the model the ladder ends with, or measure again")));
   if (r.v2_vs_lab_rmse_g > std::max(2.0, 0.005 * fmax))
     r.notes.push_back(fmt::format(
         "the record departs from the lab model by {:.1f} g RMS ({:.1f} % of {:.0f} g): the fit needs what "

@@ -29,7 +29,7 @@ const std::vector<HiddenEffectInfo> kHidden = {
      "a worn 3S LiPo (0.15 ohm) at four states of charge (12.6 to 10.2 V) that also feeds the "
      "frame's other motors (0-8 A, changing point by point); vbat_v is the resting voltage (logged "
      "before the load), current_a the pack current",
-     "curve+deadband+voltage", "sag", "current_a"},
+     "curve+deadband+voltage", "sag", "vbat_v"},
     {"motor", "four motors with 3 % part variation (Kv, R, I0, C_T, C_P, D), two voltages each",
      "curve+deadband+voltage", "motor", "motor"},
     {"drift",
@@ -49,6 +49,61 @@ const std::vector<HiddenEffectInfo> kHidden = {
 
 const std::vector<HiddenEffectInfo>& hiddenEffects() { return kHidden; }
 
+std::string toStandCsv(const Dataset& d, const StandLayout& l) {
+  static const std::vector<std::pair<std::string, double>> kThrust = {
+      {"N", 9.80665e-3}, {"kgf", 1e-3}, {"gf", 1.0}, {"lbf", 1.0 / 453.59237}, {"ozf", 1.0 / 28.349523125}};
+  static const std::vector<std::pair<std::string, double>> kTorque = {{"N·m", 1.0}, {"ozf·in", 1.0 / 0.0070615518}};
+  auto scaleOf = [](const std::vector<std::pair<std::string, double>>& units, const std::string& u, const char* what) {
+    for (const auto& [name, k] : units)
+      if (name == u) return k;
+    std::string known;
+    for (const auto& [name, k] : units) known += (known.empty() ? "" : ", ") + name;
+    throw std::invalid_argument(fmt::format("{} unit '{}': the RCbenchmark software writes {}", what, u, known));
+  };
+  if (l.series != "1520" && l.series != "1585" && l.series != "1580")
+    throw std::invalid_argument("--layout: RCbenchmark series 1520, 1580 or 1585");
+  const bool big = l.series != "1520";
+  const double kf = scaleOf(kThrust, l.thrust_unit, "thrust") * (l.negative_thrust ? -1.0 : 1.0);
+  const double kt = big ? scaleOf(kTorque, l.torque_unit, "torque") : 1.0;
+  const std::string tu = l.thrust_unit;
+  std::string out;
+  out += "Time (s),ESC signal (µs),Servo 1 (µs),Servo 2 (µs),Servo 3 (µs),";
+  if (big) out += fmt::format("AccX (g),AccY (g),AccZ (g),Torque ({}),", l.torque_unit);
+  out += fmt::format("Thrust ({}),Voltage (V),Current (A),Motor Electrical Speed (RPM),Motor Optical Speed (RPM),"
+                     "Electrical Power (W),",
+                     tu);
+  if (big)
+    out += fmt::format("Mechanical Power (W),Motor Efficiency (%),Propeller Mech. Efficiency ({}/W),", tu);
+  out += fmt::format("Overall Efficiency ({}/W),", tu);
+  if (big) out += "Vibration (g),";
+  out += "App message,\n";
+  const auto& t = d.col("t_s");
+  const auto& pwm = d.col("pwm_us");
+  const auto& f = d.col("force_g");
+  const auto& v = d.col("vbat_v");
+  const auto& i_a = d.col("current_a");
+  const auto& rpm = d.col("rpm");
+  const auto& torque = d.col("torque_nm");
+  for (std::size_t r = 0; r < d.rows(); ++r) {
+    const double thrust = f[r] * kf;
+    const double elec = v[r] * i_a[r];
+    const double mech = torque[r] * rpm[r] * 2 * M_PI / 60.0;
+    out += fmt::format("{:.6g},{:.6g},,,,", t[r] - t[0], pwm[r]);
+    if (big)
+      out += fmt::format("{:.4g},{:.4g},{:.4g},{:.6g},", 0.01 * std::sin(0.7 * r), 0.01 * std::cos(0.3 * r), -1.0,
+                         -torque[r] * kt);
+    out += fmt::format("{:.8g},{:.6g},{:.6g},{:.0f},0,{:.6g},", thrust, v[r], i_a[r], rpm[r], elec);
+    if (big)
+      out += fmt::format("{:.6g},{:.6g},{:.6g},", mech, elec > 1e-3 ? 100.0 * mech / elec : 0.0,
+                         mech > 1e-3 ? std::fabs(thrust) / mech : 0.0);
+    out += fmt::format("{:.6g},", elec > 1e-3 ? std::fabs(thrust) / elec : 0.0);
+    if (big) out += fmt::format("{:.4g},", 0.05 + 3e-6 * rpm[r]);
+    out += (r == 0 && l.tare_message ? "Tare done" : "");
+    out += ",\n";
+  }
+  return out;
+}
+
 #ifdef THRUSTCAL_LAB_HAVE_PLANT
 
 namespace {
@@ -64,7 +119,8 @@ struct RunSetup {
 };
 
 struct Row {
-  double t_s, motor, pwm_us, force_g, vbat_v, current_a, rpm, temp_c, pressure_hpa, dir, plate_m;
+  double t_s, motor, pwm_us, force_g, vbat_v, current_a, rpm, temp_c, pressure_hpa, dir, plate_m, torque_nm;
+  int run;
 };
 
 }  // namespace
@@ -128,13 +184,16 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
       runs.push_back(r);
     }
   }
-  const double settle_s = h == "drift" || h == "thermal" ? 2.0 : 0.5;
+  if (!(o.settle_s >= 0) || !(o.log_hz >= 0) || o.log_hz > 1.0 / 0.002)
+    throw std::invalid_argument("--settle-s must be >= 0 and --log-hz within 0..500 (the plant steps at 500 Hz)");
+  const double settle_s = o.settle_s > 0 ? o.settle_s : h == "drift" || h == "thermal" ? 2.0 : 0.5;
   const double dt = 0.002;
   const double creep_g_per_min = h == "drift" ? 1.2 : 0.0;
 
   std::vector<Row> rows;
   double clock = 0.0;
-  for (const auto& run : runs) {
+  for (std::size_t run_index = 0; run_index < runs.size(); ++run_index) {
+    const RunSetup& run = runs[run_index];
     plant::Environment env;
     env.temp_c = run.temp_c;
     env.pressure_pa = run.pressure_pa;
@@ -150,8 +209,35 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
       // sag: the pack also feeds the frame's other motors, 0..8 A that change point by point
       const double other_a = h == "sag" ? 8.0 * rng.uniform() : 0.0;
       double bus_current = 0, bus_v = 0;
-      for (double t = 0; t < settle_s - 1e-12; t += dt) {
-        const double now = clock + t;
+      // one row: the bench's reading now
+      const double plate = 0.08 + 0.42 * rng.uniform();
+      auto record = [&](double now) {
+        Row r{};
+        r.t_s = now;
+        r.motor = run.motor;
+        r.pwm_us = pulse;
+        double force = act.thrust_g();
+        if (h == "plate") {
+          const double ratio = run.params.prop.diameter_m / 2 / (4 * plate);
+          force /= 1 - ratio * ratio;
+        }
+        force += creep_g_per_min * now / 60.0;
+        r.force_g = force + (o.noise_g > 0 ? rng.normal(o.noise_g, 4.0) : 0.0);
+        r.vbat_v = h == "sag" ? ps.restingVoltage_v() : bus_v;
+        r.current_a = bus_current + other_a;
+        r.rpm = act.rpm();
+        r.temp_c = h == "thermal" ? act.windingTemp_c() : env.temp_c;
+        r.pressure_hpa = env.pressure_pa / 100.0;
+        r.dir = dir;
+        r.plate_m = plate;
+        r.torque_nm = act.torque_nm();
+        r.run = static_cast<int>(run_index);
+        rows.push_back(r);
+      };
+      const int steps = static_cast<int>(std::lround(settle_s / dt));
+      const int every = o.log_hz > 0 ? std::max(1, static_cast<int>(std::lround(1.0 / (o.log_hz * dt)))) : steps;
+      for (int k = 0; k < steps; ++k) {
+        const double now = clock + k * dt;
         if (run.temp_swing_k != 0) {
           env.temp_c = run.temp_c + run.temp_swing_k * std::sin(2 * M_PI * (now - run_start) / 23.0);
           act.setEnvironment(env);
@@ -162,28 +248,9 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
         bus_v = ps.solveBusVoltage(load);
         bus_current = act.step(dt, bus_v);
         ps.step(dt, bus_current + other_a);
+        if ((k + 1) % every == 0) record(now + dt);
       }
       clock += settle_s;
-      Row r{};
-      r.t_s = clock;
-      r.motor = run.motor;
-      r.pwm_us = pulse;
-      double force = act.thrust_g();
-      const double plate = 0.08 + 0.42 * rng.uniform();
-      if (h == "plate") {
-        const double ratio = run.params.prop.diameter_m / 2 / (4 * plate);
-        force /= 1 - ratio * ratio;
-      }
-      force += creep_g_per_min * clock / 60.0;
-      r.force_g = force + (o.noise_g > 0 ? rng.normal(o.noise_g, 4.0) : 0.0);
-      r.vbat_v = h == "sag" ? ps.restingVoltage_v() : bus_v;
-      r.current_a = bus_current + other_a;
-      r.rpm = act.rpm();
-      r.temp_c = h == "thermal" ? act.windingTemp_c() : env.temp_c;
-      r.pressure_hpa = env.pressure_pa / 100.0;
-      r.dir = dir;
-      r.plate_m = plate;
-      rows.push_back(r);
     }
   }
 
@@ -194,11 +261,7 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
     d.names.push_back(name);
     d.columns.push_back(std::move(v));
   };
-  std::vector<double> run_of_row;
-  for (std::size_t ri = 0; ri < runs.size(); ++ri)
-    for (std::size_t j = 0; j < rows.size() / runs.size(); ++j) run_of_row.push_back(static_cast<double>(ri));
-  d.names.push_back("run");
-  d.columns.push_back(run_of_row);
+  column("run", [](const Row& r) { return static_cast<double>(r.run); });
   column("t_s", [](const Row& r) { return r.t_s; });
   column("motor", [](const Row& r) { return r.motor; });
   column("pwm_us", [](const Row& r) { return r.pwm_us; });
@@ -210,18 +273,16 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
   column("dir", [](const Row& r) { return r.dir; });
   if (h == "density") column("pressure_hpa", [](const Row& r) { return r.pressure_hpa; });
   if (h == "plate") column("plate_height_m", [](const Row& r) { return r.plate_m; });
+  column("torque_nm", [](const Row& r) { return r.torque_nm; });
   // runs: one per (motor, setup)
-  int run = -1;
-  std::size_t k = 0;
-  for (std::size_t ri = 0; ri < runs.size(); ++ri) {
-    ++run;
+  for (std::size_t ri = 0; ri < runs.size(); ++ri)
     d.run_labels.push_back(fmt::format("generated run {} motor {}", ri, runs[ri].motor));
-    const std::size_t per_run = rows.size() / runs.size();
-    for (std::size_t j = 0; j < per_run; ++j, ++k) d.run.push_back(run);
-  }
+  for (const auto& r : rows) d.run.push_back(r.run);
   if (comments) {
-    comments->push_back(fmt::format("thrustcal lab generate --hidden {} --noise-g {} --seed {} (plant preset {})",
-                                    h, o.noise_g, o.seed, o.preset));
+    comments->push_back(fmt::format("thrustcal lab generate --hidden {} --noise-g {} --seed {} (plant preset {}){}",
+                                    h, o.noise_g, o.seed, o.preset,
+                                    o.log_hz > 0 ? fmt::format(", logged at {} Hz, {} s per point", o.log_hz, settle_s)
+                                                 : std::string()));
     comments->push_back("hidden effect: " + info->description);
     if (!info->right_effect.empty())
       comments->push_back(fmt::format("a model without it: {}; the effect that explains it: {}; "

@@ -27,6 +27,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kSplineDegree = 3;     // cubic B-splines
 constexpr int kInteriorKnots = 6;    // at quantiles of the drive
 constexpr double kSoftStartUs = 2.0;
+// Above this many rows the nonlinear parameters are searched on evenly spaced rows (the curve's
+// coefficients, the errors and the uncertainties always use every row).
+constexpr std::size_t kMaxFitRows = 20000;
 
 const std::vector<EffectInfo> kCatalogue = {
     {"curve",
@@ -92,7 +95,8 @@ const std::vector<EffectInfo> kCatalogue = {
     {"mul: EXPR",
      "User effect: the force is multiplied by EXPR (muParser syntax). Identifiers that are "
      "columns take the row's value; any other identifier that is not a function or constant is "
-     "a free parameter, fitted, starting at 0. Example: mul: 1 + a*(temp_c - 25).",
+     "a free parameter, fitted, starting at 0; write EXPR so that 0 means no effect (1 + a*..., "
+     "not a*...), then a ladder step adding it never fits worse. Example: mul: 1 + a*(temp_c - 25).",
      "the columns EXPR names", "the free identifiers [unit of what they multiply]"},
     {"add: EXPR",
      "User effect: EXPR grams are added to the force. Same rules as mul:. Example: "
@@ -115,7 +119,6 @@ void cumulativeBSpline(double u, const std::vector<double>& t, double* s) {
   const int p = kSplineDegree;
   const int n = static_cast<int>(t.size()) - p - 1;  // basis functions
   u = std::clamp(u, 0.0, 1.0);
-  double b[64] = {};
   // span index
   int k = p;
   while (k < n - 1 && u >= t[static_cast<std::size_t>(k + 1)]) ++k;
@@ -134,12 +137,16 @@ void cumulativeBSpline(double u, const std::vector<double>& t, double* s) {
     }
     N[j] = saved;
   }
-  for (int j = 0; j <= p; ++j) b[k - p + j] = N[j];
+  // S_j = sum over m >= j of B_m: 1 below the span's first non-zero function (the functions sum
+  // to one), the partial sums of N within the span, 0 above it.
+  const int first = k - p;
+  for (int j = 1; j <= std::min(first, n - 1); ++j) s[j - 1] = 1.0;
   double acc = 0;
-  for (int j = n - 1; j >= 1; --j) {
-    acc += b[j];
-    s[j - 1] = acc;
+  for (int m = k; m >= std::max(first, 1); --m) {
+    acc += N[m - first];
+    s[m - 1] = acc;
   }
+  for (int j = k + 1; j <= n - 1; ++j) s[j - 1] = 0.0;
 }
 
 double softPlus(double u, double s) {
@@ -299,6 +306,7 @@ struct Model::Impl {
     std::vector<std::vector<const std::vector<double>*>> user_columns;
     std::vector<const std::vector<double>*> probe_columns;
     std::vector<double> thesis_start;  // per row: motor calibration index
+    const std::vector<double>* sample_index = nullptr;  // row numbers (lag by samples on a subsample)
   };
 
   ModelSpec spec;
@@ -319,6 +327,11 @@ struct Model::Impl {
   bool fitted = false;
   Bound train_bound;
   Eigen::VectorXd y;
+  // The rows the nonlinear search runs on: all of them, or evenly spaced ones on big data.
+  std::unique_ptr<Dataset> fit_data;
+  std::vector<double> fit_index;
+  Bound fit_bound;
+  Eigen::VectorXd y_fit;
 
   Impl(const ModelSpec& s, const Dataset& d) : spec(s), train(d) { setup(); }
 
@@ -373,15 +386,13 @@ struct Model::Impl {
     for (const auto& e : spec.effects) {
       if (e == "deadband") {
         // start: the highest PWM below which the force stays under 3 % of the maximum
+        double first_up = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < pwm.size(); ++i)
+          if (f[i] > 0.03 * fmax) first_up = std::min(first_up, pwm[i]);
         double start = pmin;
-        std::vector<std::pair<double, double>> pf;
-        for (std::size_t i = 0; i < pwm.size(); ++i) pf.emplace_back(pwm[i], f[i]);
-        std::sort(pf.begin(), pf.end());
-        for (const auto& p : pf) {
-          if (p.second > 0.03 * fmax) break;
-          start = p.first;
-        }
-        i_start = addParam("pwm_start_us", "us", e, start, 0.01 * span, pmin - 0.05 * span, pmax, kNaN);
+        for (std::size_t i = 0; i < pwm.size(); ++i)
+          if (pwm[i] < first_up || (pwm[i] == first_up && f[i] <= 0.03 * fmax)) start = std::max(start, pwm[i]);
+        i_start = addParam("pwm_start_us", "us", e, start, 0.01 * span, pmin - 0.05 * span, pmax, pmin);
       } else if (e == "voltage") {
         require(e, "vbat_v");
         i_gamma = addParam("gamma", "1", e, 1.0, 0.1, 0.0, 5.0);
@@ -393,11 +404,11 @@ struct Model::Impl {
           i_sagrel = addParam("sag_full", "1", e, 0.02, 0.02, 0.0, 0.9);
       } else if (e == "lag") {
         if (usable(train, "t_s")) {
-          i_tau = addParam("tau_s", "s", e, 0.05, 0.02, 1e-4, 100.0, kNaN);
+          i_tau = addParam("tau_s", "s", e, 0.05, 0.02, 1e-4, 100.0, 1e-4);
         } else {
           // no time column: the rows are taken as equally spaced samples in logging order
           lag_in_samples = true;
-          i_tau = addParam("tau_samples", "samples", e, 1.0, 0.5, 1e-3, 1000.0, kNaN);
+          i_tau = addParam("tau_samples", "samples", e, 1.0, 0.5, 1e-3, 1000.0, 1e-3);
         }
       } else if (e == "motor") {
         require(e, "motor");
@@ -444,23 +455,47 @@ struct Model::Impl {
     if (thesis) buildThesis();
     train_bound = bind(train);
     y = Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
-    // Curve domain: the largest drive at the starting parameters, with room to move.
+    if (train.rows() > kMaxFitRows) {
+      const std::size_t stride = (train.rows() + kMaxFitRows - 1) / kMaxFitRows;
+      std::vector<bool> keep(train.rows(), false);
+      for (std::size_t i = 0; i < train.rows(); i += stride) {
+        keep[i] = true;
+        fit_index.push_back(static_cast<double>(i));
+      }
+      fit_data = std::make_unique<Dataset>(train.subset(keep));
+      fit_bound = bind(*fit_data);
+      fit_bound.sample_index = &fit_index;
+      const auto& fs = fit_data->col("force_g");
+      y_fit = Eigen::Map<const Eigen::VectorXd>(fs.data(), static_cast<Eigen::Index>(fs.size()));
+    } else {
+      fit_bound = train_bound;
+      y_fit = y;
+    }
+    // Curve domain and knots: from the data alone, never from the effects, so a model with an
+    // effect at its neutral value predicts exactly what the model without it does (nested
+    // fits). The drive stays below ~1.05 (start >= pmin - 5 % span, V <= V_ref).
     if (!thesis) {
-      const Eigen::VectorXd th0 = initialTheta();
-      xtop = 1.0;
-      const std::vector<double> x = drive(train_bound, th0);
-      double m = 0;
-      for (double v : x) m = std::max(m, v);
-      // the drive never exceeds ~1.05 (start >= pmin - 5 % span, V <= V_ref); keep the
-      // domain fixed while the parameters move
-      xtop = std::max(1.1, 1.05 * m);
-      // knots at quantiles of the drive where the motor turns
+      xtop = 1.1;
+      // knots at quantiles of the PWMs where the motor turns (force above 3 % of the largest),
+      // and one where it starts turning, so a curve without `deadband` can bend there too
       std::vector<double> u;
-      for (double v : x)
-        if (v > 1e-9) u.push_back(v / xtop);
+      double turn_on = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < pwm.size(); ++i)
+        if (f[i] > 0.03 * fmax) {
+          u.push_back(softPlus(pwm[i] - pmin, kSoftStartUs) / span / xtop);
+          turn_on = std::min(turn_on, u.back());
+        }
+      if (u.size() < 2) {
+        u.clear();
+        for (double p : pwm) u.push_back(softPlus(p - pmin, kSoftStartUs) / span / xtop);
+      }
       std::sort(u.begin(), u.end());
       knots.assign(kSplineDegree + 1, 0.0);
       double last = 0;
+      if (std::isfinite(turn_on) && turn_on > 0.02 && turn_on < 0.9) {
+        knots.push_back(turn_on);
+        last = turn_on;
+      }
       for (int k = 1; k <= kInteriorKnots && !u.empty(); ++k) {
         const double q = u[std::min(u.size() - 1, u.size() * static_cast<std::size_t>(k) / (kInteriorKnots + 1))];
         if (q > last + 0.02 && q < 0.98) {
@@ -743,8 +778,7 @@ struct Model::Impl {
     std::vector<double> x(b.n);
     for (std::size_t i = 0; i < b.n; ++i) {
       const double pw = pwmEffective(b, th, i);
-      double d = i_start >= 0 ? softPlus(pw - p(th, i_start), kSoftStartUs) / span
-                              : std::max(0.0, pw - pmin) / span;
+      double d = softPlus(pw - (i_start >= 0 ? p(th, i_start) : pmin), kSoftStartUs) / span;
       if (i_gamma >= 0) {
         const double v = voltageAt(b, th, i, d);
         d *= std::pow(v / vref, p(th, i_gamma));
@@ -758,6 +792,8 @@ struct Model::Impl {
 
   // First-order low-pass per run in row order (the order the samples were logged).
   void lowPass(const Bound& b, double tau, std::vector<double>& x) const {
+    // at its lower bound the lag is off: exactly the model without it
+    if (tau <= defs[static_cast<std::size_t>(i_tau)].lo) return;
     std::vector<long> last_row;     // per run: last row seen (-1: none)
     std::vector<double> last_x;
     const bool by_time = !lag_in_samples && b.t;
@@ -768,7 +804,10 @@ struct Model::Impl {
         last_x.resize(r + 1, 0.0);
       }
       if (last_row[r] >= 0) {
-        const double dt = by_time ? (*b.t)[i] - (*b.t)[static_cast<std::size_t>(last_row[r])] : 1.0;
+        const auto prev = static_cast<std::size_t>(last_row[r]);
+        const double dt = by_time          ? (*b.t)[i] - (*b.t)[prev]
+                          : b.sample_index ? (*b.sample_index)[i] - (*b.sample_index)[prev]
+                                           : 1.0;
         if (dt > 0 && std::isfinite(dt)) x[i] = last_x[r] + (1 - std::exp(-dt / tau)) * (x[i] - last_x[r]);
       }
       last_row[r] = static_cast<long>(i);
@@ -830,18 +869,14 @@ struct Model::Impl {
     }
   }
 
-  // Design matrix for the linear parameters: column 0 the offset, then mul * S_j(x).
-  Eigen::MatrixXd basis(const Bound& b, const std::vector<double>& x, const Eigen::VectorXd& mul) const {
-    const int nb = static_cast<int>(knots.size()) - kSplineDegree - 1;  // basis incl. the constant
-    Eigen::MatrixXd B(static_cast<Eigen::Index>(b.n), nb);
+  int basisSize() const { return static_cast<int>(knots.size()) - kSplineDegree - 1; }  // incl. the constant
+
+  // Row i of the design matrix of the linear parameters: 1 (the offset), then mul * S_j(x).
+  void basisRow(double x, double mul, double* row) const {
     double s[64];
-    for (std::size_t i = 0; i < b.n; ++i) {
-      const auto r = static_cast<Eigen::Index>(i);
-      cumulativeBSpline(x[i] / xtop, knots, s);
-      B(r, 0) = 1.0;
-      for (int j = 0; j < nb - 1; ++j) B(r, j + 1) = mul[r] * s[j];
-    }
-    return B;
+    cumulativeBSpline(x / xtop, knots, s);
+    row[0] = 1.0;
+    for (int j = 0; j < basisSize() - 1; ++j) row[j + 1] = mul * s[j];
   }
 
   Eigen::VectorXd thesisBase(const Bound& b, const Eigen::VectorXd& th) const {
@@ -857,6 +892,53 @@ struct Model::Impl {
     return out;
   }
 
+  using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+  // The normal equations of the curve's coefficients, G = B'B, h = B'r, rr = r'r with
+  // r = target - add, summed over blocks of rows (vectorised rank updates; the n x k matrix B is
+  // not kept unless `keep` asks for it, row-major). False when a row is not finite.
+  bool normalEquations(const Bound& b, const std::vector<double>& x, const Eigen::VectorXd& mul,
+                       const Eigen::VectorXd& add, const Eigen::VectorXd& target, Eigen::MatrixXd& G,
+                       Eigen::VectorXd& h, double& rr, std::vector<double>* keep) const {
+    const int nb = basisSize();
+    constexpr Eigen::Index kBlock = 512;
+    G = Eigen::MatrixXd::Zero(nb, nb);
+    h = Eigen::VectorXd::Zero(nb);
+    rr = 0;
+    RowMatrix blk(kBlock, nb);
+    Eigen::VectorXd rblk(kBlock);
+    if (keep) keep->resize(b.n * static_cast<std::size_t>(nb));
+    Eigen::Index k = 0;
+    auto flush = [&] {
+      if (k == 0) return;
+      G.selfadjointView<Eigen::Lower>().rankUpdate(blk.topRows(k).transpose());
+      h.noalias() += blk.topRows(k).transpose() * rblk.head(k);
+      rr += rblk.head(k).squaredNorm();
+      k = 0;
+    };
+    for (std::size_t i = 0; i < b.n; ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      const double rhs = target[r] - add[r];
+      double* row = blk.row(k).data();
+      basisRow(x[i], mul[r], row);
+      bool finite = std::isfinite(rhs);
+      for (int a = 0; a < nb && finite; ++a) finite = std::isfinite(row[a]);
+      if (!finite) return false;
+      if (keep) std::copy(row, row + nb, keep->data() + i * static_cast<std::size_t>(nb));
+      rblk[k++] = rhs;
+      if (k == kBlock) flush();
+    }
+    flush();
+    G = G.selfadjointView<Eigen::Lower>();
+    return true;
+  }
+
+  Eigen::VectorXd solveCurve(const Eigen::MatrixXd& G, const Eigen::VectorXd& h) const {
+    std::vector<bool> nonneg(static_cast<std::size_t>(G.cols()), true);
+    nonneg[0] = false;  // the offset is free
+    return nnlsGram(G, h, nonneg);
+  }
+
   // Prediction with the linear coefficients solved (when `solve`) or taken from `c`.
   Eigen::VectorXd predictWith(const Bound& b, const Eigen::VectorXd& th, Eigen::VectorXd& c, bool solve,
                               const Eigen::VectorXd* target) const {
@@ -864,37 +946,92 @@ struct Model::Impl {
     const std::vector<double> x = thesis ? thesisDrive(b) : drive(b, th);
     factors(b, th, x, mul, add);
     if (thesis) return mul.cwiseProduct(thesisBase(b, th)) + add;
-    const Eigen::MatrixXd B = basis(b, x, mul);
+    const int nb = basisSize();
+    // the rows of the design matrix are kept between the two passes when they are few
+    thread_local std::vector<double> cache;
+    const bool cached = solve && b.n * static_cast<std::size_t>(nb) <= (1u << 20);
     if (solve) {
-      std::vector<bool> nonneg(static_cast<std::size_t>(B.cols()), true);
-      nonneg[0] = false;
-      const Eigen::VectorXd rhs = *target - add;
-      if (!rhs.allFinite() || !B.allFinite()) {
-        c = Eigen::VectorXd::Zero(B.cols());
+      Eigen::MatrixXd G;
+      Eigen::VectorXd h;
+      double rr;
+      if (!normalEquations(b, x, mul, add, *target, G, h, rr, cached ? &cache : nullptr)) {
+        c = Eigen::VectorXd::Zero(nb);
         return Eigen::VectorXd::Constant(static_cast<Eigen::Index>(b.n), kNaN);
       }
-      c = nnls(B, rhs, nonneg);
+      c = solveCurve(G, h);
     }
-    return B * c + add;
+    if (cached) {
+      const Eigen::Map<const RowMatrix> B(cache.data(), static_cast<Eigen::Index>(b.n), nb);
+      return B * c + add;
+    }
+    Eigen::VectorXd out(static_cast<Eigen::Index>(b.n));
+    double row[64];
+    for (std::size_t i = 0; i < b.n; ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      basisRow(x[i], mul[r], row);
+      double v = add[r];
+      for (int a = 0; a < nb; ++a) v += row[a] * c[a];
+      out[r] = v;
+    }
+    return out;
   }
 
+  double rssAt(const Bound& b, const Eigen::VectorXd& target, const Eigen::VectorXd& th,
+               Eigen::VectorXd* coef_out = nullptr) const {
+    Eigen::VectorXd c;
+    double rss;
+    if (!thesis && b.n > kMaxFitRows) {
+      // Many rows: RSS = r'r - 2 c'h + c'Gc from the normal equations, one pass over the rows.
+      Eigen::VectorXd mul, add;
+      const std::vector<double> x = drive(b, th);
+      factors(b, th, x, mul, add);
+      Eigen::MatrixXd G;
+      Eigen::VectorXd h;
+      double rr;
+      if (normalEquations(b, x, mul, add, target, G, h, rr, nullptr)) {
+        c = solveCurve(G, h);
+        rss = std::max(0.0, rr - 2.0 * c.dot(h) + c.dot(G * c));
+      } else {
+        c = Eigen::VectorXd::Zero(basisSize());
+        rss = kNaN;
+      }
+    } else {
+      rss = (target - predictWith(b, th, c, true, &target)).squaredNorm();
+    }
+    if (coef_out) *coef_out = c;
+    return std::isfinite(rss) ? rss : std::numeric_limits<double>::infinity();
+  }
+
+  // Levenberg-Marquardt over the nonlinear parameters on the fit rows, each step solving the
+  // curve linearly (variable projection).
   struct Functor : Eigen::DenseFunctor<double> {
     const Impl* m;
     Eigen::VectorXd th0, scale;
-    Functor(const Impl* model, const Eigen::VectorXd& init, const Eigen::VectorXd& sc)
-        : Eigen::DenseFunctor<double>(static_cast<int>(init.size()), static_cast<int>(model->y.size())),
-          m(model), th0(init), scale(sc) {}
-    Eigen::VectorXd theta(const Eigen::VectorXd& z) const { return th0 + scale.cwiseProduct(z); }
+    std::vector<Eigen::Index> free;  // the parameters LM moves (the others stay at th0)
+    Functor(const Impl* model, const Eigen::VectorXd& init, const Eigen::VectorXd& sc,
+            std::vector<Eigen::Index> moving)
+        : Eigen::DenseFunctor<double>(static_cast<int>(moving.size()), static_cast<int>(model->y_fit.size())),
+          m(model), th0(init), scale(sc), free(std::move(moving)) {}
+    // the residual at the last point evaluated: LM asks for the Jacobian where it just was
+    mutable Eigen::VectorXd last_z, last_f;
+    Eigen::VectorXd theta(const Eigen::VectorXd& z) const {
+      Eigen::VectorXd th = th0;
+      for (std::size_t k = 0; k < free.size(); ++k) th[free[k]] += scale[free[k]] * z[static_cast<Eigen::Index>(k)];
+      return th;
+    }
     int operator()(const Eigen::VectorXd& z, Eigen::VectorXd& fvec) const {
       Eigen::VectorXd c;
-      fvec = m->y - m->predictWith(m->train_bound, theta(z), c, true, &m->y);
+      fvec = m->y_fit - m->predictWith(m->fit_bound, theta(z), c, true, &m->y_fit);
       for (Eigen::Index i = 0; i < fvec.size(); ++i)
         if (!std::isfinite(fvec[i])) fvec[i] = 1e6;
+      last_z = z;
+      last_f = fvec;
       return 0;
     }
     int df(const Eigen::VectorXd& z, Eigen::MatrixXd& jac) const {
       Eigen::VectorXd f0, f1;
-      (*this)(z, f0);
+      if (last_z.size() == z.size() && last_z == z) f0 = last_f;
+      else (*this)(z, f0);
       jac.resize(f0.size(), z.size());
       for (Eigen::Index j = 0; j < z.size(); ++j) {
         Eigen::VectorXd zp = z;
@@ -907,97 +1044,172 @@ struct Model::Impl {
     }
   };
 
-  FitResult fit(const std::vector<Param>* warm, bool warm_only) {
+  // `quick`: looser tolerances for the ranking's refits (only their error matters there).
+  Eigen::VectorXd runLm(const Eigen::VectorXd& start, FitResult& r, bool quick = false,
+                        const std::vector<bool>* fixed = nullptr) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    Eigen::VectorXd sc(np);
+    std::vector<Eigen::Index> moving;
+    for (Eigen::Index i = 0; i < np; ++i) {
+      sc[i] = defs[static_cast<std::size_t>(i)].scale;
+      if (!fixed || !(*fixed)[static_cast<std::size_t>(i)]) moving.push_back(i);
+    }
+    if (moving.empty()) return start;
+    const int nm = static_cast<int>(moving.size());
+    Functor fn(this, start, sc, moving);
+    Eigen::LevenbergMarquardt<Functor> lm(fn);
+    lm.setMaxfev(quick ? 20 + 10 * nm : 60 + 20 * nm);
+    lm.setXtol(quick ? 1e-6 : 1e-8);
+    lm.setFtol(quick ? 1e-7 : 1e-9);
+    Eigen::VectorXd z = Eigen::VectorXd::Zero(nm);
+    const auto status = lm.minimize(z);
+    if (status == Eigen::LevenbergMarquardtSpace::ImproperInputParameters)
+      r.warnings.push_back("the fit could not start (improper input)");
+    Eigen::VectorXd th = fn.theta(z);
+    for (Eigen::Index i = 0; i < np; ++i) th[i] = p(th, static_cast<int>(i));
+    return th;
+  }
+
+  // The smaller model's curve coefficients (offset_g, c1..), when it has all of them.
+  bool warmCurve(const std::vector<Param>& warm, Eigen::VectorXd& c) const {
+    c = Eigen::VectorXd::Constant(basisSize(), kNaN);
+    for (const auto& w : warm) {
+      if (w.effect != "curve") continue;
+      const int j = w.name == "offset_g" ? 0 : (w.name.size() > 1 && w.name[0] == 'c') ? std::atoi(w.name.c_str() + 1) : -1;
+      if (j >= 0 && j < c.size()) c[j] = w.value;
+    }
+    return c.allFinite();
+  }
+
+  // The starting point from a smaller model's fit: its parameters, and each new parameter at
+  // the value that switches its effect off, so the start predicts exactly what the smaller
+  // model did.
+  // `neutral` false: the new parameters at their starting guesses instead (the effect switched
+  // on), where LM finds a gradient (a lag at its lower bound has none).
+  Eigen::VectorXd warmStart(const std::vector<Param>& warm, bool neutral = true) const {
+    Eigen::VectorXd start = initialTheta();
+    for (std::size_t i = 0; i < defs.size(); ++i) {
+      const auto& d = defs[i];
+      bool found = false;
+      for (const auto& w : warm)
+        if (w.name == d.name && w.effect == d.effect && std::isfinite(w.value)) {
+          start[static_cast<Eigen::Index>(i)] = w.value;
+          found = true;
+        }
+      if (!found && neutral && std::isfinite(d.neutral)) start[static_cast<Eigen::Index>(i)] = d.neutral;
+    }
+    return start;
+  }
+
+  // `warm_rss`: the smaller model's RSS on these rows (its curve coefficients are in `warm`),
+  // so its optimum need not be evaluated again; NaN: evaluate it.
+  FitResult fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties, double warm_rss) {
     FitResult r;
     r.model = spec.text();
     const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    const double inf = std::numeric_limits<double>::infinity();
     theta = initialTheta();
-    if (i_start >= 0) {
-      // The start threshold has local minima (the curve can bend to mimic a later start): scan
-      // from the lowest PWM to the first guess with the linear solve alone and start LM at the best.
-      const double hi = theta[i_start];
-      double best = std::numeric_limits<double>::infinity(), best_start = hi;
-      for (int k = 0; k <= 16; ++k) {
-        Eigen::VectorXd th = theta;
-        th[i_start] = pmin + (hi - pmin) * k / 16.0;
-        Eigen::VectorXd c;
-        const double rss = (y - predictWith(train_bound, th, c, true, &y)).squaredNorm();
-        if (rss < best) { best = rss; best_start = th[i_start]; }
-      }
-      theta[i_start] = best_start;
-    }
+    double best_rss = inf;
     if (np > 0) {
-      Eigen::VectorXd sc(np);
-      for (Eigen::Index i = 0; i < np; ++i) sc[i] = defs[static_cast<std::size_t>(i)].scale;
-      auto runLm = [&](const Eigen::VectorXd& start, double& rss) {
-        Functor fn(this, start, sc);
-        Eigen::LevenbergMarquardt<Functor> lm(fn);
-        lm.setMaxfev(60 + 20 * static_cast<int>(np));
-        lm.setXtol(1e-8);
-        lm.setFtol(1e-9);
-        Eigen::VectorXd z = Eigen::VectorXd::Zero(np);
-        const auto status = lm.minimize(z);
-        if (status == Eigen::LevenbergMarquardtSpace::ImproperInputParameters)
-          r.warnings.push_back("the fit could not start (improper input)");
-        Eigen::VectorXd th = fn.theta(z);
-        for (Eigen::Index i = 0; i < np; ++i) th[i] = p(th, static_cast<int>(i));
-        Eigen::VectorXd c;
-        rss = (y - predictWith(train_bound, th, c, true, &y)).squaredNorm();
-        if (!std::isfinite(rss)) rss = std::numeric_limits<double>::infinity();
+      const bool have_warm = warm && !warm->empty();
+      std::vector<Eigen::VectorXd> searched;  // LM results
+      // The start threshold has local minima (the curve can bend to mimic a later start): when
+      // it is new, scan it from the lowest PWM to the first guess with the linear solve alone
+      // and start LM at the best.
+      auto scanStart = [&](Eigen::VectorXd th) {
+        const double hi = initialTheta()[i_start];
+        double best = inf, best_start = hi;
+        for (int k = 0; k <= 16; ++k) {
+          th[i_start] = pmin + (hi - pmin) * k / 16.0;
+          const double rss = rssAt(fit_bound, y_fit, th);
+          if (rss < best) best = rss, best_start = th[i_start];
+        }
+        th[i_start] = best_start;
         return th;
       };
-      double rss_cold = std::numeric_limits<double>::infinity();
-      Eigen::VectorXd best = theta;
-      if (!(warm_only && warm && !warm->empty())) best = runLm(theta, rss_cold);
-      if (warm && !warm->empty()) {
-        // Warm start from a smaller model's fit, the new parameters switched off: a model with
-        // an added effect then never fits worse than the one without it.
-        Eigen::VectorXd start = theta;
-        bool any = false;
-        for (Eigen::Index i = 0; i < np; ++i) {
-          const auto& d = defs[static_cast<std::size_t>(i)];
-          bool found = false;
-          for (const auto& w : *warm)
-            if (w.name == d.name && w.effect == d.effect && std::isfinite(w.value)) {
-              start[i] = w.value;
-              found = any = true;
-            }
-          if (!found && std::isfinite(d.neutral)) start[i] = d.neutral;
+      bool cold = !have_warm;
+      Eigen::VectorXd neutral;
+      if (have_warm) {
+        // Warm start from a smaller model's optimum: with the new effects switched off it is
+        // itself a candidate, so a model with an added effect never fits worse than the model
+        // without it; LM starts from it with the new effects switched on.
+        neutral = warmStart(*warm);
+        Eigen::VectorXd start = warmStart(*warm, /*neutral=*/false);
+        bool start_is_new = i_start >= 0;
+        for (const auto& w : *warm) start_is_new = start_is_new && w.name != "pwm_start_us";
+        if (start_is_new) start = scanStart(start);
+        // A generic probe asks whether anything is left in a variable: the model's own
+        // parameters stay where they are, only the probe's move (cheap, and it cannot borrow
+        // from the effects already fitted).
+        std::vector<bool> fixed;
+        if (warm_only && !probes.empty()) {
+          fixed.assign(defs.size(), false);
+          for (std::size_t i = 0; i < defs.size(); ++i) fixed[i] = defs[i].effect != "probe";
         }
-        if (any || start != theta || warm_only) {
-          double rss_warm = 0;
-          const Eigen::VectorXd th = runLm(start, rss_warm);
-          if (rss_warm < rss_cold) best = th;
+        searched.push_back(runLm(start, r, warm_only, fixed.empty() ? nullptr : &fixed));
+        // and from a cold start too (multi-start): the start threshold and the voltage exponent
+        // have local minima the continuation can end in
+        cold = !warm_only;
+      }
+      if (cold) searched.push_back(runLm(i_start >= 0 ? scanStart(initialTheta()) : initialTheta(), r));
+      // the best search result on the fit rows, then on every row against the smaller model
+      double best_fit_rows = inf;
+      theta = searched.front();
+      for (const auto& th : searched) {
+        Eigen::VectorXd c;
+        const double rss = rssAt(fit_bound, y_fit, th, &c);
+        if (rss < best_fit_rows) {
+          best_fit_rows = rss;
+          theta = th;
+          coef = c;
         }
       }
-      theta = best;
+      best_rss = fit_data ? rssAt(train_bound, y, theta, &coef) : best_fit_rows;
+      if (have_warm) {
+        Eigen::VectorXd c;
+        double rss = inf;
+        if (std::isfinite(warm_rss) && !thesis && warmCurve(*warm, c)) rss = warm_rss;
+        else rss = rssAt(train_bound, y, neutral, &c);
+        if (rss < best_rss || !std::isfinite(best_rss)) {
+          best_rss = rss;
+          theta = neutral;
+          coef = c;
+        }
+      }
+    } else {
+      best_rss = rssAt(train_bound, y, theta, &coef);
     }
-    const Eigen::VectorXd pred = predictWith(train_bound, theta, coef, true, &y);
     fitted = true;
+    if (!uncertainties && fit_data && !thesis) {
+      // A quick fit on many rows (continuation, ranking): the parameters and the error, not
+      // every row's prediction.
+      r.n = static_cast<std::size_t>(y.size());
+      r.k = static_cast<int>(coef.size() + np);
+      r.rss = best_rss;
+      const double n = static_cast<double>(r.n);
+      r.rmse_g = std::sqrt(r.rss / n);
+      r.max_g = r.max_pct = kNaN;
+      r.rmse_pct = 100 * r.rmse_g / std::max(y.cwiseAbs().maxCoeff(), 1e-9);
+      const double ll = n * std::log(std::max(r.rss / n, 1e-300));
+      r.aic = ll + 2.0 * r.k;
+      r.bic = ll + std::log(n) * r.k;
+      for (Eigen::Index j = 0; j < coef.size(); ++j)
+        r.params.push_back({j == 0 ? "offset_g" : fmt::format("c{}", j), "g", "curve", coef[j], kNaN});
+      for (Eigen::Index j = 0; j < np; ++j) {
+        const auto& d = defs[static_cast<std::size_t>(j)];
+        r.params.push_back({d.name, d.unit, d.effect, theta[j], kNaN});
+      }
+      return r;
+    }
+    Eigen::VectorXd pred_c = coef;
+    const Eigen::VectorXd pred = predictWith(train_bound, theta, pred_c, thesis, &y);
 
-    // Uncertainties: J = d pred / d (linear, nonlinear) at the optimum.
+    r.n = static_cast<std::size_t>(y.size());
     const Eigen::Index nl = thesis ? 0 : coef.size();
     std::vector<Eigen::Index> active;
     for (Eigen::Index j = 0; j < nl; ++j)
       if (j == 0 || coef[j] > 0) active.push_back(j);
     const Eigen::Index ncol = static_cast<Eigen::Index>(active.size()) + np;
-    Eigen::MatrixXd J(y.size(), ncol);
-    if (nl > 0) {
-      Eigen::VectorXd mul, add;
-      const std::vector<double> x = drive(train_bound, theta);
-      factors(train_bound, theta, x, mul, add);
-      const Eigen::MatrixXd B = basis(train_bound, x, mul);
-      for (std::size_t k = 0; k < active.size(); ++k) J.col(static_cast<Eigen::Index>(k)) = B.col(active[k]);
-    }
-    for (Eigen::Index j = 0; j < np; ++j) {
-      Eigen::VectorXd tp = theta;
-      const double h = 1e-3 * defs[static_cast<std::size_t>(j)].scale;
-      tp[j] += h;
-      Eigen::VectorXd c = coef;
-      const Eigen::VectorXd p1 = predictWith(train_bound, tp, c, false, nullptr);
-      J.col(static_cast<Eigen::Index>(active.size()) + j) = (p1 - pred) / h;
-    }
-    r.n = static_cast<std::size_t>(y.size());
     r.k = static_cast<int>(nl + np) + (thesis ? thesis_k : 0);
     const Eigen::VectorXd res = y - pred;
     r.rss = res.squaredNorm();
@@ -1027,17 +1239,48 @@ struct Model::Impl {
                                          "the model saturates there, as the firmware does", saturated, top));
     }
 
-    const double dof = std::max(n - static_cast<double>(ncol), 1.0);
-    const double s2 = r.rss / dof;
+    // Uncertainties: J = d pred / d (linear, nonlinear) at the optimum, J^T J summed row by row.
     Eigen::VectorXd sig = Eigen::VectorXd::Constant(ncol, kNaN);
-    if (ncol > 0 && J.allFinite()) {
-      const Eigen::MatrixXd JtJ = J.transpose() * J;
-      Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(JtJ);
-      const Eigen::MatrixXd cov = cod.pseudoInverse() * s2;
-      for (Eigen::Index j = 0; j < ncol; ++j) sig[j] = std::sqrt(std::max(cov(j, j), 0.0));
-      if (cod.rank() < ncol)
-        r.warnings.push_back(fmt::format("{} parameter combination(s) are not determined by the data "
-                                         "(their uncertainties are not meaningful)", ncol - cod.rank()));
+    if (uncertainties && ncol > 0 && res.allFinite()) {
+      std::vector<Eigen::VectorXd> dcol(static_cast<std::size_t>(np));
+      for (Eigen::Index j = 0; j < np; ++j) {
+        Eigen::VectorXd tp = theta;
+        const double h = 1e-3 * defs[static_cast<std::size_t>(j)].scale;
+        tp[j] += h;
+        Eigen::VectorXd c = coef;
+        dcol[static_cast<std::size_t>(j)] = (predictWith(train_bound, tp, c, false, nullptr) - pred) / h;
+      }
+      Eigen::VectorXd mul, add;
+      std::vector<double> x;
+      if (nl > 0) {
+        x = drive(train_bound, theta);
+        factors(train_bound, theta, x, mul, add);
+      }
+      Eigen::MatrixXd JtJ = Eigen::MatrixXd::Zero(ncol, ncol);
+      Eigen::VectorXd jrow(ncol);
+      double row[64];
+      bool finite = true;
+      for (std::size_t i = 0; i < r.n && finite; ++i) {
+        const auto ri = static_cast<Eigen::Index>(i);
+        if (nl > 0) basisRow(x[i], mul[ri], row);
+        for (std::size_t k = 0; k < active.size(); ++k) jrow[static_cast<Eigen::Index>(k)] = row[active[k]];
+        for (Eigen::Index j = 0; j < np; ++j)
+          jrow[static_cast<Eigen::Index>(active.size()) + j] = dcol[static_cast<std::size_t>(j)][ri];
+        finite = jrow.allFinite();
+        for (Eigen::Index a = 0; a < ncol; ++a)
+          for (Eigen::Index b = 0; b <= a; ++b) JtJ(a, b) += jrow[a] * jrow[b];
+      }
+      if (finite) {
+        JtJ = JtJ.selfadjointView<Eigen::Lower>();
+        const double dof = std::max(n - static_cast<double>(ncol), 1.0);
+        const double s2 = r.rss / dof;
+        Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(JtJ);
+        const Eigen::MatrixXd cov = cod.pseudoInverse() * s2;
+        for (Eigen::Index j = 0; j < ncol; ++j) sig[j] = std::sqrt(std::max(cov(j, j), 0.0));
+        if (cod.rank() < ncol)
+          r.warnings.push_back(fmt::format("{} parameter combination(s) are not determined by the data "
+                                           "(their uncertainties are not meaningful)", ncol - cod.rank()));
+      }
     }
     for (Eigen::Index j = 0; j < nl; ++j) {
       Param pr;
@@ -1045,7 +1288,7 @@ struct Model::Impl {
       pr.unit = "g";
       pr.effect = "curve";
       pr.value = coef[j];
-      pr.sigma = 0;
+      pr.sigma = uncertainties ? 0.0 : kNaN;
       for (std::size_t k = 0; k < active.size(); ++k)
         if (active[k] == j) pr.sigma = sig[static_cast<Eigen::Index>(k)];
       r.params.push_back(pr);
@@ -1058,9 +1301,13 @@ struct Model::Impl {
       pr.effect = d.effect;
       pr.value = theta[j];
       pr.sigma = sig[static_cast<Eigen::Index>(active.size()) + j];
+      const double tol = 1e-6 * std::fabs(d.scale);
+      if (theta[j] <= d.lo + tol || theta[j] >= d.hi - tol) {
+        pr.at_bound = true;
+        pr.bound = theta[j] <= d.lo + tol ? d.lo : d.hi;
+        r.warnings.push_back(fmt::format("{} stopped at its bound {:.6g}", d.name, pr.bound));
+      }
       r.params.push_back(pr);
-      if (theta[j] <= d.lo + 1e-12 || theta[j] >= d.hi - 1e-12)
-        r.warnings.push_back(fmt::format("{} stopped at its bound {}", d.name, theta[j]));
     }
     return r;
   }
@@ -1080,8 +1327,7 @@ struct Model::Impl {
     if (!b.vbat) return v;
     for (std::size_t i = 0; i < b.n; ++i) {
       const double pw = (*b.pwm)[i];
-      const double duty = i_start >= 0 ? softPlus(pw - p(theta, i_start), kSoftStartUs) / span
-                                       : std::max(0.0, pw - pmin) / span;
+      const double duty = softPlus(pw - (i_start >= 0 ? p(theta, i_start) : pmin), kSoftStartUs) / span;
       v[i] = voltageAt(b, theta, i, duty);
     }
     return v;
@@ -1095,15 +1341,50 @@ struct Model::Impl {
 
 Model::Model(const ModelSpec& spec, const Dataset& train) : impl_(std::make_unique<Impl>(spec, train)) {}
 Model::~Model() = default;
-FitResult Model::fit(const std::vector<Param>* warm, bool warm_only) { return impl_->fit(warm, warm_only); }
+const ModelSpec& Model::spec() const { return impl_->spec; }
+namespace {
+// The model one effect smaller (the last user effect, else the last catalogue effect after the
+// base): where a direct fit continues from. Empty when there is none.
+ModelSpec smallerSpec(const ModelSpec& spec) {
+  ModelSpec s = spec;
+  if (!s.probes.empty()) s.probes.pop_back();
+  else if (!s.user.empty()) s.user.pop_back();
+  else if (s.effects.size() > 1) s.effects.pop_back();
+  else return ModelSpec();
+  return s;
+}
+}  // namespace
+
+FitResult Model::fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties, double warm_rss) {
+  if (!warm) {
+    // Continuation: fit the model one effect smaller (recursively, down to the base) and
+    // start from its optimum as well as cold. A direct fit then equals the ladder that adds
+    // the same effects one by one in the same order, and it never stops worse than the
+    // smaller model.
+    const ModelSpec smaller = smallerSpec(impl_->spec);
+    if (!smaller.effects.empty() || !smaller.user.empty()) {
+      std::unique_ptr<Model> m;
+      try {
+        m = std::make_unique<Model>(smaller, impl_->train);
+      } catch (const std::invalid_argument&) {
+        m.reset();  // the smaller model is not a model on its own (sag without voltage, ...)
+      }
+      if (m) {
+        const FitResult prev = m->fit(nullptr, false, false);
+        return impl_->fit(&prev.params, false, uncertainties, prev.rss);
+      }
+    }
+  }
+  return impl_->fit(warm, warm_only, uncertainties, warm_rss);
+}
 std::vector<double> Model::predict(const Dataset& data) const { return impl_->predict(data); }
 std::vector<double> Model::motorVoltage(const Dataset& data) const { return impl_->motorVolts(data); }
 double Model::startUs() const { return impl_->startUs(); }
 
 FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm,
-                   bool warm_only) {
+                   bool warm_only, bool uncertainties, double warm_rss) {
   Model m(spec, data);
-  return m.fit(warm, warm_only);
+  return m.fit(warm, warm_only, uncertainties, warm_rss);
 }
 
 }  // namespace lab

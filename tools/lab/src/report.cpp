@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
+#include <sstream>
 #include <stdexcept>
 
 namespace lab {
@@ -21,6 +23,14 @@ void writeText(const fs::path& p, const std::string& text) {
   out << text;
 }
 
+std::string readBinary(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// gnuplot strings in single quotes: the terminals run with `noenhanced`, so only quotes need care
 std::string quote(const std::string& s) {
   std::string out = "'";
   for (char c : s) {
@@ -29,17 +39,190 @@ std::string quote(const std::string& s) {
   return out + "'";
 }
 
-// Labels: the terminals run with `noenhanced`, so only quotes need care.
-std::string label(const std::string& s) { return quote(s); }
+std::string stepName(const LadderStep& s, std::size_t i) { return i == 0 ? s.spec.text() : "+" + s.added; }
 
-std::string stepName(const LadderStep& s, std::size_t i) {
-  return i == 0 ? s.spec.text() : "+" + s.added;
+std::string base64(const std::string& in) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((in.size() + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 2 < in.size(); i += 3) {
+    const unsigned v = (static_cast<unsigned char>(in[i]) << 16) | (static_cast<unsigned char>(in[i + 1]) << 8) |
+                       static_cast<unsigned char>(in[i + 2]);
+    out += k[(v >> 18) & 63], out += k[(v >> 12) & 63], out += k[(v >> 6) & 63], out += k[v & 63];
+  }
+  if (i < in.size()) {
+    unsigned v = static_cast<unsigned char>(in[i]) << 16;
+    if (i + 1 < in.size()) v |= static_cast<unsigned char>(in[i + 1]) << 8;
+    out += k[(v >> 18) & 63], out += k[(v >> 12) & 63];
+    out += i + 1 < in.size() ? k[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+std::string htmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// Inline Markdown (`code`, **bold**) as HTML.
+std::string inlineHtml(const std::string& md) {
+  const std::string s = htmlEscape(md);
+  std::string out;
+  bool code = false, bold = false;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '`') {
+      out += code ? "</code>" : "<code>";
+      code = !code;
+    } else if (!code && s.compare(i, 2, "**") == 0) {
+      out += bold ? "</b>" : "<b>";
+      bold = !bold;
+      ++i;
+    } else {
+      out += s[i];
+    }
+  }
+  if (code) out += "</code>";
+  if (bold) out += "</b>";
+  return out;
+}
+
+// The page, once, for both renderings.
+struct Block {
+  enum class Kind { kH1, kH2, kPara, kList, kTable, kImage } kind;
+  std::string text;                            // heading, paragraph, image caption
+  std::vector<std::string> items;              // list items
+  std::vector<std::vector<std::string>> rows;  // table, header first
+  std::string image;                           // file name (PNG) in DIR
+};
+
+std::string toMarkdown(const std::vector<Block>& blocks) {
+  std::string md;
+  for (const auto& b : blocks) {
+    switch (b.kind) {
+      case Block::Kind::kH1: md += "# " + b.text + "\n\n"; break;
+      case Block::Kind::kH2: md += "## " + b.text + "\n\n"; break;
+      case Block::Kind::kPara: md += b.text + "\n\n"; break;
+      case Block::Kind::kList:
+        for (const auto& it : b.items) md += "- " + it + "\n";
+        md += "\n";
+        break;
+      case Block::Kind::kTable:
+        for (std::size_t r = 0; r < b.rows.size(); ++r) {
+          md += "|";
+          for (const auto& c : b.rows[r]) md += " " + c + " |";
+          md += "\n";
+          if (r == 0) {
+            md += "|";
+            for (std::size_t c = 0; c < b.rows[0].size(); ++c) md += "---|";
+            md += "\n";
+          }
+        }
+        md += "\n";
+        break;
+      case Block::Kind::kImage: md += "![" + b.text + "](" + b.image + ")\n\n"; break;
+    }
+  }
+  return md;
+}
+
+std::string toHtml(const std::vector<Block>& blocks, const fs::path& dir, bool images) {
+  std::string h =
+      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Model lab report</title>\n"
+      "<style>body{font-family:sans-serif;max-width:960px;margin:2em auto;line-height:1.4}"
+      "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}"
+      "code{background:#f3f3f3;padding:0 3px}img{max-width:100%}</style></head><body>\n";
+  for (const auto& b : blocks) {
+    switch (b.kind) {
+      case Block::Kind::kH1: h += "<h1>" + inlineHtml(b.text) + "</h1>\n"; break;
+      case Block::Kind::kH2: h += "<h2>" + inlineHtml(b.text) + "</h2>\n"; break;
+      case Block::Kind::kPara: h += "<p>" + inlineHtml(b.text) + "</p>\n"; break;
+      case Block::Kind::kList:
+        h += "<ul>\n";
+        for (const auto& it : b.items) h += "<li>" + inlineHtml(it) + "</li>\n";
+        h += "</ul>\n";
+        break;
+      case Block::Kind::kTable:
+        h += "<table>\n";
+        for (std::size_t r = 0; r < b.rows.size(); ++r) {
+          h += "<tr>";
+          for (const auto& c : b.rows[r]) h += (r ? "<td>" : "<th>") + inlineHtml(c) + (r ? "</td>" : "</th>");
+          h += "</tr>\n";
+        }
+        h += "</table>\n";
+        break;
+      case Block::Kind::kImage:
+        if (images && fs::exists(dir / b.image))
+          h += "<p><img alt=\"" + htmlEscape(b.text) + "\" src=\"data:image/png;base64," +
+               base64(readBinary(dir / b.image)) + "\"></p>\n";
+        else
+          h += "<p>(plot " + htmlEscape(b.image) + " not drawn: gnuplot is missing or failed)</p>\n";
+        break;
+    }
+  }
+  return h + "</body></html>\n";
+}
+
+// The rows drawn: all of them, or every k-th (so each run and each part of a sweep keeps its
+// share) plus each step's largest errors (so the outliers stay visible).
+std::vector<std::size_t> plotRows(const Dataset& data, const std::vector<LadderStep>& steps) {
+  const std::size_t n = data.rows();
+  std::vector<std::size_t> rows;
+  if (n <= kMaxPlotRows) {
+    rows.resize(n);
+    std::iota(rows.begin(), rows.end(), 0);
+    return rows;
+  }
+  const std::size_t worst = 50;
+  std::vector<bool> keep(n, false);
+  const std::size_t stride = (n + kMaxPlotRows - worst * steps.size() - 1) / (kMaxPlotRows - worst * steps.size());
+  for (std::size_t i = 0; i < n; i += stride) keep[i] = true;
+  for (const auto& s : steps) {
+    std::vector<std::size_t> idx(n);
+    std::iota(idx.begin(), idx.end(), 0);
+    const auto& r = s.fit.residual_g;
+    std::partial_sort(idx.begin(), idx.begin() + static_cast<long>(worst), idx.end(),
+                      [&](std::size_t a, std::size_t b) { return std::fabs(r[a]) > std::fabs(r[b]); });
+    for (std::size_t k = 0; k < worst; ++k) keep[idx[k]] = true;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (keep[i]) rows.push_back(i);
+  return rows;
+}
+
+double quantile(std::vector<double> v, double q) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.empty()) return 0;
+  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+struct VerdictStyle {
+  int color;          // 0xRRGGBB
+  const char* short_text;
+};
+VerdictStyle styleOf(const LadderStep& s, std::size_t i) {
+  if (i == 0) return {0x1f77b4, "start"};
+  if (s.earns) return {0x2ca02c, "earns"};
+  if (!s.at_bound.empty()) return {0xff7f0e, "no credit (bound)"};
+  return {0x999999, "does not earn"};
 }
 
 }  // namespace
 
-ReportFiles writeReport(const std::string& dir_name, const Dataset& data,
-                        const std::vector<LadderStep>& steps, const std::string& command_line) {
+ReportFiles writeReport(const std::string& dir_name, const Dataset& data, const std::vector<LadderStep>& steps,
+                        const std::string& command_line, const std::vector<std::string>& notes) {
   ReportFiles files;
   const fs::path dir(dir_name);
   std::error_code ec;
@@ -47,67 +230,99 @@ ReportFiles writeReport(const std::string& dir_name, const Dataset& data,
   if (ec) throw std::runtime_error("cannot create report directory " + dir_name + ": " + ec.message());
   if (steps.empty()) throw std::invalid_argument("nothing to report");
 
-  // Data: one row per sample, prediction and residual of every step.
   const auto& pwm = data.col("pwm_us");
   const auto& force = data.col("force_g");
   std::vector<std::string> suspects;
   for (const auto& s : steps.front().variables)
-    if (s.significant && suspects.size() < 3 && s.variable != "run") suspects.push_back(s.variable);
+    if (s.significant && s.role == Role::kCause && suspects.size() < 3 && s.variable != "run")
+      suspects.push_back(s.variable);
   if (suspects.empty())
     for (const auto& s : steps.front().variables)
-      if (suspects.size() < 2 && s.variable != "run") suspects.push_back(s.variable);
+      if (s.tested && s.role == Role::kCause && suspects.size() < 2 && s.variable != "run")
+        suspects.push_back(s.variable);
+  const std::vector<std::size_t> rows = plotRows(data, steps);
+  files.plotted_rows = rows.size();
+  const bool thinned = rows.size() < data.rows();
+
+  // Data of the plots: the rows drawn, prediction and residual of every step.
   {
     std::string tsv = "# pwm_us force_g";
     for (std::size_t k = 0; k < steps.size(); ++k) tsv += fmt::format(" pred{} resid{}", k, k);
     for (const auto& v : suspects) tsv += " " + v;
     tsv += "\n";
-    for (std::size_t i = 0; i < data.rows(); ++i) {
+    for (std::size_t i : rows) {
       tsv += fmt::format("{:.6g} {:.6g}", pwm[i], force[i]);
-      for (const auto& s : steps)
-        tsv += fmt::format(" {:.6g} {:.6g}", s.fit.predicted_g[i], s.fit.residual_g[i]);
+      for (const auto& s : steps) tsv += fmt::format(" {:.6g} {:.6g}", s.fit.predicted_g[i], s.fit.residual_g[i]);
       for (const auto& v : suspects) tsv += fmt::format(" {:.6g}", data.has(v) ? data.col(v)[i] : NAN);
       tsv += "\n";
     }
     writeText(dir / "data.tsv", tsv);
-    std::string lad = "# step rmse_g max_g bic\n";
-    for (std::size_t k = 0; k < steps.size(); ++k)
-      lad += fmt::format("{} {:.6g} {:.6g} {:.6g} \"{}\"\n", k, steps[k].fit.rmse_g, steps[k].fit.max_g,
-                         steps[k].fit.bic, stepName(steps[k], k));
+    std::string lad = "# step rmse_g max_g bic \"step: verdict\" color\n";
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      const VerdictStyle st = styleOf(steps[k], k);
+      std::string name = stepName(steps[k], k) + ": " + st.short_text;
+      std::replace(name.begin(), name.end(), '"', '\'');
+      lad += fmt::format("{} {:.6g} {:.6g} {:.6g} \"{}\" {}\n", k, steps[k].fit.rmse_g, steps[k].fit.max_g,
+                         steps[k].fit.bic, name, st.color);
+    }
     writeText(dir / "ladder.tsv", lad);
   }
 
-  // gnuplot script: every plot in PNG and SVG.
+  // gnuplot script: every plot in PNG and SVG. Points are translucent so their density shows.
   std::vector<std::pair<std::string, std::string>> plots;  // base name, plot commands
   const std::string data_file = quote((dir / "data.tsv").string());
+  const std::string sample_note =
+      thinned ? fmt::format(" ({} of {} samples shown)", rows.size(), data.rows()) : std::string();
   {
-    std::string cmd = "set xlabel 'PWM (us)'\nset ylabel 'force (g)'\nset key left top\n";
-    cmd += fmt::format("set title {}\n", label("measured vs model"));
+    std::string cmd = fmt::format("set xlabel {}\nset ylabel {}\nset key left top\n", quote(axisLabel(data, "pwm_us")),
+                                  quote(axisLabel(data, "force_g")));
+    cmd += fmt::format("set title {}\n", quote("measured vs model" + sample_note));
     // models first, the measurements last (open circles on top) so both stay visible
-    cmd += fmt::format("plot {} using 1:3 with points pt 7 ps 0.5 lc rgb '#d62728' title {}", data_file,
-                       label("model: " + stepName(steps.front(), 0)));
+    cmd += fmt::format("plot {} using 1:3 with points pt 7 ps 0.5 lc rgb '#60d62728' title {}", data_file,
+                       quote("model: " + stepName(steps.front(), 0)));
     if (steps.size() > 1)
-      cmd += fmt::format(", '' using 1:{} with points pt 7 ps 0.5 lc rgb '#1f77b4' title {}",
-                         3 + 2 * (steps.size() - 1), label("model: " + steps.back().spec.text()));
-    cmd += ", '' using 1:2 with points pt 6 ps 0.9 lc rgb '#222222' title 'measured'";
+      cmd += fmt::format(", '' using 1:{} with points pt 7 ps 0.5 lc rgb '#601f77b4' title {}", 3 + 2 * (steps.size() - 1),
+                         quote("model: " + steps.back().spec.text()));
+    cmd += ", '' using 1:2 with points pt 6 ps 0.8 lc rgb '#80222222' title 'measured'";
     plots.emplace_back("measured_vs_model", cmd + "\n");
   }
+  // Residual axes: robust limits (the 0.5 % and 99.5 % quantiles of every step's residual,
+  // with room), so a few outliers do not squeeze the rest flat; what lies beyond is counted.
+  std::vector<double> all_res;
+  for (const auto& s : steps)
+    for (std::size_t i : rows) all_res.push_back(s.fit.residual_g[i]);
+  double lo = quantile(all_res, 0.005), hi = quantile(all_res, 0.995);
+  const double pad = 0.15 * std::max(hi - lo, 1e-6);
+  lo -= pad, hi += pad;
+  std::size_t beyond = 0;
+  for (double r : all_res) beyond += (r < lo || r > hi) ? 1 : 0;
   const char* colors[] = {"#d62728", "#ff7f0e", "#2ca02c", "#1f77b4", "#9467bd", "#8c564b", "#e377c2"};
   for (std::size_t v = 0; v < suspects.size(); ++v) {
-    std::string cmd = fmt::format("set xlabel {}\nset ylabel 'residual (g)'\nset key outside right\n", label(suspects[v]));
-    cmd += fmt::format("set title {}\n", label("residual vs " + suspects[v] + " as effects are added"));
+    std::string cmd = fmt::format("set xlabel {}\nset ylabel 'residual: measured - model (g)'\nset key outside right\n",
+                                  quote(axisLabel(data, suspects[v])));
+    cmd += fmt::format("set yrange [{:.6g}:{:.6g}]\n", lo, hi);
+    cmd += fmt::format("set title {}\n",
+                       quote("residual vs " + suspects[v] + " as effects are added" + sample_note +
+                             (beyond ? fmt::format(", {} beyond the axis", beyond) : std::string())));
     cmd += "plot ";
     const int col = 3 + 2 * static_cast<int>(steps.size()) + static_cast<int>(v);
     for (std::size_t k = 0; k < steps.size(); ++k) {
-      cmd += fmt::format("{}{} using {}:{} with points pt 7 ps 0.35 lc rgb '{}' title {}",
-                         k ? ", " : "", k ? "''" : data_file, col, 4 + 2 * k, colors[k % 7],
-                         label(fmt::format("{} (RMSE {:.2f} g)", stepName(steps[k], k), steps[k].fit.rmse_g)));
+      std::string color = colors[k % 7];
+      color.insert(1, "70");  // translucent
+      cmd += fmt::format("{}{} using {}:{} with points pt 7 ps 0.35 lc rgb '{}' title {}", k ? ", " : "",
+                         k ? "''" : data_file, col, 4 + 2 * k, color,
+                         quote(fmt::format("{} (RMSE {:.3g} g)", stepName(steps[k], k), steps[k].fit.rmse_g)));
     }
     plots.emplace_back("residual_vs_" + suspects[v], cmd + "\n");
   }
   {
-    std::string cmd = "set style fill solid 0.6\nset boxwidth 0.6\nset ylabel 'error (g)'\nset xtics rotate by -20\n";
-    cmd += "set key left top\nset title 'the error ladder'\nset yrange [0:*]\n";
-    cmd += fmt::format("plot {} using 1:2:xtic(5) with boxes lc rgb '#1f77b4' title 'RMSE', '' using 1:3 with linespoints pt 7 lc rgb '#d62728' title 'max |error|', '' using 1:2:(sprintf('%.2f', $2)) with labels offset 0,1 notitle\n",
+    std::string cmd = "set style fill solid 0.7\nset boxwidth 0.6\nset ylabel 'error (g)'\nset xtics rotate by -20\n";
+    cmd += "set key left top\nset title 'the error ladder: green earns its parameters, grey does not, orange gets no "
+           "credit (a parameter at a bound)'\nset yrange [0:*]\nset xrange [-0.6:" +
+           fmt::format("{}", static_cast<double>(steps.size()) - 0.4) + "]\n";
+    cmd += fmt::format("plot {} using 1:2:6:xtic(5) with boxes lc rgb variable title 'RMSE', '' using 1:3 with "
+                       "linespoints pt 7 lc rgb '#d62728' title 'max |error|', '' using 1:2:(sprintf('%.3g', $2)) with "
+                       "labels offset 0,1 notitle\n",
                        quote((dir / "ladder.tsv").string()));
     plots.emplace_back("ladder", cmd);
   }
@@ -116,8 +331,8 @@ ReportFiles writeReport(const std::string& dir_name, const Dataset& data,
     for (const char* ext : {"png", "svg"}) {
       const fs::path out = dir / (name + "." + ext);
       script += "reset\n";
-      script += std::string(ext) == "png" ? "set terminal pngcairo size 900,560 noenhanced\n"
-                                          : "set terminal svg size 900,560 noenhanced\n";
+      script += std::string(ext) == "png" ? "set terminal pngcairo size 960,600 noenhanced\n"
+                                          : "set terminal svg size 960,600 noenhanced\n";
       script += "set output " + quote(out.string()) + "\n" + cmd + "unset output\n";
       files.images.push_back(out.string());
     }
@@ -126,41 +341,82 @@ ReportFiles writeReport(const std::string& dir_name, const Dataset& data,
   writeText(gp, script);
   const std::string run = "gnuplot " + quote(gp.string()) + " 2> " + quote((dir / "gnuplot.log").string());
   const int rc = std::system(run.c_str());
-  if (rc != 0) {
+  const bool drawn = rc == 0;
+  if (!drawn) {
     files.warnings.push_back(fmt::format("gnuplot failed (exit {}); see {} — the data and the script are in {}",
                                          rc, (dir / "gnuplot.log").string(), dir_name));
     files.images.clear();
   }
 
   // The page.
-  std::string md = "# Model lab report\n\n";
-  md += "Command: `" + command_line + "`\n\n";
-  md += fmt::format("{} samples in {} run(s).\n\n", data.rows(), data.runs());
-  md += "## The error ladder\n\n| step | model | k | RMSE (g) | max (g) | RMSE (% of max force) | BIC | dBIC | verdict |\n|---|---|---|---|---|---|---|---|---|\n";
+  std::vector<Block> page;
+  page.push_back({Block::Kind::kH1, "Model lab report", {}, {}, ""});
+  page.push_back({Block::Kind::kPara, "Command: `" + command_line + "`", {}, {}, ""});
+  page.push_back({Block::Kind::kPara,
+                  fmt::format("{} samples in {} run(s){}.", data.rows(), data.runs(),
+                              thinned ? fmt::format("; the plots show {} of them (every {}th, and each step's 50 "
+                                                    "largest errors)",
+                                                    rows.size(), (data.rows() + rows.size() - 1) / rows.size())
+                                      : std::string()),
+                  {}, {}, ""});
+  if (!notes.empty()) page.push_back({Block::Kind::kList, "", notes, {}, ""});
+  Block table{Block::Kind::kTable, "", {}, {}, ""};
+  table.rows.push_back({"step", "model", "k", "RMSE (g)", "max (g)", "RMSE (% of max force)", "BIC", "dBIC", "verdict"});
   for (std::size_t k = 0; k < steps.size(); ++k) {
     const auto& s = steps[k];
-    md += fmt::format("| {} | `{}` | {} | {:.3f} | {:.2f} | {:.2f} | {:.1f} | {} | {} |\n", k, stepName(s, k), s.fit.k,
-                      s.fit.rmse_g, s.fit.max_g, s.fit.rmse_pct, s.fit.bic,
-                      k ? fmt::format("{:.1f}", s.delta_bic) : "",
-                      k ? (s.earns ? "earns its parameters" : "does not earn its parameters") : "start");
+    table.rows.push_back({std::to_string(k), "`" + stepName(s, k) + "`", std::to_string(s.fit.k),
+                          fmt::format("{:.3f}", s.fit.rmse_g), fmt::format("{:.2f}", s.fit.max_g),
+                          fmt::format("{:.2f}", s.fit.rmse_pct), fmt::format("{:.1f}", s.fit.bic),
+                          k ? fmt::format("{:.1f}", s.delta_bic) : "", s.verdict});
   }
-  md += "\n![ladder](ladder.png)\n\n## Measured vs model\n\n![measured vs model](measured_vs_model.png)\n\n";
-  md += "## Where the starting model fails\n\n";
-  int shown = 0;
+  page.push_back({Block::Kind::kH2, "The error ladder", {}, {}, ""});
+  page.push_back(table);
+  page.push_back({Block::Kind::kImage, "ladder", {}, {}, "ladder.png"});
+  page.push_back({Block::Kind::kH2, "Measured vs model", {}, {}, ""});
+  page.push_back({Block::Kind::kImage, "measured vs model", {}, {}, "measured_vs_model.png"});
+  page.push_back({Block::Kind::kH2, "Where the starting model fails", {}, {}, ""});
+  Block causes{Block::Kind::kList, "", {}, {}, ""};
+  std::vector<std::string> responses;
   for (const auto& s : steps.front().variables) {
-    if (!s.significant) continue;
-    md += fmt::format("{}. **{}** (score {:.3f}): {}\n", ++shown, s.variable, s.score, s.advice);
+    if (s.role == Role::kResponse) responses.push_back(s.variable);
+    if (!s.significant || s.role != Role::kCause) continue;
+    causes.items.push_back(fmt::format("**{}** (score {:.3f}): {}", s.variable, s.score, s.advice));
   }
-  if (shown == 0) md += "No variable explains a significant part of the residual.\n";
-  md += "\n";
+  if (causes.items.empty())
+    page.push_back({Block::Kind::kPara, "No logged cause explains a significant part of the residual.", {}, {}, ""});
+  else
+    page.push_back(causes);
+  if (!responses.empty())
+    page.push_back({Block::Kind::kPara,
+                    fmt::format("Responses of the motor (they follow the drive; not suspects): {}.",
+                                fmt::join(responses, ", ")),
+                    {}, {}, ""});
   for (const auto& v : suspects)
-    md += fmt::format("![residual vs {0}](residual_vs_{0}.png)\n\n", v);
-  md += "## Fitted parameters of the last step\n\n| parameter | effect | value | uncertainty | unit |\n|---|---|---|---|---|\n";
+    page.push_back({Block::Kind::kImage, "residual vs " + v, {}, {}, "residual_vs_" + v + ".png"});
+  page.push_back({Block::Kind::kH2, "Fitted parameters of the last step", {}, {}, ""});
+  Block params{Block::Kind::kTable, "", {}, {}, ""};
+  params.rows.push_back({"parameter", "effect", "value", "uncertainty", "unit", ""});
   for (const auto& p : steps.back().fit.params)
-    md += fmt::format("| {} | {} | {:.6g} | {:.2g} | {} |\n", p.name, p.effect, p.value, p.sigma, p.unit);
-  md += "\nEach plot is also written as SVG next to the PNG; `data.tsv` holds every sample, prediction and residual.\n";
+    params.rows.push_back({p.name, p.effect, fmt::format("{:.6g}", p.value),
+                           std::isfinite(p.sigma) ? fmt::format("{:.2g}", p.sigma) : "", p.unit,
+                           p.at_bound ? fmt::format("at its bound {:.4g}", p.bound) : ""});
+  page.push_back(params);
+  page.push_back({Block::Kind::kPara,
+                  "Each plot is also written as SVG next to the PNG; `data.tsv` holds the plotted samples with every "
+                  "step's prediction and residual; `plots.gp` redraws them (`gnuplot plots.gp`). `report.html` is this "
+                  "page with the plots inside, for a browser.",
+                  {}, {}, ""});
   files.page = (dir / "report.md").string();
-  writeText(files.page, md);
+  writeText(files.page, toMarkdown(page));
+  files.html = (dir / "report.html").string();
+  writeText(files.html, toHtml(page, dir, drawn));
+
+  for (const char* f : {"data.tsv", "ladder.tsv", "plots.gp", "report.md", "report.html", "gnuplot.log"})
+    if (fs::exists(dir / f)) files.bytes += fs::file_size(dir / f);
+  for (const auto& i : files.images)
+    if (fs::exists(i)) files.bytes += fs::file_size(i);
+  if (files.bytes > 20u * 1000u * 1000u)
+    files.warnings.push_back(fmt::format("the report takes {:.1f} MB", files.bytes / 1e6));
   return files;
 }
 

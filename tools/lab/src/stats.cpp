@@ -1,5 +1,6 @@
 #include "lab/stats.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -7,16 +8,21 @@ namespace lab {
 
 Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b,
                      const std::vector<bool>& nonneg) {
-  // Lawson-Hanson on the normal equations: the n x k matrix is touched once (A^T A, A^T b);
-  // the active-set iterations then solve k x k systems. Columns are scaled to unit norm first.
-  const Eigen::Index n = A.cols();
+  return nnlsGram(A.transpose() * A, A.transpose() * b, nonneg);
+}
+
+Eigen::VectorXd nnlsGram(const Eigen::MatrixXd& AtA, const Eigen::VectorXd& Atb,
+                         const std::vector<bool>& nonneg) {
+  // Lawson-Hanson on the normal equations: the active-set iterations solve k x k systems.
+  // Columns are scaled to unit norm first.
+  const Eigen::Index n = AtA.cols();
   Eigen::VectorXd scale(n);
   for (Eigen::Index j = 0; j < n; ++j) {
-    const double norm = A.col(j).norm();
+    const double norm = std::sqrt(std::max(AtA(j, j), 0.0));
     scale[j] = norm > 0 ? 1.0 / norm : 0.0;
   }
-  const Eigen::MatrixXd G = scale.asDiagonal() * (A.transpose() * A) * scale.asDiagonal();
-  const Eigen::VectorXd h = scale.asDiagonal() * (A.transpose() * b);
+  const Eigen::MatrixXd G = scale.asDiagonal() * AtA * scale.asDiagonal();
+  const Eigen::VectorXd h = scale.asDiagonal() * Atb;
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
   std::vector<bool> passive(static_cast<std::size_t>(n), false);
   auto usable = [&](Eigen::Index j) { return scale[j] > 0; };

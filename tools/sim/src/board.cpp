@@ -7,7 +7,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <memory>
+#include <sstream>
 #include <sys/stat.h>
+
+#include "sim/intel_hex.hpp"
 
 extern "C" {
 #include <simavr/avr_adc.h>
@@ -52,39 +57,111 @@ void quietLogger(avr_t* avr, const int level, const char* format, va_list ap) {
   }
 }
 
+// True when the file starts with the ELF magic (an application can be .elf or Intel HEX).
+bool isElfFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[4] = {};
+  in.read(magic, 4);
+  return in.gcount() == 4 && std::memcmp(magic, "\x7f" "ELF", 4) == 0;
+}
+
+// An Intel HEX flash image: the bytes (0xFF where the file says nothing) and the range the
+// file covers, [lo, hi) (lo == hi: no data).
+struct HexFlash {
+  std::vector<uint8_t> bytes;
+  uint32_t lo = 0, hi = 0;
+};
+
+HexFlash readHexFlash(const std::string& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw BoardError(fmt::format("{}: cannot read the {} (Intel HEX); check the path", path, what));
+  std::ostringstream text;
+  text << in.rdbuf();
+  HexFlash h;
+  try {
+    // Parsed twice with different fills: a byte the file covers reads the same both times.
+    h.bytes = parseIntelHex(text.str(), kFlashBytes, path, 0xFF);
+    const std::vector<uint8_t> zero_fill = parseIntelHex(text.str(), kFlashBytes, path, 0x00);
+    bool any = false;
+    for (uint32_t a = 0; a < kFlashBytes; ++a) {
+      if (h.bytes[a] != zero_fill[a]) continue;
+      if (!any) h.lo = a;
+      any = true;
+      h.hi = a + 1;
+    }
+  } catch (const HexError& e) {
+    throw BoardError(fmt::format("the {} is not a usable Intel HEX flash image: {}", what, e.what()));
+  }
+  return h;
+}
+
+// Frees what elf_read_firmware allocated.
+struct ElfFirmware {
+  elf_firmware_t* fw = static_cast<elf_firmware_t*>(std::calloc(1, sizeof(elf_firmware_t)));
+  ~ElfFirmware() {
+    std::free(fw->flash);
+    std::free(fw->eeprom);
+    std::free(fw);
+  }
+};
+
 }  // namespace
 
-Board::Board(const std::string& elf_path) {
+Board::Board(const std::string& elf_path) : Board(FlashImages{"", elf_path}) {}
+
+Board::Board(const FlashImages& images) {
+  load(images);
+  wire();
+}
+
+void Board::load(const FlashImages& images) {
+  avr_global_logger_set(quietLogger);
+  const std::string& app = images.application;
   struct stat st {};
-  if (::stat(elf_path.c_str(), &st) != 0)
+  if (!app.empty() && ::stat(app.c_str(), &st) != 0)
     throw BoardError(fmt::format("{}: no such firmware image; build it first (cmake --build "
                                  "build/avr) or pass the right --elf path",
-                                 elf_path));
-  avr_global_logger_set(quietLogger);
-  auto* fw = static_cast<elf_firmware_t*>(std::calloc(1, sizeof(elf_firmware_t)));
-  if (elf_read_firmware(elf_path.c_str(), fw) != 0) {
-    std::free(fw);
-    throw BoardError(fmt::format("{}: not a readable AVR ELF file (is it the .elf, not the .hex?)",
-                                 elf_path));
+                                 app));
+  std::unique_ptr<ElfFirmware> elf;
+  HexFlash app_hex;
+  uint32_t app_end = 0;  // first byte past the application
+  if (!app.empty() && isElfFile(app)) {
+    elf = std::make_unique<ElfFirmware>();
+    elf_firmware_t* fw = elf->fw;
+    if (elf_read_firmware(app.c_str(), fw) != 0)
+      throw BoardError(fmt::format("{}: not a readable AVR ELF file (is it the .elf, not the .hex?)",
+                                   app));
+    if (fw->mmcu[0] == '\0') std::strcpy(fw->mmcu, "atmega2560");
+    if (std::strcmp(fw->mmcu, "atmega2560") != 0)
+      throw BoardError(fmt::format("{}: built for {}, but the virtual board is an atmega2560 "
+                                   "(rebuild with the AVR toolchain file)",
+                                   app, fw->mmcu));
+    if (fw->frequency == 0) fw->frequency = kCpuHz;
+    app_end = fw->flashbase + fw->flashsize;
+  } else if (!app.empty()) {
+    app_hex = readHexFlash(app, "application");
+    app_end = app_hex.hi;
   }
-  if (fw->mmcu[0] == '\0') std::strcpy(fw->mmcu, "atmega2560");
-  if (std::strcmp(fw->mmcu, "atmega2560") != 0) {
-    std::string mmcu = fw->mmcu;
-    std::free(fw->flash);
-    std::free(fw->eeprom);
-    std::free(fw);
-    throw BoardError(fmt::format("{}: built for {}, but the virtual board is an atmega2560 "
-                                 "(rebuild with the AVR toolchain file)",
-                                 elf_path, mmcu));
+  HexFlash boot;
+  if (!images.bootloader_hex.empty()) {
+    boot = readHexFlash(images.bootloader_hex, "bootloader");
+    if (boot.hi == boot.lo)
+      throw BoardError(fmt::format("{}: the bootloader file holds no data", images.bootloader_hex));
+    if (boot.lo == 0)
+      throw BoardError(fmt::format("{}: this \"bootloader\" starts at address 0; pass it as the "
+                                   "application (--hex) instead",
+                                   images.bootloader_hex));
+    if (app_end > boot.lo)
+      throw BoardError(fmt::format(
+          "{}: the application reaches byte 0x{:05X}, into the boot section at 0x{:05X} ({}); "
+          "it cannot be flashed behind this bootloader",
+          app, app_end - 1, boot.lo, images.bootloader_hex));
   }
-  if (fw->frequency == 0) fw->frequency = kCpuHz;
-  avr_ = avr_make_mcu_by_name(fw->mmcu);
-  if (!avr_) {
-    std::free(fw->flash);
-    std::free(fw->eeprom);
-    std::free(fw);
+
+  avr_ = avr_make_mcu_by_name(elf ? elf->fw->mmcu : "atmega2560");
+  if (!avr_)
     throw BoardError("libsimavr does not know the atmega2560; reinstall libsimavr-dev/simavr");
-  }
   avr_init(avr_);
   avr_->log = LOG_ERROR;
   // Every later reset (the watchdog's, or reset()) passes through onCoreReset: the harness's
@@ -98,18 +175,30 @@ Board::Board(const std::string& elf_path) {
     avr_eeprom_desc_t d{erased.data(), 0, static_cast<uint32_t>(erased.size())};
     avr_ioctl(avr_, AVR_IOCTL_EEPROM_SET, &d);
   }
-  avr_load_firmware(avr_, fw);
-  if (fw->frequency != kCpuHz)
-    fmt::print(stderr, "warning: {} says F_CPU = {} Hz; the plant assumes {} Hz timing\n",
-               elf_path, fw->frequency, kCpuHz);
-  avr_->frequency = fw->frequency;
+  uint32_t frequency = kCpuHz;
+  if (elf) {
+    avr_load_firmware(avr_, elf->fw);
+    frequency = elf->fw->frequency;
+    if (frequency != kCpuHz)
+      fmt::print(stderr, "warning: {} says F_CPU = {} Hz; the plant assumes {} Hz timing\n", app,
+                 frequency, kCpuHz);
+  } else if (app_hex.hi > 0) {
+    avr_loadcode(avr_, app_hex.bytes.data(), app_hex.hi, 0);
+  }
+  if (boot.hi > boot.lo) {
+    avr_loadcode(avr_, boot.bytes.data() + boot.lo, boot.hi - boot.lo, boot.lo);
+    boot_address_ = boot.lo;
+    avr_->reset_pc = boot.lo;  // BOOTRST: every reset enters the bootloader
+    avr_->pc = boot.lo;
+    avr_->codeend = avr_->flashend + 1;
+  }
+  avr_->frequency = frequency;
   if (avr_->vcc == 0) avr_->vcc = 5000;
   if (avr_->avcc == 0) avr_->avcc = 5000;
   if (avr_->aref == 0) avr_->aref = 5000;
-  std::free(fw->flash);
-  std::free(fw->eeprom);
-  std::free(fw);
+}
 
+void Board::wire() {
   for (int ch = 0; ch < kEscChannels; ++ch) {
     edge_params_[ch] = EdgeParam{this, ch};
     avr_irq_t* irq =
@@ -141,10 +230,30 @@ Board::~Board() {
 void Board::setTickHook(TickHook hook, uint64_t period_cycles) {
   tick_hook_ = std::move(hook);
   tick_period_ = period_cycles > 0 ? period_cycles : 1;
-  if (!tick_armed_) {
-    tick_armed_ = true;
-    avr_cycle_timer_register(avr_, tick_period_, &Board::tickTimer, this);
-  }
+  armTick();
+}
+
+void Board::armTick() {
+  if (tick_armed_ || !tick_hook_) return;
+  tick_armed_ = true;
+  avr_cycle_timer_register(avr_, tick_period_, &Board::tickTimer, this);
+}
+
+// --- reset and flash ---
+
+void Board::reset() {
+  // The DTR pulse of a port being opened: bytes still queued for the old program are gone with
+  // it (the host's side of the line was flushed).
+  input_.clear();
+  reset(ResetKind::kExternal);
+}
+
+uint32_t Board::resetAddress() const { return boot_address_; }
+
+bool Board::inBootloader() const { return boot_address_ != 0 && avr_->pc >= boot_address_; }
+
+std::vector<uint8_t> Board::flash() const {
+  return std::vector<uint8_t>(avr_->flash, avr_->flash + kFlashBytes);
 }
 
 uint64_t Board::tickTimer(avr_t*, uint64_t when, void* param) {

@@ -15,6 +15,7 @@
 #include "sim/pty_bridge.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
+#include "sim/sim_board.hpp"
 
 namespace sim {
 namespace {
@@ -68,14 +69,25 @@ void addGather(CLI::App& sim) {
       "sweep on a bench supply (or a drained pack) -> store 2, show. Saves the EEPROM as Intel\n"
       "HEX and reports the stored curves against the plant's true steady-state thrust.\n"
       "--model v2: store v2 after each sweep instead (fit, then refine); the stored model v2 is\n"
-      "checked at each sweep's resting voltage (JSON: calibration.v2.*).");
+      "checked at each sweep's resting voltage (JSON: calibration.v2.*).\n"
+      "The board boots from the Mega2560's bootloader behind a pty and is driven by the same\n"
+      "client code as `thrustcal board calibrate` (--via in-process: typed straight into the\n"
+      "simulated UART, reproducible byte for byte).");
   auto o = std::make_shared<GatherOptions>();
   auto eeprom = std::make_shared<std::string>();
   auto json = std::make_shared<std::string>();
   auto second = std::make_shared<std::string>("supply");
   auto model = std::make_shared<std::string>("v1");
+  auto via = std::make_shared<std::string>("pty");
   auto range = std::make_shared<std::vector<int>>();
   o->elf_path = defaultElf("gather_store");
+  cmd->add_option("--via", *via,
+                  "pty: bootloader + pty + the board client, as a user's cable; in-process: typed "
+                  "into the simulated UART (simulated time only, reproducible)")
+      ->check(CLI::IsMember({"pty", "in-process"}))
+      ->capture_default_str();
+  cmd->add_option("--bootloader", o->bootloader_hex, "bootloader Intel HEX (--via pty)")
+      ->capture_default_str();
   cmd->add_option("--elf", o->elf_path, "gather_store ELF image")->capture_default_str();
   cmd->add_option("--preset", o->preset, "motor + propeller preset (see thrustcal plant)")
       ->capture_default_str();
@@ -91,7 +103,7 @@ void addGather(CLI::App& sim) {
       ->capture_default_str();
   cmd->add_option("--eeprom", *eeprom,
                   "Intel HEX EEPROM image: read if it exists (other slots are kept), written "
-                  "after the run (avrdude -U eeprom:w:FILE:i puts it on a real board)");
+                  "after the run (thrustcal board eeprom put puts it on a real board)");
   cmd->add_option("--log-dir", o->log_dir,
                   "write gather_slotK_curve{1,2}.csv (the streamed sweeps + current_a, rpm, temp_c) and "
                   "gather_slotK_curves.csv (stored vs true PWM per gram)");
@@ -131,6 +143,7 @@ void addGather(CLI::App& sim) {
       opt.second = *second == "drained" ? SecondCurveSource::kDrainedPack
                                         : SecondCurveSource::kBenchSupply;
       opt.model = *model == "v2" ? GatherModel::kModelV2 : GatherModel::kThesisV1;
+      opt.link = *via == "in-process" ? GatherLink::kInProcess : GatherLink::kPty;
       opt.eeprom = loadEepromOrErased(*eeprom, false);
       const GatherResult r = runGather(opt);
       if (!eeprom->empty()) {
@@ -155,8 +168,9 @@ void addGather(CLI::App& sim) {
                    v2 ? fmt::format("; start {:.1f} us, {} knots", m.v2_start_us, m.v2_knots)
                       : std::string());
       fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time ({:.1f}x during "
-                 "sweeps)\n",
-                 r.simulated_s, r.wall_s, r.realtime_factor, r.sweep_realtime_factor);
+                 "sweeps); {:.1f} s wall in all, via {}\n",
+                 r.simulated_s, r.wall_s, r.realtime_factor, r.sweep_realtime_factor,
+                 r.session_wall_s, gatherLinkName(r.link));
     });
   });
 }
@@ -168,7 +182,9 @@ void addLiftoff(CLI::App& sim) {
       "quad frame tied to the floor, one LiPo, 'liftoff G RAMP HOLD', no attitude controller.\n"
       "calibrated: each slot's own record; uncalibrated: the reference slot's record in all\n"
       "four slots, so every ESC gets the same PWM (one generic curve). Reports per-motor thrust\n"
-      "in the hold, their spread, the force error, moments and tilt.");
+      "in the hold, their spread, the force error, moments and tilt. The board boots from the\n"
+      "Mega2560's bootloader behind a pty and `thrustcal board liftoff`'s client flies it\n"
+      "(--via in-process: typed into the simulated UART, reproducible byte for byte).");
   auto o = std::make_shared<LiftoffOptions>();
   auto eeprom = std::make_shared<std::string>();
   auto json = std::make_shared<std::string>();
@@ -177,7 +193,11 @@ void addLiftoff(CLI::App& sim) {
   auto uncal = std::make_shared<bool>(false);
   auto label = std::make_shared<std::string>();
   auto seeds = std::make_shared<std::vector<uint64_t>>(std::vector<uint64_t>{1, 2, 3, 4});
+  auto via = std::make_shared<std::string>("pty");
   o->elf_path = defaultElf("read_run");
+  cmd->add_option("--via", *via, "pty (bootloader + pty + the board client) or in-process")
+      ->check(CLI::IsMember({"pty", "in-process"}))
+      ->capture_default_str();
   cmd->add_option("--elf", o->elf_path, "read_run ELF image")->capture_default_str();
   cmd->add_option("--eeprom", *eeprom, "Intel HEX EEPROM image with the four calibrated slots")
       ->required()
@@ -223,11 +243,12 @@ void addLiftoff(CLI::App& sim) {
       if (!out_dir->empty()) fs::create_directories(*out_dir);
       nlohmann::json j;
       j["scenario"] = "liftoff";
-      double sim_s = 0, wall_s = 0;
+      double sim_s = 0, wall_s = 0, session_s = 0;
       for (const auto& mm : modes) {
         LiftoffOptions opt = *o;
         for (int i = 0; i < 4; ++i) opt.seeds[i] = (*seeds)[i];
         opt.eeprom = loadEepromOrErased(*eeprom, true);
+        opt.link = *via == "in-process" ? GatherLink::kInProcess : GatherLink::kPty;
         opt.uncalibrated = mm == "uncalibrated";
         if (!opt.uncalibrated) opt.label = *label;
         const std::string name = opt.label.empty() ? mm : opt.label;
@@ -237,6 +258,7 @@ void addLiftoff(CLI::App& sim) {
         j["liftoff"][name] = r.toJson();
         sim_s += r.simulated_s;
         wall_s += r.wall_s;
+        session_s += r.session_wall_s;
         fmt::print("liftoff {}: thrust {:.1f} {:.1f} {:.1f} {:.1f} g for {:.0f} g: spread {:.2f} %, "
                    "rms error {:.2f} %, tilt {:.2f} deg (max {:.2f})\n",
                    name, r.hold_thrust_g[0], r.hold_thrust_g[1], r.hold_thrust_g[2],
@@ -247,8 +269,9 @@ void addLiftoff(CLI::App& sim) {
                   {"simulated_s", sim_s},
                   {"wall_s", wall_s}};
       writeJson(*json, j);
-      fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time\n", sim_s, wall_s,
-                 wall_s > 0 ? sim_s / wall_s : 0);
+      fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time; {:.1f} s wall in "
+                 "all, via {}\n",
+                 sim_s, wall_s, wall_s > 0 ? sim_s / wall_s : 0, session_s, *via);
     });
   });
 }
@@ -333,6 +356,94 @@ void addConsole(CLI::App& sim) {
   });
 }
 
+void addBoard(CLI::App& sim) {
+  auto* cmd = sim.add_subcommand(
+      "board",
+      "A simulated Arduino Mega2560 as avrdude and `thrustcal board` meet a real one on USB:\n"
+      "the flash holds the Mega2560's STK500v2 bootloader (Debian's arduino-core-avr) at byte\n"
+      "0x3E000 and, if given, an application; every reset starts the bootloader (~1 s wait for\n"
+      "avrdude, then the application). UART0 is on a pseudo-terminal: a client that opens it\n"
+      "and flushes it resets the board (what avrdude's DTR pulse does; a pty has no DTR). Time\n"
+      "keeps the wall clock while idle and runs fast while bytes flow or a console command is\n"
+      "under way. What avrdude writes stays for the run. The plant follows the image at each\n"
+      "reset: gather_store gets the thesis bench (motor of --slot on the load cell), read_run\n"
+      "the tethered quad. Ctrl-C ends it and saves the EEPROM to --eeprom.");
+  auto o = std::make_shared<SimBoardOptions>();
+  auto elf = std::make_shared<std::string>();
+  auto hex = std::make_shared<std::string>();
+  auto eeprom = std::make_shared<std::string>();
+  auto link = std::make_shared<std::string>();
+  auto pacing = std::make_shared<Pacing>();
+  auto duration = std::make_shared<double>(0.0);
+  auto read_only = std::make_shared<bool>(false);
+  auto quiet = std::make_shared<bool>(false);
+  cmd->add_option("--bootloader", o->bootloader_hex, "bootloader Intel HEX")->capture_default_str();
+  auto* elf_opt = cmd->add_option("--elf", *elf, "application already in flash (ELF image)");
+  cmd->add_option("--hex", *hex, "application already in flash (Intel HEX)")->excludes(elf_opt);
+  cmd->add_option("--eeprom", *eeprom, "Intel HEX EEPROM image (loaded if it exists, saved at exit)");
+  cmd->add_option("--link", *link, "also make this symlink to the pty (a stable port name)");
+  cmd->add_option("--rig", o->rig, "plant: auto (follow the image), bench or quad")
+      ->check(CLI::IsMember({"auto", "bench", "quad"}))
+      ->capture_default_str();
+  cmd->add_option("--slot", o->bench_slot, "bench: the ESC output / slot whose motor is mounted")
+      ->check(CLI::Range(0, 3))
+      ->capture_default_str();
+  cmd->add_option("--seeds", o->seeds, "the four motors (slot 0..3), as for sim gather / liftoff")
+      ->delimiter(',')
+      ->expected(4)
+      ->capture_default_str();
+  cmd->add_option("--preset", o->preset, "motor + propeller preset")->capture_default_str();
+  cmd->add_option("--soc", o->lipo_soc, "3S LiPo state of charge (0..1)")->capture_default_str();
+  cmd->add_option("--idle-speed", pacing->idle_speed,
+                  "simulated s per wall s while idle (1: the bootloader's timeout is real)")
+      ->capture_default_str();
+  cmd->add_option("--busy-speed", pacing->busy_speed,
+                  "simulated s per wall s while bytes flow (0: as fast as possible; 1: a real "
+                  "board's timing)")
+      ->capture_default_str();
+  cmd->add_option("--duration", *duration, "stop after this many simulated seconds (0: Ctrl-C)")
+      ->capture_default_str();
+  cmd->add_flag("--read-only", *read_only, "do not write the EEPROM back");
+  cmd->add_flag("--quiet", *quiet, "no event lines (resets, clients)");
+  cmd->callback([=] {
+    guarded([&] {
+      SimBoardOptions opt = *o;
+      opt.application = !elf->empty() ? *elf : *hex;
+      opt.eeprom = loadEepromOrErased(*eeprom, false);
+      opt.pty.link_path = *link;
+      if (!*quiet) opt.pty.log = [](const std::string& l) {
+        std::fprintf(stderr, "sim board: %s\n", l.c_str());
+        std::fflush(stderr);
+      };
+      SimBoard sb(opt);
+      const std::string port = sb.link().port();
+      fmt::print("simulated Mega2560 on {}{}\n", sb.link().path(),
+                 link->empty() ? "" : fmt::format(" (link {})", *link));
+      fmt::print("  bootloader {} at 0x{:05X}; application: {}\n", opt.bootloader_hex,
+                 sb.board().resetAddress(), flashAppName(sb.app()));
+      fmt::print("  plant: {}\n", sb.rigText());
+      fmt::print("use it as the board's port:\n");
+      fmt::print("  thrustcal board flash --port {} build/avr/firmware/gather_store/gather_store.hex\n", port);
+      fmt::print("  avrdude -p m2560 -c wiring -P {} -b 115200 -D -U flash:w:IMAGE.hex:i\n", port);
+      fmt::print("  screen {} 115200\n", port);
+      fmt::print("Ctrl-C here ends the simulation{}.\n",
+                 *read_only || eeprom->empty() ? "" : " and saves the EEPROM to " + *eeprom);
+      std::fflush(stdout);
+      std::signal(SIGINT, onSignal);
+      std::signal(SIGTERM, onSignal);
+      sb.link().run(*pacing, *duration, g_stop);
+      if (!*read_only && !eeprom->empty()) {
+        writeIntelHexFile(*eeprom, sb.board().eeprom());
+        fmt::print("EEPROM saved: {}\n", *eeprom);
+      }
+      fmt::print("{:.1f} s simulated, {} reset(s) by clients; the simulation alone ran at {:.1f}x "
+                 "real time\n",
+                 sb.board().simulatedSeconds(), sb.link().clientResets(),
+                 sb.board().realtimeFactor());
+    });
+  });
+}
+
 void addFleet(CLI::App& sim) {
   auto* cmd = sim.add_subcommand(
       "fleet",
@@ -342,7 +453,7 @@ void addFleet(CLI::App& sim) {
       "  sim_summary.json   calibration.curve_error_max_g, calibration.motors[],\n"
       "                     liftoff.{calibrated,uncalibrated}.{thrust_spread_pct,\n"
       "                     force_error_rms_pct,hold_thrust_g,...}, sim.realtime_factor\n"
-      "  eeprom.hex         the calibrated EEPROM (avrdude -U eeprom:w:eeprom.hex:i)\n"
+      "  eeprom.hex         the calibrated EEPROM (thrustcal board eeprom put --port P eeprom.hex)\n"
       "  gather_slotK_curve1.csv, gather_slotK_curve2.csv   the streamed sweeps\n"
       "  gather_slotK_curves.csv                            stored vs true PWM per gram\n"
       "  liftoff_calibrated.csv, liftoff_uncalibrated.csv   10 ms time series");
@@ -431,6 +542,7 @@ void registerCommands(CLI::App& app) {
   addGather(*sim);
   addLiftoff(*sim);
   addConsole(*sim);
+  addBoard(*sim);
   addFleet(*sim);
 }
 

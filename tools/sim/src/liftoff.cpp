@@ -2,15 +2,21 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
 
+#include "board/console_client.hpp"
+#include "board/liftoff.hpp"
+#include "board/serial_port.hpp"
+#include "board/transfer.hpp"
 #include "plant/quad_frame.hpp"
 #include "plant/sensors.hpp"
 #include "sim/board.hpp"
 #include "sim/console.hpp"
+#include "sim/pty_bridge.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
 
@@ -18,8 +24,30 @@ namespace sim {
 
 QuadRig::QuadRig(const std::string& elf, const plant::QuadFrameParams& params,
                  const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s)
-    : board(elf), quad(params, motors), vsense(plant::BatterySensorParams{}),
+    : owned(std::make_unique<Board>(elf)), board(*owned), quad(params, motors),
+      vsense(plant::BatterySensorParams{}),
       sample_every(std::max<int>(1, static_cast<int>(std::lround(sample_period_s * 1000)))) {
+  wire();
+}
+
+QuadRig::QuadRig(const FlashImages& images, const plant::QuadFrameParams& params,
+                 const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s)
+    : owned(std::make_unique<Board>(images)), board(*owned), quad(params, motors),
+      vsense(plant::BatterySensorParams{}),
+      sample_every(std::max<int>(1, static_cast<int>(std::lround(sample_period_s * 1000)))) {
+  wire();
+}
+
+QuadRig::QuadRig(Board& existing, const plant::QuadFrameParams& params,
+                 const std::array<plant::ActuatorParams, 4>& motors, double sample_period_s)
+    : board(existing), quad(params, motors), vsense(plant::BatterySensorParams{}),
+      sample_every(std::max<int>(1, static_cast<int>(std::lround(sample_period_s * 1000)))) {
+  wire();
+}
+
+void QuadRig::wire() {
+  board.clearPlantWiring();
+  last_t = board.timeS();
   board.addPulseListener(
       [this](int ch, double width_us, double t_s) { quad.setPulse(ch, width_us, t_s); });
   board.setAdcSource([this](int ch) { return ch == 1 ? vsense.adcMillivolts() : 0.0; });
@@ -52,6 +80,121 @@ std::vector<std::string> bootReadRun(Console& con) {
   return con.waitPrompt(10.0);
 }
 
+namespace {
+
+// One flown lift-off: the rig (its samples), the times of the command, the hold and the end
+// (simulated seconds, -1 when not seen), read_run's boot lines and the console's last lines.
+struct Flight {
+  std::unique_ptr<QuadRig> rig;
+  double t_cmd = -1, t_hold = -1, t_done = -1;
+  std::vector<std::string> boot;
+  std::string tail;
+};
+
+// The line listener both paths share: the simulated times of "# hold" and "# liftoff done".
+auto phaseTimes(Flight& f, const std::string& mode, const ProgressFn& progress) {
+  return [&f, mode, progress](const std::string& line) {
+    if (line.rfind("# hold", 0) == 0) f.t_hold = f.rig->board.timeS();
+    if (line.rfind("# liftoff done", 0) == 0) f.t_done = f.rig->board.timeS();
+    if (line.rfind("# t ", 0) == 0) progress(fmt::format("liftoff ({}): {}", mode, line.substr(2)));
+  };
+}
+
+// read_run typed into straight through the simulated UART (simulated time only).
+Flight flyInProcess(const LiftoffOptions& o, const plant::QuadFrameParams& qp,
+                    const std::array<plant::ActuatorParams, 4>& motors,
+                    const std::vector<uint8_t>& eeprom, const std::string& mode,
+                    const ProgressFn& progress) {
+  Flight f;
+  f.rig = std::make_unique<QuadRig>(o.elf_path, qp, motors, o.sample_period_s);
+  auto& rig = f.rig;
+  rig->board.setEeprom(eeprom);
+  Console con(rig->board, "rr> ");
+  progress(fmt::format("liftoff ({}): read_run booting, seeds {} {} {} {}", mode, o.seeds[0],
+                       o.seeds[1], o.seeds[2], o.seeds[3]));
+  f.boot = bootReadRun(con);
+  con.onLine(phaseTimes(f, mode, progress));
+  rig->recording = true;
+  f.t_cmd = rig->board.timeS();
+  con.send(fmt::format("liftoff {} {} {}", static_cast<int>(std::lround(o.force_g)), o.ramp_ms,
+                       o.hold_ms));
+  // The lift-off stops when the link goes quiet for 500 ms: an empty line every 200 ms keeps it.
+  con.setKeepAlive(0.2);
+  const auto end = con.expect("^(# liftoff (done|aborted|stopped).*|error: .*)$",
+                              (o.ramp_ms + o.hold_ms) / 1000.0 + 5.0);
+  con.setKeepAlive(0);
+  if (end[0].rfind("error:", 0) == 0)
+    throw std::runtime_error(fmt::format("read_run refused the lift-off: {}", end[0]));
+  con.waitPrompt(1.0);
+  rig->board.runFor(0.5);  // spin-down
+  rig->recording = false;
+  con.clearLineListeners();
+  f.tail = con.tail();
+  return f;
+}
+
+// read_run as a user's cable reaches it: the board boots from the bootloader behind a pty and
+// `thrustcal board liftoff`'s client code flies it (stream on, liftoff, stream off).
+Flight flyOverPty(const LiftoffOptions& o, const plant::QuadFrameParams& qp,
+                  const std::array<plant::ActuatorParams, 4>& motors,
+                  const std::vector<uint8_t>& eeprom, const std::string& mode,
+                  const ProgressFn& progress) {
+  Flight f;
+  f.rig = std::make_unique<QuadRig>(FlashImages{o.bootloader_hex, o.elf_path}, qp, motors,
+                                    o.sample_period_s);
+  auto& rig = f.rig;
+  rig->board.setEeprom(eeprom);
+  // The phase lines, timed in the simulation's thread as they leave the board.
+  std::string line;
+  auto on_phase = phaseTimes(f, mode, progress);
+  rig->board.addOutputListener([&line, on_phase](uint8_t byte) {
+    if (byte == '\n') {
+      on_phase(line);
+      line.clear();
+    } else if (byte != '\r' && line.size() < 200) {
+      line.push_back(static_cast<char>(byte));
+    }
+  });
+  PtyOptions po;
+  po.reset_on_open = true;
+  PtyBridge link(rig->board, po);
+  link.start(Pacing{1.0, 0.0});
+  progress(fmt::format("liftoff ({}): board on {}: reset, bootloader, read_run, seeds {} {} {} {}",
+                       mode, link.path(), o.seeds[0], o.seeds[1], o.seeds[2], o.seeds[3]));
+  board::LiftoffOptions lo;
+  lo.force_g = static_cast<int>(std::lround(o.force_g));
+  lo.ramp_ms = o.ramp_ms;
+  lo.hold_ms = o.hold_ms;
+  try {
+    board::SerialPort port(link.path());
+    board::ConsoleClient con(port);
+    f.boot = con.waitForBoot(board::kBootTimeoutS);
+    board::flyLiftoff(con, lo, [&](const std::string&) {
+      link.paused([&] {
+        rig->recording = true;
+        f.t_cmd = rig->board.timeS();
+      });
+      return true;
+    });
+    f.tail = con.tail();
+  } catch (...) {
+    try {
+      link.stop();  // a crashed firmware says more than the client's time-out
+    } catch (const std::exception& e) {
+      throw std::runtime_error(fmt::format("liftoff ({}): {}", mode, e.what()));
+    }
+    throw;
+  }
+  link.paused([&] {
+    rig->board.runFor(0.5);  // spin-down
+    rig->recording = false;
+  });
+  link.stop();  // the board is not run again: the listener above refers to this frame
+  return f;
+}
+
+}  // namespace
+
 LiftoffResult runLiftoff(const LiftoffOptions& o) {
   const ProgressFn progress = o.progress ? o.progress : ProgressFn(stderrProgress);
   LiftoffResult r;
@@ -77,12 +220,16 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
   qp.power = plant::BatteryParams::lipo3s(o.lipo_soc);
   std::array<plant::ActuatorParams, 4> motors;
   for (int i = 0; i < 4; ++i) motors[i] = motorForSeed(o.preset, o.seeds[i], o.variation);
-  auto rig = std::make_unique<QuadRig>(o.elf_path, qp, motors, o.sample_period_s);
-  rig->board.setEeprom(eeprom);
-  Console con(rig->board, "rr> ");
-  progress(fmt::format("liftoff ({}): read_run booting, seeds {} {} {} {}", r.mode, o.seeds[0],
-                       o.seeds[1], o.seeds[2], o.seeds[3]));
-  for (const auto& line : bootReadRun(con)) {
+  const auto session0 = std::chrono::steady_clock::now();
+  r.link = o.link;
+  Flight f = o.link == GatherLink::kPty ? flyOverPty(o, qp, motors, eeprom, r.mode, progress)
+                                        : flyInProcess(o, qp, motors, eeprom, r.mode, progress);
+  r.session_wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - session0).count();
+  auto& rig = f.rig;
+  const double t_cmd = f.t_cmd, t_done = f.t_done;
+  double t_hold = f.t_hold;
+  for (const auto& line : f.boot) {
     if (line.rfind("motor ", 0) == 0 || line.rfind("calibrated motors", 0) == 0)
       r.calibration_report.push_back(line);
     int slot = -1;  // "motor K: ok, ... model v1 (...)" / "motor K: ok, model v2 (...)"
@@ -90,31 +237,9 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
       for (const char* model : {"v1", "v2"})
         if (line.find(std::string("model ") + model) != std::string::npos) r.models[slot] = model;
   }
-
-  double t_hold = -1, t_done = -1;
-  con.onLine([&](const std::string& line) {
-    if (line.rfind("# hold", 0) == 0) t_hold = rig->board.timeS();
-    if (line.rfind("# liftoff done", 0) == 0) t_done = rig->board.timeS();
-    if (line.rfind("# t ", 0) == 0) progress(fmt::format("liftoff ({}): {}", r.mode, line.substr(2)));
-  });
-  rig->recording = true;
-  const double t_cmd = rig->board.timeS();
-  con.send(fmt::format("liftoff {} {} {}", static_cast<int>(std::lround(o.force_g)), o.ramp_ms,
-                       o.hold_ms));
-  // The lift-off stops when the link goes quiet for 500 ms: an empty line every 200 ms keeps it.
-  con.setKeepAlive(0.2);
-  const auto end = con.expect("^(# liftoff (done|aborted|stopped).*|error: .*)$",
-                              (o.ramp_ms + o.hold_ms) / 1000.0 + 5.0);
-  con.setKeepAlive(0);
-  if (end[0].rfind("error:", 0) == 0)
-    throw std::runtime_error(fmt::format("read_run refused the lift-off: {}", end[0]));
-  con.waitPrompt(1.0);
-  rig->board.runFor(0.5);  // spin-down
-  rig->recording = false;
-  con.clearLineListeners();
   if (t_done < 0)
     throw std::runtime_error(fmt::format("read_run did not finish the lift-off; last lines:\n{}",
-                                         con.tail()));
+                                         f.tail));
   if (t_hold < 0) t_hold = t_cmd + o.ramp_ms / 1000.0;
 
   // Hold-phase summary.
@@ -203,6 +328,8 @@ nlohmann::json LiftoffResult::toJson() const {
           {"csv", csv_path},
           {"simulated_s", simulated_s},
           {"wall_s", wall_s},
+          {"session_wall_s", session_wall_s},
+          {"link", gatherLinkName(link)},
           {"realtime_factor", realtime_factor}};
 }
 

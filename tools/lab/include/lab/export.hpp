@@ -45,11 +45,32 @@ struct ExportResult {
   std::vector<std::string> notes;
 };
 
+// The limits a record must meet (core's; see export.cpp), in the lab's units.
+struct RecordLimitsForExport {
+  double start_min_us = 800, start_max_us = 1800;  // ESC start threshold
+  double rest_min_v = 6.0, rest_max_v = 17.5;      // resting pack voltage
+  double force_min_g = 13.2, force_max_g = 6553.5; // largest force of the curve
+  double pwm_min_us = 1000, pwm_max_us = 2000;     // ESC pulse range of the data
+  double max_sag_pct = 100;                        // battery sag, percent of the resting voltage
+  const char* source = "";                         // where the values come from
+};
+RecordLimitsForExport recordLimits();
+constexpr std::size_t kMinExportPwmLevels = 8;
+constexpr double kDefaultMaxErrorPct = 3.0;
+
+// Data a record should not be made from: PWMs outside the ESC range, too few rows or PWMs.
+// Throws std::invalid_argument saying which limit failed, the value, and what to do.
+void checkExportData(const Dataset& data);
+
 // Fits `spec` on `data` (one motor), maps it onto a ModelV2 and writes it into `slot` of
 // `eeprom` (kEepromBytes) as a power-fail-safe next-sequence write; other slots untouched.
-// Throws std::invalid_argument (refused effect, missing vbat_v, a curve the record cannot
-// hold) or std::runtime_error (the write did not verify); `eeprom` is untouched then.
+// Refuses (std::invalid_argument naming the failing limit, its value and what to do) an effect
+// the firmware cannot run, data that cannot make a right record (see checkExportData, force
+// falling as the drive rises), a fit whose error on its own data, or whose record flown at the
+// data's PWMs and voltages, misses the measured force by more than `max_error_pct` of the
+// largest force (RMS), and a record outside core's limits;
+// std::runtime_error when the write did not verify. `eeprom` is untouched on any failure.
 ExportResult exportModel(const Dataset& data, const ModelSpec& spec, uint8_t slot,
-                         std::vector<uint8_t>& eeprom);
+                         std::vector<uint8_t>& eeprom, double max_error_pct = kDefaultMaxErrorPct);
 
 }  // namespace lab

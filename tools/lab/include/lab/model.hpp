@@ -10,6 +10,7 @@
 //   M       = product of the multiplicative effects   (motor, thermal, density, drift, mul:)
 //   A       = sum of the additive effects             (add:)
 #pragma once
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -60,6 +61,8 @@ struct Param {
   std::string effect;
   double value = 0;
   double sigma = 0;  // one standard uncertainty from the Jacobian (NaN when not determined)
+  bool at_bound = false;  // the fit stopped at a limit of the parameter's range
+  double bound = 0;       // that limit
 };
 
 struct FitResult {
@@ -87,11 +90,20 @@ class Model {
   Model(const ModelSpec& spec, const Dataset& train);
   ~Model();
   Model(const Model&) = delete;
+  const ModelSpec& spec() const;  // as fitted (with the base effect)
   Model& operator=(const Model&) = delete;
 
-  // `warm`: parameters of a smaller model; the fit also starts from them (new effects switched
-  // off) and keeps the better of the two starts; `warm_only` skips the cold start.
-  FitResult fit(const std::vector<Param>* warm = nullptr, bool warm_only = false);
+  // `warm`: parameters of a smaller model; the fit also starts from them, the new effects at
+  // their neutral values (exactly the smaller model), and keeps the best of the starts, so it
+  // never fits worse than the smaller model; `warm_only` skips the cold start. Without `warm`
+  // the model one effect smaller is fitted first (recursively) and used as the warm start: a
+  // direct fit equals the ladder adding the same effects one by one. On more than 20,000 rows
+  // the nonlinear parameters are searched on evenly spaced rows; the curve, the errors and the
+  // uncertainties use every row. `uncertainties` false skips them (continuation, ranking refits;
+  // on more than 20,000 rows the per-row predictions too). `warm_rss`: the smaller model's RSS
+  // on these data (saves evaluating its optimum again), NaN when not known.
+  FitResult fit(const std::vector<Param>* warm = nullptr, bool warm_only = false, bool uncertainties = true,
+                double warm_rss = std::numeric_limits<double>::quiet_NaN());
   // Prediction of the fitted model on other data (same columns needed). NaN where it cannot.
   std::vector<double> predict(const Dataset& data) const;
   // The voltage the motor sees per row (vbat_v after the fitted sag; NaN without vbat_v):
@@ -108,7 +120,8 @@ class Model {
 
 // Fits `spec` on `data`.
 FitResult fitModel(const Dataset& data, const ModelSpec& spec, const std::vector<Param>* warm = nullptr,
-                   bool warm_only = false);
+                   bool warm_only = false, bool uncertainties = true,
+                   double warm_rss = std::numeric_limits<double>::quiet_NaN());
 
 // Adds derived candidate columns: rho_kg_m3 (from temp_c and a pressure column) and dpwm_us
 // (the PWM step from the previous sample of the same run: what a lag responds to).

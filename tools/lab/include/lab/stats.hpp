@@ -11,6 +11,9 @@ namespace lab {
 // set; the others are free). Columns that are all zero get 0.
 Eigen::VectorXd nnls(const Eigen::MatrixXd& A, const Eigen::VectorXd& b,
                      const std::vector<bool>& nonneg);
+// The same from the normal equations A^T A and A^T b (the n x k matrix need not be stored).
+Eigen::VectorXd nnlsGram(const Eigen::MatrixXd& AtA, const Eigen::VectorXd& Atb,
+                         const std::vector<bool>& nonneg);
 
 // P(F > f) for an F(d1, d2) variable.
 double fSurvival(double f, double d1, double d2);

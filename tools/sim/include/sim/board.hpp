@@ -11,6 +11,10 @@
 //   Reset     a watchdog reset (simavr's) or one the host asks for (external, brown-out,
 //             power-on) restarts the firmware in the same board: every pin is released (a pulse
 //             in progress ends there), the reset flags say why, SRAM survives except at power-on.
+//   Flash     the application alone (started at 0, as the HIL tests always did), or behind a
+//             bootloader (Intel HEX, e.g. Debian's STK500v2 for the Mega2560 at byte 0x3E000):
+//             then every reset() starts at the bootloader, as a board whose BOOTRST fuse is
+//             programmed (simavr ignores the fuses, so the harness sets the reset vector).
 // A periodic tick (default 1 ms simulated) lets a plant model advance in step with the CPU.
 //
 // Time is simulated cycles only: the firmware's idle sleep skips ahead (the sleep callback is
@@ -34,6 +38,7 @@ namespace sim {
 constexpr uint32_t kCpuHz = 16000000;
 constexpr int kEscChannels = 4;
 constexpr std::size_t kEepromBytes = 4096;
+constexpr std::size_t kFlashBytes = 256 * 1024;
 
 inline uint64_t secondsToCycles(double s) { return static_cast<uint64_t>(s * kCpuHz + 0.5); }
 inline double cyclesToSeconds(uint64_t c) { return static_cast<double>(c) / kCpuHz; }
@@ -58,6 +63,17 @@ struct EscPin {
   bool high = false;
 };
 
+// What the board's flash holds at power-on.
+struct FlashImages {
+  // Intel HEX of a bootloader; its lowest address is the boot section start (0x3E000 for the
+  // Mega2560's STK500v2). "" = no bootloader: reset starts the application at address 0.
+  std::string bootloader_hex;
+  // The application: an ELF (.elf; its .mmcu tag and .eeprom section are honoured) or an
+  // Intel HEX flash image (anything else). "" = application flash erased (0xFF), as on a board
+  // that holds only its bootloader.
+  std::string application;
+};
+
 class Board {
  public:
   // Millivolts on ADC channel `channel` (0..15) at the moment a conversion starts.
@@ -75,6 +91,10 @@ class Board {
   // or is not an AVR ELF. The EEPROM starts erased (all 0xFF) unless the ELF has an .eeprom
   // section.
   explicit Board(const std::string& elf_path);
+  // A board from a bootloader and/or an application (see FlashImages). Throws BoardError when
+  // a file cannot be read, is not for the atmega2560, or the application overlaps the
+  // bootloader.
+  explicit Board(const FlashImages& images);
   ~Board();
   Board(const Board&) = delete;
   Board& operator=(const Board&) = delete;
@@ -86,6 +106,13 @@ class Board {
   void addPulseListener(PulseListener listener) { pulse_listeners_.push_back(std::move(listener)); }
   void addOutputListener(ByteListener listener) { output_listeners_.push_back(std::move(listener)); }
   void addResetListener(ResetListener listener) { reset_listeners_.push_back(std::move(listener)); }
+  // Forgets the ADC source, the tick hook and the pulse listeners (not the output listeners):
+  // a new plant is about to be wired to this board.
+  void clearPlantWiring() {
+    adc_source_ = nullptr;
+    tick_hook_ = nullptr;
+    pulse_listeners_.clear();
+  }
 
   // --- ESC pins ---
   const EscPin& escPin(int channel) const { return esc_.at(channel); }
@@ -122,6 +149,21 @@ class Board {
   int resets() const { return resets_; }  // watchdog and requested resets since construction
   uint64_t lastResetCycle() const { return last_reset_cycle_; }
 
+  // --- reset and flash ---
+  // An external reset (what the DTR pulse of a USB-serial adapter does to an Arduino): the CPU
+  // and every peripheral restart at the reset vector (the bootloader when there is one); the
+  // flash (including what a bootloader wrote to it), the EEPROM, simulated time and the wiring
+  // are kept; input not yet delivered to the UART is dropped. ESC outputs fall silent until
+  // the firmware drives them again.
+  void reset();
+  // Byte address the CPU starts at after reset (the boot section, or 0).
+  uint32_t resetAddress() const;
+  bool hasBootloader() const { return boot_address_ != 0; }
+  // True while the CPU executes the boot section (the bootloader), false in the application.
+  bool inBootloader() const;
+  // The whole flash (kFlashBytes), e.g. to compare with what avrdude wrote.
+  std::vector<uint8_t> flash() const;
+
   // --- running ---
   uint64_t cycle() const;
   double timeS() const { return cyclesToSeconds(cycle()); }
@@ -154,6 +196,9 @@ class Board {
   static uint64_t eepeClear(avr_t* avr, uint64_t when, void* param);
   void afterReset();
 
+  void load(const FlashImages& images);
+  void wire();
+  void armTick();
   void escEdge(int channel, bool level);
   void armRx();
   uint64_t cyclesPerByte() const;
@@ -189,6 +234,7 @@ class Board {
   double wall_s_ = 0;
   double simulated_s_ = 0;
   std::vector<avr_irq_t*> irqs_;
+  uint32_t boot_address_ = 0;  // 0: no bootloader
 };
 
 }  // namespace sim

@@ -1,7 +1,11 @@
 // The virtual bench scenarios behind `thrustcal sim gather|liftoff` (and the HIL tests):
 // the real firmware images on a simulated board wired to the plant model.
 //
-// gather:  gather_store on the thesis bench (plant::Bench: one motor on the load-cell plate).
+// gather:  gather_store on the thesis bench (plant::Bench: one motor on the load-cell plate),
+//          reached the way a user's cable reaches it: the board boots from the Mega2560's
+//          bootloader behind a pty and `thrustcal board calibrate`'s client code (tools/board)
+//          drives the workflow (GatherLink::kPty); kInProcess types into the simulated UART
+//          directly, in simulated time only, which is reproducible byte for byte.
 //          Per motor: motor K, plate 60, cal W (W = motor + propeller weight), sweep on a full
 //          3S LiPo -> store 1, swap the power for a bench supply at another voltage (or drain
 //          the pack) -> tare, sweep -> store 2, show. The EEPROM image is kept across motors.
@@ -11,7 +15,8 @@
 //          the model); the stored model is checked at each sweep's conditions the same way.
 // liftoff: read_run on the tethered quad (plant::QuadFrame, four varied motors, one LiPo):
 //          "liftoff G RAMP HOLD"; thrust, moments and tilt are logged; the hold phase is
-//          summarized. Uncalibrated = every slot holds the reference slot's record, so all four
+//          summarized. Over the pty (kPty, default) the board boots from the bootloader and
+//          `thrustcal board liftoff`'s client code flies it (stream on, liftoff, stream off). Uncalibrated = every slot holds the reference slot's record, so all four
 //          ESCs get the same PWM (what one generic curve gives).
 #pragma once
 #include <array>
@@ -39,9 +44,15 @@ enum class SecondCurveSource { kBenchSupply, kDrainedPack };
 // model v2 (store v2 after both sweeps: fitted from the first, refined by the second).
 enum class GatherModel { kThesisV1, kModelV2 };
 const char* gatherModelName(GatherModel model);  // "v1" / "v2"
+// How the scenario reaches gather_store (see the top of this file).
+enum class GatherLink { kPty, kInProcess };
+const char* gatherLinkName(GatherLink link);  // "pty" / "in-process"
 
 struct GatherOptions {
   std::string elf_path;                 // gather_store.elf
+  GatherLink link = GatherLink::kPty;
+  std::string bootloader_hex =          // kPty: the bootloader in the boot section
+      "/usr/share/arduino/hardware/arduino/avr/bootloaders/stk500v2/stk500boot_v2_mega2560.hex";
   std::string preset = "kv1100_9x4.7";
   std::vector<uint64_t> seeds = {1};    // one varied motor per seed ...
   std::vector<int> slots = {0};         // ... calibrated into this slot (same length)
@@ -97,12 +108,15 @@ struct GatherMotorResult {
 
 struct GatherResult {
   GatherModel model = GatherModel::kThesisV1;
+  GatherLink link = GatherLink::kPty;
+  double session_wall_s = 0;     // wall clock of the whole run (pty: bootloader waits included)
   std::vector<GatherMotorResult> motors;
   std::vector<uint8_t> eeprom;
   double curve_error_max_g = 0;  // worst over all motors and both curves
-  double simulated_s = 0, wall_s = 0, realtime_factor = 0;
+  double simulated_s = 0, wall_s = 0, realtime_factor = 0;  // wall_s: inside the simulator
   double sweep_realtime_factor = 0;  // simulated / wall during sweeps only
-  // v1: calibration.{curve_error_max_g, motors}; v2: calibration.v2.{...} (same keys)
+  // v1: calibration.{curve_error_max_g, motors}; v2: calibration.v2.{...} (same keys);
+  // sim.{link, session_wall_s, ...}
   nlohmann::json toJson() const;
 };
 
@@ -112,6 +126,9 @@ GatherResult runGather(const GatherOptions& options);
 
 struct LiftoffOptions {
   std::string elf_path;                       // read_run.elf
+  GatherLink link = GatherLink::kPty;         // how the scenario reaches read_run
+  std::string bootloader_hex =                // kPty: the bootloader in the boot section
+      "/usr/share/arduino/hardware/arduino/avr/bootloaders/stk500v2/stk500boot_v2_mega2560.hex";
   std::vector<uint8_t> eeprom;                // calibrated image (from gather)
   std::string preset = "kv1100_9x4.7";
   std::array<uint64_t, 4> seeds = {1, 2, 3, 4};  // the same seeds as at gather, per slot
@@ -148,6 +165,8 @@ struct LiftoffResult {
   std::vector<std::string> calibration_report;  // read_run's boot lines about the slots
   std::vector<LiftoffSample> samples;
   double simulated_s = 0, wall_s = 0, realtime_factor = 0;
+  double session_wall_s = 0;              // wall clock of the whole run (pty: boot included)
+  GatherLink link = GatherLink::kPty;
   std::string csv_path;
   nlohmann::json toJson() const;
 };

@@ -1,0 +1,8 @@
+// `thrustcal board`: a real (or simulated) Mega2560 on a serial port: flash, eeprom put|get,
+// calibrate, liftoff.
+#pragma once
+#include <CLI/CLI.hpp>
+
+namespace board {
+void registerCommands(CLI::App& app);
+}  // namespace board
