@@ -921,6 +921,8 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "tst  r14\n\t"
       "breq 14f\n\t"
       // small motor: inv = 2^16 / step, force * inv * 2^8: index = byte 2, fraction = bytes 1..0
+      // (the knot multiply below again, out of line: the other models' fine runs pay 4 cycles
+      // for the flag test and no branch back into a shared multiply)
       "mul  r12, r22\n\t"
       "movw r18, r0\n\t"
       "mul  r13, r23\n\t"

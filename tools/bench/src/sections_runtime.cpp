@@ -1,5 +1,5 @@
-// Benchmark 6 (runtime) and the stack figures of benchmark 3: the real read_run and gather_store
-// images in simavr, stepped one instruction at a time so that every cycle is attributed.
+// Benchmark 6 (runtime): the real read_run image in simavr, stepped one instruction at a time so
+// that every cycle is attributed.
 //
 // read_run flies the tethered quad (tools/sim's QuadRig: four varied KV1100 + 9x4.7 motors on one
 // 3S LiPo at 50 % charge) through `liftoff 300 1000 3000` (commands change every frame during the
@@ -14,12 +14,13 @@
 //   V2Frame::fly  the same for the v2 frame alone (benchmark 2 measures it without interrupts);
 //   loop period   the longest time between two entries of rr::ReadRunApp::runOnce (normal
 //                 running, with the lift-off's progress lines; the flood case is another bench).
-// Stacks: the SRAM between the end of .bss and the top is painted before reset; after a boot and a
-// lift-off (read_run) or a calibration with every store and show (gather_store), the lowest byte
-// changed is the stack's high-water mark.
+// Stack: the SRAM between the end of .bss and the top is painted before reset; after the boot and
+// the lift-off the lowest byte changed is the stack's high-water mark (benchmark 3's stack rows
+// are sections_safety.cpp's, after the deepest paths).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -61,8 +62,6 @@ Section runtimeSection(const AvrPaths&) {
   return s;
 }
 
-StackFigures measureStacks(const AvrPaths&) { return StackFigures{}; }
-
 #else
 
 namespace {
@@ -85,13 +84,15 @@ std::map<std::string, Symbol> symbols(const std::string& elf) {
   std::map<std::string, Symbol> out;
   char line[512];
   while (fgets(line, sizeof line, p.get())) {
-    char name[400];
-    unsigned addr = 0, size = 0;
-    char type = 0;
-    if (std::sscanf(line, "%x %x %c %399s", &addr, &size, &type, name) == 4) {
-      out[name] = {addr, size};
-    } else if (std::sscanf(line, "%x %c %399s", &addr, &type, name) == 3) {
-      out[name] = {addr, 0};
+    // "ADDR SIZE TYPE NAME" or "ADDR TYPE NAME": split into words first (a type letter such
+    // as B or D also reads as a hex size).
+    char w[4][400];
+    const int n = std::sscanf(line, "%399s %399s %399s %399s", w[0], w[1], w[2], w[3]);
+    if (n == 4) {
+      out[w[3]] = {static_cast<uint32_t>(std::strtoul(w[0], nullptr, 16)),
+                   static_cast<uint32_t>(std::strtoul(w[1], nullptr, 16))};
+    } else if (n == 3) {
+      out[w[2]] = {static_cast<uint32_t>(std::strtoul(w[0], nullptr, 16)), 0};
     }
   }
   return out;
@@ -297,8 +298,16 @@ FlightFigures flyReadRun(const std::string& elf, const std::vector<uint8_t>& eep
   const uint64_t budget = sim::secondsToCycles(8.0);
   bool done = false;
   uint64_t instructions = 0;
+  // read_run's lift-off stops without a line end for 500 ms: an empty line every 200 ms, as
+  // board liftoff sends them
+  const uint64_t keepalive = sim::secondsToCycles(0.2);
+  uint64_t next_keepalive = start + keepalive;
   while (!done && avr->cycle - start < budget) {
     const uint64_t before = avr->cycle, slept_before = g_slept;
+    if (before >= next_keepalive) {
+      con.send("");
+      next_keepalive += keepalive;
+    }
     if (avr->state != cpu_Sleeping && avr->pc == run_once) {
       if (last_loop) {
         const uint64_t period = before - last_loop;
@@ -323,11 +332,13 @@ FlightFigures flyReadRun(const std::string& elf, const std::vector<uint8_t>& eep
     if ((++instructions & 0x3FFF) == 0 && rig.board.output().size() != seen) {
       const std::string& out = rig.board.output();
       done = out.find("# liftoff done", seen > 64 ? seen - 64 : 0) != std::string::npos ||
-             out.find("# liftoff aborted", seen > 64 ? seen - 64 : 0) != std::string::npos;
+             out.find("# liftoff aborted", seen > 64 ? seen - 64 : 0) != std::string::npos ||
+             out.find("# liftoff stopped", seen > 64 ? seen - 64 : 0) != std::string::npos;
       seen = out.size();
     }
   }
-  if (!done) throw std::runtime_error("read_run did not finish the lift-off in the runtime bench:\n" + con.tail());
+  if (!done || rig.board.output().find("# liftoff done") == std::string::npos)
+    throw std::runtime_error("read_run did not finish the lift-off in the runtime bench:\n" + con.tail());
   const uint64_t total = avr->cycle - start;
   f.simulated_s = sim::cyclesToSeconds(total);
   f.cpu_load_pct = total ? 100.0 * static_cast<double>(awake) / static_cast<double>(total) : 0.0;
@@ -348,65 +359,7 @@ FlightFigures flyReadRun(const std::string& elf, const std::vector<uint8_t>& eep
   return f;
 }
 
-std::vector<std::string> mustCommand(sim::Console& con, const std::string& line, double budget_s) {
-  const std::vector<std::string> lines = con.command(line, budget_s);
-  for (const std::string& l : lines)
-    if (l.rfind("error:", 0) == 0) throw std::runtime_error(fmt::format("gather_store refused `{}`: {}", line, l));
-  return lines;
-}
-
-// gather_store through a calibration with the default sweep and every store and show.
-uint32_t gatherStoreStack(const std::string& elf, std::string& scenario) {
-  plant::BenchParams params = plant::BenchParams::thesis(kPreset);
-  params.actuator = sim::motorForSeed(kPreset, kSeeds[0], kVariation);
-  sim::BenchRig rig(elf, params, 0);
-  const uint16_t heap_start = paintStack(rig.board, elf);
-  sim::Console con(rig.board, "gs> ");
-  con.waitPrompt(10.0);
-  mustCommand(con, "motor 0", 5);
-  mustCommand(con, fmt::format("plate {}", static_cast<int>(std::lround(params.load_cell.plate_g))), 5);
-  mustCommand(con, "range 1040 1800", 5);
-  mustCommand(con, fmt::format("cal {}", static_cast<int>(std::round(params.actuator.mountWeight_g()))), 15);
-  mustCommand(con, "sweep", 100);
-  mustCommand(con, "store v2", 15);
-  mustCommand(con, "show", 15);
-  mustCommand(con, "store 1", 15);
-  mustCommand(con, "show", 15);
-  mustCommand(con, "status", 15);
-  scenario = "boot, cal, the default sweep 1040-1800 us, store v2, show, store 1, show, status";
-  return stackHighWater(rig.board, heap_start);
-}
-
 }  // namespace
-
-StackFigures measureStacks(const AvrPaths& paths) {
-  static StackFigures cached;
-  static std::string done_for;
-  const std::string key = paths.elf("gather_store") + "|" + paths.elf("read_run");
-  if (done_for == key) return cached;
-  done_for = key;
-  cached = StackFigures{};
-  try {
-    if (std::filesystem::exists(paths.elf("gather_store"))) {
-      std::cerr << "bench: gather_store in simavr for its stack (calibration, stores, shows)\n";
-      cached.gather_store_bytes = gatherStoreStack(paths.elf("gather_store"), cached.gather_store_scenario);
-    }
-    if (std::filesystem::exists(paths.elf("read_run"))) {
-      std::cerr << "bench: read_run in simavr for its stack (boot with four thesis records, lift-off)\n";
-      // The thesis records: the loader decodes the biggest record at start-up.
-      const FlightFigures f = flyReadRun(paths.elf("read_run"), benchRecords().v1, "v1", 50);
-      cached.read_run_bytes = f.stack_bytes;
-      cached.read_run_scenario = "boot with four thesis records, liftoff 300 1000 3000 at 50 Hz";
-      const FlightFigures g = flyReadRun(paths.elf("read_run"), benchRecords().v2, "v2", 400);
-      cached.read_run_bytes = std::max(cached.read_run_bytes, g.stack_bytes);
-      cached.read_run_scenario += "; the same with four v2 records at 400 Hz";
-    }
-    cached.available = true;
-  } catch (const std::exception& e) {
-    cached.reason = e.what();
-  }
-  return cached;
-}
 
 Section runtimeSection(const AvrPaths& paths) {
   Section s;

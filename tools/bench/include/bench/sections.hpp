@@ -37,16 +37,6 @@ struct AvrPaths {
   std::string elf(const std::string& image) const;  // <avr_build>/firmware/<image>/<image>.elf
 };
 
-// Stack high-water marks of the two images, measured in simavr (sections_runtime.cpp).
-struct StackFigures {
-  bool available = false;
-  std::string reason;             // why not, when not available
-  uint32_t gather_store_bytes = 0;
-  uint32_t read_run_bytes = 0;
-  std::string gather_store_scenario, read_run_scenario;
-};
-StackFigures measureStacks(const AvrPaths& paths);
-
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
 Section footprintSection(const AvrPaths& paths);
