@@ -33,10 +33,10 @@
 // The battery monitor's divider is a board setting (`divider`, default 100k/47k, stored in
 // EEPROM and shared with read_run): the sweep's volts come through it.
 //
-// SRAM (avr-size, MinSizeRel): 6106 bytes static (4929 before model v2: + 1030 fitter work
-// space for 128 samples, + 123 the ModelV2 buffer, + the flash copies of the fit reasons
-// instead of the core's SRAM strings); peak stack during store v2 1044 bytes, measured in
-// simavr (tests/hil_power), leaving about 1 KB never touched.
+// SRAM (avr-size, MinSizeRel): 5295 bytes static (the sweep's curve builder and store's / show's
+// record share one union, Scratch; model v2 adds 1030 bytes of fitter work space for 128
+// samples and the 124-byte ModelV2 buffer); `thrustcal bench footprint` measures the stack
+// left after the deepest paths in simavr.
 //
 // Console rules:
 //  - errors are one line starting "error: " that says what was wrong and what to do; a

@@ -48,10 +48,10 @@
 // running, whole ESC frame including the 1 ms ticks, the four ADC conversions and the median):
 //   50 Hz: four v1 motors 18816 cycles per frame, four v2 motors 16608;
 //   400 Hz: v1 28.0 % CPU, v2 23.8 %.
-// Peak stack 705 bytes, at start-up inside tc::loadSlot (two v2 copies decoded); about 170 in
-// the loop. Static SRAM 5257 bytes (avr-size; 5199 before v2), this object 5045: four
-// Motor structs of 1131 bytes (the SlotModel union is the 1114-byte v1 calibration; a v2
-// model alone is 123), the 414-byte battery median and the bus filter.
+// Static SRAM 1895 bytes (avr-size), this object 1388 (`thrustcal bench footprint`): four
+// slots of 169 bytes (rr::SlotModel: tc::ThesisRun 168 or tc::ModelV2Run 159), four Motor
+// structs of 198 with their slot, the V2Frame (58) and the 414-byte battery median. At start-up
+// tc::loadSlot decodes each record on the stack (tc::MotorCalibration 1114 + tc::ModelV2 124).
 #pragma once
 #include <stdint.h>
 

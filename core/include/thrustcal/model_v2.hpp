@@ -38,8 +38,8 @@
 // Divisions, counted: per frame 0, or 1 after a jump (filter re-seed); per motor 0.
 // headroomDg / forceForPwmDg (status command, not per frame) use one 32/32 division each.
 // Fitting (gather_store, once per sweep) uses 32/32 divisions freely.
-// Measured on the ATmega2560 in simavr (`thrustcal bench compute`, docs/performance.md):
-// V2Frame::fly for four motors (filter, sag prediction, flags) 962 cycles mean, 989 max;
+// Measured on the ATmega2560 in simavr (`thrustcal bench compute`, docs/results.md):
+// V2Frame::fly for four motors (filter, sag prediction, flags) 966 cycles mean, 991 max;
 // tests/core_v2/avr_cycles.sh: fit of a 101-sample sweep ~0.5 M cycles (31 ms), refine 0.28 M.
 //
 // Fitting on the board (ModelV2Fitter): one sweep of (pwm_us, force_dg, vbat_mv) samples as
