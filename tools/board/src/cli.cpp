@@ -1,5 +1,6 @@
 // `thrustcal board flash|eeprom put|eeprom get|calibrate|liftoff`.
 #include "board/cli.hpp"
+#include "thrustcal/record_limits.hpp"
 
 #include <unistd.h>
 
@@ -391,7 +392,7 @@ void addLiftoff(CLI::App& board) {
   auto yes = std::make_shared<bool>(false);
   auto no_strict = std::make_shared<bool>(false);
   cmd->add_option("--port,-P", *port, "serial port")->required();
-  cmd->add_option("--force", o->force_g, "grams per motor (1..500)")->required()->check(CLI::Range(1, 500));
+  cmd->add_option("--force", o->force_g, "grams per motor (1..5000, as read_run)")->required()->check(CLI::Range(1, int{tc::kRecordMaxForceG}));
   cmd->add_option("--ramp-ms", o->ramp_ms, "ramp time")->capture_default_str();
   cmd->add_option("--hold-ms", o->hold_ms, "hold time")->capture_default_str();
   cmd->add_option("-o,--output", *out, "CSV log of the stream")->capture_default_str();

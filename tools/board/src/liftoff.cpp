@@ -1,4 +1,5 @@
 #include "board/liftoff.hpp"
+#include "thrustcal/record_limits.hpp"
 
 #include <cctype>
 #include <chrono>
@@ -48,8 +49,9 @@ LiftoffLog flyLiftoff(ConsoleClient& con, const LiftoffOptions& o,
         "{} runs {}, not read_run; flash it first: thrustcal board flash --port {} "
         "build/avr/firmware/read_run/read_run.hex",
         con.port().path(), imageName(con.image()), con.port().path()));
-  if (o.force_g < 1 || o.force_g > 500)
-    throw std::invalid_argument(fmt::format("--force {}: read_run takes 1..500 g per motor", o.force_g));
+  if (o.force_g < 1 || o.force_g > tc::kRecordMaxForceG)
+    throw std::invalid_argument(fmt::format("--force {}: read_run takes 1..{} g per motor", o.force_g,
+                                            tc::kRecordMaxForceG));
   if (o.strict) log.checksums = con.enableStrict();
   const std::string what = fmt::format(
       "all four propellers spin up to {} g each ({} ms ramp, {} ms hold); the frame must be "
