@@ -157,6 +157,7 @@ Flight flyOverPty(const LiftoffOptions& o, const plant::QuadFrameParams& qp,
   });
   PtyOptions po;
   po.reset_on_open = true;
+  po.real_time_while = [&rig] { return anyEscAbove(rig->board); };  // the keep-alives' clock
   PtyBridge link(rig->board, po);
   link.start(Pacing{1.0, 0.0});
   progress(fmt::format("liftoff ({}): board on {}: reset, bootloader, read_run, seeds {} {} {} {}",

@@ -149,6 +149,12 @@ void PtyBridge::trackOutput(uint8_t byte) {
   if (command_running_ && isPrompt(out_line_)) command_running_ = false;
 }
 
+bool anyEscAbove(const Board& board, double us) {
+  for (int ch = 0; ch < kEscChannels; ++ch)
+    if (board.escPulseUs(ch) > us) return true;
+  return false;
+}
+
 bool PtyBridge::busy() const {
   if (board_.pendingInput() > 0 || command_running_) return true;
   return board_.timeS() - std::max(last_output_s_, last_input_s_) < kQuietAfterIoS;
@@ -250,9 +256,11 @@ void PtyBridge::loop(const Pacing& pacing, double duration_s, const std::atomic<
   }
   auto anchor_wall = Clock::now();
   bool was_busy = false;
+  bool was_real_time = false;
   while (!stop.load()) {
     while (pause_requests_.load() > 0) std::this_thread::yield();
     bool is_busy = false;
+    bool real_time = false;
     bool backlog = false;
     double sim_now = 0;
     {
@@ -260,11 +268,14 @@ void PtyBridge::loop(const Pacing& pacing, double duration_s, const std::atomic<
       if (duration_s > 0 && board_.timeS() - sim0 >= duration_s) break;
       serviceInput();
       is_busy = busy();
+      real_time = options_.real_time_while && options_.real_time_while();
       sim_now = board_.timeS();
-      if (is_busy != was_busy) {  // a new pace starts from here; no catching up across modes
+      if (is_busy != was_busy || real_time != was_real_time) {
+        // a new pace starts from here; no catching up across modes
         anchor_sim = sim_now;
         anchor_wall = Clock::now();
         was_busy = is_busy;
+        was_real_time = real_time;
       }
       // A client that does not keep up with the output holds the board back (no bytes lost).
       backlog = options_.reset_on_open && !hup_ && pending_out_.size() > kBackpressureBytes;
@@ -279,7 +290,8 @@ void PtyBridge::loop(const Pacing& pacing, double duration_s, const std::atomic<
       anchor_wall = Clock::now();
       continue;
     }
-    const double speed = is_busy ? pacing.busy_speed : pacing.idle_speed;
+    double speed = is_busy ? pacing.busy_speed : pacing.idle_speed;
+    if (real_time && (speed <= 0 || speed > 1.0)) speed = 1.0;
     if (speed <= 0) continue;
     const double due = (sim_now - anchor_sim) / speed;
     const double elapsed = std::chrono::duration<double>(Clock::now() - anchor_wall).count();

@@ -64,6 +64,9 @@ SimBoard::SimBoard(SimBoardOptions options) : o_(std::move(options)) {
   fitRig();
   PtyOptions po = o_.pty;
   po.reset_on_open = true;
+  // read_run keeps time for its failsafe and lift-off by the client's keep-alives: real time
+  // while its motors spin (gather_store's sweeps still run as fast as the host allows).
+  po.real_time_while = [this] { return app_ == FlashApp::kReadRun && anyEscAbove(*board_); };
   po.on_reset = [this, user = o_.pty.on_reset] {
     fitRig();
     if (user) user();

@@ -40,7 +40,14 @@ struct PtyOptions {
   // Runs right after a client reset the board, in the bridge's thread with the simulation
   // stopped (e.g. to wire the plant that fits the image now in flash).
   std::function<void()> on_reset;
+  // While this returns true (asked with the simulation stopped), the board runs at most at real
+  // time, busy or not: read_run counts the client's keep-alive lines in its own time (failsafe,
+  // lift-off: 500 ms), and a client keeps time by the wall clock, as with a real board.
+  std::function<bool()> real_time_while;
 };
+
+// True while any ESC output pulses wider than `us` (a motor spins).
+bool anyEscAbove(const Board& board, double us = 1050.0);
 
 // Simulated seconds per wall-clock second; 0 = as fast as the host allows.
 struct Pacing {
