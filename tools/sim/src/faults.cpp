@@ -97,8 +97,32 @@ std::string withChecksum(const std::string& line) {
 void drainConsole(Console& con, double quiet_s) {
   Board& board = con.board();
   board.runUntil([&] { return board.pendingInput() == 0; }, secondsToCycles(120));
-  board.runFor(quiet_s);
-  con.send("");
+  // A line end that reaches the firmware while its receive ring is still full (it was busy
+  // with a long reply, e.g. `eeprom dump`) is lost with the other bytes, and the firmware
+  // rightly keeps discarding to the next line end. So: an empty line, until one is answered by
+  // a prompt and no error.
+  // Output quiet first: echoing a flood can leave seconds of output queued behind the input,
+  // and a prompt in it is not the answer to the empty line.
+  auto wait_quiet = [&] {
+    const double t_end = board.timeS() + 120.0;
+    std::size_t seen;
+    do {
+      seen = board.output().size();
+      board.runFor(quiet_s);
+    } while (board.output().size() != seen && board.timeS() < t_end);
+  };
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    wait_quiet();
+    while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);
+    con.send("");
+    try {
+      const auto answer = con.waitPrompt(2.0);
+      bool error = false;
+      for (const auto& l : answer) error = error || l.rfind("error:", 0) == 0;
+      if (!error) break;
+    } catch (const ExpectTimeout&) {  // the line end was lost: no answer at all
+    }
+  }
   board.runFor(0.05);
   while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);
 }
