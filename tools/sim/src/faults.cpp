@@ -102,14 +102,17 @@ void drainConsole(Console& con, double quiet_s) {
   // rightly keeps discarding to the next line end. So: an empty line, until one is answered by
   // a prompt and no error.
   // Output quiet first: echoing a flood can leave seconds of output queued behind the input,
-  // and a prompt in it is not the answer to the empty line.
+  // and a prompt in it is not the answer to the empty line. Rows of read_run's `stream on`
+  // (digits, '.', ',', '-') do not count as output here: they never stop.
   auto wait_quiet = [&] {
     const double t_end = board.timeS() + 120.0;
-    std::size_t seen;
-    do {
-      seen = board.output().size();
+    for (;;) {
+      const std::size_t seen = board.output().size();
       board.runFor(quiet_s);
-    } while (board.output().size() != seen && board.timeS() < t_end);
+      const std::string fresh = board.output().substr(seen);
+      if (fresh.find_first_not_of("0123456789.,-\r\n") == std::string::npos) return;
+      if (board.timeS() >= t_end) return;
+    }
   };
   for (int attempt = 0; attempt < 5; ++attempt) {
     wait_quiet();
