@@ -110,7 +110,7 @@ jq -r '
     .value as $name | $root.liftoff[.key] as $x |
     "  \($name + "                    " | .[0:20])  \($x.hold_thrust_g | map(r(.) | tostring) | join("  "))   \(r($x.thrust_spread_pct)) %    \(r($x.force_error_rms_pct)) %     \(r($x.max_tilt_deg)) deg"),
   "",
-  "lab: thesis model rmse \(r(.lab.diagnose.rmse_g)) g over \(.lab.diagnose.n) samples; first suspect: \(.lab.diagnose.suspects[0].variable // "none") -> \(.lab.diagnose.suspects[0].effects // [] | join(", "))",
+  "lab: thesis model rmse \(r(.lab.diagnose.rmse_g)) g over \(.lab.diagnose.n) samples; first suspect: \(.lab.diagnose.suspects[0].variable // "none") -> \(if ((.lab.diagnose.suspects[0].effects // []) | length) > 0 then (.lab.diagnose.suspects[0].effects | join(", ")) else (.lab.diagnose.suspects[0].advice // "no effect named") end)",
   "lab ladder: " + (.lab.ladder.steps | map("\(.model) \(r(.rmse_g)) g") | join("  ->  ")),
   "",
   "simulator: \(r(.sim.realtime_factor))x real time; demo took \(.sim.demo_wall_s) s"
