@@ -597,6 +597,31 @@ __attribute__((noinline, used)) uint8_t slowFilterStep(BusVoltageFilter* bus, ui
 // The frame's state at fixed offsets from Y.
 constexpr uint8_t kOffBus = 0, kOffSag = 8, kOffMin = 13, kOffMax = 15, kOffCount = 17, kOffLanes = 18;
 
+// The frame's set-up, the same after the fast check (then the filter step in assembly) and
+// after the C filter step: the limits, the lane count, every lane's flags (T: fly each model's
+// resting voltage; r3 becomes a second zero register), recip and m = 2^(8 - shift). Spelled once
+// and pasted into both paths (a shared tail would cost a branch in the per-frame path).
+#define TC_V2FLY_SETUP \
+      "ldd  r6, Y+%[o_min]\n\t" \
+      "ldd  r7, Y+%[o_min]+1\n\t" \
+      "ldd  r8, Y+%[o_max]\n\t" \
+      "ldd  r9, Y+%[o_max]+1\n\t" \
+      "ldd  r2, Y+%[o_count]\n\t" \
+      "bst  r3, 7\n\t" \
+      "mov  r16, r3\n\t" \
+      "andi r16, 0x7F\n\t" \
+      "sts  %[lflags], r16\n\t" \
+      "clr  r3\n\t" \
+      "ldd  r4, Y+4\n\t" \
+      "ldd  r5, Y+5\n\t" \
+      "ldd  r16, Y+3\n\t" \
+      "ldi  r30, lo8(%[mtab])\n\t" \
+      "ldi  r31, hi8(%[mtab])\n\t" \
+      "add  r30, r16\n\t" \
+      "adc  r31, r3\n\t" \
+      "ld   r16, Z\n\t" \
+      "mov  r10, r16\n\t"
+
 TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags) {
   register V2Frame* y asm("r28") = &frame;
   register uint16_t sample asm("r22") = sample_mv;
@@ -616,49 +641,13 @@ TC_INLINE void frameAvr(V2Frame& frame, uint16_t sample_mv, uint8_t extra_flags)
       "ldi  r16, hi8(%[sane_span])\n\t"
       "cpc  r25, r16\n\t"
       "brsh 36f\n\t"
-      "ldd  r6, Y+%[o_min]\n\t"  // limits
-      "ldd  r7, Y+%[o_min]+1\n\t"
-      "ldd  r8, Y+%[o_max]\n\t"
-      "ldd  r9, Y+%[o_max]+1\n\t"
-      "ldd  r2, Y+%[o_count]\n\t"
-      "bst  r3, 7\n\t"  // T: bus not valid, fly each model's resting voltage
-      "mov  r16, r3\n\t"
-      "andi r16, 0x7F\n\t"
-      "sts  %[lflags], r16\n\t"  // every lane's flags; r3 is the zero register from here
-      "clr  r3\n\t"
-      "ldd  r4, Y+4\n\t"  // recip
-      "ldd  r5, Y+5\n\t"
-      "ldd  r16, Y+3\n\t"  // r16 = r10 = m = 2^(8 - shift) (kShiftMul; 0 for shift 0)
-      "ldi  r30, lo8(%[mtab])\n\t"
-      "ldi  r31, hi8(%[mtab])\n\t"
-      "add  r30, r16\n\t"
-      "adc  r31, r3\n\t"
-      "ld   r16, Z\n\t"
-      "mov  r10, r16\n\t"
+      TC_V2FLY_SETUP
       "rjmp 42f\n"
       "36:\n\t"  // the C step (BusVoltageFilter::update), then the same setup, then the sag
       "movw r24, r28\n\t"
       "call %x[slow]\n\t"  // r24: kVoltageInvalid | kUseRestVoltage while not valid
       "or   r3, r24\n\t"
-      "ldd  r6, Y+%[o_min]\n\t"  // limits
-      "ldd  r7, Y+%[o_min]+1\n\t"
-      "ldd  r8, Y+%[o_max]\n\t"
-      "ldd  r9, Y+%[o_max]+1\n\t"
-      "ldd  r2, Y+%[o_count]\n\t"
-      "bst  r3, 7\n\t"  // T: bus not valid, fly each model's resting voltage
-      "mov  r16, r3\n\t"
-      "andi r16, 0x7F\n\t"
-      "sts  %[lflags], r16\n\t"  // every lane's flags; r3 is the zero register from here
-      "clr  r3\n\t"
-      "ldd  r4, Y+4\n\t"  // recip
-      "ldd  r5, Y+5\n\t"
-      "ldd  r16, Y+3\n\t"  // r16 = r10 = m = 2^(8 - shift) (kShiftMul; 0 for shift 0)
-      "ldi  r30, lo8(%[mtab])\n\t"
-      "ldi  r31, hi8(%[mtab])\n\t"
-      "add  r30, r16\n\t"
-      "adc  r31, r3\n\t"
-      "ld   r16, Z\n\t"
-      "mov  r10, r16\n\t"
+      TC_V2FLY_SETUP
       "rjmp 49f\n"
       "tc_v2fly_filter:\n\t"
       "42:\n\t"
