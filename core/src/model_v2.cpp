@@ -3,6 +3,7 @@
 // formats and the division count. Every multiplication below states its bound; `int` is 16 bits on the AVR, so every
 // product that can exceed 16 bits is cast to 32 bits first.
 #include "thrustcal/model_v2.hpp"
+#include "thrustcal/limits.hpp"
 
 namespace tc {
 
@@ -327,7 +328,7 @@ FitV2Report ModelV2FitterBase::refine(ModelV2& model) {
   rep = prepare();
   if (rep.status != FitV2Status::kOk) return rep;
   const int32_t gap = static_cast<int32_t>(rep.rest_mv) - model.rest_mv;
-  if (gap < 500 && gap > -500) {
+  if (gap < kV2MinVoltageGapMv && gap > -static_cast<int32_t>(kV2MinVoltageGapMv)) {
     rep.status = FitV2Status::kVoltagesTooClose;
     return rep;
   }

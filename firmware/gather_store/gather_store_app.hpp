@@ -63,6 +63,7 @@
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_curve.hpp"
+#include "thrustcal/limits.hpp"
 #include "thrustcal/load_cell.hpp"
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
@@ -70,8 +71,8 @@
 
 namespace gs {
 
-constexpr uint16_t kStopPwmUs = 1000;      // ESC "motor off" / arming pulse
-constexpr uint16_t kArmMs = 2000;          // ESC sees 1000 us this long before a sweep starts
+using tc::kArmMs;       // thrustcal/limits.hpp
+using tc::kStopPwmUs;
 constexpr uint16_t kForceWindow = 201;     // thesis: median of 201 load-cell readings
 // With settle auto (the default sweep) the force is the mean of the middle kForceCentral of
 // those 201 readings (ranks 68..132, in 1/16 count), and so is the tare taken while settle
@@ -82,12 +83,12 @@ constexpr uint16_t kForceWindow = 201;     // thesis: median of 201 load-cell re
 // v2 0.98 -> 0.75 % (`thrustcal bench calibration`). `settle MS` (the thesis timing) keeps the
 // thesis's reading too, the median of 201.
 constexpr uint16_t kForceCentral = 65;
-constexpr uint16_t kBatteryWindow = 101;   // thesis: median of 101 battery readings
+using tc::kBatteryWindow;
 constexpr uint16_t kMaxSweepSamples = 161; // 1000..1800 us in 5 us steps; default uses 81
 // Samples model v2 keeps per sweep: 8 bytes each in SRAM (1 KB). A sweep with more steps
 // still measures and stores the thesis curves; `store v2` refuses it.
 constexpr uint16_t kMaxV2Samples = 128;
-constexpr uint16_t kV2MinVoltageGapMv = 500;  // refine needs resting voltages this far apart
+using tc::kV2MinVoltageGapMv;
 constexpr uint8_t kProgressEvery = 10;     // one "# " progress line per this many samples
 constexpr uint8_t kLineEndGraceMs = 3;     // an LF this soon after "sweep" CR is its line end
 

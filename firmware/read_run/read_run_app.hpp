@@ -62,6 +62,7 @@
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_pwm.hpp"
+#include "thrustcal/limits.hpp"
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/model_v2_runtime.hpp"
@@ -75,11 +76,11 @@ namespace rr {
 constexpr uint8_t kMotors = tc::kMotorSlots;
 static_assert(kMotors == hal::kEscChannels, "one ESC output per calibration slot");
 
-constexpr uint16_t kArmMs = 2000;           // ESCs see 1000 us this long before any command
-constexpr uint16_t kFailsafeMs = 500;       // no command line this long while running -> stop
-constexpr uint16_t kStopPwmUs = 1000;       // ESC "motor off" pulse
+using tc::kArmMs;  // thrustcal/limits.hpp
+using tc::kFailsafeMs;
+using tc::kStopPwmUs;
 constexpr uint16_t kForceMaxG = tc::kRecordMaxForceG;  // 5 kg: v1 curves saturate at 500 g
-constexpr uint16_t kBatteryWindow = 101;    // thesis: median of 101 readings
+using tc::kBatteryWindow;
 constexpr uint8_t kBatterySamplesPerFrame = 4;  // v2 filter input: mean of the middle two
 constexpr uint16_t kLiftoffDefaultRampMs = 2000;
 constexpr uint16_t kLiftoffDefaultHoldMs = 5000;

@@ -7,6 +7,8 @@
 #pragma once
 #include <stdint.h>
 
+#include "thrustcal/limits.hpp"
+
 namespace tc {
 
 constexpr uint8_t kSagBins = 13;
@@ -15,8 +17,8 @@ constexpr uint16_t kSagBinWidthUs = 40;
 struct BatteryConfig {
   uint16_t full_scale_mv = 15638;  // (R1 + R2) / R2 * 5 V with R1 = 100k, R2 = 47k
   uint16_t adc_max_counts = 1023;  // thesis map() uses 1023
-  uint16_t min_sane_mv = 6000;     // below: sensor fault or dead pack (2S is out of scope)
-  uint16_t max_sane_mv = 17500;    // above: sensor fault or wrong divider
+  uint16_t min_sane_mv = kVbatSaneMinMv;  // below: sensor fault or dead pack (limits.hpp)
+  uint16_t max_sane_mv = kVbatSaneMaxMv;  // above: sensor fault or wrong divider
 };
 
 // Full scale in millivolts of a divider R1 (top) / R2 (bottom) at a 5 V ADC reference,

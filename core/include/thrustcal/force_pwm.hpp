@@ -17,6 +17,7 @@
 #pragma once
 #include <stdint.h>
 
+#include "thrustcal/limits.hpp"
 #include "thrustcal/motor_calibration.hpp"
 
 namespace tc {
@@ -24,8 +25,8 @@ namespace tc {
 struct ForcePwmLimits {
   uint16_t pwm_min_us = 1000;
   uint16_t pwm_max_us = 2000;
-  uint16_t v_min_mv = 6000;
-  uint16_t v_max_mv = 17500;
+  uint16_t v_min_mv = kVbatSaneMinMv;
+  uint16_t v_max_mv = kVbatSaneMaxMv;
   uint16_t min_voltage_span_mv = 100;
 };
 
