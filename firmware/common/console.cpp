@@ -361,4 +361,18 @@ void newline() {
   hal::Uart::write('\n');
 }
 
+void say(const char* progmem_text) { hal::Uart::printP(progmem_text); }
+
+void sayLine(const char* progmem_text) {
+  hal::Uart::printP(progmem_text);
+  newline();
+}
+
+void sayVolts(uint16_t mv) {
+  printFixed(mv, 3);
+  say(TC_PSTR(" V"));
+}
+
+void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
+
 }  // namespace fw

@@ -116,6 +116,11 @@ void printUint(uint32_t value);
 void printFixed(int32_t value, uint8_t decimals);
 void printHex2(uint8_t value);  // two upper-case hex digits
 void newline();  // "\r\n"
+// The print helpers both apps' console views use (one copy, here).
+void say(const char* progmem_text);      // a PROGMEM literal (TC_PSTR), no line end
+void sayLine(const char* progmem_text);  // the same and "\r\n"
+void sayVolts(uint16_t mv);              // 11350 -> "11.350 V"
+void sayCopy(uint8_t copy);              // 0 -> "copy A", 1 -> "copy B" (v2 record copies)
 
 // Boot and status lines shared by both images (docs/safety.md):
 //   "reset: watchdog" (power-on, external, brown-out, JTAG; several comma-separated)

@@ -15,11 +15,6 @@ struct UartOut {
   void fixed(int32_t value, uint8_t decimals) { printFixed(value, decimals); }
 };
 
-void sayLine(const char* progmem) {
-  hal::Uart::printP(progmem);
-  newline();
-}
-
 }  // namespace
 
 void printRecordStatus(tc::DecodeStatus status, const tc::Plausibility& why) {

@@ -16,11 +16,9 @@ namespace {
 constexpr uint8_t kMaxTokens = 4;  // command + up to 2 arguments + 1 to detect extras
 constexpr int16_t kDecigramsPerGram = 10;
 
-void say(const char* progmem) { hal::Uart::printP(progmem); }
-void sayLine(const char* progmem) {
-  hal::Uart::printP(progmem);
-  fw::newline();
-}
+using fw::say;
+using fw::sayCopy;
+using fw::sayLine;
 
 // Nearest integer of num / den (den > 0), halves away from zero.
 int32_t divRound(int32_t num, int32_t den) {
@@ -48,8 +46,6 @@ void sayWritten() {
   sayLine(CountingEeprom::written == 1 ? TC_PSTR(" byte") : TC_PSTR(" bytes"));
 }
 
-void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
-
 // 1/16 us -> "1083.4 us"
 void printQ4Us(uint16_t q4_us) {
   fw::printFixed(static_cast<int32_t>((static_cast<uint32_t>(q4_us) * 10u + 8u) >> 4), 1);
@@ -70,11 +66,6 @@ void printRecordRange(uint8_t slot) {
   fw::printUint(tc::slotAddress(slot));
   say(TC_PSTR(".."));
   fw::printUint(tc::slotAddress(slot) + tc::kRecordBytes - 1u);
-}
-
-void printVolts(uint16_t mv) {
-  fw::printFixed(mv, 3);
-  say(TC_PSTR(" V"));
 }
 
 // "error: <what> must be a whole number in MIN..MAX, got 'TOKEN'; nothing changed"
@@ -160,7 +151,7 @@ void printCurve(uint8_t which, const tc::ForceCurveBase& curve) {
   say(TC_PSTR("curve "));
   fw::printUint(which);
   say(TC_PSTR(": start "));
-  printVolts(curve.start_mv);
+  fw::sayVolts(curve.start_mv);
   say(TC_PSTR(", 1.."));
   fw::printUint(curve.maxGrams());
   say(TC_PSTR(" g; PWM per gram:"));
@@ -642,11 +633,11 @@ void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
       break;
     case SweepEnd::kBattery:
       say(TC_PSTR("battery reads "));
-      printVolts(value);
+      fw::sayVolts(value);
       say(TC_PSTR(", outside "));
-      printVolts(battery_.config().min_sane_mv);
+      fw::sayVolts(battery_.config().min_sane_mv);
       say(TC_PSTR(".."));
-      printVolts(battery_.config().max_sane_mv);
+      fw::sayVolts(battery_.config().max_sane_mv);
       say(TC_PSTR(": check the pack and the divider on A1"));
       break;
     case SweepEnd::kDone:
@@ -810,10 +801,10 @@ void GatherStoreApp::finishSweep(uint8_t slot, uint32_t elapsed_ms) {
   say(TC_PSTR(" g (monotone fit), violations "));
   fw::printUint(sweep_.report.violations);
   say(TC_PSTR(", start voltage "));
-  printVolts(start_mv);
+  fw::sayVolts(start_mv);
   say(TC_PSTR(", sag in the top bin "));
   const int16_t top_sag_mv = sweep_.sag.offset_mv[tc::kSagBins - 1];
-  printVolts(static_cast<uint16_t>(top_sag_mv > 0 ? top_sag_mv : 0));
+  fw::sayVolts(static_cast<uint16_t>(top_sag_mv > 0 ? top_sag_mv : 0));
   fw::newline();
   if (sweep_.report.status != tc::BuildStatus::kOk) {
     say(TC_PSTR("# no curve: "));
@@ -901,11 +892,11 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
     const uint16_t min_span_mv = tc::ForcePwmLimits().min_voltage_span_mv;
     if (span_mv < min_span_mv) {
       say(TC_PSTR("error: this sweep started at "));
-      printVolts(sweep_.curve.start_mv);
+      fw::sayVolts(sweep_.curve.start_mv);
       say(TC_PSTR(", within "));
-      printVolts(min_span_mv);
+      fw::sayVolts(min_span_mv);
       say(TC_PSTR(" of curve 1 ("));
-      printVolts(record.first.start_mv);
+      fw::sayVolts(record.first.start_mv);
       sayLine(TC_PSTR("): sweep again at another battery voltage; nothing changed"));
       return;
     }
@@ -947,7 +938,7 @@ void GatherStoreApp::cmdStore(char** args, uint8_t n) {
   say(TC_PSTR(" ("));
   printRecordRange(slot);
   say(TC_PSTR("): start "));
-  printVolts(sweep_.curve.start_mv);
+  fw::sayVolts(sweep_.curve.start_mv);
   say(TC_PSTR(", 1.."));
   fw::printUint(sweep_.curve.maxGrams());
   say(TC_PSTR(" g"));
@@ -1009,9 +1000,9 @@ void GatherStoreApp::cmdStoreV2() {
     say(TC_PSTR("error: motor "));
     fw::printUint(slot);
     say(TC_PSTR(" already holds a model v2 refined by a sweep at "));
-    printVolts(old_second_mv);
+    fw::sayVolts(old_second_mv);
     say(TC_PSTR(", within 0.5 V of this one ("));
-    printVolts(rest_mv);
+    fw::sayVolts(rest_mv);
     sayLine(TC_PSTR("): sweep at another voltage, or erase and store v2 to start over; "
                     "nothing changed"));
     return;
@@ -1072,9 +1063,9 @@ void GatherStoreApp::cmdStoreV2() {
   say(TC_PSTR("): "));
   if (refine) {
     say(TC_PSTR("refined with this sweep at "));
-    printVolts(rest_mv);
+    fw::sayVolts(rest_mv);
     say(TC_PSTR(" (first sweep "));
-    printVolts(model_.rest_mv);
+    fw::sayVolts(model_.rest_mv);
     say(TC_PSTR("), start "));
     printQ4Us(model_.start_q4_us);
     say(TC_PSTR(" (was "));
@@ -1082,7 +1073,7 @@ void GatherStoreApp::cmdStoreV2() {
     say(TC_PSTR(")"));
   } else {
     say(TC_PSTR("fitted from one sweep at "));
-    printVolts(rest_mv);
+    fw::sayVolts(rest_mv);
     say(TC_PSTR(", start "));
     printQ4Us(model_.start_q4_us);
   }
@@ -1094,13 +1085,13 @@ void GatherStoreApp::cmdStoreV2() {
   if (had_v1) say(TC_PSTR("; replaced the thesis record"));
   if (had_v2 && !refine) {
     say(TC_PSTR("; replaced the model of a sweep at "));
-    printVolts(old_rest_mv);
+    fw::sayVolts(old_rest_mv);
   }
   sayWritten();
   sayStoreSafety(w, slot);
   if (!refine) {
     say(TC_PSTR("# next: sweep at another voltage (>= 0.5 V from "));
-    printVolts(rest_mv);
+    fw::sayVolts(rest_mv);
     sayLine(TC_PSTR("), then store v2 to refine"));
   }
 }
@@ -1150,10 +1141,10 @@ void GatherStoreApp::showV2(uint8_t slot) {
   say(TC_PSTR(" g in "));
   fw::printUint(model_.knots);
   say(TC_PSTR(" knots, first sweep at "));
-  printVolts(model_.rest_mv);
+  fw::sayVolts(model_.rest_mv);
   if (model_.second_mv != 0) {
     say(TC_PSTR(", refined at "));
-    printVolts(model_.second_mv);
+    fw::sayVolts(model_.second_mv);
   } else {
     say(TC_PSTR(", single sweep (store v2 after a sweep at another voltage refines it)"));
   }
@@ -1163,7 +1154,7 @@ void GatherStoreApp::showV2(uint8_t slot) {
   tc::BusVoltageFilter bus;
   bus.reset(model_.rest_mv);
   say(TC_PSTR("PWM from rest at "));
-  printVolts(model_.rest_mv);
+  fw::sayVolts(model_.rest_mv);
   say(TC_PSTR(" (bench sag predicted):"));
   const uint16_t max_g = static_cast<uint16_t>(model_.maxForceDg() / 10u);
   for (uint16_t grams = 10; grams <= max_g; grams = static_cast<uint16_t>(grams == 10 ? 100 : grams + 100)) {
@@ -1264,7 +1255,7 @@ void GatherStoreApp::cmdStatus() {
     say(TC_PSTR(" g, not tared"));
   }
   say(TC_PSTR("; battery "));
-  printVolts(battery_.millivoltsFromCounts(medianBatteryCounts()));
+  fw::sayVolts(battery_.millivoltsFromCounts(medianBatteryCounts()));
   fw::newline();
 
   say(TC_PSTR("last sweep: "));

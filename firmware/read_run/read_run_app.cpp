@@ -11,17 +11,10 @@ namespace {
 
 constexpr uint8_t kMaxTokens = 6;
 
-void say(const char* progmem_text) { hal::Uart::printP(progmem_text); }
-
-void sayLine(const char* progmem_text) {
-  hal::Uart::printP(progmem_text);
-  fw::newline();
-}
-
-void sayVolts(uint16_t mv) {
-  fw::printFixed(mv, 3);
-  say(TC_PSTR(" V"));
-}
+using fw::say;
+using fw::sayCopy;
+using fw::sayLine;
+using fw::sayVolts;
 
 // Heaviest force both curves reach without saturating.
 uint16_t reachableGrams(const tc::MotorCalibration& cal) {
@@ -34,8 +27,6 @@ void sayMotor(uint8_t index) {
   say(TC_PSTR("motor "));
   fw::printUint(index);
 }
-
-void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
 
 // Why a motor is not armed: the decode status (with the plausibility rule a record broke);
 // for a v2 slot both copies' reasons.
