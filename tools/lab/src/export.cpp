@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "lab/analysis.hpp"
+#include "lab/effect.hpp"
 
 #include "thrustcal/model_v2.hpp"
 // The record's limits are core's (thrustcal/record_limits.hpp, "never fly a record that cannot
@@ -21,29 +22,6 @@
 namespace lab {
 
 namespace {
-
-// Why each effect the record has no term for cannot be exported, and what to do instead.
-const char* refusalReason(const std::string& effect) {
-  if (effect == "drift")
-    return "read_run has no clock-dependent term (the record holds no time); fit without it, or "
-           "re-zero the load cell and measure again";
-  if (effect == "lag")
-    return "read_run sets the steady-state PWM for a force and the record holds no time constant; "
-           "fit without it (the steady-state curve is what the board needs)";
-  if (effect == "thermal")
-    return "the board reads no motor temperature and the record holds no temperature term; fit "
-           "without it, on data taken at the temperature you fly at";
-  if (effect == "density")
-    return "the board has no air-density input and the record holds no density term; fit without "
-           "it, on data taken in the air you fly in";
-  if (effect == "motor")
-    return "a record holds one motor; pick one motor's rows with --motor N and export each motor "
-           "into its own slot";
-  if (effect == "thesis")
-    return "the thesis model is the v1 record, which gather_store writes on the board; export a "
-           "curve model, e.g. curve+deadband+voltage+sag";
-  return nullptr;
-}
 
 // EEPROM image as the Storage type record_v2.hpp's templates need.
 std::vector<uint8_t>* g_image = nullptr;
@@ -123,18 +101,19 @@ void checkExportData(const Dataset& data) {
 }
 
 void checkExportable(const ModelSpec& spec, bool motor_selected) {
+  // what a record can hold is each effect's registry entry (effects/<effect>.cpp)
   for (const auto& e : spec.effects) {
-    if (e == "curve" || e == "deadband" || e == "voltage" || e == "sag") continue;
-    if (e == "motor" && motor_selected) continue;
-    const char* why = refusalReason(e);
-    throw std::invalid_argument(
-        fmt::format("cannot export `{}`: {}", e, why ? why : "the firmware's model v2 has no such term"));
+    const effects::EffectDef* d = effects::find(e);
+    if (d && d->exports == effects::Export::kInRecord) continue;
+    if (d && d->exports == effects::Export::kOneMotor && motor_selected) continue;
+    throw std::invalid_argument(fmt::format("cannot export `{}`: {}", e,
+                                            d && !d->export_note.empty() ? d->export_note
+                                                                         : "the firmware's model v2 has no such term"));
   }
-  if (!spec.user.empty())
-    throw std::invalid_argument(fmt::format(
-        "cannot export `{}: {}`: the firmware evaluates no expressions (the record holds a curve, a "
-        "start threshold and a sag table); fit without it",
-        spec.user.front().multiplicative ? "mul" : "add", spec.user.front().expression));
+  for (const auto& u : spec.user)
+    for (const auto* d : effects::registry())
+      if (d->role == effects::Role::kExpression && d->multiplicative == u.multiplicative)
+        throw std::invalid_argument(fmt::format("cannot export `{} {}`: {}", d->prefix, u.expression, d->export_note));
 }
 
 Dataset selectMotor(const Dataset& data, long motor_id) {
