@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/cli.hpp"
+#include "lab/effect.hpp"
 #include "lab/dataset.hpp"
 #include "lab/generate.hpp"
 #include "lab/report.hpp"
@@ -217,6 +218,18 @@ TEST(LabCli, EffectsListingDocumentsTheWholeCatalogue) {
   for (const char* name : {"curve", "deadband", "voltage", "sag", "motor", "drift", "lag", "thermal", "density", "thesis", "mul: EXPR"})
     EXPECT_NE(out.find(std::string("\n  ") + name + "\n"), std::string::npos) << name;
   EXPECT_NE(out.find("[ohm]"), std::string::npos);
+}
+
+TEST(LabCli, EffectsListingDocumentsEveryRegisteredEffectAndParameter) {
+  std::string out;
+  ASSERT_EQ(run({"lab", "effects"}, out), 0);
+  for (const auto* e : lab::effects::registry()) {
+    EXPECT_NE(out.find("\n  " + e->name + "\n"), std::string::npos) << e->name;
+    for (const auto& p : e->params) EXPECT_NE(out.find(p.name + " [" + p.unit + "]"), std::string::npos) << p.name;
+  }
+  std::string md;
+  ASSERT_EQ(run({"lab", "effects", "--markdown"}, md), 0);
+  EXPECT_EQ(md, lab::effects::markdownTable());
 }
 
 }  // namespace

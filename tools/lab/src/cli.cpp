@@ -1,4 +1,5 @@
 #include "lab/cli.hpp"
+#include "lab/effect.hpp"
 
 #include <fmt/format.h>
 
@@ -482,7 +483,9 @@ void registerCommands(CLI::App& app) {
   });
 
   auto* e = lab->add_subcommand("effects", "document every effect: physics, columns, parameters with units");
-  e->callback([] { std::fputs(effectsText().c_str(), stdout); });
+  auto markdown = std::make_shared<bool>(false);
+  e->add_flag("--markdown", *markdown, "print docs/lab.md's effect table instead (names, columns, parameters)");
+  e->callback([markdown] { std::fputs((*markdown ? effects::markdownTable() : effectsText()).c_str(), stdout); });
 
   auto gen = std::make_shared<GenerateOptions>();
   auto out = std::make_shared<std::string>();
