@@ -247,6 +247,7 @@ class GatherStoreApp {
   // last median. False: a key arrived.
   bool settleForce(uint16_t& counts);
   void printSettle();  // "settle 200 ms" / "settle auto (cap 200 ms)"
+  void printSweepPlan();  // "1000..1800 us, step 10 us, settle auto (cap 500 ms)"
   bool readForceCounts(uint16_t& counts);  // false: a key arrived during the 201 readings
   bool readBatteryCounts(uint16_t& counts);
   void stopMotor();

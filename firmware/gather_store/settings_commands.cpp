@@ -238,13 +238,7 @@ void GatherStoreApp::cmdStatus() {
   say(TC_PSTR(" us), plate "));
   fw::printInt(settings_.plate_g);
   say(TC_PSTR(" g, range "));
-  fw::printUint(settings_.pwm_min_us);
-  say(TC_PSTR(".."));
-  fw::printUint(settings_.pwm_max_us);
-  say(TC_PSTR(" us, step "));
-  fw::printUint(settings_.step_us);
-  say(TC_PSTR(" us, "));
-  printSettle();
+  printSweepPlan();
   fw::newline();
 
   const uint16_t counts = medianForceCounts();

@@ -31,6 +31,16 @@ bool GatherStoreApp::waitOrAbort(uint16_t ms) {
   }
 }
 
+void GatherStoreApp::printSweepPlan() {
+  fw::printUint(settings_.pwm_min_us);
+  say(TC_PSTR(".."));
+  fw::printUint(settings_.pwm_max_us);
+  say(TC_PSTR(" us, step "));
+  fw::printUint(settings_.step_us);
+  say(TC_PSTR(" us, "));
+  printSettle();
+}
+
 void GatherStoreApp::printSettle() {
   say(settings_.settle_auto ? TC_PSTR("settle auto (cap ") : TC_PSTR("settle "));
   fw::printUint(settings_.settle_ms);
@@ -146,13 +156,7 @@ void GatherStoreApp::cmdSweep() {
   say(TC_PSTR("# sweep motor "));
   fw::printUint(slot);
   say(TC_PSTR(": "));
-  fw::printUint(settings_.pwm_min_us);
-  say(TC_PSTR(".."));
-  fw::printUint(settings_.pwm_max_us);
-  say(TC_PSTR(" us, step "));
-  fw::printUint(settings_.step_us);
-  say(TC_PSTR(" us, "));
-  printSettle();
+  printSweepPlan();
   say(TC_PSTR(", "));
   fw::printUint(planned);
   sayLine(TC_PSTR(" steps; any key aborts"));
