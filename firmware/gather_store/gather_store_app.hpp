@@ -58,6 +58,7 @@
 
 #include "console.hpp"
 #include "placement_new.hpp"
+#include "shell.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/curve_builder.hpp"
@@ -70,6 +71,11 @@
 #include "thrustcal/motor_calibration.hpp"
 
 namespace gs {
+
+enum class StoreRefusal : uint8_t;  // store_decision.hpp
+namespace view {
+struct RefusalFacts;  // gather_store_view.hpp
+}  // namespace view
 
 using tc::kArmMs;       // thrustcal/limits.hpp
 using tc::kStopPwmUs;
@@ -100,6 +106,7 @@ constexpr uint16_t kStepMaxUs = 100;
 constexpr uint16_t kSettleMinMs = 0;
 constexpr uint16_t kSettleMaxMs = 10000;
 constexpr int16_t kPlateMaxG = 500;
+constexpr int16_t kKnownWeightMaxG = 950;  // cal W / span W: up to the load cell's overload
 
 // settle auto: force medians kSettleProbeMs apart; the step is settled when
 // kSettledAgreements successive pairs differ by at most kSettledCounts ADC counts (0 counts:
@@ -193,29 +200,37 @@ class GatherStoreApp {
   SweepEnd lastSweepEnd() const { return last_end_; }
 
  private:
+  friend struct GatherStoreCommands;  // the command table's handlers (gather_store_commands.cpp)
+
   void execute(char* line);
+  void runCommand(char* line, const fw::LineContext& context);  // through the table
   void prompt();
 
-  // Commands.
+  // Commands (arguments parsed and range-checked by the table).
   void cmdHelp();
-  void cmdMotor(char** args, uint8_t n);
-  void cmdPlate(char** args, uint8_t n);
+  void cmdMotor(uint8_t slot);
+  void cmdPlate(int16_t grams);
   void cmdWeigh();
   void cmdTare();
-  void cmdCal(char** args, uint8_t n);
-  void cmdSpan(char** args, uint8_t n);
-  void cmdRange(char** args, uint8_t n);
-  void cmdStep(char** args, uint8_t n);
-  void cmdSettle(char** args, uint8_t n);
+  void cmdCal(int16_t grams);
+  void cmdSpan(int16_t grams);
+  void cmdRange(uint16_t lo_us, uint16_t hi_us);
+  void cmdStep(uint16_t step_us);
+  void cmdSettle(uint16_t ms);
+  void cmdSettleAuto();
   void cmdSweep();
-  void cmdStore(char** args, uint8_t n);
+  void cmdStore(uint8_t which);  // store 1 | store 2
   void cmdStoreV2();
-  bool checkStoreSource(uint8_t slot);  // a complete sweep on the selected slot, else error
   void cmdShow();
-  void showV2(uint8_t slot);  // the slot holds a v2 record (valid or not)
   void cmdErase();
   void cmdStatus();
-  void cmdDivider(char** args, uint8_t n);
+  void cmdDividerShow();
+  void cmdDivider(uint32_t top_ohm, uint32_t bottom_ohm);
+  void sayPlannedSteps();  // " us, K steps" + newline
+  // Prints the refusal and returns true unless `why` is kNone.
+  bool refuse(StoreRefusal why, const view::RefusalFacts& facts);
+  // Force in 0.1 g from a reading in 1/16 count (rounded).
+  int16_t forceDecigrams(uint16_t force_q4) const;
 
   // Sweep parts.
   uint16_t plannedSamples() const;
@@ -232,6 +247,7 @@ class GatherStoreApp {
   // last median. False: a key arrived.
   bool settleForce(uint16_t& counts);
   void printSettle();  // "settle 200 ms" / "settle auto (cap 200 ms)"
+  void printSweepPlan();  // "1000..1800 us, step 10 us, settle auto (cap 500 ms)"
   bool readForceCounts(uint16_t& counts);  // false: a key arrived during the 201 readings
   bool readBatteryCounts(uint16_t& counts);
   void stopMotor();

@@ -1,5 +1,8 @@
 // gather_store image for the ATmega2560 (thesis "Gather and Store", fig. 6.8, appendix G.1).
-// All logic lives in gather_store_app.cpp, which the host tests run against the fake HAL.
+// The logic is gs::GatherStoreApp, which the host tests run against the fake HAL; fig. 6.8's
+// boxes are its commands (gather_store_commands.cpp): choose motor and weigh, calibrate and
+// zerolize (settings_commands.cpp), sweep (sweep_runner.cpp), "first or second?" and store
+// (store_decision.cpp, gather_store_app.cpp).
 #include <avr/avr_mcu_section.h>
 
 #include "gather_store_app.hpp"

@@ -37,12 +37,23 @@ TEST_F(GatherStore, StartArmsAllFourEscsAtOneThousandAndShowsThePrompt) {
   EXPECT_EQ(banner_.substr(banner_.size() - 4), "gs> ");
 }
 
-TEST_F(GatherStore, HelpListsEveryCommand) {
+TEST_F(GatherStore, HelpListsEveryCommandWithItsArgumentsAndRanges) {
+  const auto lines = responseLines(run("help"));
+  for (const char* usage :
+       {"help ", "motor N ", "plate G ", "weigh ", "tare ", "cal W ", "span W ", "range MIN MAX ",
+        "step US ", "settle MS ", "settle auto ", "sweep ", "store 1 ", "store 2 ", "store v2 ",
+        "show ", "erase ", "status ", "eeprom crc|dump ", "divider  ", "divider R1 R2 ",
+        "strict on|off "}) {
+    EXPECT_EQ(std::count_if(lines.begin(), lines.end(),
+                            [&](const std::string& l) { return startsWith(l, usage); }),
+              1)
+        << usage;
+  }
+  // The ranges come from the table's argument specs (the ones the parser checks).
   const std::string out = run("help");
-  for (const char* cmd : {"help", "motor N", "plate G", "weigh", "tare", "cal W", "span W",
-                          "range MIN MAX", "step US", "settle MS", "settle auto", "sweep", "store 1", "store 2",
-                          "store v2", "show", "erase", "status"}) {
-    EXPECT_NE(out.find(std::string("  ") + cmd), std::string::npos) << cmd;
+  for (const char* range : {"(N 0..3)", "(G 0..500)", "(W 1..950)", "(MIN 1000..1999, MAX 1001..2000)",
+                            "(US 1..100)", "(MS 0..10000)", "at most 48 characters"}) {
+    EXPECT_NE(out.find(range), std::string::npos) << range;
   }
 }
 
@@ -596,30 +607,40 @@ struct BadInputRow {
 TEST_F(GatherStore, BadInputGetsOneErrorLineAndChangesNothing) {
   const std::string too_long(fw::kLineMax + 1, 'm');
   const BadInputRow rows[] = {
-      {"foo", "error: unknown command 'foo'; type help"},
-      {"Sweep", "error: unknown command 'Sweep'"},
+      {"foo", "error: unknown command \"foo\"; type help for the list"},
+      {"Sweep", "error: unknown command \"Sweep\""},
       {"motor", "error: usage: motor N"},
-      {"motor 4", "error: motor slot must be a whole number in 0..3, got '4'"},
-      {"motor -1", "error: motor slot must be a whole number in 0..3, got '-1'"},
-      {"motor one", "error: motor slot must be a whole number in 0..3, got 'one'"},
+      {"motor 4", "error: N must be a whole number 0..3, got \"4\""},
+      {"motor -1", "error: N must be a whole number 0..3, got \"-1\""},
+      {"motor one", "error: N must be a whole number 0..3, got \"one\""},
       {"motor 1 2", "error: usage: motor N"},
-      {"plate 501", "error: plate weight in g must be a whole number in 0..500"},
-      {"cal 0", "error: known weight in g must be a whole number in 1..950"},
-      {"cal 951", "error: known weight in g must be a whole number in 1..950"},
-      {"span 2000", "error: known weight in g must be a whole number in 1..950"},
-      {"range 900 1800", "error: range MIN in us must be a whole number in 1000..1999"},
-      {"range 1500 1200", "error: range MAX in us must be a whole number in 1501..2000"},
+      {"plate 501", "error: G must be a whole number 0..500"},
+      {"cal 0", "error: W must be a whole number 1..950"},
+      {"cal 951", "error: W must be a whole number 1..950"},
+      {"span 2000", "error: W must be a whole number 1..950"},
+      {"range 900 1800", "error: MIN must be a whole number 1000..1999, got \"900\""},
+      {"range 1000 2001", "error: MAX must be a whole number 1001..2000, got \"2001\""},
+      {"range 1500 1200", "error: range MAX must be above MIN (1500 us), got 1200"},
+      {"range 1500 1500", "error: range MAX must be above MIN (1500 us), got 1500"},
       {"range 1000", "error: usage: range MIN MAX"},
-      {"step 0", "error: step in us must be a whole number in 1..100"},
+      {"step 0", "error: US must be a whole number 1..100"},
       {"step 4", "error: a step of 4 us makes 201 steps, at most 161 fit"},
-      {"step 2.5", "error: step in us must be a whole number in 1..100, got '2.5'"},
-      {"settle -1", "error: settle time in ms must be a whole number in 0..10000"},
-      {"settle 10001", "error: settle time in ms must be a whole number in 0..10000"},
-      {"store", "error: usage: store 1 | store 2"},
-      {"store 3", "error: curve number must be a whole number in 1..2, got '3'"},
+      {"step 2.5", "error: US must be a whole number 1..100, got \"2.5\""},
+      {"settle -1", "error: usage: settle MS | settle auto"},
+      {"settle 10001", "error: usage: settle MS | settle auto"},
+      {"settle 200 auto", "error: usage: settle MS | settle auto"},
+      {"store", "error: usage: store 1 | store 2 | store v2"},
+      {"store 3", "error: usage: store 1 | store 2 | store v2"},
       {"store 1", "error: nothing to store: run a complete sweep first"},
-      {"sweep now", "error: sweep takes no arguments"},
-      {"erase all", "error: erase takes no arguments"},
+      {"sweep now", "error: usage: sweep"},
+      {"erase all", "error: usage: erase"},
+      {"weigh 1", "error: usage: weigh"},
+      {"status x", "error: usage: status"},
+      {"divider 100000", "error: usage: divider | divider R1 R2"},
+      {"divider 1 20000000", "error: R2 must be a whole number 0..10000000"},
+      {"eeprom", "error: usage: eeprom crc|dump"},
+      {"eeprom crc x", "error: usage: eeprom crc|dump"},
+      {"strict maybe", "error: expected on|off, got \"maybe\""},
       {too_long.c_str(), "error: line longer than 48 characters, ignored; nothing changed"},
   };
   for (const auto& row : rows) {

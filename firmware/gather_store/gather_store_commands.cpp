@@ -1,0 +1,196 @@
+// gather_store's console commands: one table in flash (fw::Command rows, firmware/common/
+// shell.hpp). Names, argument ranges, which commands strict mode guards, and the help lines
+// all come from here; `help` prints this table and docs/gather_store.md's command list is
+// checked against that output (tests/firmware/gather_store/test_gather_store_docs.cpp).
+//
+// Guarded (kCmdGuarded: with strict on, only checksummed lines run them): the commands that
+// spin a motor or write the EEPROM, i.e. sweep, store 1|2|v2, erase and divider R1 R2.
+#include "console.hpp"
+#include "eeprom_console.hpp"
+#include "gather_store_app.hpp"
+#include "shell.hpp"
+
+namespace gs {
+
+// The handlers: each turns the parsed arguments into one GatherStoreApp command.
+struct GatherStoreCommands {
+  using Args = fw::ArgValues;
+  static void help(GatherStoreApp& app, const Args&) { app.cmdHelp(); }
+  static void motor(GatherStoreApp& app, const Args& a) {
+    app.cmdMotor(static_cast<uint8_t>(a[0]));
+  }
+  static void plate(GatherStoreApp& app, const Args& a) {
+    app.cmdPlate(static_cast<int16_t>(a[0]));
+  }
+  static void weigh(GatherStoreApp& app, const Args&) { app.cmdWeigh(); }
+  static void cal(GatherStoreApp& app, const Args& a) { app.cmdCal(static_cast<int16_t>(a[0])); }
+  static void tare(GatherStoreApp& app, const Args&) { app.cmdTare(); }
+  static void span(GatherStoreApp& app, const Args& a) {
+    app.cmdSpan(static_cast<int16_t>(a[0]));
+  }
+  static void range(GatherStoreApp& app, const Args& a) {
+    app.cmdRange(static_cast<uint16_t>(a[0]), static_cast<uint16_t>(a[1]));
+  }
+  static void step(GatherStoreApp& app, const Args& a) {
+    app.cmdStep(static_cast<uint16_t>(a[0]));
+  }
+  static void settleMs(GatherStoreApp& app, const Args& a) {
+    app.cmdSettle(static_cast<uint16_t>(a[0]));
+  }
+  static void settleAuto(GatherStoreApp& app, const Args&) { app.cmdSettleAuto(); }
+  static void sweep(GatherStoreApp& app, const Args&) { app.cmdSweep(); }
+  static void store1(GatherStoreApp& app, const Args&) { app.cmdStore(1); }
+  static void store2(GatherStoreApp& app, const Args&) { app.cmdStore(2); }
+  static void storeV2(GatherStoreApp& app, const Args&) { app.cmdStoreV2(); }
+  static void show(GatherStoreApp& app, const Args&) { app.cmdShow(); }
+  static void erase(GatherStoreApp& app, const Args&) { app.cmdErase(); }
+  static void status(GatherStoreApp& app, const Args&) { app.cmdStatus(); }
+  static void eeprom(GatherStoreApp&, const Args& a) {
+    if (a[0] == 0) {
+      fw::eepromCrc();
+    } else {
+      fw::eepromDump();
+    }
+  }
+  static void dividerShow(GatherStoreApp& app, const Args&) { app.cmdDividerShow(); }
+  static void divider(GatherStoreApp& app, const Args& a) {
+    app.cmdDivider(static_cast<uint32_t>(a[0]), static_cast<uint32_t>(a[1]));
+  }
+  static void strict(GatherStoreApp& app, const Args& a) { app.reader_.strictCommand(a[0] == 0); }
+};
+
+namespace {
+
+using C = GatherStoreCommands;
+using fw::kCmdGuarded;
+
+// Names, argument specs and help lines: all in flash.
+#define GS_TEXT(id, text) const char id[] TC_PROGMEM = text
+
+GS_TEXT(kHelp, "help");
+GS_TEXT(kMotor, "motor");
+GS_TEXT(kPlate, "plate");
+GS_TEXT(kWeigh, "weigh");
+GS_TEXT(kCal, "cal");
+GS_TEXT(kTare, "tare");
+GS_TEXT(kSpan, "span");
+GS_TEXT(kRange, "range");
+GS_TEXT(kStep, "step");
+GS_TEXT(kSettle, "settle");
+GS_TEXT(kSweep, "sweep");
+GS_TEXT(kStore, "store");
+GS_TEXT(kShow, "show");
+GS_TEXT(kErase, "erase");
+GS_TEXT(kStatus, "status");
+GS_TEXT(kEeprom, "eeprom");
+GS_TEXT(kDivider, "divider");
+GS_TEXT(kStrict, "strict");
+
+GS_TEXT(kN, "N");
+GS_TEXT(kG, "G");
+GS_TEXT(kW, "W");
+GS_TEXT(kMin, "MIN");
+GS_TEXT(kMax, "MAX");
+GS_TEXT(kUs, "US");
+GS_TEXT(kMs, "MS");
+GS_TEXT(kR1, "R1");
+GS_TEXT(kR2, "R2");
+GS_TEXT(kWordAuto, "auto");
+GS_TEXT(kWord1, "1");
+GS_TEXT(kWord2, "2");
+GS_TEXT(kWordV2, "v2");
+GS_TEXT(kWordsEeprom, "crc|dump");
+GS_TEXT(kWordsOnOff, "on|off");
+
+static_assert(tc::LoadCellConfig().overload_g == kKnownWeightMaxG, "cal/span up to the overload");
+constexpr int32_t kSlotMax = tc::kMotorSlots - 1;
+constexpr int32_t kDividerMax = static_cast<int32_t>(tc::kDividerMaxOhm);
+
+const fw::ArgSpec kArgSlot[] TC_PROGMEM = {{kN, nullptr, 0, kSlotMax}};
+const fw::ArgSpec kArgPlate[] TC_PROGMEM = {{kG, nullptr, 0, kPlateMaxG}};
+const fw::ArgSpec kArgKnown[] TC_PROGMEM = {{kW, nullptr, 1, kKnownWeightMaxG}};
+const fw::ArgSpec kArgRange[] TC_PROGMEM = {{kMin, nullptr, kPwmLowestUs, kPwmHighestUs - 1},
+                                           {kMax, nullptr, kPwmLowestUs + 1, kPwmHighestUs}};
+const fw::ArgSpec kArgStep[] TC_PROGMEM = {{kUs, nullptr, kStepMinUs, kStepMaxUs}};
+const fw::ArgSpec kArgSettle[] TC_PROGMEM = {{kMs, nullptr, kSettleMinMs, kSettleMaxMs}};
+const fw::ArgSpec kArgAuto[] TC_PROGMEM = {{kWordAuto, kWordAuto, 0, 0}};
+const fw::ArgSpec kArgStore1[] TC_PROGMEM = {{kWord1, kWord1, 0, 0}};
+const fw::ArgSpec kArgStore2[] TC_PROGMEM = {{kWord2, kWord2, 0, 0}};
+const fw::ArgSpec kArgStoreV2[] TC_PROGMEM = {{kWordV2, kWordV2, 0, 0}};
+const fw::ArgSpec kArgEeprom[] TC_PROGMEM = {{kWordsEeprom, kWordsEeprom, 0, 0}};
+const fw::ArgSpec kArgDivider[] TC_PROGMEM = {{kR1, nullptr, 0, kDividerMax},
+                                             {kR2, nullptr, 0, kDividerMax}};
+const fw::ArgSpec kArgOnOff[] TC_PROGMEM = {{kWordsOnOff, kWordsOnOff, 0, 0}};
+
+// Help lines. The numbers they quote are the constants' (checked below); the ranges of the
+// arguments are appended by fw::printHelp from the specs above.
+static_assert(kForceWindow == 201, "weigh's help quotes the median of 201");
+static_assert(kDefaultSettleCapMs == 500, "settle auto's help quotes the cap");
+static_assert(Settings().plate_g == 60 && Settings().step_us == 10 &&
+                  Settings().pwm_min_us == 1000 && Settings().pwm_max_us == 1800,
+              "the defaults the help lines quote");
+GS_TEXT(kHelpHelp, "this list");
+GS_TEXT(kHelpMotor, "select motor slot N: ESC output and EEPROM record");
+GS_TEXT(kHelpPlate, "plate weight in g, default 60");
+GS_TEXT(kHelpWeigh, "weight on the plate (median of 201 readings)");
+GS_TEXT(kHelpCal, "calibrate: motor + propeller weigh W g; also tares");
+GS_TEXT(kHelpTare, "zerolize: force reads 0 g now (motor mounted, stopped)");
+GS_TEXT(kHelpSpan, "optional gain: after tare put W g on the plate,\nthen span W");
+GS_TEXT(kHelpRange, "sweep PWM range in us,\ndefault 1000 1800");
+GS_TEXT(kHelpStep, "sweep step in us, default 10");
+GS_TEXT(kHelpSettleMs, "wait per step in ms (thesis: 200); also the cap\nof settle auto");
+GS_TEXT(kHelpSettleAuto, "next step once the force stops changing\n(default, cap 500 ms)");
+GS_TEXT(kHelpSweep, "run the sweep, stream CSV; any key aborts (motor -> 1000 us)");
+GS_TEXT(kHelpStore1, "store the last sweep as curve 1 (+ start voltage, sag offsets)");
+GS_TEXT(kHelpStore2, "store the last sweep as curve 2 (another battery voltage)");
+GS_TEXT(kHelpStoreV2, "fit model v2 (effective voltage) to the last sweep and store it;\n"
+                      "a slot's v2 model from another voltage (>= 0.5 V) is refined");
+GS_TEXT(kHelpShow, "what the selected slot's EEPROM record holds (v1 or v2)");
+GS_TEXT(kHelpErase, "mark the selected slot not calibrated (v1 and both v2 copies)");
+GS_TEXT(kHelpStatus, "settings, live force and battery, last sweep, stack");
+GS_TEXT(kHelpEeprom, "EEPROM CRC-16 per slot and whole, or all of it as Intel HEX");
+GS_TEXT(kHelpDividerShow, "the battery divider (read_run flies with it too)");
+GS_TEXT(kHelpDivider, "set it in ohm: R1 pack-A1, R2 A1-ground,\ndefault 100000 47000 (15.638 V)");
+GS_TEXT(kHelpStrict, "sweep, store, erase and divider R1 R2 need a checksum\n(host clients)");
+static_assert(tc::kV2MinVoltageGapMv == 500, "store v2's help quotes 0.5 V");
+
+const fw::Command<GatherStoreApp> kCommands[] TC_PROGMEM = {
+    {{kHelp, nullptr, 0, 0, 0, kHelpHelp}, C::help},
+    {{kMotor, kArgSlot, 1, 1, 0, kHelpMotor}, C::motor},
+    {{kPlate, kArgPlate, 1, 1, 0, kHelpPlate}, C::plate},
+    {{kWeigh, nullptr, 0, 0, 0, kHelpWeigh}, C::weigh},
+    {{kCal, kArgKnown, 1, 1, 0, kHelpCal}, C::cal},
+    {{kTare, nullptr, 0, 0, 0, kHelpTare}, C::tare},
+    {{kSpan, kArgKnown, 1, 1, 0, kHelpSpan}, C::span},
+    {{kRange, kArgRange, 2, 2, 0, kHelpRange}, C::range},
+    {{kStep, kArgStep, 1, 1, 0, kHelpStep}, C::step},
+    {{kSettle, kArgSettle, 1, 1, 0, kHelpSettleMs}, C::settleMs},
+    {{kSettle, kArgAuto, 1, 1, 0, kHelpSettleAuto}, C::settleAuto},
+    {{kSweep, nullptr, 0, 0, kCmdGuarded, kHelpSweep}, C::sweep},
+    {{kStore, kArgStore1, 1, 1, kCmdGuarded, kHelpStore1}, C::store1},
+    {{kStore, kArgStore2, 1, 1, kCmdGuarded, kHelpStore2}, C::store2},
+    {{kStore, kArgStoreV2, 1, 1, kCmdGuarded, kHelpStoreV2}, C::storeV2},
+    {{kShow, nullptr, 0, 0, 0, kHelpShow}, C::show},
+    {{kErase, nullptr, 0, 0, kCmdGuarded, kHelpErase}, C::erase},
+    {{kStatus, nullptr, 0, 0, 0, kHelpStatus}, C::status},
+    {{kEeprom, kArgEeprom, 1, 1, 0, kHelpEeprom}, C::eeprom},
+    {{kDivider, nullptr, 0, 0, 0, kHelpDividerShow}, C::dividerShow},
+    {{kDivider, kArgDivider, 2, 2, kCmdGuarded, kHelpDivider}, C::divider},
+    {{kStrict, kArgOnOff, 1, 1, 0, kHelpStrict}, C::strict},
+};
+
+}  // namespace
+
+void GatherStoreApp::runCommand(char* line, const fw::LineContext& context) {
+  fw::dispatch(*this, kCommands, line, context);
+}
+
+void GatherStoreApp::cmdHelp() {
+  fw::printHelp(kCommands);
+  fw::say(TC_PSTR("lines: CR, LF or CRLF, at most "));
+  fw::printUint(fw::kLineMax);
+  fw::sayLine(TC_PSTR(" characters; optional checksum *HH = XOR"));
+  fw::sayLine(TC_PSTR("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
+}
+
+}  // namespace gs

@@ -1,0 +1,258 @@
+// The sweep runner (thesis fig. 6.8: for every PWM step, settle, read force and battery, keep
+// them; then the filter functions): the sweep/measure/settle loop and its abort paths. What
+// it prints comes from the view (gather_store_view.hpp); what it keeps is the SweepResult
+// that `store` decides on (store_decision.hpp).
+#include "gather_store_app.hpp"
+#include "gather_store_view.hpp"
+#include "hal/hal.hpp"
+
+namespace gs {
+
+using fw::say;
+using fw::sayLine;
+
+uint16_t GatherStoreApp::plannedSamples() const {
+  return static_cast<uint16_t>((settings_.pwm_max_us - settings_.pwm_min_us) / settings_.step_us +
+                               1u);
+}
+
+void GatherStoreApp::stopMotor() { hal::Esc::writePulse(settings_.slot, kStopPwmUs); }
+
+bool GatherStoreApp::waitOrAbort(uint16_t ms) {
+  const uint32_t start = hal::Clock::millis();
+  for (;;) {
+    hal::Watchdog::kick();  // settling: up to 10 s per step
+    if (hal::Uart::available()) {
+      abortSweep(SweepEnd::kKey, kKeyUnread);
+      return false;
+    }
+    if (hal::Clock::millis() - start >= ms) return true;
+    hal::Clock::sleepUntilInterrupt();
+  }
+}
+
+void GatherStoreApp::printSweepPlan() {
+  fw::printUint(settings_.pwm_min_us);
+  say(TC_PSTR(".."));
+  fw::printUint(settings_.pwm_max_us);
+  say(TC_PSTR(" us, step "));
+  fw::printUint(settings_.step_us);
+  say(TC_PSTR(" us, "));
+  printSettle();
+}
+
+void GatherStoreApp::printSettle() {
+  say(settings_.settle_auto ? TC_PSTR("settle auto (cap ") : TC_PSTR("settle "));
+  fw::printUint(settings_.settle_ms);
+  say(settings_.settle_auto ? TC_PSTR(" ms)") : TC_PSTR(" ms"));
+}
+
+bool GatherStoreApp::settleForce(uint16_t& counts) {
+  const uint32_t start = hal::Clock::millis();
+  uint16_t previous = 0;
+  bool have_previous = false;
+  uint8_t agreements = 0;
+  for (;;) {
+    if (!waitOrAbort(kSettleProbeMs)) return false;
+    if (!readForceCounts(counts)) return false;
+    if (have_previous) {
+      const uint16_t change = counts > previous ? counts - previous : previous - counts;
+      agreements = change <= kSettledCounts ? static_cast<uint8_t>(agreements + 1) : 0;
+      if (agreements >= kSettledAgreements) return true;
+    }
+    previous = counts;
+    have_previous = true;
+    if (hal::Clock::millis() - start >= settings_.settle_ms) return true;  // the cap
+  }
+}
+
+bool GatherStoreApp::readForceCounts(uint16_t& counts) {
+  force_median_.reset();
+  for (uint16_t i = 0; i < kForceWindow; ++i) {
+    hal::Watchdog::kick();
+    if (hal::Uart::available()) {
+      abortSweep(SweepEnd::kKey, kKeyUnread);
+      return false;
+    }
+    force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
+  }
+  counts = force_median_.median();
+  return true;
+}
+
+bool GatherStoreApp::readBatteryCounts(uint16_t& counts) {
+  battery_median_.reset();
+  for (uint16_t i = 0; i < kBatteryWindow; ++i) {
+    hal::Watchdog::kick();
+    if (hal::Uart::available()) {
+      abortSweep(SweepEnd::kKey, kKeyUnread);
+      return false;
+    }
+    battery_median_.push(hal::Adc::readCounts(hal::kAdcBattery));
+  }
+  counts = battery_median_.median();
+  return true;
+}
+
+void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
+  stopMotor();  // first, before any output
+  last_end_ = why;
+  sweep_.valid = false;
+  sweep_.complete = false;
+  // The key that aborted is not a command, nor is the rest of its line (e.g. "xerase").
+  if (why == SweepEnd::kKey)
+    reader_.abortLine(value == kKeyUnread ? hal::Uart::read() : static_cast<int16_t>(value));
+  say(TC_PSTR("# aborted: "));
+  switch (why) {
+    case SweepEnd::kKey:
+      say(TC_PSTR("key pressed"));
+      break;
+    case SweepEnd::kOverload:
+      say(TC_PSTR("load cell overload, force "));
+      fw::printInt(static_cast<int16_t>(value));
+      say(TC_PSTR(" g (limit "));
+      fw::printInt(cell_.config().overload_g);
+      say(TC_PSTR(" g): lower range MAX"));
+      break;
+    case SweepEnd::kImplausible:
+      say(TC_PSTR("load cell reads "));
+      fw::printUint(value);
+      say(TC_PSTR(" counts (ADC rail): check the amplifier and the wire to A0"));
+      break;
+    case SweepEnd::kBattery:
+      say(TC_PSTR("battery reads "));
+      fw::sayVolts(value);
+      say(TC_PSTR(", outside "));
+      fw::sayVolts(battery_.config().min_sane_mv);
+      say(TC_PSTR(".."));
+      fw::sayVolts(battery_.config().max_sane_mv);
+      say(TC_PSTR(": check the pack and the divider on A1"));
+      break;
+    case SweepEnd::kDone:
+      break;
+  }
+  sayLine(TC_PSTR("; motor stopped (1000 us), nothing kept: type sweep to start again"));
+}
+
+void GatherStoreApp::cmdSweep() {
+  if (!cell_.isTared()) {
+    sayLine(TC_PSTR("error: a sweep needs a tare first: with the motor mounted and stopped, "
+                    "type tare (or cal W)"));
+    return;
+  }
+  const uint16_t planned = plannedSamples();
+  if (planned > kMaxSweepSamples) {  // range and step refuse this already; kept as a guard
+    sayLine(TC_PSTR("error: too many steps for the sample buffer: use a larger step"));
+    return;
+  }
+  const uint8_t slot = settings_.slot;
+  sweep_.valid = false;
+  sweep_.complete = false;
+  if (!swallowLineFeed()) return;
+  scratch_.startBuilder();
+  sag_builder_.reset(settings_.pwm_min_us);
+  fitter_.reset();
+
+  say(TC_PSTR("# sweep motor "));
+  fw::printUint(slot);
+  say(TC_PSTR(": "));
+  printSweepPlan();
+  say(TC_PSTR(", "));
+  fw::printUint(planned);
+  sayLine(TC_PSTR(" steps; any key aborts"));
+  if (planned > kMaxV2Samples) {
+    say(TC_PSTR("# note: model v2 keeps at most "));
+    fw::printUint(kMaxV2Samples);
+    sayLine(TC_PSTR(" steps: store v2 will refuse this sweep (store 1 and store 2 work)"));
+  }
+
+  const uint32_t since_arm = hal::Clock::millis() - armed_at_ms_;
+  if (since_arm < kArmMs) {
+    sayLine(TC_PSTR("# arming the ESC (1000 us)"));
+    if (!waitOrAbort(static_cast<uint16_t>(kArmMs - since_arm))) return;
+  }
+
+  sayLine(TC_PSTR("pwm_us,force_g,vbat_v,t_s,motor,dir"));
+  const uint32_t start_ms = hal::Clock::millis();
+  uint16_t pwm = settings_.pwm_min_us;
+  int16_t max_force_dg = 0;
+  for (uint16_t done = 1; done <= planned;
+       ++done, pwm = static_cast<uint16_t>(pwm + settings_.step_us)) {
+    int16_t force_dg;
+    uint16_t vbat_mv;
+    if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
+    scratch_.builder().add(pwm, force_dg);
+    sag_builder_.add(pwm, vbat_mv);
+    fitter_.add(pwm, force_dg, vbat_mv);  // false once full: store v2 then refuses the sweep
+    if (force_dg > max_force_dg) max_force_dg = force_dg;
+    view::printCsvRow(pwm, force_dg, vbat_mv, hal::Clock::millis() - start_ms, slot);
+    if (done % kProgressEvery == 0 && done != planned) view::sayProgress(done, planned, max_force_dg);
+  }
+  stopMotor();
+  last_end_ = SweepEnd::kDone;
+  finishSweep(slot, hal::Clock::millis() - start_ms);
+}
+
+bool GatherStoreApp::swallowLineFeed() {
+  // A terminal that ends lines with CR LF sends the LF right after the CR that completed
+  // "sweep" (87 us later at 115200 baud): it belongs to the command, it is not a key.
+  const uint32_t start = hal::Clock::millis();
+  while (!hal::Uart::available() && hal::Clock::millis() - start < kLineEndGraceMs) {
+    hal::Clock::sleepUntilInterrupt();
+  }
+  if (!hal::Uart::available()) return true;
+  const int16_t item = hal::Uart::read();
+  if (item == '\n') return true;
+  abortSweep(SweepEnd::kKey, static_cast<uint16_t>(item));  // a key: the motor has not started
+  return false;
+}
+
+bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {
+  hal::Esc::writePulse(settings_.slot, pwm_us);
+  uint16_t force_counts;
+  if (settings_.settle_auto) {
+    if (!settleForce(force_counts)) return false;
+  } else {
+    if (!waitOrAbort(settings_.settle_ms)) return false;
+    if (!readForceCounts(force_counts)) return false;
+  }
+  const tc::LoadCellStatus cell_status = cell_.check(force_counts);
+  if (cell_status == tc::LoadCellStatus::kImplausible) {
+    abortSweep(SweepEnd::kImplausible, force_counts);
+    return false;
+  }
+  if (cell_status == tc::LoadCellStatus::kOverload) {
+    abortSweep(SweepEnd::kOverload, static_cast<uint16_t>(cell_.forceGrams(force_counts)));
+    return false;
+  }
+  const uint16_t force_q4 = forceQ4();  // the window whose median force_counts is
+  uint16_t battery_counts;
+  if (!readBatteryCounts(battery_counts)) return false;
+  vbat_mv = battery_.millivoltsFromCounts(battery_counts);
+  if (!battery_.isSane(vbat_mv)) {
+    abortSweep(SweepEnd::kBattery, vbat_mv);
+    return false;
+  }
+  force_dg = forceDecigrams(force_q4);
+  return true;
+}
+
+// Filter functions (fig. 6.9 and G.2): sag offsets and start voltage, then the force curve;
+// then the summary lines.
+
+// Filter functions (fig. 6.9 and G.2): sag offsets and start voltage, then the force curve;
+// then the summary lines.
+void GatherStoreApp::finishSweep(uint8_t slot, uint32_t elapsed_ms) {
+  uint16_t start_mv = 0;
+  sweep_.sag = tc::SagTable();
+  sag_builder_.build(sweep_.sag, start_mv);  // bin 0 holds the first step: cannot fail
+  sweep_.curve.start_mv = start_mv;
+  sweep_.samples = scratch_.builder().size();
+  sweep_.report = scratch_.builder().build(sweep_.curve);
+  sweep_.slot = slot;
+  sweep_.complete = true;
+  sweep_.valid = sweep_.report.status == tc::BuildStatus::kOk;
+  view::saySweepSummary(sweep_, elapsed_ms);
+}
+
+}  // namespace gs
