@@ -195,19 +195,24 @@ void LineReader::setStrict(bool on) {
   flags_ = static_cast<uint8_t>(on ? (flags_ | kStrict) : (flags_ & ~kStrict));
 }
 
+void LineReader::strictCommand(bool on) {
+  setStrict(on);
+  hal::Uart::printP(on ? TC_PSTR("strict on: commands that spin a motor or write the EEPROM need "
+                                 "a checksum (*HH)")
+                       : TC_PSTR("strict off: checksums optional"));
+  newline();
+}
+
 bool LineReader::handleStrict(char** tokens, uint8_t count) {
   if (count == 0 || !equalsP(tokens[0], TC_PSTR("strict"))) return false;
   if (count == 2 && equalsP(tokens[1], TC_PSTR("on"))) {
-    setStrict(true);
-    hal::Uart::printP(TC_PSTR("strict on: commands that spin a motor or write the EEPROM need "
-                              "a checksum (*HH)"));
+    strictCommand(true);
   } else if (count == 2 && equalsP(tokens[1], TC_PSTR("off"))) {
-    setStrict(false);
-    hal::Uart::printP(TC_PSTR("strict off: checksums optional"));
+    strictCommand(false);
   } else {
     hal::Uart::printP(TC_PSTR("error: usage: strict on|off; nothing changed"));
+    newline();
   }
-  newline();
   return true;
 }
 

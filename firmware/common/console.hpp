@@ -66,6 +66,8 @@ class LineReader {
   // "strict on|off": returns false if tokens[0] is not "strict"; otherwise handles it (the
   // reply or a usage error is printed) and returns true.
   bool handleStrict(char** tokens, uint8_t count);
+  // `strict on` / `strict off` already parsed (a shell row): sets it and prints the reply.
+  void strictCommand(bool on);
   // For a command that can spin a motor or write the EEPROM: true when allowed; otherwise
   // prints "error: strict mode: ..." and returns false.
   bool allowRisky();

@@ -30,6 +30,8 @@ void printHex16(uint16_t value) {
   printHex8(static_cast<uint8_t>(value & 0xFF));
 }
 
+}  // namespace
+
 void eepromCrc() {
   uint16_t all = 0xFFFF;
   hal::Uart::printP(TC_PSTR("eeprom crc"));
@@ -72,7 +74,6 @@ void eepromDump(void (*between_records)()) {
   newline();
 }
 
-}  // namespace
 
 bool isEepromCommand(const char* verb) { return equalsP(verb, TC_PSTR("eeprom")); }
 

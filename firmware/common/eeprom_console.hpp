@@ -28,4 +28,8 @@ bool isEepromCommand(const char* verb);
 // with a watchdog or a TX ring buffer can keep its loop duties going there.
 void eepromCommand(char** tokens, uint8_t count, void (*between_records)() = nullptr);
 
+// The two sub-commands on their own, for a shell row that parsed `crc|dump` itself.
+void eepromCrc();
+void eepromDump(void (*between_records)() = nullptr);
+
 }  // namespace fw

@@ -52,9 +52,13 @@ bool commandDivider(char** tokens, uint8_t count, tc::BoardSettings& settings) {
                     "to ground, 0..10000000 (thesis: divider 100000 47000); nothing changed"));
     return false;
   }
+  return setDivider(static_cast<uint32_t>(top), static_cast<uint32_t>(bottom), settings);
+}
+
+bool setDivider(uint32_t top_ohm, uint32_t bottom_ohm, tc::BoardSettings& settings) {
   tc::BoardSettings wanted;
-  wanted.divider_top_ohm = static_cast<uint32_t>(top);
-  wanted.divider_bottom_ohm = static_cast<uint32_t>(bottom);
+  wanted.divider_top_ohm = top_ohm;
+  wanted.divider_bottom_ohm = bottom_ohm;
   if (!wanted.isValid()) {
     hal::Uart::printP(TC_PSTR("error: divider "));
     printUint(wanted.divider_top_ohm);

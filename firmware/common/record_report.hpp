@@ -20,5 +20,8 @@ void printDivider(const tc::BoardSettings& settings);
 // stores it power-fail-safely and updates `settings`. Prints one result line (or one error
 // line). Returns true when the setting changed.
 bool commandDivider(char** tokens, uint8_t count, tc::BoardSettings& settings);
+// `divider R1 R2` with the numbers already parsed (a shell row, 0..tc::kDividerMaxOhm each):
+// the same checks, store and reply line.
+bool setDivider(uint32_t top_ohm, uint32_t bottom_ohm, tc::BoardSettings& settings);
 
 }  // namespace fw
