@@ -193,13 +193,13 @@ const char kLiftoffHelp[] TC_PROGMEM =
     "ramp all four 0->G g (default 2000 ms),\nhold (default 5000 ms), stop; empty lines keep it "
     "going,\nany other key aborts";
 const char kStreamHelp[] TC_PROGMEM = "CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s";
-const char kRateHelp[] TC_PROGMEM = "ESC frame rate (motors stopped)";
+const char kRateHelp[] TC_PROGMEM = "ESC frames per second (motors stopped)";
 const char kEepromHelp[] TC_PROGMEM = "EEPROM CRC-16 per slot and whole, or Intel HEX (stopped)";
 const char kDividerShowHelp[] TC_PROGMEM = "the battery divider and its full scale";
 const char kDividerSetHelp[] TC_PROGMEM =
-    "battery divider in ohm, R1 pack-A1, R2 A1-ground\n(thesis 100000 47000); reloads the "
-    "calibration (motors stopped)";
-const char kStrictHelp[] TC_PROGMEM = "f (above 0 g), liftoff, divider R1 R2 need a checksum";
+    "battery divider in ohm: R1 pack-A1, R2 A1-ground\n(thesis 100000 47000); reloads the "
+    "calibration,\nmotors stopped";
+const char kStrictHelp[] TC_PROGMEM = "f (above 0 g), liftoff, divider R1_OHM R2_OHM need a checksum";
 
 // Every console command. kCmdGuarded marks what strict mode refuses without a checksum: what
 // can spin a motor (f above 0 g, liftoff) or write the EEPROM (divider R1 R2).

@@ -40,6 +40,11 @@
 //    hal::Uart::write, which runs service() from its wait hook, so frames stay on time;
 //  - service() kicks the watchdog; nothing else in the loop does (docs/safety.md).
 //
+// Files, by lifetime: read_run_app.cpp (start-up, the loop's pass, failsafe, lift-off),
+// frame.cpp (the ESC frame), commands.cpp (the console's command table and handlers: parsing,
+// ranges, strict mode and help come from the table, firmware/common/shell.hpp),
+// console_view.cpp (every line printed), run_rules.hpp (the pure decisions).
+//
 // The per-frame path (battery samples, voltage filter, both models, ESC write) is integer
 // only; the image links no floating-point routine at all.
 // Host tests drive the same class against the fake HAL.
