@@ -96,6 +96,16 @@ void sayMs(uint16_t ms) {
   say(TC_PSTR(" ms"));
 }
 
+// "<prefix>motor N<middle><why it is not calibrated><suffix>" and the line end.
+void motorLine(const char* prefix, uint8_t index, const Motor& m, const char* middle,
+               const char* suffix) {
+  say(prefix);
+  sayMotor(index);
+  say(middle);
+  sayRecordStatus(m);
+  sayLine(suffix);
+}
+
 void statusMotor(const ReadRunApp& app, uint8_t i) {
   const Motor& m = app.motor(i);
   sayMotor(i);
@@ -194,27 +204,17 @@ void calibratedCount(uint8_t calibrated) {
 }
 
 void refuseMotor(uint8_t index, const Motor& m) {
-  say(TC_PSTR("error: "));
-  sayMotor(index);
-  say(TC_PSTR(" is "));
-  sayRecordStatus(m);
-  sayLine(TC_PSTR("; it stays at 1000 us - recalibrate it with gather_store"));
+  motorLine(TC_PSTR("error: "), index, m, TC_PSTR(" is "),
+            TC_PSTR("; it stays at 1000 us - recalibrate it with gather_store"));
 }
 
 void heldMotor(uint8_t index, const Motor& m) {
-  say(TC_PSTR("warning: "));
-  sayMotor(index);
-  say(TC_PSTR(" "));
-  sayRecordStatus(m);
-  sayLine(TC_PSTR("; held at 1000 us"));
+  motorLine(TC_PSTR("warning: "), index, m, TC_PSTR(" "), TC_PSTR("; held at 1000 us"));
 }
 
 void liftoffNeedsAll(uint8_t index, const Motor& m) {
-  say(TC_PSTR("error: liftoff needs all four motors calibrated; "));
-  sayMotor(index);
-  say(TC_PSTR(" is "));
-  sayRecordStatus(m);
-  sayLine(TC_PSTR("; recalibrate it with gather_store"));
+  motorLine(TC_PSTR("error: liftoff needs all four motors calibrated; "), index, m,
+            TC_PSTR(" is "), TC_PSTR("; recalibrate it with gather_store"));
 }
 
 void liftoffStarted(uint16_t force_g, uint16_t ramp_ms, uint16_t hold_ms) {
