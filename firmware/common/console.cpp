@@ -195,6 +195,14 @@ void LineReader::setStrict(bool on) {
   flags_ = static_cast<uint8_t>(on ? (flags_ | kStrict) : (flags_ & ~kStrict));
 }
 
+void LineReader::strictCommand(bool on) {
+  setStrict(on);
+  hal::Uart::printP(on ? TC_PSTR("strict on: commands that spin a motor or write the EEPROM need "
+                                 "a checksum (*HH)")
+                       : TC_PSTR("strict off: checksums optional"));
+  newline();
+}
+
 bool LineReader::handleStrict(char** tokens, uint8_t count) {
   if (count == 0 || !equalsP(tokens[0], TC_PSTR("strict"))) return false;
   if (count == 2 && equalsP(tokens[1], TC_PSTR("on"))) {
@@ -379,5 +387,32 @@ void sayVolts(uint16_t mv) {
 }
 
 void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
+
+// A flash copy of the board's ESC table (indexing hal::kEscPins at run time would put it in
+// SRAM on the AVR).
+static_assert(hal::kEscChannels == 4, "one entry per ESC channel");
+#ifdef __AVR__
+const hal::EscPin kEscPinsFlash[] PROGMEM = {hal::kEscPins[0], hal::kEscPins[1], hal::kEscPins[2],
+                                             hal::kEscPins[3]};
+#endif
+
+void printEscPin(uint8_t channel) {
+  if (channel >= hal::kEscChannels) return;
+#ifdef __AVR__
+  hal::EscPin pin;
+  memcpy_P(&pin, &kEscPinsFlash[channel], sizeof pin);
+#else
+  const hal::EscPin& pin = hal::kEscPins[channel];
+#endif
+  hal::Uart::write('D');
+  printUint(pin.arduino_pin);
+  hal::Uart::printP(TC_PSTR(" (P"));
+  hal::Uart::write(static_cast<uint8_t>(pin.port));
+  hal::Uart::write(static_cast<uint8_t>('0' + pin.bit));
+  hal::Uart::printP(TC_PSTR(", OC"));
+  hal::Uart::write(static_cast<uint8_t>('0' + pin.timer));
+  hal::Uart::write(static_cast<uint8_t>(pin.compare));
+  hal::Uart::write(')');
+}
 
 }  // namespace fw

@@ -130,5 +130,7 @@ void printResetCause();
 //   "stack: 1234 of 2086 bytes never used; strict off; 0 lines rejected"
 // `yield` is passed to hal::Stack::untouchedBytes (its scan takes about 1.5 ms).
 void printHealth(const LineReader& reader, void (*yield)() = nullptr);
+//   "D6 (PH3, OC4A)": where ESC `channel` is wired, from the board table (hal/board.hpp)
+void printEscPin(uint8_t channel);
 
 }  // namespace fw

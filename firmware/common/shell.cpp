@@ -157,7 +157,8 @@ int8_t matchCommand(const void* table, uint8_t rows, size_t stride, char* line,
     }
     if (!ok) continue;
     parsed.count = given;
-    if ((spec.flags & kCmdGuarded) && context.strict && !context.checksummed) {
+    const bool stop = (spec.flags & kCmdZeroIsStop) && given > 0 && parsed.value[given - 1] == 0;
+    if ((spec.flags & kCmdGuarded) && !stop && context.strict && !context.checksummed) {
       hal::Uart::printP(TC_PSTR("error: strict mode: \""));
       hal::Uart::print(tokens[0]);
       hal::Uart::printP(TC_PSTR("\" needs a checksum: end the line with *hh (XOR of its bytes)"));

@@ -52,6 +52,9 @@ enum CommandFlag : uint8_t {
   kCmdGuarded = 1u << 0,
   // Hidden from `help` (aliases kept for old scripts).
   kCmdHidden = 1u << 1,
+  // With kCmdGuarded: a last argument of 0 is a stop (`f 0`, `f 2 0`), which never needs a
+  // checksum; any other value is guarded.
+  kCmdZeroIsStop = 1u << 2,
 };
 
 // The part of a row the shell reads; Command<App> adds the typed handler after it.

@@ -18,7 +18,7 @@ rr::ReadRunApp app;  // four motor structs (~4.5 KB) live here, in .bss
 int main() {
   hal::Esc::init(hal::kEscDefaultFrameHz);  // first: the ESCs see 1000 us from power-on
   hal::Clock::init();
-  hal::Uart::init(115200);
+  hal::Uart::init(hal::kUartBaud);
   hal::Adc::init();
   // The boot code (.init3) switched the watchdog off and saved why the chip reset; from here on
   // a loop that stops coming round resets it within ~64 ms (docs/safety.md).

@@ -40,6 +40,11 @@
 //    hal::Uart::write, which runs service() from its wait hook, so frames stay on time;
 //  - service() kicks the watchdog; nothing else in the loop does (docs/safety.md).
 //
+// Files, by lifetime: read_run_app.cpp (start-up, the loop's pass, failsafe, lift-off),
+// frame.cpp (the ESC frame), commands.cpp (the console's command table and handlers: parsing,
+// ranges, strict mode and help come from the table, firmware/common/shell.hpp),
+// console_view.cpp (every line printed), run_rules.hpp (the pure decisions).
+//
 // The per-frame path (battery samples, voltage filter, both models, ESC write) is integer
 // only; the image links no floating-point routine at all.
 // Host tests drive the same class against the fake HAL.
@@ -69,6 +74,7 @@
 #include "thrustcal/motor_calibration.hpp"
 #include "thrustcal/record_v2.hpp"
 #include "thrustcal/thesis_runtime.hpp"
+#include "run_rules.hpp"
 #include "slot_model.hpp"
 
 namespace rr {
@@ -82,7 +88,7 @@ using tc::kStopPwmUs;
 constexpr uint16_t kForceMaxG = tc::kRecordMaxForceG;  // 5 kg: v1 curves saturate at 500 g
 using tc::kBatteryWindow;
 constexpr uint8_t kBatterySamplesPerFrame = 4;  // v2 filter input: mean of the middle two
-constexpr uint16_t kLiftoffDefaultRampMs = 2000;
+constexpr uint16_t kLiftoffDefaultRampMs = 2000;  // `help` spells both (static_assert there)
 constexpr uint16_t kLiftoffDefaultHoldMs = 5000;
 constexpr uint16_t kLiftoffMaxMs = 60000;
 constexpr uint16_t kLiftoffProgressMs = 500;  // one "# " progress line this often
@@ -144,21 +150,25 @@ class ReadRunApp {
   // v2: the bench sag of the commands the filtered voltage reflects (1/16 of 10 mV).
   const tc::BusSagFilter& sagFilter() const { return v2_.sag; }
   bool isStreaming() const { return stream_; }
+  uint16_t frameHz() const { return frame_hz_; }
+  uint8_t v2Motors() const { return v2_.count; }  // motors flying model v2
+  // Lift-off progress: since its command, its force, whether it holds.
+  uint32_t liftoffStartMs() const { return liftoff_start_ms_; }
+  bool liftoffHolding() const { return liftoff_holding_; }
+  uint16_t liftoffForceG() const { return liftoff_force_g_; }
+  uint16_t liftoffHoldMs() const { return liftoff_hold_ms_; }
   uint32_t failsafeTrips() const { return failsafe_trips_; }
   const fw::LineReader& console() const { return line_; }
 
- private:
-  void handleLine(char* line);
-  void commandHelp();
-  void commandForce(char** tokens, uint8_t count);
-  void commandStop();
-  void commandStatus();
-  void commandLiftoff(char** tokens, uint8_t count);
-  void commandStream(char** tokens, uint8_t count);
-  void commandRate(char** tokens, uint8_t count);
-  void commandDivider(char** tokens, uint8_t count);
+  // `help`: every row of the command table (usage, help text, ranges), then the console rules
+  // with their constants. docs/read_run.md holds a copy a test compares with it.
+  static void printHelp();
 
-  bool requireArmable(uint8_t index);  // prints the refusal when not
+ private:
+  friend struct Commands;  // commands.cpp: the console's command table and its handlers
+
+  void handleLine(char* line);
+  bool requireArmable(uint8_t index) const;  // prints the refusal when not
   void stopAll();                      // forces to 0, every ESC to 1000 us at once
 
   // The time-critical part of a pass, also run from inside a blocked write (the UART wait
@@ -171,16 +181,14 @@ class ReadRunApp {
   void checkFailsafe(uint32_t now_ms);
   void abortLiftoff(int16_t key);
   void updateLiftoff(uint32_t now_ms);
-  void printLiftoffProgress(uint32_t elapsed_ms, uint16_t force_g);
 
   void scheduleFrames(uint32_t now_ms);
-  bool frameDue(uint32_t now_ms) const;
+  void setFrameRate(uint16_t frame_hz);  // filter constant and stream pace follow it
   void frame(uint32_t now_ms);
   void sampleBattery();
   void setFilterShift(uint16_t frame_hz);
   void setForce(uint8_t index, uint16_t force_g);  // a v2 motor's lane too
   void flyMotor(Motor& m);
-  void streamLine(uint32_t now_ms);
   void prompt();
 
   Motor motors_[kMotors];
@@ -208,13 +216,11 @@ class ReadRunApp {
   uint32_t note_ms_ = 0;        // time of the frame the notes are about
   static ReadRunApp* active_;   // the instance the UART wait hook serves
 
-  // ESC frame schedule: period 1000/hz ms as whole ms plus a remainder, so 400 Hz averages
-  // exactly 2.5 ms on a 1 ms clock.
-  uint32_t next_frame_ms_ = 0;
-  uint16_t frame_rem_ = 0;
+  FrameClock frames_;  // ESC frame schedule (run_rules.hpp)
   uint16_t frame_hz_ = hal::kEscDefaultFrameHz;
 
   bool stream_ = false;
+  bool hold_prompt_ = false;  // the command's reply goes on (lift-off progress, stream rows)
   uint8_t stream_every_frames_ = 5;
   uint8_t stream_countdown_ = 0;
 

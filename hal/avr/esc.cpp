@@ -1,18 +1,52 @@
 // Four ESC outputs, 16-bit timers in fast PWM mode 14 (TOP = ICRn), prescaler 8 -> 0.5 us
 // per tick. ICRn = 2e6 / frame_hz - 1 (39999 at 50 Hz, 4999 at 400 Hz), OCRnx = 2 * pwm_us - 1.
-//   ESC 0  D6  PH3 OC4A      ESC 2  D8  PH5 OC4C
-//   ESC 1  D7  PH4 OC4B      ESC 3  D11 PB5 OC1A
+// Which timer, compare unit and pin each channel uses is the table hal::kEscPins
+// (hal/board.hpp); the compare registers, output-enable bits and pin masks below are derived
+// from it at compile time. The timer set-up is written for timers 4 and 1 (asserted).
 // OCRnx is double-buffered in mode 14: a new pulse width takes effect at the next frame.
 #include <avr/io.h>
 #include <util/atomic.h>
 
 #include "hal/hal.hpp"
 
-static_assert(F_CPU == 16000000UL, "ESC timer settings assume a 16 MHz clock (0.5 us ticks)");
+static_assert(F_CPU == hal::kCpuHz, "hal/board.hpp's clock is the one the build targets");
 
 namespace {
 
-constexpr uint32_t kTicksPerSecond = F_CPU / 8;
+namespace board = hal::board;
+
+// The set-up below starts timers 4 and 1 with prescaler 8 and enables exactly the table's pins.
+static_assert(hal::kEscPrescaler == 8, "CSn1: clk / 8");
+static_assert(board::escUsesTimer(4) && board::escUsesTimer(1) && !board::escUsesTimer(3) &&
+                  !board::escUsesTimer(5),
+              "the ESC outputs use timers 4 and 1");
+static_assert(__builtin_popcount(board::escPortMask('H')) +
+                      __builtin_popcount(board::escPortMask('B')) == hal::kEscChannels,
+              "every ESC pin is on port H or B");
+static_assert(board::escPortMask('H') == (_BV(PH3) | _BV(PH4) | _BV(PH5)) &&
+                  board::escPortMask('B') == _BV(PB5) &&
+                  board::escCompareBits(4) == (_BV(COM4A1) | _BV(COM4B1) | _BV(COM4C1)) &&
+                  board::escCompareBits(1) == _BV(COM1A1),
+              "pin masks and output-enable bits as the datasheet names them");
+static_assert(board::escCompareAddress(0) == _SFR_MEM_ADDR(OCR4A) &&
+                  board::escCompareAddress(1) == _SFR_MEM_ADDR(OCR4B) &&
+                  board::escCompareAddress(2) == _SFR_MEM_ADDR(OCR4C) &&
+                  board::escCompareAddress(3) == _SFR_MEM_ADDR(OCR1A),
+              "the table's compare registers are the ATmega2560's");
+
+constexpr uint32_t kTicksPerSecond = hal::kEscTicksPerSecond;
+
+// Everything taken from the table as constants (so the table itself never reaches SRAM).
+constexpr uint8_t kPortHMask = board::escPortMask('H');
+constexpr uint8_t kPortBMask = board::escPortMask('B');
+constexpr uint8_t kTimer4Outputs = board::escCompareBits(4);
+constexpr uint8_t kTimer1Outputs = board::escCompareBits(1);
+
+template <uint8_t Channel>
+volatile uint16_t& compareRegister() {
+  constexpr uint16_t address = board::escCompareAddress(Channel);
+  return _SFR_MEM16(address);
+}
 uint16_t g_pulse_us[hal::kEscChannels] = {};
 uint16_t g_frame_hz = 0;
 
@@ -30,11 +64,12 @@ uint16_t topFor(uint16_t frame_hz) {
 void writeCompare(uint8_t channel, uint16_t ticks) {
   ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {  // 16-bit registers share the TEMP byte
     for (uint16_t value = ticks ^ 1u;; value = ticks) {
+      static_assert(hal::kEscChannels == 4, "one case per channel");
       switch (channel) {
-        case 0: OCR4A = value; break;
-        case 1: OCR4B = value; break;
-        case 2: OCR4C = value; break;
-        default: OCR1A = value; break;
+        case 0: compareRegister<0>() = value; break;
+        case 1: compareRegister<1>() = value; break;
+        case 2: compareRegister<2>() = value; break;
+        default: compareRegister<3>() = value; break;
       }
       if (value == ticks) break;
     }
@@ -60,10 +95,10 @@ void Esc::init(uint16_t frame_hz) {
   }
   for (uint8_t ch = 0; ch < kEscChannels; ++ch) writePulse(ch, 1000);
   // Non-inverting compare outputs, WGM 14 = WGMn3:WGMn2:WGMn1.
-  TCCR4A = _BV(COM4A1) | _BV(COM4B1) | _BV(COM4C1) | _BV(WGM41);
-  TCCR1A = _BV(COM1A1) | _BV(WGM11);
-  DDRH |= _BV(PH3) | _BV(PH4) | _BV(PH5);
-  DDRB |= _BV(PB5);
+  TCCR4A = kTimer4Outputs | _BV(WGM41);
+  TCCR1A = kTimer1Outputs | _BV(WGM11);
+  DDRH |= kPortHMask;
+  DDRB |= kPortBMask;
   // Start both at clk / 8, back to back so the frames stay nearly aligned.
   TCCR4B = _BV(WGM43) | _BV(WGM42) | _BV(CS41);
   TCCR1B = _BV(WGM13) | _BV(WGM12) | _BV(CS11);
@@ -109,6 +144,10 @@ void Esc::writePulse(uint8_t channel, uint16_t pwm_us) {
   if (pwm_us > kEscPulseMaxUs) pwm_us = kEscPulseMaxUs;
   g_pulse_us[channel] = pwm_us;
   writeCompare(channel, static_cast<uint16_t>(2u * pwm_us - 1u));
+}
+
+void Esc::writeAll(const uint16_t (&pwm_us)[kEscChannels]) {
+  for (uint8_t ch = 0; ch < kEscChannels; ++ch) writePulse(ch, pwm_us[ch]);
 }
 
 uint16_t Esc::pulseUs(uint8_t channel) {

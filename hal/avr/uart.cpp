@@ -85,7 +85,7 @@ ISR(USART0_UDRE_vect) {
 namespace hal {
 
 void Uart::init(uint32_t baud) {
-  const uint16_t ubrr = static_cast<uint16_t>((F_CPU + 4 * baud) / (8 * baud) - 1);
+  const uint16_t ubrr = board::uartDivisor(baud);  // its error is checked in hal/board.hpp
   // No "UCSR0B = 0" first: simavr 1.6 clears UDRE0 when TXEN0 is written 0 and only sets it
   // again after a byte went out, so the first transmit would wait forever. Read-modify-write
   // of UCSR0A for the same reason (UDRE0 is read-only on the chip).

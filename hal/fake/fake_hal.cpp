@@ -19,7 +19,7 @@
 
 namespace {
 
-constexpr uint8_t kAdcChannels = 16;
+using hal::kAdcChannels;  // hal/board.hpp
 
 struct ScheduledInput {
   uint32_t at_ms;
@@ -36,6 +36,7 @@ struct FakeState {
   uint32_t adc_conversions = 0;
 
   uint16_t pulse_us[hal::kEscChannels] = {};
+  uint32_t esc_write_alls = 0;
   uint16_t frame_hz = 0;
 
   uint8_t eeprom[hal::Eeprom::kSize];
@@ -154,6 +155,11 @@ void Esc::writePulse(uint8_t channel, uint16_t pwm_us) {
   state().pulse_us[channel] = pwm_us;
 }
 
+void Esc::writeAll(const uint16_t (&pwm_us)[kEscChannels]) {
+  ++state().esc_write_alls;
+  for (uint8_t ch = 0; ch < kEscChannels; ++ch) writePulse(ch, pwm_us[ch]);
+}
+
 uint16_t Esc::pulseUs(uint8_t channel) {
   return channel < kEscChannels ? state().pulse_us[channel] : 0;
 }
@@ -239,6 +245,7 @@ void setAdcSource(std::function<uint16_t(uint8_t channel)> source) {
 uint32_t adcConversions() { return state().adc_conversions; }
 
 uint16_t pulseUs(uint8_t channel) { return Esc::pulseUs(channel); }
+uint32_t escWriteAlls() { return state().esc_write_alls; }
 uint16_t frameRateHz() { return state().frame_hz; }
 
 uint8_t* eeprom() { return state().eeprom; }

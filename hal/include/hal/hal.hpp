@@ -2,16 +2,12 @@
 // backend chosen at link time (hal/avr for the ATmega2560, hal/fake for host tests).
 // No virtual calls, no vtables, no heap.
 //
-// Pinout (Arduino Mega2560):
-//   A0  load-cell amplifier (INA125P through the 3rd-order RC low-pass)
-//   A1  battery divider 100k / 47k
-//   ESC 0  D6  PH3 OC4A      ESC 2  D8  PH5 OC4C
-//   ESC 1  D7  PH4 OC4B      ESC 3  D11 PB5 OC1A
-//   UART0 (USB) 115200 8N1
-// The ESC pins are timer compare outputs that are not external-interrupt pins (see
-// CONVENTIONS.md: simavr polls INT pins held low every cycle).
+// The board (which pin does what, clock, baud rate) is data in hal/board.hpp, checked at
+// compile time.
 #pragma once
 #include <stdint.h>
+
+#include "hal/board.hpp"
 
 #ifdef __AVR__
 #include <avr/pgmspace.h>
@@ -21,15 +17,6 @@
 #endif
 
 namespace hal {
-
-constexpr uint8_t kAdcLoadCell = 0;
-constexpr uint8_t kAdcBattery = 1;
-constexpr uint8_t kEscChannels = 4;
-constexpr uint16_t kEscDefaultFrameHz = 50;
-constexpr uint16_t kEscMinFrameHz = 50;
-constexpr uint16_t kEscMaxFrameHz = 400;
-constexpr uint16_t kEscPulseMinUs = 500;
-constexpr uint16_t kEscPulseMaxUs = 2500;
 
 // Millisecond clock (Timer0, 1 kHz interrupt) and delays.
 struct Clock {
@@ -57,6 +44,8 @@ struct Esc {
   static uint16_t frameRateHz();
   // Pulse width for one channel, clamped to 500..2500 us. Takes effect at the next frame.
   static void writePulse(uint8_t channel, uint16_t pwm_us);
+  // All four at once (read_run's frame): writePulse of each channel, back to back.
+  static void writeAll(const uint16_t (&pwm_us)[kEscChannels]);
   static uint16_t pulseUs(uint8_t channel);
 };
 
@@ -83,7 +72,7 @@ struct Uart {
   static constexpr int16_t kRxDamaged = 0x100;  // read(): bytes were lost or garbled here
   using WaitHook = void (*)();
 
-  static void init(uint32_t baud = 115200);
+  static void init(uint32_t baud = kUartBaud);
   static bool available();  // a byte or a damage mark is waiting
   static int16_t read();    // a byte 0..255, kRxDamaged or kNothing
   static void write(uint8_t byte);

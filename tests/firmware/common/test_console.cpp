@@ -448,3 +448,16 @@ TEST_F(Console, NewlineIsCrLf) {
 }
 
 }  // namespace
+
+TEST(BoardPins, EachEscPinIsNamedFromTheBoardTable) {
+  hal::fake::reset();
+  const char* names[] = {"D6 (PH3, OC4A)", "D7 (PH4, OC4B)", "D8 (PH5, OC4C)", "D11 (PB5, OC1A)"};
+  for (uint8_t ch = 0; ch < hal::kEscChannels; ++ch) {
+    fw::printEscPin(ch);
+    EXPECT_EQ(hal::fake::takeOutput(), names[ch]) << int(ch);
+    EXPECT_EQ(hal::escArduinoPin(ch), hal::kEscPins[ch].arduino_pin);
+  }
+  fw::printEscPin(hal::kEscChannels);
+  EXPECT_EQ(hal::fake::takeOutput(), "") << "no such channel: nothing";
+  EXPECT_EQ(hal::escArduinoPin(hal::kEscChannels), 0xFF);
+}

@@ -141,3 +141,36 @@ TEST_F(Shell, HelpIsGeneratedFromTheTableWithUsageAndRanges) {
 }
 
 }  // namespace
+
+namespace {
+
+const fw::Command<Calls> kStopTable[] = {
+    {{"f", kG, 1, 1, fw::kCmdGuarded | fw::kCmdZeroIsStop, "all motors to G grams"}, runForceAll},
+    {{"f", kNG, 2, 2, fw::kCmdGuarded | fw::kCmdZeroIsStop, "motor N to G grams"}, runForceOne},
+};
+
+TEST(ShellZeroIsStop, AGuardedRowWhoseLastArgumentIsZeroNeedsNoChecksum) {
+  hal::fake::reset();
+  Calls calls;
+  fw::LineContext strict;
+  strict.strict = true;
+  const struct {
+    const char* line;
+    bool runs;
+  } rows[] = {{"f 0", true}, {"f 2 0", true}, {"f 1", false}, {"f 0 300", false}};
+  for (const auto& row : rows) {
+    char buffer[32];
+    snprintf(buffer, sizeof buffer, "%s", row.line);
+    calls.log.clear();
+    hal::fake::takeOutput();
+    const fw::ShellResult result = fw::dispatch(calls, kStopTable, buffer, strict);
+    EXPECT_EQ(result, row.runs ? fw::ShellResult::kRan : fw::ShellResult::kRejected) << row.line;
+    EXPECT_EQ(calls.log.size(), row.runs ? 1u : 0u) << row.line;
+    if (!row.runs) {
+      EXPECT_NE(hal::fake::takeOutput().find("error: strict mode"), std::string::npos) << row.line;
+    }
+  }
+  hal::fake::reset();
+}
+
+}  // namespace

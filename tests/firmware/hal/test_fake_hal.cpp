@@ -281,3 +281,31 @@ TEST_F(FakeHal, TickHookCanModelAPlantReactingToTheEscPulse) {
 }
 
 }  // namespace
+
+TEST(FakeHalBoard, WriteAllSetsTheFourPulsesClampedLikeWritePulseInOneCall) {
+  hal::fake::reset();
+  hal::Esc::init(50);
+  const uint16_t pulses_us[hal::kEscChannels] = {1000, 1500, 100, 3000};
+  hal::Esc::writeAll(pulses_us);
+  EXPECT_EQ(hal::fake::escWriteAlls(), 1u);
+  EXPECT_EQ(hal::fake::pulseUs(0), 1000);
+  EXPECT_EQ(hal::fake::pulseUs(1), 1500);
+  EXPECT_EQ(hal::fake::pulseUs(2), hal::kEscPulseMinUs);
+  EXPECT_EQ(hal::fake::pulseUs(3), hal::kEscPulseMaxUs);
+}
+
+TEST(FakeHalBoard, TheBoardTableIsWhatTheDocsSay) {
+  // docs/hardware.md's wiring table; the compile-time checks are in hal/board.hpp.
+  static_assert(hal::board::uartDivisor(115200) == 16, "UBRR0 16 with U2X0");
+  EXPECT_EQ(hal::board::uartActualBaud(115200), 117647u);
+  EXPECT_EQ(hal::board::uartErrorBasisPoints(115200), 212u);  // +2.12 %
+  EXPECT_EQ(hal::board::uartErrorBasisPoints(250000), 0u) << "250 kbaud divides 16 MHz exactly";
+  EXPECT_EQ(hal::board::escCompareAddress(0), 0xA8);  // OCR4A
+  EXPECT_EQ(hal::board::escCompareAddress(3), 0x88);  // OCR1A
+  EXPECT_EQ(hal::board::escPortMask('H'), 0x38);      // PH3..PH5
+  EXPECT_EQ(hal::board::escPortMask('B'), 0x20);      // PB5
+  EXPECT_EQ(hal::board::escCompareBits(4), 0xA8);     // COM4A1 | COM4B1 | COM4C1
+  EXPECT_EQ(hal::board::escCompareBits(1), 0x80);     // COM1A1
+  EXPECT_EQ(hal::kAdcLoadCell, 0);
+  EXPECT_EQ(hal::kAdcBattery, 1);
+}

@@ -531,8 +531,13 @@ TEST_F(ReadRun, StrictModeRefusesSpinningWithoutAChecksumButAlwaysAllowsStopping
   EXPECT_EQ(app_->mode(), rr::Mode::kReady);
   command("f 200*74");  // XOR of "f 200"
   EXPECT_EQ(app_->motor(0).force_g, 200);
+  EXPECT_FALSE(contains(command("f 2 0"), "error:")) << "stopping one motor needs no checksum";
+  EXPECT_EQ(app_->motor(2).force_g, 0);
+  EXPECT_EQ(app_->motor(1).force_g, 200);
   command("f 0");
   EXPECT_EQ(app_->motor(0).force_g, 0);
+  EXPECT_TRUE(contains(command("divider 100000 22000"), "error: strict mode")) << "writes the EEPROM";
+  EXPECT_FALSE(contains(command("divider"), "error:")) << "showing it writes nothing";
 }
 
 TEST_F(ReadRun, LiftoffIsRefusedWhileMotorsRun) {

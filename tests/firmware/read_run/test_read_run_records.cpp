@@ -121,7 +121,7 @@ TEST_F(ReadRun, TheDividerIsAStoredSettingAndTheCalibrationIsLoadedAgainstIt) {
   ASSERT_EQ(tc::readModelV2<FakeStorage>(0, loaded, limits).status, tc::DecodeStatus::kOk);
   EXPECT_NEAR(pulse(0), tc::forceToPwmV2(loaded, 45000, bus).pwm_us, 1);
   EXPECT_GT(pulse(0), 1800);
-  EXPECT_TRUE(contains(command("f 0 5001"), "error: usage: f GRAMS")) << "above 5 kg";
+  EXPECT_TRUE(contains(command("f 0 5001"), "error: G must be a whole number 0..5000, got \"5001\"")) << "above 5 kg";
   // and after a reboot the divider comes from the EEPROM
   command("stop");
   boot();
@@ -139,7 +139,7 @@ TEST_F(ReadRun, TheDividerCommandRefusesWhatCannotBeADividerAndChangesNothing) {
   } rows[] = {
       {"divider 100000 0", "error: divider 100000/0 ohm gives a full scale outside 5..60 V or R2 below 100 ohm"},
       {"divider 1000000 10000", "error: divider 1000000/10000 ohm gives a full scale outside 5..60 V"},
-      {"divider 100k 47k", "error: usage: divider [R1_OHM R2_OHM]"},
+      {"divider 100k 47k", "error: R1_OHM must be a whole number 0..10000000, got \"100k\""},
       {"divider 100000 22000", "error: no room for the setting: all four slots hold thesis (v1) records"},
   };
   for (const auto& r : rows) {

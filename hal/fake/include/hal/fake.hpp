@@ -27,6 +27,7 @@ uint32_t adcConversions();
 
 // ESC outputs as the code last wrote them (0 before Esc::init).
 uint16_t pulseUs(uint8_t channel);
+uint32_t escWriteAlls();  // Esc::writeAll calls since reset()
 uint16_t frameRateHz();
 
 // EEPROM bytes and the number of physical byte writes (updateByte of an equal byte does not
