@@ -203,36 +203,6 @@ void LineReader::strictCommand(bool on) {
   newline();
 }
 
-bool LineReader::handleStrict(char** tokens, uint8_t count) {
-  if (count == 0 || !equalsP(tokens[0], TC_PSTR("strict"))) return false;
-  if (count == 2 && equalsP(tokens[1], TC_PSTR("on"))) {
-    strictCommand(true);
-  } else if (count == 2 && equalsP(tokens[1], TC_PSTR("off"))) {
-    strictCommand(false);
-  } else {
-    hal::Uart::printP(TC_PSTR("error: usage: strict on|off; nothing changed"));
-    newline();
-  }
-  return true;
-}
-
-void LineReader::strictCommand(bool on) {
-  setStrict(on);
-  hal::Uart::printP(on ? TC_PSTR("strict on: commands that spin a motor or write the EEPROM "
-                                 "need a checksum (*HH)")
-                       : TC_PSTR("strict off: checksums optional"));
-  newline();
-}
-
-bool LineReader::allowRisky() {
-  if (!strict() || checked()) return true;
-  hal::Uart::printP(TC_PSTR("error: strict mode: this command spins a motor or writes the "
-                            "EEPROM and needs a checksum (*HH, XOR of the line before '*'); "
-                            "nothing changed"));
-  newline();
-  return false;
-}
-
 uint8_t tokenize(char* line, char** tokens, uint8_t max_tokens) {
   uint8_t count = 0;
   char* p = line;

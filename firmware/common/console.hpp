@@ -14,7 +14,8 @@
 //  - after an abort key (abortLine()) everything up to the next line end is discarded; if that
 //    was more than nothing, one error line says so;
 //  - strict mode (strict on|off): commands that can spin a motor or write the EEPROM are
-//    refused unless their line carried a valid checksum (allowRisky()).
+//    refused unless their line carried a valid checksum (checked(); the shell's kCmdGuarded
+//    rows, shell.hpp).
 #pragma once
 #include <stdint.h>
 
@@ -63,14 +64,8 @@ class LineReader {
   // Strict mode.
   bool strict() const { return (flags_ & kStrict) != 0; }
   void setStrict(bool on);
-  // "strict on|off": returns false if tokens[0] is not "strict"; otherwise handles it (the
-  // reply or a usage error is printed) and returns true.
-  bool handleStrict(char** tokens, uint8_t count);
   // `strict on` / `strict off` already parsed: sets the mode and prints the reply line.
   void strictCommand(bool on);
-  // For a command that can spin a motor or write the EEPROM: true when allowed; otherwise
-  // prints "error: strict mode: ..." and returns false.
-  bool allowRisky();
 
   // Lines rejected since start-up (status).
   uint16_t rejectedLines() const { return rejected_; }

@@ -74,17 +74,4 @@ void eepromDump(void (*between_records)()) {
   newline();
 }
 
-bool isEepromCommand(const char* verb) { return equalsP(verb, TC_PSTR("eeprom")); }
-
-void eepromCommand(char** tokens, uint8_t count, void (*between_records)()) {
-  if (count == 2 && equalsP(tokens[1], TC_PSTR("crc"))) {
-    eepromCrc();
-  } else if (count == 2 && equalsP(tokens[1], TC_PSTR("dump"))) {
-    eepromDump(between_records);
-  } else {
-    hal::Uart::printP(TC_PSTR("error: usage: eeprom crc|dump; nothing changed"));
-    newline();
-  }
-}
-
 }  // namespace fw

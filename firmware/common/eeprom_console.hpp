@@ -18,17 +18,10 @@
 
 namespace fw {
 
-// True when `verb` (a command line's first token) is "eeprom".
-bool isEepromCommand(const char* verb);
-
-// Runs "eeprom crc" or "eeprom dump" (tokens[0] is "eeprom", `count` tokens in all). Anything
-// else (no sub-command, an unknown one, extra arguments) prints one
-// "error: usage: eeprom crc|dump; nothing changed" line. `between_records`, when not null, runs
-// after each dump record: the dump is ~11 KB of output (about 1 s at 115200 baud), so an image
-// with a watchdog or a TX ring buffer can keep its loop duties going there.
-void eepromCommand(char** tokens, uint8_t count, void (*between_records)() = nullptr);
-
-// The two sub-commands on their own (for a table-driven shell that parsed "crc|dump").
+// `eeprom crc` and `eeprom dump` (each image's command table parses `crc|dump`).
+// `between_records`, when not null, runs after each dump record: the dump is ~11 KB of output
+// (about 1 s at 115200 baud), so an image with a watchdog or a TX ring buffer can keep its
+// loop duties going there.
 void eepromCrc();
 void eepromDump(void (*between_records)() = nullptr);
 

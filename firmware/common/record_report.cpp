@@ -38,23 +38,6 @@ void printDivider(const tc::BoardSettings& settings) {
   if (settings.isDefault()) hal::Uart::printP(TC_PSTR(" (thesis default)"));
 }
 
-bool commandDivider(char** tokens, uint8_t count, tc::BoardSettings& settings) {
-  if (count == 1) {
-    printDivider(settings);
-    newline();
-    return false;
-  }
-  int32_t top = 0;
-  int32_t bottom = 0;
-  if (count != 3 || !parseInt(tokens[1], 0, static_cast<int32_t>(tc::kDividerMaxOhm), top) ||
-      !parseInt(tokens[2], 0, static_cast<int32_t>(tc::kDividerMaxOhm), bottom)) {
-    sayLine(TC_PSTR("error: usage: divider [R1_OHM R2_OHM], R1 from the pack to A1, R2 from A1 "
-                    "to ground, 0..10000000 (thesis: divider 100000 47000); nothing changed"));
-    return false;
-  }
-  return setDivider(static_cast<uint32_t>(top), static_cast<uint32_t>(bottom), settings);
-}
-
 bool setDivider(uint32_t top_ohm, uint32_t bottom_ohm, tc::BoardSettings& settings) {
   tc::BoardSettings wanted;
   wanted.divider_top_ohm = top_ohm;

@@ -16,12 +16,9 @@ void printRecordStatus(tc::DecodeStatus status, const tc::Plausibility& why);
 // "divider 100000/47000 ohm, full scale 15.638 V"
 void printDivider(const tc::BoardSettings& settings);
 
-// The `divider` command: no argument prints the setting; `divider R1 R2` (ohm) validates,
-// stores it power-fail-safely and updates `settings`. Prints one result line (or one error
-// line). Returns true when the setting changed.
-bool commandDivider(char** tokens, uint8_t count, tc::BoardSettings& settings);
-// `divider R1 R2` with both already parsed (0..tc::kDividerMaxOhm): the same checks, store
-// and reply line.
+// `divider R1 R2` (ohm, both already parsed by the command table, 0..tc::kDividerMaxOhm):
+// validates, stores the setting power-fail-safely, updates `settings` and prints one result
+// (or error) line. True when the setting changed.
 bool setDivider(uint32_t top_ohm, uint32_t bottom_ohm, tc::BoardSettings& settings);
 
 }  // namespace fw

@@ -24,15 +24,6 @@ void printQ4Us(uint16_t q4_us) {
   say(TC_PSTR(" us"));
 }
 
-void printEscPin(uint8_t slot) {
-  switch (slot) {
-    case 0: say(TC_PSTR("D6 (PH3, OC4A)")); break;
-    case 1: say(TC_PSTR("D7 (PH4, OC4B)")); break;
-    case 2: say(TC_PSTR("D8 (PH5, OC4C)")); break;
-    default: say(TC_PSTR("D11 (PB5, OC1A)")); break;
-  }
-}
-
 void printRecordRange(uint8_t slot) {
   say(TC_PSTR("EEPROM "));
   fw::printUint(tc::slotAddress(slot));

@@ -16,8 +16,6 @@ namespace view {
 void sayWritten(uint16_t bytes);
 // 1/16 us -> "1083.4 us"
 void printQ4Us(uint16_t q4_us);
-// "D6 (PH3, OC4A)": the ESC output of a motor slot
-void printEscPin(uint8_t slot);
 // "EEPROM 0..1023"
 void printRecordRange(uint8_t slot);
 // "motor N (EEPROM a..b): "

@@ -34,7 +34,7 @@ void GatherStoreApp::cmdMotor(uint8_t slot) {
   say(TC_PSTR("motor "));
   fw::printUint(settings_.slot);
   say(TC_PSTR(" selected: ESC "));
-  view::printEscPin(settings_.slot);
+  fw::printEscPin(settings_.slot);
   say(TC_PSTR(", "));
   view::printRecordRange(settings_.slot);
   fw::newline();
@@ -232,7 +232,7 @@ void GatherStoreApp::cmdStatus() {
   say(TC_PSTR("motor "));
   fw::printUint(settings_.slot);
   say(TC_PSTR(" (ESC "));
-  view::printEscPin(settings_.slot);
+  fw::printEscPin(settings_.slot);
   say(TC_PSTR(" at "));
   fw::printUint(hal::Esc::pulseUs(settings_.slot));
   say(TC_PSTR(" us), plate "));

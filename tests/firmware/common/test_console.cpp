@@ -219,36 +219,22 @@ TEST_F(Console, AWrongChecksumSaysWhatTheLineShouldHaveCarried) {
       << hal::fake::output();
 }
 
-TEST_F(Console, StrictModeRefusesRiskyCommandsWithoutAValidChecksum) {
+TEST_F(Console, StrictCommandSetsTheModeAndSaysWhatItMeans) {
   // given
   fw::LineReader reader;
-  char strict_on[] = "strict on";
-  char* tokens[3];
-  ASSERT_TRUE(reader.handleStrict(tokens, fw::tokenize(strict_on, tokens, 3)));
+  // when / then: on, with the reply naming the checksum; a checksummed line says so
+  reader.strictCommand(true);
   ASSERT_TRUE(reader.strict());
-  // when / then: a plain line is refused with one error, a checksummed one allowed
+  EXPECT_NE(hal::fake::takeOutput().find("strict on: commands that spin a motor"),
+            std::string::npos);
   feedAll(reader, "f 1 37\r");
-  hal::fake::takeOutput();
-  EXPECT_FALSE(reader.allowRisky());
-  EXPECT_EQ(errorLines(hal::fake::output()), 1);
+  EXPECT_FALSE(reader.checked());
   feedAll(reader, "f 1 37*53\r");
-  EXPECT_TRUE(reader.allowRisky());
-  // strict off: anything goes again
-  char strict_off[] = "strict off";
-  ASSERT_TRUE(reader.handleStrict(tokens, fw::tokenize(strict_off, tokens, 3)));
-  feedAll(reader, "f 1 37\r");
-  EXPECT_TRUE(reader.allowRisky());
-}
-
-TEST_F(Console, HandleStrictIgnoresOtherVerbsAndRejectsBadArguments) {
-  fw::LineReader reader;
-  char other[] = "status";
-  char bad[] = "strict maybe";
-  char* tokens[3];
-  EXPECT_FALSE(reader.handleStrict(tokens, fw::tokenize(other, tokens, 3)));
-  EXPECT_TRUE(reader.handleStrict(tokens, fw::tokenize(bad, tokens, 3)));
+  EXPECT_TRUE(reader.checked());
+  // off again
+  reader.strictCommand(false);
   EXPECT_FALSE(reader.strict());
-  EXPECT_NE(hal::fake::output().find("error: usage: strict on|off"), std::string::npos);
+  EXPECT_NE(hal::fake::takeOutput().find("strict off: checksums optional"), std::string::npos);
 }
 
 TEST_F(Console, AfterAnAbortKeyTheRestOfItsLineIsDiscardedWithOneError) {

@@ -566,6 +566,8 @@ TEST_F(ReadRun, BadInputGetsOneErrorLineAndChangesNothing) {
       "liftoff 9 1 2 3", "rate 49",  "rate 401",      "rate",        "rate fast",
       "stream maybe", "stream",      "xyz",           "F 100",
       "divider 100000", "divider 100000 0", "divider 1 2 3", "divider 100000 22000",  // running
+      "eeprom", "eeprom read", "eeprom crc 1", "eeprom dump all", "eeprom CRC", "eeprom2 crc",
+      "strict", "strict maybe", "stop now", "status 1", "help me",
       "0123456789012345678901234567890123456789012345678901234567890",
   };
   // given: motors running at 200 g
