@@ -23,7 +23,7 @@ bool ModelV2::finalize() {
   const bool coarse = fine_knots < knots;
   const uint32_t split = static_cast<uint32_t>(fine_knots) * step_dg;
   const uint32_t top = split + static_cast<uint32_t>(knots - fine_knots) * coarse_step_dg;
-  bool ok = start_q4_us >= kV2StartMinQ4 && start_q4_us <= kV2StartMaxQ4 &&
+  bool ok = start_q4_us >= kV2StartMinQ4Us && start_q4_us <= kV2StartMaxQ4Us &&
             step_dg >= (coarse ? kV2MinStepDg : kV2MinStepSmallDg) && knots >= 2 &&
             knots <= kV2MaxKnots && fine_knots >= 1 &&
             fine_knots <= knots && (coarse ? coarse_step_dg >= kV2MinStepDg : coarse_step_dg == 0) &&

@@ -6,6 +6,7 @@
 #include "thrustcal/limits.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/model_v2_knots.hpp"
+#include "thrustcal/order_stats.hpp"
 
 namespace tc {
 
@@ -74,18 +75,34 @@ uint16_t driveOf(int32_t pwm_q4, int32_t vbat_mv, int32_t start_q4) {
   return d > 65535u ? 65535u : static_cast<uint16_t>(d);
 }
 
-template <class T>
-void insertionSort(T* a, uint8_t n) {
-  for (uint8_t i = 1; i < n; ++i) {
-    const T v = a[i];
-    uint8_t j = i;
-    while (j > 0 && a[j - 1] > v) {
-      a[j] = a[j - 1];
-      --j;
-    }
-    a[j] = v;
+// The samples for the monotone fit (order_stats.hpp's poolAdjacentViolators), unweighted:
+// block k's mean (rounded) in samples[k].force_dg, its size in weights[k].
+struct PavaPool {
+  struct Block {
+    int32_t mean;
+    uint16_t size;
+  };
+  SweepPointV2* samples;
+  uint16_t* weights;
+
+  Block point(uint16_t i) const { return Block{samples[i].force_dg, 1}; }
+  static bool above(const Block& lo, const Block& hi) { return lo.mean > hi.mean; }
+  static Block merge(const Block& lo, const Block& hi) {
+    const int32_t total = static_cast<int32_t>(hi.size) + lo.size;
+    const int32_t sum = lo.mean * lo.size + hi.mean * hi.size;
+    return Block{(sum >= 0 ? sum + total / 2 : sum - total / 2) / total,
+                 static_cast<uint16_t>(hi.size + lo.size)};
   }
-}
+  void keep(uint16_t k, const Block& b) {
+    samples[k].force_dg = static_cast<int16_t>(b.mean);
+    weights[k] = b.size;
+  }
+  Block kept(uint16_t k) const { return Block{samples[k].force_dg, weights[k]}; }
+  static uint16_t points(const Block& b) { return b.size; }
+  void fill(uint16_t first, uint16_t end, const Block& b) {
+    for (uint16_t i = first; i < end; ++i) samples[i].force_dg = static_cast<int16_t>(b.mean);
+  }
+};
 
 }  // namespace
 
@@ -104,44 +121,11 @@ FitV2Report ModelV2FitterBase::prepare() {
     }
   }
   // Sort by PWM (a sweep is ascending already: linear time then).
-  for (uint16_t i = 1; i < n; ++i) {
-    const SweepPointV2 v = samples_[i];
-    uint16_t j = i;
-    while (j > 0 && samples_[j - 1].pwm_us > v.pwm_us) {
-      samples_[j] = samples_[j - 1];
-      --j;
-    }
-    samples_[j] = v;
-  }
-  // Monotone (non-decreasing) force in PWM: pool adjacent violators, in place. A block
-  // [b, e] keeps its mean in samples_[b].force_dg and its size in weights_[b] and weights_[e].
-  for (uint16_t j = 0; j < n; ++j) {
-    uint16_t b = j;
-    int32_t mean = samples_[j].force_dg;
-    uint16_t size = 1;
-    while (b > 0) {
-      const uint16_t prev_size = weights_[b - 1];
-      const uint16_t pb = static_cast<uint16_t>(b - prev_size);
-      const int32_t prev_mean = samples_[pb].force_dg;
-      if (prev_mean <= mean) break;
-      const int32_t total = static_cast<int32_t>(size) + prev_size;
-      const int32_t sum = prev_mean * prev_size + mean * size;
-      mean = (sum >= 0 ? sum + total / 2 : sum - total / 2) / total;
-      size = static_cast<uint16_t>(size + prev_size);
-      b = pb;
-      ++rep.violations;
-    }
-    samples_[b].force_dg = static_cast<int16_t>(mean);
-    weights_[b] = size;
-    weights_[b + size - 1] = size;
-  }
-  for (int32_t e = static_cast<int32_t>(n) - 1; e >= 0;) {
-    const uint16_t size = weights_[e];
-    const int32_t b = e - size + 1;
-    const int16_t mean = samples_[b].force_dg;
-    for (int32_t k = b; k <= e; ++k) samples_[k].force_dg = mean;
-    e = b - 1;
-  }
+  insertionSort(samples_, n,
+                [](const SweepPointV2& a, const SweepPointV2& b) { return a.pwm_us < b.pwm_us; });
+  // Monotone (non-decreasing) force in PWM: pool adjacent violators, in place.
+  PavaPool pool{samples_, weights_};
+  rep.violations = poolAdjacentViolators(pool, n);
   rep.max_force_dg = samples_[n - 1].force_dg;
   if (rep.max_force_dg < static_cast<int16_t>(10 * kRecordMinForceG)) {
     rep.status = FitV2Status::kNoForce;
@@ -204,7 +188,7 @@ FitV2Report ModelV2FitterBase::fit(ModelV2& out) {
         break;
       }
       s = p1 - (u * u + den / 2) / den;  // u < 2^15: u^2 < 2^30
-      if (s < kV2StartMinQ4 || s >= a1.pwm_q4) ok = false;
+      if (s < kV2StartMinQ4Us || s >= a1.pwm_q4) ok = false;
     }
     if (ok) est[n_est++] = static_cast<int16_t>(s);
   }
@@ -213,9 +197,7 @@ FitV2Report ModelV2FitterBase::fit(ModelV2& out) {
     rep.status = FitV2Status::kStartNotFound;
     return rep;
   }
-  insertionSort(est, n_est);
-  const int32_t start_q4 = (n_est & 1) ? est[n_est / 2]
-                                       : (static_cast<int32_t>(est[n_est / 2 - 1]) + est[n_est / 2] + 1) / 2;
+  const int32_t start_q4 = medianInPlace(est, n_est);
 
   ModelV2 m;
   placeV2Knots(m, static_cast<uint16_t>(fmax));
@@ -279,7 +261,7 @@ FitV2Report ModelV2FitterBase::refine(ModelV2& model) {
     const int32_t xa = static_cast<int32_t>(model.drive_512usmv[k]) * 8192 + s_old * va;
     const int32_t xb = b.pwm_q4 * b.vbat_mv;
     const int32_t s = (xa - xb) / den;
-    if (s < kV2StartMinQ4 || s > kV2StartMaxQ4) continue;
+    if (s < kV2StartMinQ4Us || s > kV2StartMaxQ4Us) continue;
     est[n_est++] = static_cast<int16_t>(s);
   }
   rep.estimates = n_est;
@@ -287,9 +269,7 @@ FitV2Report ModelV2FitterBase::refine(ModelV2& model) {
     rep.status = FitV2Status::kStartNotFound;
     return rep;
   }
-  insertionSort(est, n_est);
-  const int32_t s_new = (n_est & 1) ? est[n_est / 2]
-                                    : (static_cast<int32_t>(est[n_est / 2 - 1]) + est[n_est / 2] + 1) / 2;
+  const int32_t s_new = medianInPlace(est, n_est);
 
   ModelV2 m = model;
   m.start_q4_us = static_cast<uint16_t>(s_new);

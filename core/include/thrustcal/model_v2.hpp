@@ -77,8 +77,8 @@ constexpr uint16_t kV2SaneMinMv = kPackMinMv;
 constexpr uint16_t kV2SaneMaxMv = kPackMaxMv;
 inline bool isSaneV2Mv(uint16_t mv) { return mv >= kV2SaneMinMv && mv <= kV2SaneMaxMv; }
 // Start thresholds a model may hold (ModelV2::finalize, the fitter's estimates), 1/16 us.
-constexpr uint16_t kV2StartMinQ4 = 800u * 16u;
-constexpr uint16_t kV2StartMaxQ4 = 1800u * 16u;
+constexpr uint16_t kV2StartMinQ4Us = 800u * 16u;
+constexpr uint16_t kV2StartMaxQ4Us = 1800u * 16u;
 
 struct ModelV2 {
   // Stored fields (record_v2.hpp serializes exactly these). Field order: everything the
