@@ -15,7 +15,6 @@ namespace {
 
 constexpr int32_t kNewtonLimit = 1l << 20;  // |e| above: re-seed by division (jump > 1/128)
 
-
 // Where a force falls between the knots: segment index (0 = between the origin and knot 0)
 // and the fraction inside it (Q16). force_dg must be <= maxForceDg().
 // AVR note: avr-gcc -Os turns 32-bit shifts by a constant that is not a multiple of 8 into
