@@ -3,6 +3,8 @@
 // no recursion, no heap: the work space is the caller-sized arrays of CurveBuilder<N>.
 #include "thrustcal/curve_builder.hpp"
 
+#include "thrustcal/order_stats.hpp"
+
 namespace tc {
 
 namespace {
@@ -39,6 +41,44 @@ int16_t roundedMean(int32_t sum, uint16_t weight) {
   return static_cast<int16_t>(q);
 }
 
+// The points of the monotone fit (order_stats.hpp's poolAdjacentViolators): a point's sum and
+// weight (raw samples) in the block arrays; block k's sum and weight at index k of the same
+// arrays, its point count parked in samples[k].force_dg, which the merge step no longer needs.
+struct PavaPool {
+  struct Block {
+    int32_t sum;
+    uint16_t weight;
+    uint16_t points;
+  };
+  SweepSample* samples;
+  int32_t* sum;
+  uint16_t* weight;
+  uint16_t pooled;  // points in blocks of more than one
+
+  Block point(uint16_t i) const { return Block{sum[i], weight[i], 1}; }
+  static bool above(const Block& lo, const Block& hi) {
+    return meanGreater(lo.sum, lo.weight, hi.sum, hi.weight);
+  }
+  static Block merge(const Block& lo, const Block& hi) {
+    return Block{lo.sum + hi.sum, static_cast<uint16_t>(lo.weight + hi.weight),
+                 static_cast<uint16_t>(lo.points + hi.points)};
+  }
+  void keep(uint16_t k, const Block& b) {
+    sum[k] = b.sum;
+    weight[k] = b.weight;
+    samples[k].force_dg = static_cast<int16_t>(b.points);
+  }
+  Block kept(uint16_t k) const {
+    return Block{sum[k], weight[k], static_cast<uint16_t>(samples[k].force_dg)};
+  }
+  static uint16_t points(const Block& b) { return b.points; }
+  void fill(uint16_t first, uint16_t end, const Block& b) {
+    const int16_t fitted_dg = roundedMean(b.sum, b.weight);
+    if (b.points > 1) pooled = static_cast<uint16_t>(pooled + b.points);
+    for (uint16_t i = first; i < end; ++i) samples[i].force_dg = fitted_dg;
+  }
+};
+
 }  // namespace
 
 bool CurveBuilderBase::add(uint16_t pwm_us, int16_t force_dg) {
@@ -55,15 +95,8 @@ BuildReport CurveBuilderBase::build(ForceCurveBase& out) {
   out.clear();
 
   // 1. Sort by PWM: insertion sort, O(n) for the usual already-ascending sweep, stable.
-  for (uint16_t i = 1; i < count_; ++i) {
-    const SweepSample s = samples_[i];
-    uint16_t j = i;
-    while (j > 0 && samples_[j - 1].pwm_us > s.pwm_us) {
-      samples_[j] = samples_[j - 1];
-      --j;
-    }
-    samples_[j] = s;
-  }
+  insertionSort(samples_, count_,
+                [](const SweepSample& a, const SweepSample& b) { return a.pwm_us < b.pwm_us; });
 
   // 2. Merge equal PWMs: a point's sum and weight (raw samples) go to the PAVA arrays.
   uint16_t points = 0;
@@ -86,33 +119,9 @@ BuildReport CurveBuilderBase::build(ForceCurveBase& out) {
   }
 
   // 3. Pool adjacent violators (weighted by raw samples: least squares on the raw data).
-  //    Blocks form a stack in the low indices of the work arrays; a block's last point index
-  //    is parked in samples_[block].force_dg, which the merge step no longer needs.
-  uint16_t blocks = 0;
-  for (uint16_t i = 0; i < points; ++i) {
-    int32_t sum = block_sum_[i];
-    uint16_t weight = block_weight_[i];
-    while (blocks > 0 && meanGreater(block_sum_[blocks - 1], block_weight_[blocks - 1], sum, weight)) {
-      --blocks;
-      sum += block_sum_[blocks];
-      weight = static_cast<uint16_t>(weight + block_weight_[blocks]);
-    }
-    block_sum_[blocks] = sum;
-    block_weight_[blocks] = weight;
-    samples_[blocks].force_dg = static_cast<int16_t>(i);
-    ++blocks;
-  }
-  //    Expand from the last block backwards: block b starts at index >= b, so writing its
-  //    points never overwrites the end index of a block still to be read.
-  uint16_t pooled = 0;
-  for (uint16_t b = blocks; b-- > 0;) {
-    const uint16_t last = static_cast<uint16_t>(samples_[b].force_dg);
-    const uint16_t first = b > 0 ? static_cast<uint16_t>(samples_[b - 1].force_dg + 1) : 0;
-    const int16_t fitted_dg = roundedMean(block_sum_[b], block_weight_[b]);
-    if (last > first) pooled = static_cast<uint16_t>(pooled + (last - first + 1u));
-    for (uint16_t i = first; i <= last; ++i) samples_[i].force_dg = fitted_dg;
-  }
-  report.violations = pooled;
+  PavaPool pool{samples_, block_sum_, block_weight_, 0};
+  poolAdjacentViolators(pool, points);
+  report.violations = pool.pooled;
   report.max_force_dg = samples_[points - 1].force_dg;
 
   // 4. Invert: for each whole gram the PWM where the fitted force first reaches it.

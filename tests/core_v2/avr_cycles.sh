@@ -14,7 +14,7 @@ trap 'rm -rf "$out"' EXIT
 avr-g++ -mmcu=atmega2560 -DF_CPU=16000000UL -Os -std=gnu++14 -fno-exceptions -fno-rtti \
   -fno-threadsafe-statics -ffunction-sections -fdata-sections -Wl,--gc-sections \
   -I"$root/core/include" "$here/avr_cycles/v2_cycles.cpp" \
-  "$root"/core/src/model_v2.cpp "$root"/core/src/model_v2_runtime.cpp "$root"/core/src/force_pwm.cpp "$root"/core/src/force_curve.cpp \
+  "$root"/core/src/model_v2.cpp "$root"/core/src/model_v2_fit.cpp "$root"/core/src/model_v2_runtime.cpp "$root"/core/src/force_pwm.cpp "$root"/core/src/force_curve.cpp \
   "$root"/core/src/curve_builder.cpp "$root"/core/src/motor_calibration.cpp \
   "$root"/core/src/battery_monitor.cpp "$root"/core/src/record_v2.cpp "$root"/core/src/crc16.cpp \
   "$root"/core/src/plausibility.cpp \
@@ -22,7 +22,7 @@ avr-g++ -mmcu=atmega2560 -DF_CPU=16000000UL -Os -std=gnu++14 -fno-exceptions -fn
 g++ -O2 -std=c++17 $(pkg-config --cflags simavr) "$here/avr_cycles/run_cycles.cpp" \
   $(pkg-config --libs simavr) -lelf -o "$out/run_cycles"
 g++ -O2 -std=c++17 -I"$root/core/include" "$here/avr_cycles/scenario_host.cpp" \
-  "$root"/core/src/model_v2.cpp "$root"/core/src/model_v2_runtime.cpp "$root"/core/src/force_pwm.cpp "$root"/core/src/force_curve.cpp \
+  "$root"/core/src/model_v2.cpp "$root"/core/src/model_v2_fit.cpp "$root"/core/src/model_v2_runtime.cpp "$root"/core/src/force_pwm.cpp "$root"/core/src/force_curve.cpp \
   "$root"/core/src/curve_builder.cpp "$root"/core/src/motor_calibration.cpp \
   "$root"/core/src/battery_monitor.cpp "$root"/core/src/record_v2.cpp "$root"/core/src/crc16.cpp \
   "$root"/core/src/plausibility.cpp \

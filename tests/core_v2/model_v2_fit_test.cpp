@@ -8,6 +8,7 @@
 
 #include "synthetic_motor.hpp"
 #include "thrustcal/model_v2.hpp"
+#include "thrustcal/model_v2_curve.hpp"
 
 using tc_test::GridError;
 using tc_test::Recording;

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "synthetic_motor.hpp"
+#include "thrustcal/model_v2_curve.hpp"
 #include "thrustcal/model_v2_runtime.hpp"
 
 using tc_test::SyntheticMotor;

@@ -75,6 +75,10 @@ constexpr uint32_t kRecipOne = 1ul << 27;
 // reading lies outside does not finalize): 1S..6S packs.
 constexpr uint16_t kV2SaneMinMv = kPackMinMv;
 constexpr uint16_t kV2SaneMaxMv = kPackMaxMv;
+inline bool isSaneV2Mv(uint16_t mv) { return mv >= kV2SaneMinMv && mv <= kV2SaneMaxMv; }
+// Start thresholds a model may hold (ModelV2::finalize, the fitter's estimates), 1/16 us.
+constexpr uint16_t kV2StartMinQ4Us = 800u * 16u;
+constexpr uint16_t kV2StartMaxQ4Us = 1800u * 16u;
 
 struct ModelV2 {
   // Stored fields (record_v2.hpp serializes exactly these). Field order: everything the
@@ -246,18 +250,5 @@ class ModelV2Fitter : public ModelV2FitterBase {
   SweepPointV2 samples_storage_[MaxSamples];
   uint16_t weight_storage_[MaxSamples];
 };
-
-#if !defined(__AVR__)
-// Host only (model lab export): fills `out` from a curve given in double precision.
-// Points (drive_usv[i], force_g[i]) with drive = (pwm - start) * V in us*V, ascending; dense
-// points are best (the curve is resampled linearly onto the knots). sag_mv[i] (may be null)
-// is the monitor drop at force_g[i]. Returns false (out cleared) when the points are fewer
-// than 2, not ascending, the largest force is outside kRecordMinForceG..kRecordMaxForceG, or
-// a field is out of range
-// (see ModelV2::finalize).
-bool modelV2FromCurve(ModelV2& out, double start_us, const double* drive_usv,
-                      const double* force_g, uint16_t count, double rest_mv,
-                      const double* sag_mv = nullptr, double second_mv = 0.0);
-#endif
 
 }  // namespace tc

@@ -6,6 +6,7 @@
 #include "read_run_fixture.hpp"
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/eeprom_store.hpp"
+#include "thrustcal/model_v2_curve.hpp"
 
 namespace rr_test {
 namespace {

@@ -11,6 +11,7 @@
 #include "lab/effect.hpp"
 
 #include "thrustcal/model_v2.hpp"
+#include "thrustcal/model_v2_curve.hpp"
 // The record's limits are core's (thrustcal/record_limits.hpp, "never fly a record that cannot
 // be right"); until that header exists in this tree the values core's model_v2.cpp checks today
 // stand in, so the messages follow core either way.
