@@ -46,7 +46,9 @@ void GatherStoreApp::begin() {
   tc::readSettings<hal::Eeprom>(settings_board_);
   battery_ = tc::BatteryMonitor(settings_board_.batteryConfig());
   fw::newline();
-  sayLine(TC_PSTR("thrustcal gather_store: Gather and Store (thesis sec. 6.4), 115200 8N1"));
+  say(TC_PSTR("thrustcal gather_store: Gather and Store (thesis sec. 6.4), "));
+  fw::printUint(hal::kUartBaud);
+  sayLine(TC_PSTR(" 8N1"));
   fw::printResetCause();
   sayLine(TC_PSTR("ESCs armed at 1000 us. Load cell A0, battery A1. Type help for the commands."));
   say(TC_PSTR("battery monitor: "));

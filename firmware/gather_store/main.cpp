@@ -21,7 +21,7 @@ gs::GatherStoreApp app;  // sweep buffers, median windows and the record buffer 
 int main() {
   hal::Esc::init(hal::kEscDefaultFrameHz);  // first: the ESC sees 1000 us from power-on
   hal::Clock::init();
-  hal::Uart::init(115200);
+  hal::Uart::init(hal::kUartBaud);  // hal/board.hpp (its baud error is checked there)
   hal::Adc::init();
   // The boot code (.init3) switched the watchdog off and saved why the chip reset; from here on
   // a loop that stops coming round resets it within ~64 ms (docs/safety.md).
