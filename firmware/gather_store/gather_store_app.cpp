@@ -46,18 +46,18 @@ void GatherStoreApp::begin() {
   tc::readSettings<hal::Eeprom>(settings_board_);
   battery_ = tc::BatteryMonitor(settings_board_.batteryConfig());
   fw::newline();
-  say(TC_PSTR("thrustcal gather_store: Gather and Store (thesis sec. 6.4), "));
+  say(TC_FLASH_TEXT("thrustcal gather_store: Gather and Store (thesis sec. 6.4), "));
   fw::printUint(hal::kUartBaud);
-  sayLine(TC_PSTR(" 8N1"));
+  sayLine(TC_FLASH_TEXT(" 8N1"));
   fw::printResetCause();
-  sayLine(TC_PSTR("ESCs armed at 1000 us. Load cell A0, battery A1. Type help for the commands."));
-  say(TC_PSTR("battery monitor: "));
+  sayLine(TC_FLASH_TEXT("ESCs armed at 1000 us. Load cell A0, battery A1. Type help for the commands."));
+  say(TC_FLASH_TEXT("battery monitor: "));
   fw::printDivider(settings_board_);
   fw::newline();
   prompt();
 }
 
-void GatherStoreApp::prompt() { say(TC_PSTR("gs> ")); }
+void GatherStoreApp::prompt() { say(TC_FLASH_TEXT("gs> ")); }
 
 bool GatherStoreApp::poll() {
   hal::Watchdog::kick();  // the main loop came round
@@ -198,9 +198,9 @@ void GatherStoreApp::cmdErase() {
   // Both v2 copies' version bytes (the one not holding the newest model first); copy A's is
   // the thesis record's too.
   tc::eraseSlot<CountingEeprom>(slot, settings_board_.recordLimits());
-  fw::say(TC_PSTR("erased "));
+  fw::say(TC_FLASH_TEXT("erased "));
   view::sayMotorRecord(slot);  // "motor N (EEPROM a..b): "
-  fw::say(TC_PSTR("not calibrated now, thesis curves, sag offsets and model v2 are gone"));
+  fw::say(TC_FLASH_TEXT("not calibrated now, thesis curves, sag offsets and model v2 are gone"));
   view::sayWritten(CountingEeprom::written);
 }
 

@@ -1,6 +1,6 @@
 // The console view of gather_store: every line the sweep, store, show and status commands
 // print, from the data they hand over (no decisions here, no EEPROM writes). Strings are
-// TC_PSTR literals, so they stay in flash on the AVR.
+// TC_FLASH_TEXT literals, so they stay in flash on the AVR.
 #pragma once
 #include <stdint.h>
 

@@ -33,18 +33,18 @@ bool GatherStoreApp::waitOrAbort(uint16_t ms) {
 
 void GatherStoreApp::printSweepPlan() {
   fw::printUint(settings_.pwm_min_us);
-  say(TC_PSTR(".."));
+  say(TC_FLASH_TEXT(".."));
   fw::printUint(settings_.pwm_max_us);
-  say(TC_PSTR(" us, step "));
+  say(TC_FLASH_TEXT(" us, step "));
   fw::printUint(settings_.step_us);
-  say(TC_PSTR(" us, "));
+  say(TC_FLASH_TEXT(" us, "));
   printSettle();
 }
 
 void GatherStoreApp::printSettle() {
-  say(settings_.settle_auto ? TC_PSTR("settle auto (cap ") : TC_PSTR("settle "));
+  say(settings_.settle_auto ? TC_FLASH_TEXT("settle auto (cap ") : TC_FLASH_TEXT("settle "));
   fw::printUint(settings_.settle_ms);
-  say(settings_.settle_auto ? TC_PSTR(" ms)") : TC_PSTR(" ms"));
+  say(settings_.settle_auto ? TC_FLASH_TEXT(" ms)") : TC_FLASH_TEXT(" ms"));
 }
 
 bool GatherStoreApp::settleForce(uint16_t& counts) {
@@ -102,47 +102,47 @@ void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
   // The key that aborted is not a command, nor is the rest of its line (e.g. "xerase").
   if (why == SweepEnd::kKey)
     reader_.abortLine(value == kKeyUnread ? hal::Uart::read() : static_cast<int16_t>(value));
-  say(TC_PSTR("# aborted: "));
+  say(TC_FLASH_TEXT("# aborted: "));
   switch (why) {
     case SweepEnd::kKey:
-      say(TC_PSTR("key pressed"));
+      say(TC_FLASH_TEXT("key pressed"));
       break;
     case SweepEnd::kOverload:
-      say(TC_PSTR("load cell overload, force "));
+      say(TC_FLASH_TEXT("load cell overload, force "));
       fw::printInt(static_cast<int16_t>(value));
-      say(TC_PSTR(" g (limit "));
+      say(TC_FLASH_TEXT(" g (limit "));
       fw::printInt(cell_.config().overload_g);
-      say(TC_PSTR(" g): lower range MAX"));
+      say(TC_FLASH_TEXT(" g): lower range MAX"));
       break;
     case SweepEnd::kImplausible:
-      say(TC_PSTR("load cell reads "));
+      say(TC_FLASH_TEXT("load cell reads "));
       fw::printUint(value);
-      say(TC_PSTR(" counts (ADC rail): check the amplifier and the wire to A0"));
+      say(TC_FLASH_TEXT(" counts (ADC rail): check the amplifier and the wire to A0"));
       break;
     case SweepEnd::kBattery:
-      say(TC_PSTR("battery reads "));
+      say(TC_FLASH_TEXT("battery reads "));
       fw::sayVolts(value);
-      say(TC_PSTR(", outside "));
+      say(TC_FLASH_TEXT(", outside "));
       fw::sayVolts(battery_.config().min_sane_mv);
-      say(TC_PSTR(".."));
+      say(TC_FLASH_TEXT(".."));
       fw::sayVolts(battery_.config().max_sane_mv);
-      say(TC_PSTR(": check the pack and the divider on A1"));
+      say(TC_FLASH_TEXT(": check the pack and the divider on A1"));
       break;
     case SweepEnd::kDone:
       break;
   }
-  sayLine(TC_PSTR("; motor stopped (1000 us), nothing kept: type sweep to start again"));
+  sayLine(TC_FLASH_TEXT("; motor stopped (1000 us), nothing kept: type sweep to start again"));
 }
 
 void GatherStoreApp::cmdSweep() {
   if (!cell_.isTared()) {
-    sayLine(TC_PSTR("error: a sweep needs a tare first: with the motor mounted and stopped, "
+    sayLine(TC_FLASH_TEXT("error: a sweep needs a tare first: with the motor mounted and stopped, "
                     "type tare (or cal W)"));
     return;
   }
   const uint16_t planned = plannedSamples();
   if (planned > kMaxSweepSamples) {  // range and step refuse this already; kept as a guard
-    sayLine(TC_PSTR("error: too many steps for the sample buffer: use a larger step"));
+    sayLine(TC_FLASH_TEXT("error: too many steps for the sample buffer: use a larger step"));
     return;
   }
   const uint8_t slot = settings_.slot;
@@ -153,26 +153,26 @@ void GatherStoreApp::cmdSweep() {
   sag_builder_.reset(settings_.pwm_min_us);
   fitter_.reset();
 
-  say(TC_PSTR("# sweep motor "));
+  say(TC_FLASH_TEXT("# sweep motor "));
   fw::printUint(slot);
-  say(TC_PSTR(": "));
+  say(TC_FLASH_TEXT(": "));
   printSweepPlan();
-  say(TC_PSTR(", "));
+  say(TC_FLASH_TEXT(", "));
   fw::printUint(planned);
-  sayLine(TC_PSTR(" steps; any key aborts"));
+  sayLine(TC_FLASH_TEXT(" steps; any key aborts"));
   if (planned > kMaxV2Samples) {
-    say(TC_PSTR("# note: model v2 keeps at most "));
+    say(TC_FLASH_TEXT("# note: model v2 keeps at most "));
     fw::printUint(kMaxV2Samples);
-    sayLine(TC_PSTR(" steps: store v2 will refuse this sweep (store 1 and store 2 work)"));
+    sayLine(TC_FLASH_TEXT(" steps: store v2 will refuse this sweep (store 1 and store 2 work)"));
   }
 
   const uint32_t since_arm = hal::Clock::millis() - armed_at_ms_;
   if (since_arm < kArmMs) {
-    sayLine(TC_PSTR("# arming the ESC (1000 us)"));
+    sayLine(TC_FLASH_TEXT("# arming the ESC (1000 us)"));
     if (!waitOrAbort(static_cast<uint16_t>(kArmMs - since_arm))) return;
   }
 
-  sayLine(TC_PSTR("pwm_us,force_g,vbat_v,t_s,motor,dir"));
+  sayLine(TC_FLASH_TEXT("pwm_us,force_g,vbat_v,t_s,motor,dir"));
   const uint32_t start_ms = hal::Clock::millis();
   uint16_t pwm = settings_.pwm_min_us;
   int16_t max_force_dg = 0;

@@ -26,7 +26,7 @@ struct Commands {
     uint8_t armable = 0;
     for (uint8_t i = 0; i < kMotors; ++i) armable += app.motors_[i].isArmable() ? 1 : 0;
     if (armable == 0) {
-      sayLine(TC_PSTR("error: no motor is calibrated; calibrate them with gather_store first"));
+      sayLine(TC_FLASH_TEXT("error: no motor is calibrated; calibrate them with gather_store first"));
       return;
     }
     for (uint8_t i = 0; i < kMotors; ++i) {
@@ -46,7 +46,7 @@ struct Commands {
 
   static void stop(ReadRunApp& app, const fw::ArgValues&) {
     app.stopAll();
-    sayLine(TC_PSTR("stopped: every ESC at 1000 us"));
+    sayLine(TC_FLASH_TEXT("stopped: every ESC at 1000 us"));
   }
 
   static void status(ReadRunApp& app, const fw::ArgValues&) {
@@ -61,7 +61,7 @@ struct Commands {
       }
     }
     if (app.isRunning()) {
-      sayLine(TC_PSTR("error: motors are running; send stop first, then liftoff"));
+      sayLine(TC_FLASH_TEXT("error: motors are running; send stop first, then liftoff"));
       return;
     }
     const uint32_t now_ms = hal::Clock::millis();
@@ -85,30 +85,30 @@ struct Commands {
       app.hold_prompt_ = true;  // the next line is a CSV row, and must start clean
     } else {
       app.stream_ = false;
-      sayLine(TC_PSTR("# stream off"));
+      sayLine(TC_FLASH_TEXT("# stream off"));
     }
   }
 
   static void rate(ReadRunApp& app, const fw::ArgValues& args) {
     const uint16_t hz = static_cast<uint16_t>(args[0]);
     if (app.isRunning()) {
-      sayLine(TC_PSTR("error: motors are running; send stop first, then change the rate"));
+      sayLine(TC_FLASH_TEXT("error: motors are running; send stop first, then change the rate"));
       return;
     }
     if (!hal::Esc::setFrameRate(hz)) {
-      sayLine(TC_PSTR("error: the ESC driver refused that rate; nothing changed"));
+      sayLine(TC_FLASH_TEXT("error: the ESC driver refused that rate; nothing changed"));
       return;
     }
     app.setFrameRate(hz);
     app.scheduleFrames(hal::Clock::millis());
-    fw::say(TC_PSTR("frame rate "));
+    fw::say(TC_FLASH_TEXT("frame rate "));
     fw::printUint(hz);
-    sayLine(TC_PSTR(" Hz"));
+    sayLine(TC_FLASH_TEXT(" Hz"));
   }
 
   static void eeprom(ReadRunApp& app, const fw::ArgValues& args) {
     if (app.isRunning()) {
-      sayLine(TC_PSTR("error: eeprom: motors are running; send stop first"));
+      sayLine(TC_FLASH_TEXT("error: eeprom: motors are running; send stop first"));
     } else if (args[0] == 0) {
       fw::eepromCrc();
     } else {
@@ -126,7 +126,7 @@ struct Commands {
   // it, and a record's voltages must lie within its full scale.
   static void dividerSet(ReadRunApp& app, const fw::ArgValues& args) {
     if (app.isRunning()) {
-      sayLine(TC_PSTR("error: motors are running; send stop first, then set the divider"));
+      sayLine(TC_FLASH_TEXT("error: motors are running; send stop first, then set the divider"));
       return;
     }
     if (!fw::setDivider(static_cast<uint32_t>(args[0]), static_cast<uint32_t>(args[1]),
@@ -149,61 +149,61 @@ struct Commands {
 namespace {
 
 // Argument specs: names as `help` and the errors show them, ranges from the named limits.
-const char kG[] TC_PROGMEM = "G";
-const char kN[] TC_PROGMEM = "N";
-const char kRampMs[] TC_PROGMEM = "RAMP_MS";
-const char kHoldMs[] TC_PROGMEM = "HOLD_MS";
-const char kHz[] TC_PROGMEM = "HZ";
-const char kR1[] TC_PROGMEM = "R1_OHM";
-const char kR2[] TC_PROGMEM = "R2_OHM";
-const char kOnOff[] TC_PROGMEM = "on|off";
-const char kCrcDump[] TC_PROGMEM = "crc|dump";
+const char kG[] TC_FLASH = "G";
+const char kN[] TC_FLASH = "N";
+const char kRampMs[] TC_FLASH = "RAMP_MS";
+const char kHoldMs[] TC_FLASH = "HOLD_MS";
+const char kHz[] TC_FLASH = "HZ";
+const char kR1[] TC_FLASH = "R1_OHM";
+const char kR2[] TC_FLASH = "R2_OHM";
+const char kOnOff[] TC_FLASH = "on|off";
+const char kCrcDump[] TC_FLASH = "crc|dump";
 
 constexpr int32_t kDividerMax = static_cast<int32_t>(tc::kDividerMaxOhm);
 
-const fw::ArgSpec kForceAllArgs[] TC_PROGMEM = {{kG, nullptr, 0, kForceMaxG}};
-const fw::ArgSpec kForceOneArgs[] TC_PROGMEM = {{kN, nullptr, 0, kMotors - 1},
+const fw::ArgSpec kForceAllArgs[] TC_FLASH = {{kG, nullptr, 0, kForceMaxG}};
+const fw::ArgSpec kForceOneArgs[] TC_FLASH = {{kN, nullptr, 0, kMotors - 1},
                                                 {kG, nullptr, 0, kForceMaxG}};
-const fw::ArgSpec kLiftoffArgs[] TC_PROGMEM = {{kG, nullptr, 1, kForceMaxG},
+const fw::ArgSpec kLiftoffArgs[] TC_FLASH = {{kG, nullptr, 1, kForceMaxG},
                                                {kRampMs, nullptr, 0, kLiftoffMaxMs},
                                                {kHoldMs, nullptr, 0, kLiftoffMaxMs}};
-const fw::ArgSpec kOnOffArgs[] TC_PROGMEM = {{kOnOff, kOnOff, 0, 0}};
-const fw::ArgSpec kRateArgs[] TC_PROGMEM = {{kHz, nullptr, hal::kEscMinFrameHz, hal::kEscMaxFrameHz}};
-const fw::ArgSpec kEepromArgs[] TC_PROGMEM = {{kCrcDump, kCrcDump, 0, 0}};
-const fw::ArgSpec kDividerArgs[] TC_PROGMEM = {{kR1, nullptr, 0, kDividerMax},
+const fw::ArgSpec kOnOffArgs[] TC_FLASH = {{kOnOff, kOnOff, 0, 0}};
+const fw::ArgSpec kRateArgs[] TC_FLASH = {{kHz, nullptr, hal::kEscMinFrameHz, hal::kEscMaxFrameHz}};
+const fw::ArgSpec kEepromArgs[] TC_FLASH = {{kCrcDump, kCrcDump, 0, 0}};
+const fw::ArgSpec kDividerArgs[] TC_FLASH = {{kR1, nullptr, 0, kDividerMax},
                                                {kR2, nullptr, 0, kDividerMax}};
 
-const char kHelpName[] TC_PROGMEM = "help";
-const char kFName[] TC_PROGMEM = "f";
-const char kStopName[] TC_PROGMEM = "stop";
-const char kStatusName[] TC_PROGMEM = "status";
-const char kLiftoffName[] TC_PROGMEM = "liftoff";
-const char kStreamName[] TC_PROGMEM = "stream";
-const char kRateName[] TC_PROGMEM = "rate";
-const char kEepromName[] TC_PROGMEM = "eeprom";
-const char kDividerName[] TC_PROGMEM = "divider";
-const char kStrictName[] TC_PROGMEM = "strict";
+const char kHelpName[] TC_FLASH = "help";
+const char kFName[] TC_FLASH = "f";
+const char kStopName[] TC_FLASH = "stop";
+const char kStatusName[] TC_FLASH = "status";
+const char kLiftoffName[] TC_FLASH = "liftoff";
+const char kStreamName[] TC_FLASH = "stream";
+const char kRateName[] TC_FLASH = "rate";
+const char kEepromName[] TC_FLASH = "eeprom";
+const char kDividerName[] TC_FLASH = "divider";
+const char kStrictName[] TC_FLASH = "strict";
 
-const char kHelpHelp[] TC_PROGMEM = "this list";
-const char kForceAllHelp[] TC_PROGMEM = "all calibrated motors to G grams";
-const char kForceOneHelp[] TC_PROGMEM = "motor N to G grams";
-const char kStopHelp[] TC_PROGMEM = "all motors to 0 g (1000 us)";
-const char kStatusHelp[] TC_PROGMEM = "per motor: force, pwm, battery, flags; v2 motors: headroom";
-const char kLiftoffHelp[] TC_PROGMEM =
+const char kHelpHelp[] TC_FLASH = "this list";
+const char kForceAllHelp[] TC_FLASH = "all calibrated motors to G grams";
+const char kForceOneHelp[] TC_FLASH = "motor N to G grams";
+const char kStopHelp[] TC_FLASH = "all motors to 0 g (1000 us)";
+const char kStatusHelp[] TC_FLASH = "per motor: force, pwm, battery, flags; v2 motors: headroom";
+const char kLiftoffHelp[] TC_FLASH =
     "ramp all four 0->G g (default 2000 ms),\nhold (default 5000 ms), stop; empty lines keep it "
     "going,\nany other key aborts";
-const char kStreamHelp[] TC_PROGMEM = "CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s";
-const char kRateHelp[] TC_PROGMEM = "ESC frames per second (motors stopped)";
-const char kEepromHelp[] TC_PROGMEM = "EEPROM CRC-16 per slot and whole, or Intel HEX (stopped)";
-const char kDividerShowHelp[] TC_PROGMEM = "the battery divider and its full scale";
-const char kDividerSetHelp[] TC_PROGMEM =
+const char kStreamHelp[] TC_FLASH = "CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s";
+const char kRateHelp[] TC_FLASH = "ESC frames per second (motors stopped)";
+const char kEepromHelp[] TC_FLASH = "EEPROM CRC-16 per slot and whole, or Intel HEX (stopped)";
+const char kDividerShowHelp[] TC_FLASH = "the battery divider and its full scale";
+const char kDividerSetHelp[] TC_FLASH =
     "battery divider in ohm: R1 pack-A1, R2 A1-ground\n(thesis 100000 47000); reloads the "
     "calibration,\nmotors stopped";
-const char kStrictHelp[] TC_PROGMEM = "f (above 0 g), liftoff, divider R1_OHM R2_OHM need a checksum";
+const char kStrictHelp[] TC_FLASH = "f (above 0 g), liftoff, divider R1_OHM R2_OHM need a checksum";
 
 // Every console command. kCmdGuarded marks what strict mode refuses without a checksum: what
 // can spin a motor (f above 0 g, liftoff) or write the EEPROM (divider R1 R2).
-const fw::Command<ReadRunApp> kCommands[] TC_PROGMEM = {
+const fw::Command<ReadRunApp> kCommands[] TC_FLASH = {
     {{kHelpName, nullptr, 0, 0, 0, kHelpHelp}, &Commands::help},
     {{kFName, kForceAllArgs, 1, 1, fw::kCmdGuarded | fw::kCmdZeroIsStop, kForceAllHelp},
      &Commands::forceAll},

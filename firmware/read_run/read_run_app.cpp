@@ -22,7 +22,7 @@ uint8_t ReadRunApp::loadCalibration() {
   tc::readSettings<hal::Eeprom>(settings_);
   monitor_ = tc::BatteryMonitor(settings_.batteryConfig());
   const tc::RecordLimits limits = settings_.recordLimits();
-  fw::say(TC_PSTR("battery monitor: "));
+  fw::say(TC_FLASH_TEXT("battery monitor: "));
   fw::printDivider(settings_);
   fw::newline();
   for (uint8_t i = 0; i < kMotors; ++i) {
@@ -67,7 +67,7 @@ uint8_t ReadRunApp::loadCalibration() {
 
 void ReadRunApp::arm() {
   mode_ = Mode::kArming;
-  fw::sayLine(TC_PSTR("arming... (every ESC at 1000 us for 2 s)"));
+  fw::sayLine(TC_FLASH_TEXT("arming... (every ESC at 1000 us for 2 s)"));
   static_assert(kArmMs == 2000 && kStopPwmUs == 1000, "the arming line says 1000 us for 2 s");
   stopAll();
   uint16_t frame_hz = hal::Esc::frameRateHz();
@@ -92,9 +92,9 @@ void ReadRunApp::arm() {
   line_.clear();
   mode_ = Mode::kReady;
   last_line_ms_ = hal::Clock::millis();
-  fw::sayLine(TC_PSTR("armed"));
+  fw::sayLine(TC_FLASH_TEXT("armed"));
   if (discarded) {
-    fw::sayLine(TC_PSTR("note: input received while arming was ignored; send commands after \"armed\""));
+    fw::sayLine(TC_FLASH_TEXT("note: input received while arming was ignored; send commands after \"armed\""));
   }
   prompt();
 }
@@ -222,7 +222,7 @@ void ReadRunApp::stopAll() {
   hal::Esc::writeAll(pulses_us);
 }
 
-void ReadRunApp::prompt() { fw::say(TC_PSTR("rr> ")); }
+void ReadRunApp::prompt() { fw::say(TC_FLASH_TEXT("rr> ")); }
 
 // ---------------------------------------------------------------------------------------------
 // Lift-off sequence (thesis sec. 7.4): all four motors the same force, ramp then hold

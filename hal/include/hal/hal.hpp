@@ -9,13 +9,6 @@
 
 #include "hal/board.hpp"
 
-#ifdef __AVR__
-#include <avr/pgmspace.h>
-#define TC_PSTR(s) PSTR(s)
-#else
-#define TC_PSTR(s) (s)
-#endif
-
 namespace hal {
 
 // Millisecond clock (Timer0, 1 kHz interrupt) and delays.
@@ -77,7 +70,7 @@ struct Uart {
   static int16_t read();    // a byte 0..255, kRxDamaged or kNothing
   static void write(uint8_t byte);
   static void print(const char* text);          // string in RAM
-  static void printP(const char* progmem_text);  // string made with TC_PSTR
+  static void printP(const char* progmem_text);  // string made with TC_FLASH_TEXT
   // Called (repeatedly) while write() waits for room; nullptr for none. Must not print.
   static void setWaitHook(WaitHook hook);
   static uint16_t rxDamageCount();  // damage marks produced since init (saturates)
