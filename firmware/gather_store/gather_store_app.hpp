@@ -69,6 +69,7 @@
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/motor_calibration.hpp"
+#include "thrustcal/sweep_limits.hpp"
 
 namespace gs {
 
@@ -98,15 +99,7 @@ using tc::kV2MinVoltageGapMv;
 constexpr uint8_t kProgressEvery = 10;     // one "# " progress line per this many samples
 constexpr uint8_t kLineEndGraceMs = 3;     // an LF this soon after "sweep" CR is its line end
 
-// Accepted ranges of the settings (inclusive).
-constexpr uint16_t kPwmLowestUs = 1000;
-constexpr uint16_t kPwmHighestUs = 2000;
-constexpr uint16_t kStepMinUs = 1;
-constexpr uint16_t kStepMaxUs = 100;
-constexpr uint16_t kSettleMinMs = 0;
-constexpr uint16_t kSettleMaxMs = 10000;
-constexpr int16_t kPlateMaxG = 500;
-constexpr int16_t kKnownWeightMaxG = 950;  // cal W / span W: up to the load cell's overload
+// The settings' accepted ranges: thrustcal/sweep_limits.hpp.
 
 // settle auto: force medians kSettleProbeMs apart; the step is settled when
 // kSettledAgreements successive pairs differ by at most kSettledCounts ADC counts (0 counts:
@@ -127,7 +120,7 @@ constexpr uint16_t kDefaultSettleCapMs = 500;
 struct Settings {
   uint8_t slot = 0;             // motor slot 0..3 = ESC output and EEPROM record
   int16_t plate_g = 60;         // plate carrying the motor (thesis 60 g)
-  uint16_t pwm_min_us = 1000;   // sweep start
+  uint16_t pwm_min_us = tc::kThrottleMinUs;  // sweep start
   uint16_t pwm_max_us = 1800;   // sweep end (inclusive when on the step grid)
   uint16_t step_us = 10;
   uint16_t settle_ms = kDefaultSettleCapMs;  // per step (settle auto: the cap); thesis 200

@@ -100,17 +100,17 @@ const char kWordV2[] TC_FLASH = "v2";
 const char kWordsEeprom[] TC_FLASH = "crc|dump";
 const char kWordsOnOff[] TC_FLASH = "on|off";
 
-static_assert(tc::LoadCellConfig().overload_g == kKnownWeightMaxG, "cal/span up to the overload");
+static_assert(tc::LoadCellConfig().overload_g == tc::kKnownWeightMaxG, "cal/span up to the overload");
 constexpr int32_t kSlotMax = tc::kMotorSlots - 1;
 constexpr int32_t kDividerMax = static_cast<int32_t>(tc::kDividerMaxOhm);
 
 const fw::ArgSpec kArgSlot[] TC_FLASH = {{kN, nullptr, 0, kSlotMax}};
-const fw::ArgSpec kArgPlate[] TC_FLASH = {{kG, nullptr, 0, kPlateMaxG}};
-const fw::ArgSpec kArgKnown[] TC_FLASH = {{kW, nullptr, 1, kKnownWeightMaxG}};
-const fw::ArgSpec kArgRange[] TC_FLASH = {{kMin, nullptr, kPwmLowestUs, kPwmHighestUs - 1},
-                                           {kMax, nullptr, kPwmLowestUs + 1, kPwmHighestUs}};
-const fw::ArgSpec kArgStep[] TC_FLASH = {{kUs, nullptr, kStepMinUs, kStepMaxUs}};
-const fw::ArgSpec kArgSettle[] TC_FLASH = {{kMs, nullptr, kSettleMinMs, kSettleMaxMs}};
+const fw::ArgSpec kArgPlate[] TC_FLASH = {{kG, nullptr, 0, tc::kPlateMaxG}};
+const fw::ArgSpec kArgKnown[] TC_FLASH = {{kW, nullptr, 1, tc::kKnownWeightMaxG}};
+const fw::ArgSpec kArgRange[] TC_FLASH = {{kMin, nullptr, tc::kSweepPwmLowestUs, tc::kSweepPwmHighestUs - 1},
+                                           {kMax, nullptr, tc::kSweepPwmLowestUs + 1, tc::kSweepPwmHighestUs}};
+const fw::ArgSpec kArgStep[] TC_FLASH = {{kUs, nullptr, tc::kSweepStepMinUs, tc::kSweepStepMaxUs}};
+const fw::ArgSpec kArgSettle[] TC_FLASH = {{kMs, nullptr, tc::kSweepSettleMinMs, tc::kSweepSettleMaxMs}};
 const fw::ArgSpec kArgAuto[] TC_FLASH = {{kWordAuto, kWordAuto, 0, 0}};
 const fw::ArgSpec kArgStore1[] TC_FLASH = {{kWord1, kWord1, 0, 0}};
 const fw::ArgSpec kArgStore2[] TC_FLASH = {{kWord2, kWord2, 0, 0}};

@@ -45,7 +45,7 @@ struct Esc {
 // 4 KB EEPROM. updateByte reads first and skips bytes that already hold the value; it kicks the
 // watchdog (a byte write takes 3.4 ms on the chip).
 struct Eeprom {
-  static constexpr uint16_t kSize = 4096;
+  static constexpr uint16_t kSize = kEepromBytes;
   static uint8_t readByte(uint16_t addr);
   static void updateByte(uint16_t addr, uint8_t value);
   static void readBlock(uint16_t addr, void* dst, uint16_t length);

@@ -290,8 +290,8 @@ TEST(FakeHalBoard, WriteAllSetsTheFourPulsesClampedLikeWritePulseInOneCall) {
   EXPECT_EQ(hal::fake::escWriteAlls(), 1u);
   EXPECT_EQ(hal::fake::pulseUs(0), 1000);
   EXPECT_EQ(hal::fake::pulseUs(1), 1500);
-  EXPECT_EQ(hal::fake::pulseUs(2), hal::kEscPulseMinUs);
-  EXPECT_EQ(hal::fake::pulseUs(3), hal::kEscPulseMaxUs);
+  EXPECT_EQ(hal::fake::pulseUs(2), hal::kPulseClampMinUs);
+  EXPECT_EQ(hal::fake::pulseUs(3), hal::kPulseClampMaxUs);
 }
 
 TEST(FakeHalBoard, TheBoardTableIsWhatTheDocsSay) {
