@@ -117,7 +117,7 @@ constexpr uint8_t kSettledAgreements = 2;
 // 0.9 % with the default; `thrustcal bench calibration`). `settle 200` is the thesis timing.
 constexpr uint16_t kDefaultSettleCapMs = 500;
 
-struct Settings {
+struct SweepSettings {
   uint8_t slot = 0;             // motor slot 0..3 = ESC output and EEPROM record
   int16_t plate_g = 60;         // plate carrying the motor (thesis 60 g)
   uint16_t pwm_min_us = tc::kThrottleMinUs;  // sweep start
@@ -187,7 +187,7 @@ class GatherStoreApp {
   bool poll();
 
   // Observers for tests.
-  const Settings& settings() const { return settings_; }
+  const SweepSettings& sweepSettings() const { return sweep_settings_; }
   const tc::LoadCell& loadCell() const { return cell_; }
   const SweepResult& lastSweep() const { return sweep_; }
   SweepEnd lastSweepEnd() const { return last_end_; }
@@ -260,13 +260,13 @@ class GatherStoreApp {
   // The force reading of the window force_median_ holds, in 1/16 count: the central mean with
   // settle auto, the thesis's median otherwise.
   uint16_t forceQ4() const {
-    return settings_.settle_auto ? force_median_.centralMeanQ4(kForceCentral)
+    return sweep_settings_.settle_auto ? force_median_.centralMeanQ4(kForceCentral)
                                  : static_cast<uint16_t>(force_median_.median() * 16u);
   }
 
-  Settings settings_;
+  SweepSettings sweep_settings_;
   tc::LoadCell cell_;
-  tc::BoardSettings settings_board_;  // the divider (EEPROM), read at begin()
+  tc::BoardSettings board_settings_;  // the divider (EEPROM), read at begin()
   tc::BatteryMonitor battery_;        // configured from it
   uint16_t tare_counts_ = 0;  // load-cell reading at the last tare (the span's empty point)
   uint32_t armed_at_ms_ = 0;

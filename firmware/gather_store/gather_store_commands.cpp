@@ -124,8 +124,8 @@ const fw::ArgSpec kArgOnOff[] TC_FLASH = {{kWordsOnOff, kWordsOnOff, 0, 0}};
 // arguments are appended by fw::printHelp from the specs above.
 static_assert(kForceWindow == 201, "weigh's help quotes the median of 201");
 static_assert(kDefaultSettleCapMs == 500, "settle auto's help quotes the cap");
-static_assert(Settings().plate_g == 60 && Settings().step_us == 10 &&
-                  Settings().pwm_min_us == 1000 && Settings().pwm_max_us == 1800,
+static_assert(SweepSettings().plate_g == 60 && SweepSettings().step_us == 10 &&
+                  SweepSettings().pwm_min_us == 1000 && SweepSettings().pwm_max_us == 1800,
               "the defaults the help lines quote");
 const char kHelpHelp[] TC_FLASH = "this list";
 const char kHelpMotor[] TC_FLASH = "select motor slot N: ESC output and EEPROM record";

@@ -63,7 +63,7 @@ void sayV2FitFailed(uint8_t slot, bool refine, tc::FitV2Status status);
 struct V2Outcome {
   uint8_t slot = 0;
   bool refine = false;
-  SlotModel before;
+  SlotContents before;
   uint16_t rest_mv = 0;  // this sweep's resting voltage
   uint16_t written = 0;
 };

@@ -30,19 +30,19 @@ int16_t GatherStoreApp::forceDecigrams(uint16_t force_q4) const {
 // Settings
 
 void GatherStoreApp::cmdMotor(uint8_t slot) {
-  settings_.slot = slot;
+  sweep_settings_.slot = slot;
   say(TC_FLASH_TEXT("motor "));
-  fw::printUint(settings_.slot);
+  fw::printUint(sweep_settings_.slot);
   say(TC_FLASH_TEXT(" selected: ESC "));
-  fw::printEscPin(settings_.slot);
+  fw::printEscPin(sweep_settings_.slot);
   say(TC_FLASH_TEXT(", "));
-  view::printRecordRange(settings_.slot);
+  view::printRecordRange(sweep_settings_.slot);
   fw::newline();
 }
 
 void GatherStoreApp::cmdPlate(int16_t grams) {
-  settings_.plate_g = grams;
-  cell_.setPlateGrams(settings_.plate_g);
+  sweep_settings_.plate_g = grams;
+  cell_.setPlateGrams(sweep_settings_.plate_g);
   say(TC_FLASH_TEXT("plate "));
   fw::printInt(grams);
   sayLine(TC_FLASH_TEXT(" g (weigh and cal leave it out)"));
@@ -65,12 +65,12 @@ void GatherStoreApp::cmdRange(uint16_t lo, uint16_t hi) {
     sayLine(TC_FLASH_TEXT("; nothing changed"));
     return;
   }
-  const uint32_t samples = static_cast<uint32_t>(hi - lo) / settings_.step_us + 1u;
+  const uint32_t samples = static_cast<uint32_t>(hi - lo) / sweep_settings_.step_us + 1u;
   if (samples > kMaxSweepSamples) {
     say(TC_FLASH_TEXT("error: that range is "));
     fw::printUint(samples);
     say(TC_FLASH_TEXT(" steps of "));
-    fw::printUint(settings_.step_us);
+    fw::printUint(sweep_settings_.step_us);
     say(TC_FLASH_TEXT(" us, at most "));
     fw::printUint(kMaxSweepSamples);
     say(TC_FLASH_TEXT(" fit: set a step of at least "));
@@ -78,8 +78,8 @@ void GatherStoreApp::cmdRange(uint16_t lo, uint16_t hi) {
     sayLine(TC_FLASH_TEXT(" us first; nothing changed"));
     return;
   }
-  settings_.pwm_min_us = lo;
-  settings_.pwm_max_us = hi;
+  sweep_settings_.pwm_min_us = lo;
+  sweep_settings_.pwm_max_us = hi;
   say(TC_FLASH_TEXT("range "));
   fw::printUint(lo);
   say(TC_FLASH_TEXT(".."));
@@ -89,7 +89,7 @@ void GatherStoreApp::cmdRange(uint16_t lo, uint16_t hi) {
 
 void GatherStoreApp::cmdStep(uint16_t step) {
   const uint32_t samples =
-      static_cast<uint32_t>(settings_.pwm_max_us - settings_.pwm_min_us) / step + 1u;
+      static_cast<uint32_t>(sweep_settings_.pwm_max_us - sweep_settings_.pwm_min_us) / step + 1u;
   if (samples > kMaxSweepSamples) {
     say(TC_FLASH_TEXT("error: a step of "));
     fw::printUint(step);
@@ -100,14 +100,14 @@ void GatherStoreApp::cmdStep(uint16_t step) {
     sayLine(TC_FLASH_TEXT(" fit: use a larger step or a smaller range; nothing changed"));
     return;
   }
-  settings_.step_us = step;
+  sweep_settings_.step_us = step;
   say(TC_FLASH_TEXT("step "));
   fw::printUint(step);
   sayPlannedSteps();
 }
 
 void GatherStoreApp::cmdSettleAuto() {
-  settings_.settle_auto = true;
+  sweep_settings_.settle_auto = true;
   say(TC_FLASH_TEXT("settle auto: next step once "));
   fw::printUint(kSettledAgreements + 1u);
   say(TC_FLASH_TEXT(" force medians "));
@@ -115,13 +115,13 @@ void GatherStoreApp::cmdSettleAuto() {
   say(TC_FLASH_TEXT(" ms apart agree within "));
   fw::printUint(kSettledCounts);
   say(TC_FLASH_TEXT(" counts, at most "));
-  fw::printUint(settings_.settle_ms);
+  fw::printUint(sweep_settings_.settle_ms);
   sayLine(TC_FLASH_TEXT(" ms per step (settle MS sets the cap and turns auto off)"));
 }
 
 void GatherStoreApp::cmdSettle(uint16_t ms) {
-  settings_.settle_ms = ms;
-  settings_.settle_auto = false;
+  sweep_settings_.settle_ms = ms;
+  sweep_settings_.settle_auto = false;
   say(TC_FLASH_TEXT("settle "));
   fw::printUint(ms);
   sayLine(TC_FLASH_TEXT(" ms per step"));
@@ -164,7 +164,7 @@ void GatherStoreApp::cmdWeigh() {
   say(TC_FLASH_TEXT("weight "));
   fw::printInt(cell_.weightGrams(counts));
   say(TC_FLASH_TEXT(" g (plate "));
-  fw::printInt(settings_.plate_g);
+  fw::printInt(sweep_settings_.plate_g);
   say(TC_FLASH_TEXT(" g left out), "));
   fw::printUint(counts);
   say(TC_FLASH_TEXT(" counts"));
@@ -230,13 +230,13 @@ void GatherStoreApp::cmdSpan(int16_t grams) {
 
 void GatherStoreApp::cmdStatus() {
   say(TC_FLASH_TEXT("motor "));
-  fw::printUint(settings_.slot);
+  fw::printUint(sweep_settings_.slot);
   say(TC_FLASH_TEXT(" (ESC "));
-  fw::printEscPin(settings_.slot);
+  fw::printEscPin(sweep_settings_.slot);
   say(TC_FLASH_TEXT(" at "));
-  fw::printUint(hal::Esc::pulseUs(settings_.slot));
+  fw::printUint(hal::Esc::pulseUs(sweep_settings_.slot));
   say(TC_FLASH_TEXT(" us), plate "));
-  fw::printInt(settings_.plate_g);
+  fw::printInt(sweep_settings_.plate_g);
   say(TC_FLASH_TEXT(" g, range "));
   printSweepPlan();
   fw::newline();
@@ -280,13 +280,13 @@ void GatherStoreApp::cmdStatus() {
 // `divider [R1 R2]`: the battery monitor's divider (thrustcal/board_settings.hpp). The last
 // sweep's volts came through the old one: it is dropped when the divider changes.
 void GatherStoreApp::cmdDividerShow() {
-  fw::printDivider(settings_board_);
+  fw::printDivider(board_settings_);
   fw::newline();
 }
 
 void GatherStoreApp::cmdDivider(uint32_t top_ohm, uint32_t bottom_ohm) {
-  if (!fw::setDivider(top_ohm, bottom_ohm, settings_board_)) return;
-  battery_ = tc::BatteryMonitor(settings_board_.batteryConfig());
+  if (!fw::setDivider(top_ohm, bottom_ohm, board_settings_)) return;
+  battery_ = tc::BatteryMonitor(board_settings_.batteryConfig());
   if (sweep_.complete) {
     sweep_.valid = false;
     sweep_.complete = false;

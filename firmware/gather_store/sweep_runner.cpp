@@ -12,11 +12,11 @@ using fw::say;
 using fw::sayLine;
 
 uint16_t GatherStoreApp::plannedSamples() const {
-  return static_cast<uint16_t>((settings_.pwm_max_us - settings_.pwm_min_us) / settings_.step_us +
+  return static_cast<uint16_t>((sweep_settings_.pwm_max_us - sweep_settings_.pwm_min_us) / sweep_settings_.step_us +
                                1u);
 }
 
-void GatherStoreApp::stopMotor() { hal::Esc::writePulse(settings_.slot, kStopPwmUs); }
+void GatherStoreApp::stopMotor() { hal::Esc::writePulse(sweep_settings_.slot, kStopPwmUs); }
 
 bool GatherStoreApp::waitOrAbort(uint16_t ms) {
   const uint32_t start = hal::Clock::millis();
@@ -32,19 +32,19 @@ bool GatherStoreApp::waitOrAbort(uint16_t ms) {
 }
 
 void GatherStoreApp::printSweepPlan() {
-  fw::printUint(settings_.pwm_min_us);
+  fw::printUint(sweep_settings_.pwm_min_us);
   say(TC_FLASH_TEXT(".."));
-  fw::printUint(settings_.pwm_max_us);
+  fw::printUint(sweep_settings_.pwm_max_us);
   say(TC_FLASH_TEXT(" us, step "));
-  fw::printUint(settings_.step_us);
+  fw::printUint(sweep_settings_.step_us);
   say(TC_FLASH_TEXT(" us, "));
   printSettle();
 }
 
 void GatherStoreApp::printSettle() {
-  say(settings_.settle_auto ? TC_FLASH_TEXT("settle auto (cap ") : TC_FLASH_TEXT("settle "));
-  fw::printUint(settings_.settle_ms);
-  say(settings_.settle_auto ? TC_FLASH_TEXT(" ms)") : TC_FLASH_TEXT(" ms"));
+  say(sweep_settings_.settle_auto ? TC_FLASH_TEXT("settle auto (cap ") : TC_FLASH_TEXT("settle "));
+  fw::printUint(sweep_settings_.settle_ms);
+  say(sweep_settings_.settle_auto ? TC_FLASH_TEXT(" ms)") : TC_FLASH_TEXT(" ms"));
 }
 
 bool GatherStoreApp::settleForce(uint16_t& counts) {
@@ -62,7 +62,7 @@ bool GatherStoreApp::settleForce(uint16_t& counts) {
     }
     previous = counts;
     have_previous = true;
-    if (hal::Clock::millis() - start >= settings_.settle_ms) return true;  // the cap
+    if (hal::Clock::millis() - start >= sweep_settings_.settle_ms) return true;  // the cap
   }
 }
 
@@ -145,12 +145,12 @@ void GatherStoreApp::cmdSweep() {
     sayLine(TC_FLASH_TEXT("error: too many steps for the sample buffer: use a larger step"));
     return;
   }
-  const uint8_t slot = settings_.slot;
+  const uint8_t slot = sweep_settings_.slot;
   sweep_.valid = false;
   sweep_.complete = false;
   if (!swallowLineFeed()) return;
   scratch_.startBuilder();
-  sag_builder_.reset(settings_.pwm_min_us);
+  sag_builder_.reset(sweep_settings_.pwm_min_us);
   fitter_.reset();
 
   say(TC_FLASH_TEXT("# sweep motor "));
@@ -174,10 +174,10 @@ void GatherStoreApp::cmdSweep() {
 
   sayLine(TC_FLASH_TEXT("pwm_us,force_g,vbat_v,t_s,motor,dir"));
   const uint32_t start_ms = hal::Clock::millis();
-  uint16_t pwm = settings_.pwm_min_us;
+  uint16_t pwm = sweep_settings_.pwm_min_us;
   int16_t max_force_dg = 0;
   for (uint16_t done = 1; done <= planned;
-       ++done, pwm = static_cast<uint16_t>(pwm + settings_.step_us)) {
+       ++done, pwm = static_cast<uint16_t>(pwm + sweep_settings_.step_us)) {
     int16_t force_dg;
     uint16_t vbat_mv;
     if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
@@ -208,12 +208,12 @@ bool GatherStoreApp::swallowLineFeed() {
 }
 
 bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {
-  hal::Esc::writePulse(settings_.slot, pwm_us);
+  hal::Esc::writePulse(sweep_settings_.slot, pwm_us);
   uint16_t force_counts;
-  if (settings_.settle_auto) {
+  if (sweep_settings_.settle_auto) {
     if (!settleForce(force_counts)) return false;
   } else {
-    if (!waitOrAbort(settings_.settle_ms)) return false;
+    if (!waitOrAbort(sweep_settings_.settle_ms)) return false;
     if (!readForceCounts(force_counts)) return false;
   }
   const tc::LoadCellStatus cell_status = cell_.check(force_counts);
