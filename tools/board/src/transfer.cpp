@@ -270,9 +270,9 @@ EepromPutResult putEeprom(const std::string& port, const std::string& hex_path,
   args.push_back("-V");
   args.push_back("-U");
   args.push_back("eeprom:w:" + tmp + ":i");
-  say(progress, fmt::format("writing 4096 EEPROM bytes through the bootloader on {} (a real "
+  say(progress, fmt::format("writing {} EEPROM bytes through the bootloader on {} (a real "
                             "board takes ~3.3 ms per byte: ~14 s)",
-                            port));
+                            hal::kEepromBytes, port));
   r.avrdude = runAvrdude(args, timeout_s);
   if (r.avrdude.exit_code != 0 || r.avrdude.timed_out)
     throw AvrdudeError(fmt::format("{}: {}; the EEPROM may be partly written: run `thrustcal "
@@ -308,8 +308,9 @@ EepromGetResult getEeprom(const std::string& port, const TransferOptions& o) {
   r.dump_wall_s = since(td);
   r.crcs = EepromCrcs::of(r.bytes);
   r.wall_s = since(t0);
-  say(progress, fmt::format("read 4096 bytes through {} in {:.1f} s (dump {:.1f} s): {}",
-                            imageName(r.image), r.wall_s, r.dump_wall_s, r.crcs.text()));
+  say(progress, fmt::format("read {} bytes through {} in {:.1f} s (dump {:.1f} s): {}",
+                            hal::kEepromBytes, imageName(r.image), r.wall_s, r.dump_wall_s,
+                            r.crcs.text()));
   return r;
 }
 
