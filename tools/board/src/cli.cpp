@@ -21,7 +21,7 @@
 #include "lab/analysis.hpp"
 #include "lab/dataset.hpp"
 #include "lab/model.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 
 namespace board {
 namespace {
@@ -258,7 +258,7 @@ void addEeprom(CLI::App& board) {
         TransferOptions to;
         to.progress = info;
         const EepromGetResult r = getEeprom(*port, to);
-        sim::writeIntelHexFile(*out, r.bytes);
+        hex::writeIntelHexFile(*out, r.bytes);
         std::printf("read the EEPROM on %s through %s into %s (%.1f s): %s\n", port->c_str(),
                     imageName(r.image), out->c_str(), r.wall_s, r.crcs.text().c_str());
       });

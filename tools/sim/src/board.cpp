@@ -12,7 +12,7 @@
 #include <sstream>
 #include <sys/stat.h>
 
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 
 extern "C" {
 #include <simavr/avr_adc.h>
@@ -81,8 +81,8 @@ HexFlash readHexFlash(const std::string& path, const char* what) {
   HexFlash h;
   try {
     // Parsed twice with different fills: a byte the file covers reads the same both times.
-    h.bytes = parseIntelHex(text.str(), kFlashBytes, path, 0xFF);
-    const std::vector<uint8_t> zero_fill = parseIntelHex(text.str(), kFlashBytes, path, 0x00);
+    h.bytes = hex::parseIntelHex(text.str(), kFlashBytes, path, 0xFF);
+    const std::vector<uint8_t> zero_fill = hex::parseIntelHex(text.str(), kFlashBytes, path, 0x00);
     bool any = false;
     for (uint32_t a = 0; a < kFlashBytes; ++a) {
       if (h.bytes[a] != zero_fill[a]) continue;
@@ -90,7 +90,7 @@ HexFlash readHexFlash(const std::string& path, const char* what) {
       any = true;
       h.hi = a + 1;
     }
-  } catch (const HexError& e) {
+  } catch (const hex::HexError& e) {
     throw BoardError(fmt::format("the {} is not a usable Intel HEX flash image: {}", what, e.what()));
   }
   return h;

@@ -11,7 +11,7 @@
 #include <memory>
 
 #include "sim/board.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "sim/pty_bridge.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
@@ -36,7 +36,7 @@ std::string defaultElf(const std::string& name) {
 std::vector<uint8_t> loadEepromOrErased(const std::string& path, bool must_exist) {
   if (path.empty() || (!must_exist && !fs::exists(path)))
     return std::vector<uint8_t>(kEepromBytes, 0xFF);
-  return readIntelHexFile(path, kEepromBytes);
+  return hex::readIntelHexFile(path, kEepromBytes);
 }
 
 void writeJson(const std::string& path, const nlohmann::json& j) {
@@ -147,7 +147,7 @@ void addGather(CLI::App& sim) {
       opt.eeprom = loadEepromOrErased(*eeprom, false);
       const GatherResult r = runGather(opt);
       if (!eeprom->empty()) {
-        writeIntelHexFile(*eeprom, r.eeprom);
+        hex::writeIntelHexFile(*eeprom, r.eeprom);
         stderrProgress(fmt::format("EEPROM saved: {}", *eeprom));
       }
       nlohmann::json j = r.toJson();
@@ -346,7 +346,7 @@ void addConsole(CLI::App& sim) {
       std::signal(SIGTERM, onSignal);
       pty.run(*speed, *duration, g_stop);
       if (!*read_only && !eeprom->empty()) {
-        writeIntelHexFile(*eeprom, board->eeprom());
+        hex::writeIntelHexFile(*eeprom, board->eeprom());
         fmt::print("EEPROM saved: {}\n", *eeprom);
       }
       fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {:.0f}x real "
@@ -433,7 +433,7 @@ void addBoard(CLI::App& sim) {
       std::signal(SIGTERM, onSignal);
       sb.link().run(*pacing, *duration, g_stop);
       if (!*read_only && !eeprom->empty()) {
-        writeIntelHexFile(*eeprom, sb.board().eeprom());
+        hex::writeIntelHexFile(*eeprom, sb.board().eeprom());
         fmt::print("EEPROM saved: {}\n", *eeprom);
       }
       fmt::print("{:.1f} s simulated, {} reset(s) by clients; the simulation alone ran at {:.1f}x "
@@ -486,7 +486,7 @@ void addFleet(CLI::App& sim) {
       go.eeprom = std::vector<uint8_t>(kEepromBytes, 0xFF);
       const GatherResult gr = runGather(go);
       const std::string eeprom_path = (fs::path(*out_dir) / "eeprom.hex").string();
-      writeIntelHexFile(eeprom_path, gr.eeprom);
+      hex::writeIntelHexFile(eeprom_path, gr.eeprom);
       nlohmann::json j = gr.toJson();
       double sim_s = gr.simulated_s, wall_s = gr.wall_s;
       for (const bool uncal : {false, true}) {
