@@ -57,7 +57,6 @@
 #include <stdint.h>
 
 #include "console.hpp"
-#include "placement_new.hpp"
 #include "shell.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/board_settings.hpp"
@@ -69,6 +68,7 @@
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/motor_calibration.hpp"
+#include "thrustcal/placement_new.hpp"
 
 namespace gs {
 

@@ -54,7 +54,7 @@
 //   50 Hz: four v1 motors 18816 cycles per frame, four v2 motors 16608;
 //   400 Hz: v1 28.0 % CPU, v2 23.8 %.
 // Static SRAM 1895 bytes (avr-size), this object 1388 (`thrustcal bench footprint`): four
-// slots of 169 bytes (rr::SlotModel: tc::ThesisRun 168 or tc::ModelV2Run 159), four Motor
+// slots of 169 bytes (tc::SlotModel: tc::ThesisRun 168 or tc::ModelV2Run 159), four Motor
 // structs of 198 with their slot, the V2Frame (58) and the 414-byte battery median. At start-up
 // tc::loadSlot decodes each record on the stack (tc::MotorCalibration 1114 + tc::ModelV2 124).
 #pragma once
@@ -73,12 +73,13 @@
 #include "thrustcal/model_v2_runtime.hpp"
 #include "thrustcal/motor_calibration.hpp"
 #include "thrustcal/record_v2.hpp"
+#include "thrustcal/slot_model.hpp"
 #include "thrustcal/thesis_runtime.hpp"
 #include "run_rules.hpp"
-#include "slot_model.hpp"
 
 namespace rr {
 
+using tc::SlotModel;  // thrustcal/slot_model.hpp
 constexpr uint8_t kMotors = tc::kMotorSlots;
 static_assert(kMotors == hal::kEscChannels, "one ESC output per calibration slot");
 

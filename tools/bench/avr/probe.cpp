@@ -5,7 +5,8 @@
 //   GPIOR1 = label, GPIOR0 = 1 (start) ... GPIOR0 = 2 (end)       a measured section
 //   GPIOR1 = 0x80 + key, GPIOR2 = low byte, GPIOR2 = high byte     a value (sizes, checks)
 //   GPIOR1 = 0xFF                                                  done
-// Every section is a call read_run makes, with read_run's own types and storage:
+// Every section is a call read_run makes, with the types read_run flies (core's, its slots'
+// tc::SlotModel included; no firmware header):
 //   - tc::V2Frame::fly, the frame read_run calls for its v2 motors (bus filter, sag prediction,
 //     four pulses; the lanes' commands set as read_run's setForce sets them);
 //   - the v1 (thesis) motor as read_run's flyMotor flies it: the sag-compensated reading and
@@ -21,8 +22,6 @@
 #include <string.h>
 
 #include "hal/hal.hpp"
-#include "read_run_app.hpp"
-#include "slot_model.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
@@ -30,6 +29,7 @@
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/model_v2_runtime.hpp"
+#include "thrustcal/slot_model.hpp"
 #include "thrustcal/thesis_runtime.hpp"
 
 enum Label : uint8_t {
@@ -48,7 +48,7 @@ enum Key : uint8_t {
   kFrames = 0x84,
   kSizeofModelV2Run = 0x85,
   kSizeofThesisRun = 0x86,
-  kSizeofMotor = 0x87,
+  // 0x87 was sizeof(rr::Motor): read_run's private struct, no longer measured here
   kSizeofV2Frame = 0x88,
   kFrameMismatches = 0x89,
   kFramesChecked = 0x8A,
@@ -67,7 +67,7 @@ static inline void ready(const T& v) { __asm__ volatile("" ::"r"(v) : "memory");
 
 // read_run's storage: four slots and the frame of its v2 motors (the symbols' sizes are what
 // the image holds).
-rr::SlotModel bench_slots[4];
+tc::SlotModel bench_slots[4];
 tc::V2Frame bench_frame;
 static tc::ModelV2 models[4];
 static tc::MotorCalibration decoded;  // one at a time, as read_run's loader
@@ -118,10 +118,9 @@ int main() {
   markEnd();
   report(kSizeofModelV2, sizeof(tc::ModelV2));
   report(kSizeofMotorCalibration, sizeof(tc::MotorCalibration));
-  report(kSizeofSlotModel, sizeof(rr::SlotModel));
+  report(kSizeofSlotModel, sizeof(tc::SlotModel));
   report(kSizeofModelV2Run, sizeof(tc::ModelV2Run));
   report(kSizeofThesisRun, sizeof(tc::ThesisRun));
-  report(kSizeofMotor, sizeof(rr::Motor));
   report(kSizeofV2Frame, sizeof(tc::V2Frame));
   uint16_t failures = 0;
   const uint16_t kFramesRun = 500;

@@ -234,24 +234,22 @@ Section footprintSection(const AvrPaths& paths) {
   if (!probe.empty() && std::filesystem::exists(probe)) {
     const ProbeResult r = runProbe(probe);
     const uint64_t v2 = r.values.at(0x80), v1 = r.values.at(0x81), slot = r.values.at(0x82);
-    const uint64_t v2run = r.values.at(0x85), v1run = r.values.at(0x86), motor = r.values.at(0x87),
-                   frame = r.values.at(0x88);
+    const uint64_t v2run = r.values.at(0x85), v1run = r.values.at(0x86), frame = r.values.at(0x88);
     const bool slots_met = 4 * slot <= kModelsSramTarget;
-    t.addRow({fmt::format("read_run's four slots, v1 or v2 (4 x sizeof(rr::SlotModel) = 4 x {})", slot),
+    t.addRow({fmt::format("read_run's four slots, v1 or v2 (4 x sizeof(tc::SlotModel) = 4 x {})", slot),
               std::to_string(4 * slot), "", "<= 1024", verdict(slots_met)});
     t.addRow({fmt::format("  four v2 models as flown (4 x sizeof(tc::ModelV2Run) = 4 x {})", v2run),
               std::to_string(4 * v2run), "", "-", "-"});
     t.addRow({fmt::format("  four thesis models as flown (4 x sizeof(tc::ThesisRun) = 4 x {})", v1run),
               std::to_string(4 * v1run), "", "-", "-"});
-    t.addRow({fmt::format("read_run's per-motor state (4 x rr::Motor of {} + tc::V2Frame of {})", motor, frame),
-              std::to_string(4 * motor + frame), "", "-", "-"});
+    t.addRow({"read_run's frame of its v2 motors (tc::V2Frame)", std::to_string(frame), "", "-", "-"});
     t.addRow({fmt::format("decoded records at start-up, on the stack (tc::MotorCalibration {} + tc::ModelV2 {})", v1, v2),
               std::to_string(v1 + v2), "", "-", "-"});
     t.addNote("read_run keeps the thesis curves' steps in the EEPROM (read on demand, PWM checkpoints every "
               "16 g in SRAM) and model v2 in the form its frame reads: a slot is a union of the two");
     s.json["models_sram"] = {{"sizeof_model_v2", v2}, {"sizeof_motor_calibration", v1},
                              {"sizeof_slot_model", slot}, {"sizeof_model_v2_run", v2run},
-                             {"sizeof_thesis_run", v1run}, {"sizeof_motor", motor}, {"sizeof_v2_frame", frame},
+                             {"sizeof_thesis_run", v1run}, {"sizeof_v2_frame", frame},
                              {"read_run_four_slots_bytes", 4 * slot}, {"four_v2_bytes", 4 * v2run},
                              {"four_v1_bytes", 4 * v1run}, {"target_bytes", kModelsSramTarget}};
     s.targets.push_back({"3. SRAM of read_run's four slots (v1 or v2 each)", fmt::format("{} bytes", 4 * slot),
