@@ -1,6 +1,8 @@
 #include <fmt/format.h>
 
 #include "bench/sections.hpp"
+#include "thrustcal/limits.hpp"
+#include "thrustcal/sweep_rules.hpp"
 
 namespace bench {
 
@@ -29,7 +31,7 @@ Section accuracySection(const AccuracyConfig& config) {
   // gather_store's default sweep: settle auto with a 500 ms cap (10 us steps, 1000-1800 us), the
   // force read as the mean of the middle 65 of 201 readings.
   AccuracyConfig dflt = config;
-  dflt.sweep.settle_ms = 500;
+  dflt.sweep.settle_ms = tc::kDefaultSettleCapMs;
   dflt.sweep.settle_auto = true;
   dflt.sweep.fine_force = true;
   const AccuracyResult rd = runAccuracy(dflt);
@@ -60,16 +62,18 @@ Section accuracySection(const AccuracyConfig& config) {
   t.addRow({"option 2.1 / v2, RMS outside its calibration voltages", fmt::format("{:.1f}x", ratio),
             "", "", "", ">= 3x", verdict(ratio >= 3.0)});
   t.addNote(fmt::format("sweeps as gather_store sees them (load cell + monitor through the plant's "
-                        "sensors, medians of 201/101): {}-{} us step {} us, {} ms settle; LiPo at "
+                        "sensors, medians of {}/{}): {}-{} us step {} us, {} ms settle; LiPo at "
                         "{:.1f} V and bench supply at {:.1f} V",
-                        c.sweep.pwm_min_us, c.sweep.pwm_max_us, c.sweep.step_us, c.sweep.settle_ms,
-                        c.cal_high_v, c.cal_low_v));
+                        tc::kForceWindow, tc::kBatteryWindow, c.sweep.pwm_min_us, c.sweep.pwm_max_us,
+                        c.sweep.step_us, c.sweep.settle_ms, c.cal_high_v, c.cal_low_v));
   t.addNote("ArduPilot: its thrust model as lab export --to ardupilot computes it, fitted per motor to both "
             "sweeps (better than one set for all motors, as ArduPilot flies); voltage = the monitor reading");
-  t.addNote("default sweeps: gather_store's default since issue 11, settle auto (next step once three "
-            "force medians 20 ms apart agree, at most 500 ms), the force and the tare read as the mean of the "
-            "middle 65 of the 201 readings (1/16 count); 200 ms: the thesis's fixed timing (settle 200); the "
-            "600 ms and 200 ms rows read medians, as before issue 11");
+  t.addNote(fmt::format("default sweeps: gather_store's default since issue 11, settle auto (next step once {} "
+                        "force medians {} ms apart agree, at most {} ms), the force and the tare read as the "
+                        "mean of the middle {} of the {} readings (1/16 count); 200 ms: the thesis's fixed "
+                        "timing (settle 200); the 600 ms and 200 ms rows read medians, as before issue 11",
+                        tc::kSettledAgreements + 1, tc::kSettleProbeMs, tc::kDefaultSettleCapMs,
+                        tc::kForceCentral, tc::kForceWindow));
   s.json["targets"] = {{"v2_rms_pct_max", 1.0},
                        {"v2_max_pct_max", 3.0},
                        {"outside_rms_ratio_min", 3.0}};

@@ -1,6 +1,7 @@
 // `thrustcal board flash|eeprom put|eeprom get|calibrate|liftoff`.
 #include "board/cli.hpp"
 #include "thrustcal/record_limits.hpp"
+#include "thrustcal/sweep_rules.hpp"
 
 #include <unistd.h>
 
@@ -279,7 +280,7 @@ void addCalibrate(CLI::App& board) {
   auto port = std::make_shared<std::string>();
   auto o = std::make_shared<CalibrateOptions>();
   auto range = std::make_shared<std::vector<int>>();
-  auto settle = std::make_shared<std::string>("500");
+  auto settle = std::make_shared<std::string>(std::to_string(tc::kDefaultSettleCapMs));
   auto out_dir = std::make_shared<std::string>(".");
   auto yes = std::make_shared<bool>(false);
   auto no_strict = std::make_shared<bool>(false);
@@ -305,8 +306,9 @@ void addCalibrate(CLI::App& board) {
       ->expected(2);
   cmd->add_option("--step", o->step_us, "sweep step, us")->capture_default_str();
   cmd->add_option("--settle", *settle,
-                  "per step: MS, or auto (next step once the force stops changing, 500 ms cap); "
-                  "the thesis's 200 ms leaves the load cell's low-pass ~1 % behind")
+                  fmt::format("per step: MS, or auto (next step once the force stops changing, {} ms "
+                              "cap); the thesis's 200 ms leaves the load cell's low-pass ~1 % behind",
+                              tc::kDefaultSettleCapMs))
       ->capture_default_str();
   cmd->add_option("--out-dir", *out_dir, "where calibrate_slotK_sweepN.csv go")->capture_default_str();
   cmd->add_flag("--yes,-y", *yes, "do not ask before spinning the propeller");
