@@ -1,12 +1,9 @@
 // AVR probe for `thrustcal bench compute|footprint`, built with avr-g++ by tools/bench's
-// CMakeLists (same flags as the AVR tree) and run in libsimavr by src/avr_probe.cpp.
-// Same marker approach as tests/core_v2/avr_cycles: the host timestamps GPIOR writes with the
-// simulated cycle counter.
-//   GPIOR1 = label, GPIOR0 = 1 (start) ... GPIOR0 = 2 (end)       a measured section
-//   GPIOR1 = 0x80 + key, GPIOR2 = low byte, GPIOR2 = high byte     a value (sizes, checks)
-//   GPIOR1 = 0xFF                                                  done
+// CMakeLists (the AVR tree's flags) and run in simavr by src/avr_probe.cpp with
+// sim::runCycleProbe: each measured call sits between probe::markStart and probe::markEnd, and
+// sizes and checks are reported under keys (sim/cycle_probe_avr.hpp).
 // Every section is a call read_run makes, with the types read_run flies (core's, its slots'
-// tc::SlotModel included; no firmware header):
+// tc::SlotModel included):
 //   - tc::V2Frame::fly, the frame read_run calls for its v2 motors (bus filter, sag prediction,
 //     four pulses; the lanes' commands set as read_run's setForce sets them);
 //   - the v1 (thesis) motor as read_run's flyMotor flies it: the sag-compensated reading and
@@ -22,6 +19,7 @@
 #include <string.h>
 
 #include "hal/hal.hpp"
+#include "sim/cycle_probe_avr.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
@@ -54,13 +52,9 @@ enum Key : uint8_t {
   kFramesChecked = 0x8A,
 };
 
-static inline void markStart(uint8_t label) { GPIOR1 = label; GPIOR0 = 1; }
-static inline void markEnd() { GPIOR0 = 2; }
-static void report(uint8_t key, uint16_t value) {
-  GPIOR1 = key;
-  GPIOR2 = static_cast<uint8_t>(value);
-  GPIOR2 = static_cast<uint8_t>(value >> 8);
-}
+using probe::markEnd;
+using probe::markStart;
+static void report(uint8_t key, uint16_t value) { probe::report16(key, value); }
 // Keeps a value in a register across the markers: inputs are computed before the start.
 template <class T>
 static inline void ready(const T& v) { __asm__ volatile("" ::"r"(v) : "memory"); }
@@ -294,7 +288,7 @@ int main() {
   report(kFrames, kFramesRun);
   report(kFrameMismatches, mismatches);
   report(kFramesChecked, checked);
-  GPIOR1 = 0xFF;
+  probe::done();
   cli();
   sleep_enable();
   sleep_cpu();
