@@ -89,6 +89,46 @@ std::string AvrPaths::elf(const std::string& image) const {
   return tree + "/firmware/" + image + "/" + image + ".elf";
 }
 
+namespace {
+
+// Where the cycles of V2Frame::fly go: the frame's steps, by the labels of its assembly.
+Table breakdownTable(const ProbeResult& r, const std::string& probe, nlohmann::json& json) {
+  Table b("2b. Compute breakdown: V2Frame::fly, cycles per frame by step (mean over the frames above)",
+          {"step", "cycles", "share"});
+  const std::vector<ProfileRange> ranges = {
+      {"call: save registers", "_ZN2tc7V2Frame3flyEjh"},
+      {"reading check, limits, filter constant", "tc_v2fly_check"},
+      {"bus filter: first-order step + Newton reciprocal", "tc_v2fly_filter"},
+      {"sag filter (the commands' bench sag, filtered)", "tc_v2fly_sag"},
+      {"prediction: 1/V at the commands (3 products)", "tc_v2fly_predict"},
+      {"  (rare paths: stop, clamp to the curve)", "tc_v2fly_rare_a"},
+      {"per motor: command, model, fine/coarse run", "tc_v2fly_lane"},
+      {"per motor: knot position (16x16)", "tc_v2fly_knot"},
+      {"per motor: drive between the knots (16x16, rounded)", "tc_v2fly_interp"},
+      {"per motor: bench sag at the command (2 x 8x8)", "tc_v2fly_sagpt"},
+      {"per motor: duty = drive / V + start (16x16)", "tc_v2fly_duty"},
+      {"per motor: limits, store pulse and flags, next", "tc_v2fly_limits"},
+      {"  (rare paths: bus not valid, limits hit)", "tc_v2fly_rare_b"},
+      {"return: total sag, restore registers", "tc_v2fly_out"},
+  };
+  const auto by_range = cyclesByRange(r, probe, ranges, "_ZN2tc7V2Frame3flyEjh");
+  const CycleStat& frame = r.sections.at(kLabelV2Frame);
+  uint64_t total = 0;
+  for (const auto& [name, cycles] : by_range) total += cycles;
+  for (const auto& [name, cycles] : by_range) {
+    const double per_frame = frame.count ? static_cast<double>(cycles) / frame.count : 0.0;
+    b.addRow({name, fixed(per_frame, 1), total ? fmt::format("{:.1f} %", 100.0 * cycles / total) : "-"});
+    json["breakdown"].push_back({{"step", name}, {"cycles_per_frame", per_frame}});
+  }
+  b.addRow({"total (the function alone, without the caller's argument setup)",
+            fixed(frame.count ? static_cast<double>(total) / frame.count : 0.0, 1), "100 %"});
+  b.addNote("cycles attributed to the address of each instruction (simavr, one instruction per step) and "
+            "summed between the assembly's tc_v2fly_* labels; per motor rows are for all four motors");
+  return b;
+}
+
+}  // namespace
+
 Section computeSection(const AvrPaths& paths) {
   Section s;
   s.key = "compute";
@@ -158,40 +198,7 @@ Section computeSection(const AvrPaths& paths) {
   s.json["probe_elf"] = probe;
   s.json["assembly_vs_portable"] = {{"frames", checked}, {"mismatches", mismatches}};
   s.tables.push_back(std::move(t));
-
-  // Where the cycles go: the frame's steps, by the labels of its assembly.
-  Table b("2b. Compute breakdown: V2Frame::fly, cycles per frame by step (mean over the frames above)",
-          {"step", "cycles", "share"});
-  const std::vector<ProfileRange> ranges = {
-      {"call: save registers", "_ZN2tc7V2Frame3flyEjh"},
-      {"reading check, limits, filter constant", "tc_v2fly_check"},
-      {"bus filter: first-order step + Newton reciprocal", "tc_v2fly_filter"},
-      {"sag filter (the commands' bench sag, filtered)", "tc_v2fly_sag"},
-      {"prediction: 1/V at the commands (3 products)", "tc_v2fly_predict"},
-      {"  (rare paths: stop, clamp to the curve)", "tc_v2fly_rare_a"},
-      {"per motor: command, model, fine/coarse run", "tc_v2fly_lane"},
-      {"per motor: knot position (16x16)", "tc_v2fly_knot"},
-      {"per motor: drive between the knots (16x16, rounded)", "tc_v2fly_interp"},
-      {"per motor: bench sag at the command (2 x 8x8)", "tc_v2fly_sagpt"},
-      {"per motor: duty = drive / V + start (16x16)", "tc_v2fly_duty"},
-      {"per motor: limits, store pulse and flags, next", "tc_v2fly_limits"},
-      {"  (rare paths: bus not valid, limits hit)", "tc_v2fly_rare_b"},
-      {"return: total sag, restore registers", "tc_v2fly_out"},
-  };
-  const auto by_range = cyclesByRange(r, probe, ranges, "_ZN2tc7V2Frame3flyEjh");
-  const CycleStat& frame = r.sections.at(kLabelV2Frame);
-  uint64_t total = 0;
-  for (const auto& [name, cycles] : by_range) total += cycles;
-  for (const auto& [name, cycles] : by_range) {
-    const double per_frame = frame.count ? static_cast<double>(cycles) / frame.count : 0.0;
-    b.addRow({name, fixed(per_frame, 1), total ? fmt::format("{:.1f} %", 100.0 * cycles / total) : "-"});
-    s.json["breakdown"].push_back({{"step", name}, {"cycles_per_frame", per_frame}});
-  }
-  b.addRow({"total (the function alone, without the caller's argument setup)",
-            fixed(frame.count ? static_cast<double>(total) / frame.count : 0.0, 1), "100 %"});
-  b.addNote("cycles attributed to the address of each instruction (simavr, one instruction per step) and "
-            "summed between the assembly's tc_v2fly_* labels; per motor rows are for all four motors");
-  s.tables.push_back(std::move(b));
+  s.tables.push_back(breakdownTable(r, probe, s.json));
   return s;
 }
 

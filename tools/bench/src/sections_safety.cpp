@@ -193,13 +193,9 @@ std::string repeat(const std::string& s, std::size_t bytes) {
   return out;
 }
 
-}  // namespace
-
-Section safetySection(const AvrPaths& paths) {
-  Section s;
-  s.key = "safety";
-  const std::string rr = paths.elf("read_run"), gs = paths.elf("gather_store");
-
+// Table 6a: a hang in each image (main loop or sweep, interrupts on or off) and the time until
+// every ESC pulse wider than 1050 us has stopped.
+Table hangTable(const std::string& rr, const std::string& gs, Section& s) {
   Table stop("6a. Safety: a hang stops every ESC pulse wider than 1050 us (watchdog, simavr "
              "cycles; hang injected by patching the image's flash)",
              {"hang", "last pulse > 1050 us ends", "watchdog reset", "after the reset", "target",
@@ -241,7 +237,12 @@ Section safetySection(const AvrPaths& paths) {
   stop.addNote("a pulse in progress at the reset ends there: the chip releases every pin");
   s.targets.push_back({"6. time to stop every ESC pulse > 1050 us after a hang (worst of 4)",
                        ms(worst_stop), "<= 100 ms (required 150 ms)", all_ok});
+  return stop;
+}
 
+// Table 6b: read_run's frames, service() and loop passes under four kinds of input, at 50 and
+// 400 Hz.
+Table floodTable(const std::string& rr, Section& s) {
   Table loop("6b. Safety: read_run's loop under floods, four motors at 200 g (simavr; 2 s each)",
              {"input", "rate", "frames", "frame interval min..max", "jitter", "service() max gap",
               "runOnce() max gap", "target", "met?"});
@@ -293,6 +294,17 @@ Section safetySection(const AvrPaths& paths) {
   s.targets.push_back({"6. frames under a flood (4 inputs, 50 and 400 Hz)",
                        fmt::format("jitter {:.2f} ms at most", worst_jitter * 1000),
                        "at most 1 ms after their 1 ms tick", loop_ok});
+  return loop;
+}
+
+}  // namespace
+
+Section safetySection(const AvrPaths& paths) {
+  Section s;
+  s.key = "safety";
+  const std::string rr = paths.elf("read_run"), gs = paths.elf("gather_store");
+  Table stop = hangTable(rr, gs, s);
+  Table loop = floodTable(rr, s);
   s.json["available"] = true;
   s.tables.push_back(std::move(stop));
   s.tables.push_back(std::move(loop));
