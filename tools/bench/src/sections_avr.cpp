@@ -23,6 +23,13 @@ constexpr uint64_t kStaticSramTarget = 6144;  // 8 KB minus 2 KB for the stack
 constexpr int kLabelV2Frame = 1, kLabelV2Steady = 2, kLabelThesis = 3, kLabelThesisMedian = 4,
               kLabelV2Reading = 5;
 
+// A path as the docs show it: relative to the source tree when inside it (docs/results.md is
+// written from the JSON and must not name the machine it was measured on).
+std::string shown(const std::string& path) {
+  const std::string root = std::string(THRUSTCAL_SOURCE_DIR) + "/";
+  return path.rfind(root, 0) == 0 ? path.substr(root.size()) : path;
+}
+
 std::string probePath(const AvrPaths& paths) {
   return paths.probe_elf.empty() ? builtinProbePath() : paths.probe_elf;
 }
@@ -186,7 +193,7 @@ Section computeSection(const AvrPaths& paths) {
   t.addNote(fmt::format("probe: {} (core/ and read_run's slot storage built with avr-g++ -Os as in the AVR "
                         "tree, the thesis steps read through hal/avr's Eeprom), net of {} cycles of marker "
                         "overhead, {} frames each; the calls' argument setup is included",
-                        probe, r.overhead_cycles, th.count));
+                        shown(probe), r.overhead_cycles, th.count));
   t.addNote(fmt::format("V2Frame::fly is assembly on the AVR; on {} frames with insane readings, jumps, rate "
                         "changes, stops and saturation, bus readings from 3.0 to 26.0 V and a 5 g and a 5 kg "
                         "motor, it gave the same state as its portable C++: {}",
@@ -195,7 +202,7 @@ Section computeSection(const AvrPaths& paths) {
             "5's forceToPwmV2Frame (no sag prediction, 1295 cycles max) and includes the prediction");
   s.json["available"] = true;
   s.json["target_max_cycles"] = kCycleTarget;
-  s.json["probe_elf"] = probe;
+  s.json["probe_elf"] = shown(probe);
   s.json["assembly_vs_portable"] = {{"frames", checked}, {"mismatches", mismatches}};
   s.tables.push_back(std::move(t));
   s.tables.push_back(breakdownTable(r, probe, s.json));
@@ -214,7 +221,7 @@ Section footprintSection(const AvrPaths& paths) {
       t.addRow({std::string(image) + ".elf", "missing", "", "-", "-"});
       t.addNote(fmt::format("{} not found: build the AVR tree (cmake -DCMAKE_TOOLCHAIN_FILE="
                             "toolchain-avr.cmake; --target {}) or pass --avr-build DIR", elf, image));
-      s.json["images"][image] = {{"available", false}, {"elf", elf}};
+      s.json["images"][image] = {{"available", false}, {"elf", shown(elf)}};
       continue;
     }
     const SizeInfo z = avrSize(elf);
@@ -222,7 +229,7 @@ Section footprintSection(const AvrPaths& paths) {
     t.addRow({fmt::format("{} flash (.text + .data)", image), std::to_string(z.flash()), "262144", "-", "-"});
     t.addRow({fmt::format("{} static SRAM (.data + .bss)", image), std::to_string(z.sram()), "8192",
               fmt::format("<= {} (2 KB stack)", kStaticSramTarget), verdict(sram_met)});
-    s.json["images"][image] = {{"available", true}, {"elf", elf}, {"flash_bytes", z.flash()},
+    s.json["images"][image] = {{"available", true}, {"elf", shown(elf)}, {"flash_bytes", z.flash()},
                                {"sram_static_bytes", z.sram()}, {"text", z.text}, {"data", z.data},
                                {"bss", z.bss}, {"sram_static_target_bytes", kStaticSramTarget}};
     s.targets.push_back({fmt::format("3. static SRAM of {} (>= 2 KB left for the stack)", image),
