@@ -110,7 +110,7 @@ static bool flyBothSame(uint16_t mv, uint8_t extra) {
 // The whole measurement, in order: sizes, the thesis slots and frames, the v2 slots and frames,
 // then the assembly against the portable frame.
 // long: AVR code whose measured sections include the code around each call; split into
-// functions, the same calls measured up to 32 cycles more (register moves), so it stays one run
+// functions, the same calls measured longer (register moves around them), so it stays one run
 int main() {
   markStart(kEmpty);
   markEnd();
