@@ -11,7 +11,7 @@
 
 #include <fmt/format.h>
 
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "thrustcal/crc16.hpp"
 
 namespace board {
@@ -35,8 +35,8 @@ std::string readText(const std::string& path, const char* what) {
 // Parses Intel HEX twice with different fills: a byte the text gives reads the same both times.
 std::vector<bool> givenBytes(const std::string& text, std::size_t size, const std::string& origin,
                              std::vector<uint8_t>& bytes) {
-  bytes = sim::parseIntelHex(text, size, origin, 0xFF);
-  const std::vector<uint8_t> zero = sim::parseIntelHex(text, size, origin, 0x00);
+  bytes = hex::parseIntelHex(text, size, origin, 0xFF);
+  const std::vector<uint8_t> zero = hex::parseIntelHex(text, size, origin, 0x00);
   std::vector<bool> given(size);
   for (std::size_t i = 0; i < size; ++i) given[i] = bytes[i] == zero[i];
   return given;
@@ -265,7 +265,7 @@ EepromPutResult putEeprom(const std::string& port, const std::string& hex_path,
     std::string path;
     ~Remove() { std::remove(path.c_str()); }
   } remove{tmp};
-  sim::writeIntelHexFile(tmp, image);
+  hex::writeIntelHexFile(tmp, image);
   auto args = avrdudeArgs(port);
   args.push_back("-V");
   args.push_back("-U");

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <filesystem>
 
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 
 #include "lab/analysis.hpp"
 #include "lab/autopilot_export.hpp"
@@ -332,12 +332,12 @@ int runExport(const ExportArgs& a) {
   selectAndCheck(data, a.where, warnings);  // a force collapse is refused by exportModel
   if (a.motor >= 0) data = selectMotor(data, a.motor);
   const bool existed = std::filesystem::exists(a.eeprom);
-  std::vector<uint8_t> image = existed ? sim::readIntelHexFile(a.eeprom, kEepromBytes)
+  std::vector<uint8_t> image = existed ? hex::readIntelHexFile(a.eeprom, kEepromBytes)
                                        : std::vector<uint8_t>(kEepromBytes, 0xFF);
   const ExportResult r = exportModel(data, spec, static_cast<uint8_t>(a.slot), image, a.max_error_pct);
   if (r.write.status == tc::WriteV2Status::kWritten || !existed) {
     const std::string tmp = a.eeprom + ".tmp";
-    sim::writeIntelHexFile(tmp, image);
+    hex::writeIntelHexFile(tmp, image);
     std::filesystem::rename(tmp, a.eeprom);
   }
   for (const auto& n : data.notes) std::fprintf(stderr, "note: %s\n", n.c_str());

@@ -5,7 +5,8 @@
 // Mechanical: J dw/dt = Kt (I - I0) - Q_prop(w), J = rotor + propeller inertia,
 //   integrated linearly-implicitly (stable for any dt up to ~10 ms).
 // Speed time constant (small step around hover, 300 g, 11 V, kv1100_9x4.7):
-//   tau = J / (Kt Ke / R + dQ/dw) ~= 0.08 s (measured by the fidelity test; spec 0.05..0.12 s).
+//   tau = J / (Kt Ke / R + dQ/dw), which the fidelity test holds to the spec's 0.05..0.12 s
+//   (`thrustcal plant step` measures it).
 //   Spin-down is slower (no active braking: only propeller drag).
 // Thermal: winding temperature first-order, see MotorParams.
 //
