@@ -10,6 +10,7 @@
 #include <fstream>
 #include <memory>
 
+#include "sim/air_cli.hpp"
 #include "sim/board.hpp"
 #include "sim/intel_hex.hpp"
 #include "sim/pty_bridge.hpp"
@@ -282,7 +283,10 @@ void addConsole(CLI::App& sim) {
       "The simulated board on a pseudo-terminal: open the printed /dev/pts/N with\n"
       "'screen /dev/pts/N 115200' or 'picocom -b 115200 /dev/pts/N' and type as on the real\n"
       "board. gather_store gets the thesis bench (motor on the load cell), read_run the tethered\n"
-      "quad. Ctrl-C ends it and saves the EEPROM back to --eeprom.");
+      "quad. Ctrl-C ends it and saves the EEPROM back to --eeprom.\n"
+      "Any image: --imu mpu6050 puts an MPU-6050 on its I2C bus; --rig seesaw|gimbal an attitude\n"
+      "rig on its ESC outputs that the IMU measures, --log FILE its true attitude as it runs;\n"
+      "--fault KIND@T injects faults (docs/sim.md, \"The virtual airframe\").");
   auto elf = std::make_shared<std::string>(defaultElf("gather_store"));
   auto eeprom = std::make_shared<std::string>();
   auto rig = std::make_shared<std::string>("auto");
@@ -294,9 +298,12 @@ void addConsole(CLI::App& sim) {
   auto slot = std::make_shared<int>(0);
   cmd->add_option("--elf", *elf, "firmware ELF image")->capture_default_str();
   cmd->add_option("--eeprom", *eeprom, "Intel HEX EEPROM image (loaded if it exists, saved at exit)");
-  cmd->add_option("--rig", *rig, "bench, quad or auto (bench for gather_store, quad otherwise)")
-      ->check(CLI::IsMember({"auto", "bench", "quad"}))
+  cmd->add_option("--rig", *rig, "bench, quad, seesaw, gimbal or auto (bench for gather_store, quad "
+                                 "otherwise)")
+      ->check(CLI::IsMember({"auto", "bench", "quad", "seesaw", "gimbal"}))
       ->capture_default_str();
+  auto air = std::make_shared<AirCliOptions>();
+  addAirOptions(cmd, *air);
   cmd->add_option("--preset", *preset, "motor + propeller preset")->capture_default_str();
   cmd->add_option("--slot", *slot, "bench: the ESC output (0..3) the motor is wired to; select "
                                    "it with 'motor N' in gather_store")
@@ -319,8 +326,12 @@ void addConsole(CLI::App& sim) {
       const auto image = loadEepromOrErased(*eeprom, false);
       std::unique_ptr<BenchRig> bench;
       std::unique_ptr<QuadRig> quad;
+      std::unique_ptr<AirframeRig> airframe;
       Board* board = nullptr;
-      if (which == "bench") {
+      if (isAirRig(which)) {
+        airframe = makeAirframeRig(*elf, which, *preset, *seeds, *air);
+        board = &airframe->board();
+      } else if (which == "bench") {
         plant::BenchParams p = plant::BenchParams::thesis(*preset);
         p.actuator = motorForSeed(*preset, seeds->at(0), 0.03);
         bench = std::make_unique<BenchRig>(*elf, p, *slot);
@@ -334,6 +345,9 @@ void addConsole(CLI::App& sim) {
         board = &quad->board;
       }
       board->setEeprom(image);
+      std::unique_ptr<StillAirframe> still;
+      if (!airframe) still = std::make_unique<StillAirframe>(*board, which, *air);
+      if (airframe) fmt::print("rig: {}\n", airframe->describe());
       PtyBridge pty(*board);
       fmt::print("simulated board ({}, {} rig) on {}\n", fs::path(*elf).filename().string(), which,
                  pty.path());
@@ -352,6 +366,9 @@ void addConsole(CLI::App& sim) {
       fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {:.0f}x real "
                  "time)\n",
                  board->simulatedSeconds(), *speed, board->realtimeFactor());
+      for (const auto& f : airframe ? airframe->faultsApplied() : still->faultsApplied())
+        fmt::print("fault applied: {}\n", f);
+      if (!air->log.empty()) fmt::print("truth log: {}\n", air->log);
     });
   });
 }
@@ -544,6 +561,8 @@ void registerCommands(CLI::App& app) {
   addConsole(*sim);
   addBoard(*sim);
   addFleet(*sim);
+  addRunCommand(*sim);
+  addImuCommand(*sim);
 }
 
 }  // namespace sim
