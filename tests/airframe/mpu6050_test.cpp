@@ -178,14 +178,10 @@ TEST_P(Mpu6050Dlpf, RampLagsByTheDatasheetDelay) {
     return tr;
   };
   // when: 0.3 s of ramp (far past every filter's settling)
-  const double period = c.chip.tickPeriod_s();
-  const int ticks = static_cast<int>(std::lround(0.3 / period));
-  c.run(ticks);
-  // then: at the last accelerometer sample instant (the first tick after wake-up, then every
-  // 1 ms), truth - reading = slope * delay
-  const int per_accel = static_cast<int>(std::lround(1e-3 / period));
-  const double t = ((ticks - 1) / per_accel * per_accel + 1) * period;
-  const double gyro_lag_s = (-100.0 + gyro_slope * c.t_s - c.gyroX() / 131.0) / gyro_slope;
+  c.run(static_cast<int>(std::lround(0.3 / c.chip.tickPeriod_s())));
+  // then: at the instants the registers' samples were taken, truth - reading = slope * delay
+  const double tg = c.chip.lastLatch_s(), t = c.chip.lastAccelSample_s();
+  const double gyro_lag_s = (-100.0 + gyro_slope * tg - c.gyroX() / 131.0) / gyro_slope;
   const double accel_lag_s = (-0.8 + accel_slope * t - c.accel(0) / 16384.0) / accel_slope;
   EXPECT_NEAR(gyro_lag_s, Mpu6050::gyroDlpf(cfg).delay_s, 0.03e-3) << "gyro, DLPF_CFG " << cfg;
   EXPECT_NEAR(accel_lag_s, Mpu6050::accelDlpf(cfg).delay_s, 0.05e-3) << "accel, DLPF_CFG " << cfg;
@@ -217,12 +213,12 @@ TEST(Mpu6050, NoiseHasTheDatasheetDensityAtLowFrequency) {
   c.write(0x6B, 0x00);
   c.write(0x1A, 0x03);
   const int blocks = 400, per_block = 100;  // 0.1 s at 1 kHz
-  c.run(50);
+  c.run(400);
   double gsum2 = 0, asum2 = 0;
   for (int b = 0; b < blocks; ++b) {
     double g = 0, a = 0;
     for (int i = 0; i < per_block; ++i) {
-      c.run(1);
+      c.run(8);  // one 1 kHz sample
       g += c.gyroX() / 131.0;
       a += c.accel(1) / 16384.0;
     }

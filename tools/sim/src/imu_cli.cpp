@@ -42,11 +42,9 @@ struct Bench {
   double accel_g() const { return chip.reg16(Mpu6050::kAccelXoutH) / 8192.0; }
 };
 
-// Whether the last tick sampled the accelerometer (the first tick after wake-up, then every 1 ms).
-bool accelSampled(const Bench& b) {
-  const double period = b.chip.tickPeriod_s();
-  const long per_accel = std::lround(1e-3 / period);
-  return (std::lround(b.t_s / period) - 1) % per_accel == 0;
+// Whether the last tick put out a new sample of the sensor asked for.
+bool fresh(const Bench& b, bool gyro) {
+  return (gyro ? b.chip.lastLatch_s() : b.chip.lastAccelSample_s()) == b.t_s;
 }
 
 // Gain of the chain at f_hz: a sine fitted at the sample instants over whole periods.
@@ -63,7 +61,7 @@ double gainAt(int cfg, bool gyro, double f_hz) {
   int n = 0;
   while (b.t_s < settle_s + span_s) {
     b.tick();
-    if (!gyro && !accelSampled(b)) continue;  // it repeats between its 1 kHz samples
+    if (!fresh(b, gyro)) continue;  // between samples the registers repeat
     const double y = gyro ? b.gyro_dps() : b.accel_g();
     s += y * std::sin(w * b.t_s);
     c += y * std::cos(w * b.t_s);
@@ -90,11 +88,8 @@ double delayMs(int cfg, bool gyro) {
     (gyro ? tr.rate_dps[0] : tr.specific_force_g[0]) = -slope * 0.2 + slope * t;
     return tr;
   });
-  double sampled_t = 0;
-  while (b.t_s < 0.3) {
-    b.tick();
-    if (gyro || accelSampled(b)) sampled_t = b.t_s;
-  }
+  while (b.t_s < 0.3) b.tick();
+  const double sampled_t = gyro ? b.chip.lastLatch_s() : b.chip.lastAccelSample_s();
   const double y = gyro ? b.gyro_dps() : b.accel_g();
   return (-slope * 0.2 + slope * sampled_t - y) / slope * 1e3;
 }
@@ -105,7 +100,7 @@ double noiseRms(int cfg, bool gyro) {
   int n = 0;
   while (b.t_s < 2.0) {
     b.tick();
-    if (b.t_s < 0.1 || (!gyro && !accelSampled(b))) continue;
+    if (b.t_s < 0.1 || !fresh(b, gyro)) continue;
     const double y = gyro ? b.gyro_dps() : b.accel_g();
     sum2 += y * y;
     ++n;

@@ -102,12 +102,13 @@ void Mpu6050::powerOnReset() {
   was_asleep_ = true;
 }
 
-double Mpu6050::tickPeriod_s() const {
-  const int cfg = dlpfCfg();
-  return 1.0 / (cfg == 0 || cfg == 7 ? kFastGyroHz : kSampleHz);
-}
+double Mpu6050::tickPeriod_s() const { return 1.0 / kFastGyroHz; }
 
-double Mpu6050::sampleRate_hz() const { return 1.0 / tickPeriod_s() / (1.0 + regs_[kSmplrtDiv]); }
+bool Mpu6050::gyroFast() const { return dlpfCfg() == 0 || dlpfCfg() == 7; }
+
+double Mpu6050::sampleRate_hz() const {
+  return (gyroFast() ? kFastGyroHz : kSampleHz) / (1.0 + regs_[kSmplrtDiv]);
+}
 
 bool Mpu6050::asleep() const { return (regs_[kPwrMgmt1] & kSleepBit) != 0; }
 
@@ -141,18 +142,27 @@ void Mpu6050::tick(double t_s) {
   if (was_asleep_) {  // woken up: the filters start again from the signal
     for (auto& f : gyro_f_) f.primed = false;
     for (auto& f : accel_f_) f.primed = false;
+    tick_count_ = div_count_ = 0;
     was_asleep_ = false;
   }
   const ImuTruth t = truth_(t_s);
-  const double period = tickPeriod_s();
-  sampleGyro(t, period);
-  // The accelerometer runs at 1 kHz whatever the gyro does.
-  const uint32_t per_accel = static_cast<uint32_t>(std::lround(1.0 / kSampleHz / period));
-  if (tick_count_ % per_accel == 0) sampleAccel(t);
+  // The gyro is filtered at 8 kHz and put out at 8 kHz (DLPF_CFG 0, 7) or every 8th tick; the
+  // accelerometer is sampled and filtered at 1 kHz.
+  constexpr uint32_t kPerMs = static_cast<uint32_t>(kFastGyroHz / kSampleHz);
+  const bool slow_tick = tick_count_ % kPerMs == 0;
   ++tick_count_;
+  sampleGyro(t, tickPeriod_s());
+  if (slow_tick) {
+    sampleAccel(t);
+    last_accel_s_ = t_s;
+  }
+  if (!gyroFast() && !slow_tick) return;
   if (++div_count_ >= 1u + regs_[kSmplrtDiv]) {
     div_count_ = 0;
-    if (!frozen_) latch(t);
+    if (!frozen_) {
+      latch(t);
+      last_latch_s_ = t_s;
+    }
   }
 }
 

@@ -7,7 +7,8 @@
 //   - WHO_AM_I (0x75) 0x68; every other register 0 at power-up except PWR_MGMT_1 (0x6B) 0x40:
 //     asleep, and the data registers do not change while asleep; DEVICE_RESET (0x6B bit 7).
 //   - SMPLRT_DIV (0x19): data registers update at gyro output rate / (1 + div); the gyro output
-//     rate is 8 kHz with DLPF_CFG 0 or 7, else 1 kHz; the accelerometer is sampled at 1 kHz.
+//     rate is 8 kHz with DLPF_CFG 0 or 7, else 1 kHz (it is filtered at 8 kHz either way); the
+//     accelerometer is sampled and filtered at 1 kHz.
 //   - CONFIG (0x1A) DLPF_CFG: a low-pass with the datasheet's delay for each setting (a
 //     first-order low-pass at the table's bandwidth plus a delay line making up the table's
 //     delay; where the table's delay is shorter than that low-pass alone, the low-pass is
@@ -80,11 +81,16 @@ class Mpu6050 {
   Mpu6050(const Mpu6050Params& params, ImuTruthSource truth);
 
   // --- the internal sample clock ---
-  // Period of one tick: 1/8 ms while the gyro runs at 8 kHz (DLPF_CFG 0 or 7), else 1 ms.
+  // Period of one tick: 1/8 ms (the gyro is sampled and filtered at 8 kHz, the accelerometer
+  // every 8th tick).
   double tickPeriod_s() const;
   // One tick at simulated time t_s: samples the truth, filters it, and at the sample rate
   // updates the data registers (not while asleep or frozen).
   void tick(double t_s);
+  // When the data registers last took a sample, and when the accelerometer value in it was
+  // sampled (host side: what a reading is compared with).
+  double lastLatch_s() const { return last_latch_s_; }
+  double lastAccelSample_s() const { return last_accel_s_; }
 
   // --- I2C slave (called by the part for each bus message) ---
   bool i2cStart(uint8_t sla);            // SLA+R/W: true = ACK
@@ -116,7 +122,7 @@ class Mpu6050 {
   struct Filter {  // one axis: first-order low-pass, then a fractional delay line
     double y = 0;
     bool primed = false;
-    std::array<double, 8> past{};
+    std::array<double, 32> past{};
     int head = 0;
     double run(double x, double alpha, double delay_samples);
   };
@@ -128,6 +134,7 @@ class Mpu6050 {
   void latch(const ImuTruth& t);
   void refreshUserRegisters();
   int dlpfCfg() const { return regs_[kConfig] & 7; }
+  bool gyroFast() const;
 
   Mpu6050Params p_;
   ImuTruthSource truth_;
@@ -140,6 +147,7 @@ class Mpu6050 {
   uint32_t tick_count_ = 0;
   uint32_t div_count_ = 0;
   uint64_t updates_ = 0;
+  double last_latch_s_ = 0.0, last_accel_s_ = 0.0;
   bool was_asleep_ = true;
   // I2C transaction
   bool in_transaction_ = false;
