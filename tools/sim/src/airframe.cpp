@@ -85,15 +85,16 @@ void AirframeRig::advanceTo(double board_t_s) {
     double next = target;
     const bool fault_due = !pending_.empty() && pending_.front().at_s - t0_s_ <= target;
     if (fault_due) next = std::max(pending_.front().at_s - t0_s_, rig_->time_s());
-    const bool log_due = o_.log_period_s > 0 && next_log_s_ <= next;
-    if (log_due) next = std::max(next_log_s_, rig_->time_s());
+    const double next_log_s = static_cast<double>(log_rows_) * o_.log_period_s;
+    const bool log_due = o_.log_period_s > 0 && next_log_s <= next;
+    if (log_due) next = std::max(next_log_s, rig_->time_s());
     const double dt = next - rig_->time_s();
     if (dt > 1e-12) {
       rig_->step(dt);
       vsense_.step(dt, rig_->busVoltage_v());
     }
     if (log_due) {
-      next_log_s_ += o_.log_period_s;  // first: a listener that asks for the truth re-enters
+      ++log_rows_;  // first: a listener that asks for the truth re-enters
       logRow();
     } else if (fault_due) {
       const AirFault f = pending_.front();

@@ -129,7 +129,7 @@ class AirframeRig {
   double t0_s_ = 0.0;           // board time when the plant's clock was 0
   std::vector<AirFault> pending_;  // by time
   std::vector<std::string> applied_;
-  double next_log_s_ = 0.0;     // plant time of the next row
+  uint64_t log_rows_ = 0;       // rows so far: the next is due at log_rows_ * log_period_s
   std::vector<AirSample> samples_;
   std::function<void(const AirSample&)> sample_listener_;
 };
