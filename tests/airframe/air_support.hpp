@@ -20,7 +20,7 @@ inline sim::Mpu6050Params idealImu() {
   return p;
 }
 
-class ProbeBoard : public ::testing::Test {
+class TwiProbe : public ::testing::Test {
  protected:
   void SetUp() override {
     if (std::string(AIR_PROBE_ELF).empty()) GTEST_SKIP() << "avr-gcc not found: no air_probe image";

@@ -15,9 +15,9 @@
 
 namespace {
 
-using air::ProbeBoard;
+using air::TwiProbe;
 
-TEST_F(ProbeBoard, PolledRegisterReadShowsTheChipsStatusSequence) {
+TEST_F(TwiProbe, PolledRegisterReadShowsTheChipsStatusSequence) {
   // given: the IMU awake
   wake();
   // when: WHO_AM_I is read the way a polled driver does (START, SLA+W, register, repeated
@@ -30,7 +30,7 @@ TEST_F(ProbeBoard, PolledRegisterReadShowsTheChipsStatusSequence) {
   EXPECT_GT(spins, 0) << "TWINT read as set right after it was cleared (simavr 1.6's bug)";
 }
 
-TEST_F(ProbeBoard, BurstReadAcknowledgesEveryByteButTheLast) {
+TEST_F(TwiProbe, BurstReadAcknowledgesEveryByteButTheLast) {
   wake();
   const auto r = command("rd 59 14");
   std::string expected = "st 08 18 28 10 40";
@@ -39,7 +39,7 @@ TEST_F(ProbeBoard, BurstReadAcknowledgesEveryByteButTheLast) {
   EXPECT_EQ(r.at(0).rfind(expected, 0), 0u) << r.at(0);
 }
 
-TEST_F(ProbeBoard, InterruptDrivenReadSeesTheSameSequenceFromTheTwiVector) {
+TEST_F(TwiProbe, InterruptDrivenReadSeesTheSameSequenceFromTheTwiVector) {
   wake();
   const auto r = command("ri 117 2");
   ASSERT_FALSE(r.empty());
@@ -47,18 +47,18 @@ TEST_F(ProbeBoard, InterruptDrivenReadSeesTheSameSequenceFromTheTwiVector) {
       << r[0];
 }
 
-TEST_F(ProbeBoard, AnAbsentSlaveNacksItsAddressWith0x20) {
+TEST_F(TwiProbe, AnAbsentSlaveNacksItsAddressWith0x20) {
   command("addr 105");
   const auto r = command("rd 117 1");
   EXPECT_EQ(r.at(0).rfind("st 08 20 cyc", 0), 0u) << r.at(0);
 }
 
-TEST_F(ProbeBoard, WritingTwdrWhileAByteShiftsSetsTwwc) {
+TEST_F(TwiProbe, WritingTwdrWhileAByteShiftsSetsTwwc) {
   const auto r = command("wc");
   EXPECT_EQ(r.at(0), "twwc 1");
 }
 
-TEST_F(ProbeBoard, WritesReachTheImuAndReadBack) {
+TEST_F(TwiProbe, WritesReachTheImuAndReadBack) {
   wake();
   command("wr 27 24");  // GYRO_CONFIG: FS_SEL 3 (+-2000 deg/s)
   EXPECT_EQ(imu->chip().reg(0x1B), 24);
@@ -72,7 +72,7 @@ struct RateCase {
   uint64_t bit_cycles;  // 16 + 2 TWBR 4^TWPS (datasheet 24.5.2)
 };
 
-class TwiTiming : public ProbeBoard, public ::testing::WithParamInterface<RateCase> {};
+class TwiTiming : public TwiProbe, public ::testing::WithParamInterface<RateCase> {};
 
 TEST_P(TwiTiming, EveryByteTakesNineBitsOf16Plus2TwbrTimes4PowTwps) {
   // given
