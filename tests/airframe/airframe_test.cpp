@@ -85,6 +85,7 @@ TEST_F(Airframe, TheImuMeasuresTheRigsRateAndGravity) {
   const auto v = imu();
   // then: its gyro x is the rig's roll rate (within the DLPF's 1 ms and an LSB) and its
   // accelerometer sees gravity through the tilt
+  EXPECT_NEAR(t.t_s, rig->board().timeS() - 0.004, 0.004);  // on the board's clock
   EXPECT_GT(t.rate_dps[0], 2.0);
   EXPECT_NEAR(v[4] / kLsbPerDps, t.rate_dps[0], 0.02);
   EXPECT_NEAR(v[1] / 16384.0, std::sin(t.roll_deg * M_PI / 180), 1.5 / 16384);

@@ -75,7 +75,9 @@ plant::Gimbal* AirframeRig::gimbal() { return dynamic_cast<plant::Gimbal*>(rig_.
 
 plant::RigTruth AirframeRig::truth() {
   advanceTo(board_.timeS());
-  return rig_->truth();
+  plant::RigTruth t = rig_->truth();
+  t.t_s += t0_s_;  // the board's clock
+  return t;
 }
 
 void AirframeRig::advanceTo(double board_t_s) {

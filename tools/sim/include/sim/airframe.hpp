@@ -96,7 +96,7 @@ class AirframeRig {
   const AirframeOptions& options() const { return o_; }
 
   void run(double seconds) { board_.runFor(seconds); }
-  // The rig's true state now (the plant advanced to the board's time).
+  // The rig's true state now (the plant advanced to the board's time; t_s on the board's clock).
   plant::RigTruth truth();
 
   // Adds a fault (it happens when simulated time reaches its at_s; at once if that is past).
