@@ -79,34 +79,38 @@ TEST_P(TwiTiming, EveryByteTakesNineBitsOf16Plus2TwbrTimes4PowTwps) {
   const RateCase c = GetParam();
   wake();
   command(fmt::format("rate {} {}", c.twbr, c.twps));
-  board->twi().setTracing(true);
-  // when: a 14-byte burst, polled
-  const auto r = command("rd 59 14");
-  // then: each operation lasts one bit (conditions) or nine (a byte and its acknowledge)
   ASSERT_EQ(board->twi().bitCycles(), c.bit_cycles);
-  const auto& trace = board->twi().trace();
-  int bytes = 0, conditions = 0;
-  for (std::size_t i = 0; i + 1 < trace.size(); ++i) {
-    if (trace[i].what != sim::TwiEvent::What::kOpStart) continue;
-    ASSERT_EQ(trace[i + 1].what, sim::TwiEvent::What::kStatus);
-    const uint64_t took = trace[i + 1].cycle - trace[i].cycle;
-    const auto op = static_cast<sim::TwiOp>(trace[i].value);
-    const bool byte = op == sim::TwiOp::kAddress || op == sim::TwiOp::kWrite || op == sim::TwiOp::kRead;
-    EXPECT_EQ(took, (byte ? 9 : 1) * c.bit_cycles) << "operation " << i;
-    (byte ? bytes : conditions) += 1;
+  for (const char* driver : {"rd", "ri"}) {  // polled, interrupt-driven
+    SCOPED_TRACE(driver);
+    board->twi().clearTrace();
+    board->twi().setTracing(true);
+    // when: a 14-byte burst
+    const auto r = command(fmt::format("{} 59 14", driver));
+    board->twi().setTracing(false);
+    // then: each operation lasts one bit (conditions) or nine (a byte and its acknowledge)
+    const auto& trace = board->twi().trace();
+    int bytes = 0, conditions = 0;
+    for (std::size_t i = 0; i + 1 < trace.size(); ++i) {
+      if (trace[i].what != sim::TwiEvent::What::kOpStart) continue;
+      ASSERT_EQ(trace[i + 1].what, sim::TwiEvent::What::kStatus);
+      const uint64_t took = trace[i + 1].cycle - trace[i].cycle;
+      const auto op = static_cast<sim::TwiOp>(trace[i].value);
+      const bool byte = op == sim::TwiOp::kAddress || op == sim::TwiOp::kWrite || op == sim::TwiOp::kRead;
+      EXPECT_EQ(took, (byte ? 9 : 1) * c.bit_cycles) << "operation " << i;
+      (byte ? bytes : conditions) += 1;
+    }
+    EXPECT_EQ(bytes, 2 + 1 + 14);  // SLA+W, register, SLA+R, 14 data bytes
+    EXPECT_EQ(conditions, 3);      // START, repeated START, STOP
+    // and the firmware's own count: the bus time plus a little software per operation
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(r.at(0), m, std::regex(R"(cyc (\d+))")));
+    const uint64_t bus = (17 * 9 + 3) * c.bit_cycles;
+    const uint64_t measured = std::stoull(m[1]);
+    EXPECT_GE(measured, bus);
+    EXPECT_LE(measured, bus + 20 * 120) << "software overhead per operation too large";
+    std::printf("14-byte burst (%s) at TWBR %d TWPS %d: %llu cycles (bus alone %llu)\n", driver, c.twbr,
+                c.twps, static_cast<unsigned long long>(measured), static_cast<unsigned long long>(bus));
   }
-  EXPECT_EQ(bytes, 2 + 1 + 14);    // SLA+W, register, SLA+R, 14 data bytes
-  EXPECT_EQ(conditions, 3);        // START, repeated START, STOP
-  // and the firmware's own count: the bus time plus a little software per byte
-  std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.at(0), m, std::regex(R"(cyc (\d+))")));
-  const uint64_t bus = (17 * 9 + 3) * c.bit_cycles;
-  const uint64_t measured = std::stoull(m[1]);
-  EXPECT_GE(measured, bus);
-  EXPECT_LE(measured, bus + 20 * 120) << "software overhead per operation too large";
-  RecordProperty("burst_cycles", std::to_string(measured));
-  std::printf("14-byte burst at TWBR %d TWPS %d: %llu cycles (bus alone %llu)\n", c.twbr, c.twps,
-              static_cast<unsigned long long>(measured), static_cast<unsigned long long>(bus));
 }
 
 INSTANTIATE_TEST_SUITE_P(Datasheet, TwiTiming,

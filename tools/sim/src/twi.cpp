@@ -251,16 +251,17 @@ void Twi::beginStop() {
   begin(TwiOp::kStop, bitCycles(), kNoState);
 }
 
-uint64_t Twi::onOpDone(avr_t*, uint64_t, void* param) {
-  static_cast<Twi*>(param)->finish();
+uint64_t Twi::onOpDone(avr_t*, uint64_t when, void* param) {
+  static_cast<Twi*>(param)->finish(when);
   return 0;
 }
 
-void Twi::finish() {
+void Twi::finish(uint64_t when) {
   busy_ = false;
   reg(kTwsr) = static_cast<uint8_t>(op_status_ | (reg(kTwsr) & kTwpsMask));
   avr_raise_irq(irq_ + TWI_IRQ_STATUS, op_status_);
-  record(TwiEvent::What::kStatus, op_status_);
+  // The cycle it was due (simavr runs the timer at the next instruction boundary).
+  if (tracing_) trace_.push_back(TwiEvent{when, TwiEvent::What::kStatus, op_status_});
   if (op_ == TwiOp::kStop) {
     // TWSTO clears itself; no TWINT. A held-low SDA makes no STOP: the bus stays busy.
     master_ = false;

@@ -94,7 +94,7 @@ class Twi {
   void beginStart();
   void beginByte();
   void beginStop();
-  void finish();
+  void finish(uint64_t when);
   void busFreed();
   void raiseLevelInterrupt();
   void toSlaves(uint8_t msg, uint8_t addr, uint8_t data);
