@@ -13,6 +13,7 @@
 #include <string>
 
 #include "air_support.hpp"
+#include "sim/air_cli.hpp"
 #include "sim/airframe.hpp"
 #include "sim/twi.hpp"
 
@@ -297,6 +298,35 @@ TEST_F(Airframe, AFaultOnAMotorTheRigLacksIsRefusedAtOnce) {
   auto o = options(sim::AirRig::kSeesaw);
   o.faults = {sim::parseAirFault("motor-dead:3@1")};
   EXPECT_THROW(make(o), std::invalid_argument);
+}
+
+TEST_F(Airframe, ABoardWithoutARigGetsTheStillImuAndItsFaultsAtTheirCycle) {
+  // given: `sim run/console --rig none|bench|quad --imu mpu6050 --fault ...`
+  sim::Board board(AIR_PROBE_ELF);
+  sim::AirCliOptions o;
+  o.imu = "mpu6050";
+  o.imu_ideal = true;
+  o.faults = {"imu-nack@0.1", "sda-low@0.2"};
+  sim::StillAirframe still(board, "none", o);
+  sim::Console c(board, "a> ");
+  c.waitPrompt(0.1);
+  c.command("wr 107 0");
+  board.runFor(0.05);
+  EXPECT_EQ(c.command("imu").at(0), "imu 0 0 16384 -3920 0 0 0");  // level, 25 C
+  board.runFor(0.1);
+  EXPECT_EQ(c.command("rd 117 1").at(0).rfind("st 08 20", 0), 0u);
+  board.runFor(0.1);
+  EXPECT_EQ(c.command("pins").at(0), "pins 0 1");
+  ASSERT_EQ(still.faultsApplied().size(), 2u);
+  EXPECT_EQ(still.faultsApplied()[1], "t=0.2000 s sda-low@0.2");
+  // and a rig-only option is refused with what to do
+  o.log = "x.csv";
+  try {
+    sim::StillAirframe refused(board, "quad", o);
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("use --rig seesaw or gimbal"), std::string::npos) << e.what();
+  }
 }
 
 std::string shell(const std::string& command, int& status) {
