@@ -55,16 +55,16 @@ Plausibility checkCurve(ForceCurveBase& c, uint8_t which, const RecordLimits& li
     return fail(Implausible::kVoltage, PlausibilityUnit::kMv, c.start_mv, kPackMinMv, limits.maxMv(), which);
   const uint16_t grams = c.maxGrams();
   const int32_t p1 = c.pwm_at_1g_us;
-  if (outside(p1, kEscMinPulseUs, kEscMaxPulseUs))
-    return fail(Implausible::kPwmRange, PlausibilityUnit::kUs, p1, kEscMinPulseUs, kEscMaxPulseUs, which);
+  if (outside(p1, kThrottleMinUs, kThrottleMaxUs))
+    return fail(Implausible::kPwmRange, PlausibilityUnit::kUs, p1, kThrottleMinUs, kThrottleMaxUs, which);
   const int32_t pmax = c.pwmForGrams(grams);
-  if (pmax > kEscMaxPulseUs)
-    return fail(Implausible::kPwmRange, PlausibilityUnit::kUs, pmax, kEscMinPulseUs, kEscMaxPulseUs, which);
+  if (pmax > kThrottleMaxUs)
+    return fail(Implausible::kPwmRange, PlausibilityUnit::kUs, pmax, kThrottleMinUs, kThrottleMaxUs, which);
   if (grams < kRecordMinForceG)
     return fail(Implausible::kForceSpan, PlausibilityUnit::kG, grams, kRecordMinForceG, kRecordMaxForceG, which);
   const int32_t need = grams / kMaxGramsPerUs > kMinCurveSpanUs ? grams / kMaxGramsPerUs : kMinCurveSpanUs;
   if (pmax - p1 < need)
-    return fail(Implausible::kFlat, PlausibilityUnit::kUs, pmax - p1, need, kEscMaxPulseUs - kEscMinPulseUs, which);
+    return fail(Implausible::kFlat, PlausibilityUnit::kUs, pmax - p1, need, kThrottleMaxUs - kThrottleMinUs, which);
   return Plausibility();
 }
 
@@ -80,9 +80,9 @@ Plausibility checkCalibration(MotorCalibration& cal, const RecordLimits& limits)
   Plausibility p = checkCurve(cal.first, 1, limits);
   if (!p.ok()) return p;
   const SagTable& sag = cal.sag;
-  if (outside(sag.base_pwm_us, kEscMinPulseUs, kEscMaxPulseUs - 1))
-    return fail(Implausible::kSagBase, PlausibilityUnit::kUs, sag.base_pwm_us, kEscMinPulseUs,
-                kEscMaxPulseUs - 1);
+  if (outside(sag.base_pwm_us, kThrottleMinUs, kThrottleMaxUs - 1))
+    return fail(Implausible::kSagBase, PlausibilityUnit::kUs, sag.base_pwm_us, kThrottleMinUs,
+                kThrottleMaxUs - 1);
   if (sag.offset_mv[0] != 0) return malformed(1);
   const int32_t most_mv = static_cast<int32_t>(cal.first.start_mv) * kMaxSagPercent / 100;
   for (uint8_t i = 1; i < kSagBins; ++i) {
@@ -147,8 +147,8 @@ Plausibility checkModelV2(const ModelV2& m, const RecordLimits& limits) {
                            static_cast<uint32_t>(m.sag_10mv[last]) * kV2SagUnitMv;
   const uint32_t duty_q4 = (final_drive * kDriveUnitUsMv * 16u + best_mv / 2) / best_mv;
   const int32_t pwm_us = static_cast<int32_t>((m.start_q4_us + duty_q4 + 8) >> 4);
-  if (pwm_us > kEscMaxPulseUs + kPwmToleranceUs)
-    return fail(Implausible::kPwmRange, PlausibilityUnit::kUs, pwm_us, start_us, kEscMaxPulseUs, 0,
+  if (pwm_us > kThrottleMaxUs + kPwmToleranceUs)
+    return fail(Implausible::kPwmRange, PlausibilityUnit::kUs, pwm_us, start_us, kThrottleMaxUs, 0,
                 static_cast<int8_t>(last));
   return Plausibility();
 }

@@ -3,12 +3,6 @@
 
 #include "hal/hal.hpp"
 
-#ifdef __AVR__
-#include <avr/pgmspace.h>
-#define TC_READ_PROGMEM_BYTE(p) pgm_read_byte(p)
-#else
-#define TC_READ_PROGMEM_BYTE(p) (*(p))
-#endif
 
 namespace fw {
 
@@ -98,44 +92,44 @@ LineEvent LineReader::endLine() {
 LineEvent LineReader::rejectLine(Reject why) {
   reject_ = why;
   if (rejected_ != 0xFFFF) ++rejected_;
-  hal::Uart::printP(TC_PSTR("error: "));
+  hal::Uart::printP(TC_FLASH_TEXT("error: "));
   switch (why) {
     case Reject::kDamaged:
-      hal::Uart::printP(TC_PSTR("line damaged in transit (bytes lost or garbled: receive "
+      hal::Uart::printP(TC_FLASH_TEXT("line damaged in transit (bytes lost or garbled: receive "
                                 "overflow, framing or parity error)"));
       break;
     case Reject::kNotText:
-      hal::Uart::printP(TC_PSTR("byte 0x"));
+      hal::Uart::printP(TC_FLASH_TEXT("byte 0x"));
       printHex2(bad_byte_);
-      hal::Uart::printP(TC_PSTR(" at column "));
+      hal::Uart::printP(TC_FLASH_TEXT(" at column "));
       printUint(bad_column_);
-      hal::Uart::printP(TC_PSTR(" is not text (noise on the line?)"));
+      hal::Uart::printP(TC_FLASH_TEXT(" is not text (noise on the line?)"));
       break;
     case Reject::kTooLong:
-      hal::Uart::printP(TC_PSTR("line longer than "));
+      hal::Uart::printP(TC_FLASH_TEXT("line longer than "));
       printUint(kLineMax);
-      hal::Uart::printP(TC_PSTR(" characters"));
+      hal::Uart::printP(TC_FLASH_TEXT(" characters"));
       break;
     case Reject::kBadChecksum:
-      hal::Uart::printP(TC_PSTR("checksum *"));
+      hal::Uart::printP(TC_FLASH_TEXT("checksum *"));
       printHex2(given_sum_);
-      hal::Uart::printP(TC_PSTR(" does not match the line (*"));
+      hal::Uart::printP(TC_FLASH_TEXT(" does not match the line (*"));
       printHex2(wanted_sum_);
       hal::Uart::write(')');
       break;
     case Reject::kMalformedChecksum:
-      hal::Uart::printP(TC_PSTR("'*' must end the line with two hex digits (checksum *HH)"));
+      hal::Uart::printP(TC_FLASH_TEXT("'*' must end the line with two hex digits (checksum *HH)"));
       break;
     case Reject::kAbortedRest:
-      hal::Uart::printP(TC_PSTR("ignored the rest of the line whose first key aborted ("));
+      hal::Uart::printP(TC_FLASH_TEXT("ignored the rest of the line whose first key aborted ("));
       printUint(length_);
-      hal::Uart::printP(TC_PSTR(" characters)"));
+      hal::Uart::printP(TC_FLASH_TEXT(" characters)"));
       length_ = 0;
       break;
     case Reject::kNone:
       break;
   }
-  hal::Uart::printP(TC_PSTR(", ignored; nothing changed"));
+  hal::Uart::printP(TC_FLASH_TEXT(", ignored; nothing changed"));
   newline();
   buffer_[0] = '\0';
   return LineEvent::kRejected;
@@ -197,9 +191,9 @@ void LineReader::setStrict(bool on) {
 
 void LineReader::strictCommand(bool on) {
   setStrict(on);
-  hal::Uart::printP(on ? TC_PSTR("strict on: commands that spin a motor or write the EEPROM need "
+  hal::Uart::printP(on ? TC_FLASH_TEXT("strict on: commands that spin a motor or write the EEPROM need "
                                  "a checksum (*HH)")
-                       : TC_PSTR("strict off: checksums optional"));
+                       : TC_FLASH_TEXT("strict off: checksums optional"));
   newline();
 }
 
@@ -247,7 +241,7 @@ bool parseInt(const char* token, int32_t min, int32_t max, int32_t& value) {
 
 bool equalsP(const char* ram, const char* progmem) {
   for (;; ++ram, ++progmem) {
-    const char expected = static_cast<char>(TC_READ_PROGMEM_BYTE(progmem));
+    const char expected = static_cast<char>(tc::flashByte(progmem));
     if (*ram != expected) return false;
     if (expected == '\0') return true;
   }
@@ -298,44 +292,44 @@ void printHex2(uint8_t value) {
 
 void printResetCause() {
   const uint8_t flags = hal::Watchdog::resetFlags();
-  hal::Uart::printP(TC_PSTR("reset: "));
+  hal::Uart::printP(TC_FLASH_TEXT("reset: "));
   if ((flags & 0x1F) == 0) {  // a bootloader cleared MCUSR
     hal::Uart::printP((flags & hal::Watchdog::kWasRunning)
-                          ? TC_PSTR("watchdog or external while running (a bootloader cleared "
+                          ? TC_FLASH_TEXT("watchdog or external while running (a bootloader cleared "
                                     "the reset flags)")
-                          : TC_PSTR("power-on or external (a bootloader cleared the reset flags)"));
+                          : TC_FLASH_TEXT("power-on or external (a bootloader cleared the reset flags)"));
     newline();
     return;
   }
   bool first = true;
   auto word = [&](uint8_t bit, const char* text) {
     if ((flags & bit) == 0) return;
-    if (!first) hal::Uart::printP(TC_PSTR(", "));
+    if (!first) hal::Uart::printP(TC_FLASH_TEXT(", "));
     hal::Uart::printP(text);
     first = false;
   };
-  word(hal::Watchdog::kWatchdog, TC_PSTR("watchdog"));
-  word(hal::Watchdog::kBrownOut, TC_PSTR("brown-out"));
-  word(hal::Watchdog::kExternal, TC_PSTR("external"));
-  word(hal::Watchdog::kPowerOn, TC_PSTR("power-on"));
-  word(hal::Watchdog::kJtag, TC_PSTR("JTAG"));
+  word(hal::Watchdog::kWatchdog, TC_FLASH_TEXT("watchdog"));
+  word(hal::Watchdog::kBrownOut, TC_FLASH_TEXT("brown-out"));
+  word(hal::Watchdog::kExternal, TC_FLASH_TEXT("external"));
+  word(hal::Watchdog::kPowerOn, TC_FLASH_TEXT("power-on"));
+  word(hal::Watchdog::kJtag, TC_FLASH_TEXT("JTAG"));
   if (flags & hal::Watchdog::kWatchdog) {
-    hal::Uart::printP(TC_PSTR(" (the program hung; motors were stopped)"));
+    hal::Uart::printP(TC_FLASH_TEXT(" (the program hung; motors were stopped)"));
   } else if (flags & hal::Watchdog::kBrownOut) {
-    hal::Uart::printP(TC_PSTR(" (the supply dipped; check the 5 V supply)"));
+    hal::Uart::printP(TC_FLASH_TEXT(" (the supply dipped; check the 5 V supply)"));
   }
   newline();
 }
 
 void printHealth(const LineReader& reader, void (*yield)()) {
-  hal::Uart::printP(TC_PSTR("stack: "));
+  hal::Uart::printP(TC_FLASH_TEXT("stack: "));
   printUint(hal::Stack::untouchedBytes(yield));
-  hal::Uart::printP(TC_PSTR(" of "));
+  hal::Uart::printP(TC_FLASH_TEXT(" of "));
   printUint(hal::Stack::sizeBytes());
-  hal::Uart::printP(reader.strict() ? TC_PSTR(" bytes never used; strict on; ")
-                                    : TC_PSTR(" bytes never used; strict off; "));
+  hal::Uart::printP(reader.strict() ? TC_FLASH_TEXT(" bytes never used; strict on; ")
+                                    : TC_FLASH_TEXT(" bytes never used; strict off; "));
   printUint(reader.rejectedLines());
-  hal::Uart::printP(TC_PSTR(" lines rejected"));
+  hal::Uart::printP(TC_FLASH_TEXT(" lines rejected"));
   newline();
 }
 
@@ -353,33 +347,27 @@ void sayLine(const char* progmem_text) {
 
 void sayVolts(uint16_t mv) {
   printFixed(mv, 3);
-  say(TC_PSTR(" V"));
+  say(TC_FLASH_TEXT(" V"));
 }
 
-void sayCopy(uint8_t copy) { say(copy == 0 ? TC_PSTR("copy A") : TC_PSTR("copy B")); }
+void sayCopy(uint8_t copy) { say(copy == 0 ? TC_FLASH_TEXT("copy A") : TC_FLASH_TEXT("copy B")); }
 
 // A flash copy of the board's ESC table (indexing hal::kEscPins at run time would put it in
 // SRAM on the AVR).
 static_assert(hal::kEscChannels == 4, "one entry per ESC channel");
-#ifdef __AVR__
-const hal::EscPin kEscPinsFlash[] PROGMEM = {hal::kEscPins[0], hal::kEscPins[1], hal::kEscPins[2],
-                                             hal::kEscPins[3]};
-#endif
+const hal::EscPin kEscPinsFlash[] TC_FLASH = {hal::kEscPins[0], hal::kEscPins[1], hal::kEscPins[2],
+                                              hal::kEscPins[3]};
 
 void printEscPin(uint8_t channel) {
   if (channel >= hal::kEscChannels) return;
-#ifdef __AVR__
   hal::EscPin pin;
-  memcpy_P(&pin, &kEscPinsFlash[channel], sizeof pin);
-#else
-  const hal::EscPin& pin = hal::kEscPins[channel];
-#endif
+  tc::flashCopy(&pin, &kEscPinsFlash[channel], sizeof pin);
   hal::Uart::write('D');
   printUint(pin.arduino_pin);
-  hal::Uart::printP(TC_PSTR(" (P"));
+  hal::Uart::printP(TC_FLASH_TEXT(" (P"));
   hal::Uart::write(static_cast<uint8_t>(pin.port));
   hal::Uart::write(static_cast<uint8_t>('0' + pin.bit));
-  hal::Uart::printP(TC_PSTR(", OC"));
+  hal::Uart::printP(TC_FLASH_TEXT(", OC"));
   hal::Uart::write(static_cast<uint8_t>('0' + pin.timer));
   hal::Uart::write(static_cast<uint8_t>(pin.compare));
   hal::Uart::write(')');

@@ -19,6 +19,8 @@
 #pragma once
 #include <stdint.h>
 
+#include "thrustcal/flash_text.hpp"
+
 namespace fw {
 
 constexpr uint8_t kLineMax = 48;  // characters per command line, without terminator
@@ -102,7 +104,7 @@ uint8_t tokenize(char* line, char** tokens, uint8_t max_tokens);
 // empty token, a stray character, or out of range.
 bool parseInt(const char* token, int32_t min, int32_t max, int32_t& value);
 
-// Case-sensitive string equality (RAM vs PROGMEM literal made with TC_PSTR).
+// Case-sensitive string equality (RAM vs flash text made with TC_FLASH_TEXT).
 bool equalsP(const char* ram, const char* progmem);
 
 // Printing on hal::Uart.
@@ -114,7 +116,7 @@ void printFixed(int32_t value, uint8_t decimals);
 void printHex2(uint8_t value);  // two upper-case hex digits
 void newline();  // "\r\n"
 // The print helpers both apps' console views use (one copy, here).
-void say(const char* progmem_text);      // a PROGMEM literal (TC_PSTR), no line end
+void say(const char* progmem_text);      // a flash text (TC_FLASH_TEXT), no line end
 void sayLine(const char* progmem_text);  // the same and "\r\n"
 void sayVolts(uint16_t mv);              // 11350 -> "11.350 V"
 void sayCopy(uint8_t copy);              // 0 -> "copy A", 1 -> "copy B" (v2 record copies)

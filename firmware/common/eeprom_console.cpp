@@ -34,7 +34,7 @@ void printHex16(uint16_t value) {
 
 void eepromCrc() {
   uint16_t all = 0xFFFF;
-  hal::Uart::printP(TC_PSTR("eeprom crc"));
+  hal::Uart::printP(TC_FLASH_TEXT("eeprom crc"));
   for (uint8_t slot = 0; slot < kSlots; ++slot) {
     uint16_t crc = 0xFFFF;
     const uint16_t base = static_cast<uint16_t>(slot * kSlotBytes);
@@ -43,12 +43,12 @@ void eepromCrc() {
       crc = tc::crc16Update(crc, byte);
       all = tc::crc16Update(all, byte);
     }
-    hal::Uart::printP(TC_PSTR(" slot"));
+    hal::Uart::printP(TC_FLASH_TEXT(" slot"));
     printUint(slot);
     hal::Uart::write(' ');
     printHex16(crc);
   }
-  hal::Uart::printP(TC_PSTR(" all "));
+  hal::Uart::printP(TC_FLASH_TEXT(" all "));
   printHex16(all);
   newline();
 }
@@ -70,7 +70,7 @@ void eepromDump(void (*between_records)()) {
     newline();
     if (between_records != nullptr) between_records();
   }
-  hal::Uart::printP(TC_PSTR(":00000001FF"));
+  hal::Uart::printP(TC_FLASH_TEXT(":00000001FF"));
   newline();
 }
 

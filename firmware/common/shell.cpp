@@ -12,17 +12,9 @@ namespace {
 
 constexpr uint8_t kHelpColumn = 15;  // help text starts here ("f N G" + spaces)
 
-uint8_t progmemByte(const char* p) {
-#ifdef __AVR__
-  return pgm_read_byte(p);
-#else
-  return static_cast<uint8_t>(*p);
-#endif
-}
-
 uint8_t lengthP(const char* p) {
   uint8_t n = 0;
-  while (progmemByte(p + n) != 0) ++n;
+  while (tc::flashByte(p + n) != 0) ++n;
   return n;
 }
 
@@ -41,7 +33,7 @@ int8_t wordIndex(const char* words, const char* token) {
   for (;;) {
     const char* t = token;
     for (;;) {
-      const uint8_t c = progmemByte(p);
+      const uint8_t c = tc::flashByte(p);
       if (c == '|' || c == 0) {
         if (*t == '\0') return index;
         break;
@@ -50,8 +42,8 @@ int8_t wordIndex(const char* words, const char* token) {
       ++p;
       ++t;
     }
-    while (progmemByte(p) != '|' && progmemByte(p) != 0) ++p;  // rest of this word
-    if (progmemByte(p) == 0) return -1;
+    while (tc::flashByte(p) != '|' && tc::flashByte(p) != 0) ++p;  // rest of this word
+    if (tc::flashByte(p) == 0) return -1;
     ++p;
     ++index;
   }
@@ -69,18 +61,18 @@ bool parseArg(const ArgSpec& arg, const char* token, int32_t& value) {
 
 // "G must be 0..500, got "900"" or "expected on|off, got "x"".
 void sayArgError(const ArgSpec& arg, const char* token) {
-  hal::Uart::printP(TC_PSTR("error: "));
+  hal::Uart::printP(TC_FLASH_TEXT("error: "));
   if (arg.words != nullptr) {
-    hal::Uart::printP(TC_PSTR("expected "));
+    hal::Uart::printP(TC_FLASH_TEXT("expected "));
     hal::Uart::printP(arg.words);
   } else {
     hal::Uart::printP(arg.name);
-    hal::Uart::printP(TC_PSTR(" must be a whole number "));
+    hal::Uart::printP(TC_FLASH_TEXT(" must be a whole number "));
     printInt(arg.min);
-    hal::Uart::printP(TC_PSTR(".."));
+    hal::Uart::printP(TC_FLASH_TEXT(".."));
     printInt(arg.max);
   }
-  hal::Uart::printP(TC_PSTR(", got \""));
+  hal::Uart::printP(TC_FLASH_TEXT(", got \""));
   hal::Uart::print(token);
   hal::Uart::write('"');
   newline();
@@ -105,13 +97,13 @@ uint8_t printUsage(const CommandSpec& spec) {
 }
 
 void sayUsage(const void* table, uint8_t rows, size_t stride, const char* name) {
-  hal::Uart::printP(TC_PSTR("error: usage: "));
+  hal::Uart::printP(TC_FLASH_TEXT("error: usage: "));
   bool first = true;
   for (uint8_t r = 0; r < rows; ++r) {
     CommandSpec spec;
     readSpec(static_cast<const char*>(table) + r * stride, spec);
     if (!equalsP(name, spec.name)) continue;
-    if (!first) hal::Uart::printP(TC_PSTR(" | "));
+    if (!first) hal::Uart::printP(TC_FLASH_TEXT(" | "));
     first = false;
     printUsage(spec);
   }
@@ -121,11 +113,7 @@ void sayUsage(const void* table, uint8_t rows, size_t stride, const char* name) 
 }  // namespace
 
 void readBytes(void* dst, const void* progmem_src, size_t length) {
-#ifdef __AVR__
-  memcpy_P(dst, progmem_src, length);
-#else
-  memcpy(dst, progmem_src, length);
-#endif
+  tc::flashCopy(dst, progmem_src, length);
 }
 
 void readSpec(const void* row, CommandSpec& spec) { readBytes(&spec, row, sizeof spec); }
@@ -159,9 +147,9 @@ int8_t matchCommand(const void* table, uint8_t rows, size_t stride, char* line,
     parsed.count = given;
     const bool stop = (spec.flags & kCmdZeroIsStop) && given > 0 && parsed.value[given - 1] == 0;
     if ((spec.flags & kCmdGuarded) && !stop && context.strict && !context.checksummed) {
-      hal::Uart::printP(TC_PSTR("error: strict mode: \""));
+      hal::Uart::printP(TC_FLASH_TEXT("error: strict mode: \""));
       hal::Uart::print(tokens[0]);
-      hal::Uart::printP(TC_PSTR("\" needs a checksum: end the line with *hh (XOR of its bytes)"));
+      hal::Uart::printP(TC_FLASH_TEXT("\" needs a checksum: end the line with *hh (XOR of its bytes)"));
       newline();
       return -1;
     }
@@ -170,9 +158,9 @@ int8_t matchCommand(const void* table, uint8_t rows, size_t stride, char* line,
   }
 
   if (!known) {
-    hal::Uart::printP(TC_PSTR("error: unknown command \""));
+    hal::Uart::printP(TC_FLASH_TEXT("error: unknown command \""));
     hal::Uart::print(tokens[0]);
-    hal::Uart::printP(TC_PSTR("\"; type help for the list"));
+    hal::Uart::printP(TC_FLASH_TEXT("\"; type help for the list"));
     newline();
     return -1;
   }
@@ -201,8 +189,8 @@ void printHelp(const void* table, uint8_t rows, size_t stride) {
     if (spec.flags & kCmdHidden) continue;
     const uint8_t width = printUsage(spec);
     spaces(width + 2 <= kHelpColumn ? static_cast<uint8_t>(kHelpColumn - width) : 2);
-    for (const char* p = spec.help; progmemByte(p) != 0; ++p) {
-      const uint8_t c = progmemByte(p);
+    for (const char* p = spec.help; tc::flashByte(p) != 0; ++p) {
+      const uint8_t c = tc::flashByte(p);
       if (c == '\n') {
         newline();
         spaces(kHelpColumn);
@@ -216,12 +204,12 @@ void printHelp(const void* table, uint8_t rows, size_t stride) {
       ArgSpec arg;
       readArg(spec, i, arg);
       if (arg.words != nullptr) continue;
-      hal::Uart::printP(first ? TC_PSTR(" (") : TC_PSTR(", "));
+      hal::Uart::printP(first ? TC_FLASH_TEXT(" (") : TC_FLASH_TEXT(", "));
       first = false;
       hal::Uart::printP(arg.name);
       hal::Uart::write(' ');
       printInt(arg.min);
-      hal::Uart::printP(TC_PSTR(".."));
+      hal::Uart::printP(TC_FLASH_TEXT(".."));
       printInt(arg.max);
     }
     if (!first) hal::Uart::write(')');

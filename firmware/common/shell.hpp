@@ -11,20 +11,14 @@
 //   error: G must be 0..500, got "900"             (the only row with that count refused it)
 //   error: strict mode: "f" needs a checksum, e.g. f 300*hh
 //
-// Everything in a table lives in flash (TC_PROGMEM) on the AVR; rows are copied to the
-// stack one at a time (memcpy_P), so a table costs no SRAM.
+// Everything in a table lives in flash (TC_FLASH) on the AVR; rows are copied to the
+// stack one at a time (tc::flashCopy), so a table costs no SRAM.
 #pragma once
 #include <stddef.h>
 #include <stdint.h>
 
 #include "hal/hal.hpp"
-
-#ifdef __AVR__
-#include <avr/pgmspace.h>
-#define TC_PROGMEM PROGMEM
-#else
-#define TC_PROGMEM
-#endif
+#include "thrustcal/flash_text.hpp"
 
 namespace fw {
 
@@ -33,8 +27,8 @@ constexpr uint8_t kShellMaxArgs = 4;
 // One argument: an integer in [min, max], or (words != nullptr) one of the '|'-separated
 // words, whose index becomes the value ("on|off": on = 0, off = 1).
 struct ArgSpec {
-  const char* name;   // TC_PROGMEM, shown in usage and errors ("G", "MS")
-  const char* words;  // TC_PROGMEM or nullptr
+  const char* name;   // TC_FLASH, shown in usage and errors ("G", "MS")
+  const char* words;  // TC_FLASH or nullptr
   int32_t min;
   int32_t max;
 };
@@ -59,12 +53,12 @@ enum CommandFlag : uint8_t {
 
 // The part of a row the shell reads; Command<App> adds the typed handler after it.
 struct CommandSpec {
-  const char* name;      // TC_PROGMEM
-  const ArgSpec* args;   // TC_PROGMEM array of max_args specs (nullptr when max_args == 0)
+  const char* name;      // TC_FLASH
+  const ArgSpec* args;   // TC_FLASH array of max_args specs (nullptr when max_args == 0)
   uint8_t min_args;      // required arguments
   uint8_t max_args;      // required + optional (optional ones print as [NAME])
   uint8_t flags;         // CommandFlag bits
-  const char* help;      // TC_PROGMEM; '\n' continues on an indented line
+  const char* help;      // TC_FLASH; '\n' continues on an indented line
 };
 
 template <class App>

@@ -38,26 +38,26 @@ using fw::sayLine;
 
 }  // namespace
 
-GatherStoreApp::GatherStoreApp() { sag_builder_.reset(settings_.pwm_min_us); }
+GatherStoreApp::GatherStoreApp() { sag_builder_.reset(sweep_settings_.pwm_min_us); }
 
 void GatherStoreApp::begin() {
   for (uint8_t ch = 0; ch < hal::kEscChannels; ++ch) hal::Esc::writePulse(ch, kStopPwmUs);
   armed_at_ms_ = hal::Clock::millis();
-  tc::readSettings<hal::Eeprom>(settings_board_);
-  battery_ = tc::BatteryMonitor(settings_board_.batteryConfig());
+  tc::readSettings<hal::Eeprom>(board_settings_);
+  battery_ = tc::BatteryMonitor(board_settings_.batteryConfig());
   fw::newline();
-  say(TC_PSTR("thrustcal gather_store: Gather and Store (thesis sec. 6.4), "));
+  say(TC_FLASH_TEXT("thrustcal gather_store: Gather and Store (thesis sec. 6.4), "));
   fw::printUint(hal::kUartBaud);
-  sayLine(TC_PSTR(" 8N1"));
+  sayLine(TC_FLASH_TEXT(" 8N1"));
   fw::printResetCause();
-  sayLine(TC_PSTR("ESCs armed at 1000 us. Load cell A0, battery A1. Type help for the commands."));
-  say(TC_PSTR("battery monitor: "));
-  fw::printDivider(settings_board_);
+  sayLine(TC_FLASH_TEXT("ESCs armed at 1000 us. Load cell A0, battery A1. Type help for the commands."));
+  say(TC_FLASH_TEXT("battery monitor: "));
+  fw::printDivider(board_settings_);
   fw::newline();
   prompt();
 }
 
-void GatherStoreApp::prompt() { say(TC_PSTR("gs> ")); }
+void GatherStoreApp::prompt() { say(TC_FLASH_TEXT("gs> ")); }
 
 bool GatherStoreApp::poll() {
   hal::Watchdog::kick();  // the main loop came round
@@ -86,11 +86,11 @@ bool GatherStoreApp::refuse(StoreRefusal why, const view::RefusalFacts& facts) {
 }
 
 void GatherStoreApp::cmdStore(uint8_t which) {
-  const uint8_t slot = settings_.slot;
+  const uint8_t slot = sweep_settings_.slot;
   view::RefusalFacts facts;
   facts.slot = slot;
   if (refuse(checkStoreSource(sweep_, slot), facts)) return;
-  const tc::RecordLimits limits = settings_board_.recordLimits();
+  const tc::RecordLimits limits = board_settings_.recordLimits();
   const bool had_v2 = tc::probeSlotLayout<hal::Eeprom>(slot, limits) == tc::SlotLayout::kModelV2;
   tc::MotorCalibration& record = scratch_.startRecord();
   facts.before = tc::readRecord<hal::Eeprom>(slot, record, limits);
@@ -115,21 +115,21 @@ void GatherStoreApp::cmdStore(uint8_t which) {
 
 // Model v2 (thrustcal/model_v2.hpp), fitted on the board; see the header for the rules.
 void GatherStoreApp::cmdStoreV2() {
-  const uint8_t slot = settings_.slot;
+  const uint8_t slot = sweep_settings_.slot;
   view::RefusalFacts facts;
   facts.slot = slot;
   if (refuse(checkStoreSource(sweep_, slot), facts)) return;
   if (sweep_.samples > fitter_.capacity()) {
     facts.limit = fitter_.capacity();
     facts.step_us = smallestStepUs(
-        static_cast<uint16_t>(settings_.pwm_max_us - settings_.pwm_min_us), fitter_.capacity());
+        static_cast<uint16_t>(sweep_settings_.pwm_max_us - sweep_settings_.pwm_min_us), fitter_.capacity());
     refuse(StoreRefusal::kTooManySamples, facts);
     return;
   }
   // What the slot holds now.
-  const tc::RecordLimits limits = settings_board_.recordLimits();
+  const tc::RecordLimits limits = board_settings_.recordLimits();
   const tc::RecordV2Read now = tc::readModelV2<hal::Eeprom>(slot, model_, limits);
-  SlotModel before;
+  SlotContents before;
   before.has_v2 = now.status == tc::DecodeStatus::kOk;
   before.has_v1 =
       !before.has_v2 && hal::Eeprom::readByte(tc::slotAddress(slot)) == tc::kLayoutVersion1;
@@ -179,8 +179,8 @@ void GatherStoreApp::cmdStoreV2() {
 }
 
 void GatherStoreApp::cmdShow() {
-  const uint8_t slot = settings_.slot;
-  const tc::RecordLimits limits = settings_board_.recordLimits();
+  const uint8_t slot = sweep_settings_.slot;
+  const tc::RecordLimits limits = board_settings_.recordLimits();
   if (tc::probeSlotLayout<hal::Eeprom>(slot, limits) == tc::SlotLayout::kModelV2) {
     const tc::RecordV2Read read = tc::readModelV2<hal::Eeprom>(slot, model_, limits);
     view::showModelV2(slot, read, model_);
@@ -193,14 +193,14 @@ void GatherStoreApp::cmdShow() {
 }
 
 void GatherStoreApp::cmdErase() {
-  const uint8_t slot = settings_.slot;
+  const uint8_t slot = sweep_settings_.slot;
   CountingEeprom::written = 0;
   // Both v2 copies' version bytes (the one not holding the newest model first); copy A's is
   // the thesis record's too.
-  tc::eraseSlot<CountingEeprom>(slot, settings_board_.recordLimits());
-  fw::say(TC_PSTR("erased "));
+  tc::eraseSlot<CountingEeprom>(slot, board_settings_.recordLimits());
+  fw::say(TC_FLASH_TEXT("erased "));
   view::sayMotorRecord(slot);  // "motor N (EEPROM a..b): "
-  fw::say(TC_PSTR("not calibrated now, thesis curves, sag offsets and model v2 are gone"));
+  fw::say(TC_FLASH_TEXT("not calibrated now, thesis curves, sag offsets and model v2 are gone"));
   view::sayWritten(CountingEeprom::written);
 }
 

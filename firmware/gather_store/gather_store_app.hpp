@@ -69,6 +69,7 @@
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/motor_calibration.hpp"
+#include "thrustcal/sweep_limits.hpp"
 
 namespace gs {
 
@@ -98,15 +99,7 @@ using tc::kV2MinVoltageGapMv;
 constexpr uint8_t kProgressEvery = 10;     // one "# " progress line per this many samples
 constexpr uint8_t kLineEndGraceMs = 3;     // an LF this soon after "sweep" CR is its line end
 
-// Accepted ranges of the settings (inclusive).
-constexpr uint16_t kPwmLowestUs = 1000;
-constexpr uint16_t kPwmHighestUs = 2000;
-constexpr uint16_t kStepMinUs = 1;
-constexpr uint16_t kStepMaxUs = 100;
-constexpr uint16_t kSettleMinMs = 0;
-constexpr uint16_t kSettleMaxMs = 10000;
-constexpr int16_t kPlateMaxG = 500;
-constexpr int16_t kKnownWeightMaxG = 950;  // cal W / span W: up to the load cell's overload
+// The settings' accepted ranges: thrustcal/sweep_limits.hpp.
 
 // settle auto: force medians kSettleProbeMs apart; the step is settled when
 // kSettledAgreements successive pairs differ by at most kSettledCounts ADC counts (0 counts:
@@ -124,10 +117,10 @@ constexpr uint8_t kSettledAgreements = 2;
 // 0.9 % with the default; `thrustcal bench calibration`). `settle 200` is the thesis timing.
 constexpr uint16_t kDefaultSettleCapMs = 500;
 
-struct Settings {
+struct SweepSettings {
   uint8_t slot = 0;             // motor slot 0..3 = ESC output and EEPROM record
   int16_t plate_g = 60;         // plate carrying the motor (thesis 60 g)
-  uint16_t pwm_min_us = 1000;   // sweep start
+  uint16_t pwm_min_us = tc::kThrottleMinUs;  // sweep start
   uint16_t pwm_max_us = 1800;   // sweep end (inclusive when on the step grid)
   uint16_t step_us = 10;
   uint16_t settle_ms = kDefaultSettleCapMs;  // per step (settle auto: the cap); thesis 200
@@ -194,7 +187,7 @@ class GatherStoreApp {
   bool poll();
 
   // Observers for tests.
-  const Settings& settings() const { return settings_; }
+  const SweepSettings& sweepSettings() const { return sweep_settings_; }
   const tc::LoadCell& loadCell() const { return cell_; }
   const SweepResult& lastSweep() const { return sweep_; }
   SweepEnd lastSweepEnd() const { return last_end_; }
@@ -267,13 +260,13 @@ class GatherStoreApp {
   // The force reading of the window force_median_ holds, in 1/16 count: the central mean with
   // settle auto, the thesis's median otherwise.
   uint16_t forceQ4() const {
-    return settings_.settle_auto ? force_median_.centralMeanQ4(kForceCentral)
+    return sweep_settings_.settle_auto ? force_median_.centralMeanQ4(kForceCentral)
                                  : static_cast<uint16_t>(force_median_.median() * 16u);
   }
 
-  Settings settings_;
+  SweepSettings sweep_settings_;
   tc::LoadCell cell_;
-  tc::BoardSettings settings_board_;  // the divider (EEPROM), read at begin()
+  tc::BoardSettings board_settings_;  // the divider (EEPROM), read at begin()
   tc::BatteryMonitor battery_;        // configured from it
   uint16_t tare_counts_ = 0;  // load-cell reading at the last tare (the span's empty point)
   uint32_t armed_at_ms_ = 0;

@@ -65,96 +65,94 @@ using C = GatherStoreCommands;
 using fw::kCmdGuarded;
 
 // Names, argument specs and help lines: all in flash.
-#define GS_TEXT(id, text) const char id[] TC_PROGMEM = text
+const char kHelp[] TC_FLASH = "help";
+const char kMotor[] TC_FLASH = "motor";
+const char kPlate[] TC_FLASH = "plate";
+const char kWeigh[] TC_FLASH = "weigh";
+const char kCal[] TC_FLASH = "cal";
+const char kTare[] TC_FLASH = "tare";
+const char kSpan[] TC_FLASH = "span";
+const char kRange[] TC_FLASH = "range";
+const char kStep[] TC_FLASH = "step";
+const char kSettle[] TC_FLASH = "settle";
+const char kSweep[] TC_FLASH = "sweep";
+const char kStore[] TC_FLASH = "store";
+const char kShow[] TC_FLASH = "show";
+const char kErase[] TC_FLASH = "erase";
+const char kStatus[] TC_FLASH = "status";
+const char kEeprom[] TC_FLASH = "eeprom";
+const char kDivider[] TC_FLASH = "divider";
+const char kStrict[] TC_FLASH = "strict";
 
-GS_TEXT(kHelp, "help");
-GS_TEXT(kMotor, "motor");
-GS_TEXT(kPlate, "plate");
-GS_TEXT(kWeigh, "weigh");
-GS_TEXT(kCal, "cal");
-GS_TEXT(kTare, "tare");
-GS_TEXT(kSpan, "span");
-GS_TEXT(kRange, "range");
-GS_TEXT(kStep, "step");
-GS_TEXT(kSettle, "settle");
-GS_TEXT(kSweep, "sweep");
-GS_TEXT(kStore, "store");
-GS_TEXT(kShow, "show");
-GS_TEXT(kErase, "erase");
-GS_TEXT(kStatus, "status");
-GS_TEXT(kEeprom, "eeprom");
-GS_TEXT(kDivider, "divider");
-GS_TEXT(kStrict, "strict");
+const char kN[] TC_FLASH = "N";
+const char kG[] TC_FLASH = "G";
+const char kW[] TC_FLASH = "W";
+const char kMin[] TC_FLASH = "MIN";
+const char kMax[] TC_FLASH = "MAX";
+const char kUs[] TC_FLASH = "US";
+const char kMs[] TC_FLASH = "MS";
+const char kR1[] TC_FLASH = "R1";
+const char kR2[] TC_FLASH = "R2";
+const char kWordAuto[] TC_FLASH = "auto";
+const char kWord1[] TC_FLASH = "1";
+const char kWord2[] TC_FLASH = "2";
+const char kWordV2[] TC_FLASH = "v2";
+const char kWordsEeprom[] TC_FLASH = "crc|dump";
+const char kWordsOnOff[] TC_FLASH = "on|off";
 
-GS_TEXT(kN, "N");
-GS_TEXT(kG, "G");
-GS_TEXT(kW, "W");
-GS_TEXT(kMin, "MIN");
-GS_TEXT(kMax, "MAX");
-GS_TEXT(kUs, "US");
-GS_TEXT(kMs, "MS");
-GS_TEXT(kR1, "R1");
-GS_TEXT(kR2, "R2");
-GS_TEXT(kWordAuto, "auto");
-GS_TEXT(kWord1, "1");
-GS_TEXT(kWord2, "2");
-GS_TEXT(kWordV2, "v2");
-GS_TEXT(kWordsEeprom, "crc|dump");
-GS_TEXT(kWordsOnOff, "on|off");
-
-static_assert(tc::LoadCellConfig().overload_g == kKnownWeightMaxG, "cal/span up to the overload");
+static_assert(tc::LoadCellConfig().overload_g == tc::kKnownWeightMaxG, "cal/span up to the overload");
 constexpr int32_t kSlotMax = tc::kMotorSlots - 1;
 constexpr int32_t kDividerMax = static_cast<int32_t>(tc::kDividerMaxOhm);
 
-const fw::ArgSpec kArgSlot[] TC_PROGMEM = {{kN, nullptr, 0, kSlotMax}};
-const fw::ArgSpec kArgPlate[] TC_PROGMEM = {{kG, nullptr, 0, kPlateMaxG}};
-const fw::ArgSpec kArgKnown[] TC_PROGMEM = {{kW, nullptr, 1, kKnownWeightMaxG}};
-const fw::ArgSpec kArgRange[] TC_PROGMEM = {{kMin, nullptr, kPwmLowestUs, kPwmHighestUs - 1},
-                                           {kMax, nullptr, kPwmLowestUs + 1, kPwmHighestUs}};
-const fw::ArgSpec kArgStep[] TC_PROGMEM = {{kUs, nullptr, kStepMinUs, kStepMaxUs}};
-const fw::ArgSpec kArgSettle[] TC_PROGMEM = {{kMs, nullptr, kSettleMinMs, kSettleMaxMs}};
-const fw::ArgSpec kArgAuto[] TC_PROGMEM = {{kWordAuto, kWordAuto, 0, 0}};
-const fw::ArgSpec kArgStore1[] TC_PROGMEM = {{kWord1, kWord1, 0, 0}};
-const fw::ArgSpec kArgStore2[] TC_PROGMEM = {{kWord2, kWord2, 0, 0}};
-const fw::ArgSpec kArgStoreV2[] TC_PROGMEM = {{kWordV2, kWordV2, 0, 0}};
-const fw::ArgSpec kArgEeprom[] TC_PROGMEM = {{kWordsEeprom, kWordsEeprom, 0, 0}};
-const fw::ArgSpec kArgDivider[] TC_PROGMEM = {{kR1, nullptr, 0, kDividerMax},
+const fw::ArgSpec kArgSlot[] TC_FLASH = {{kN, nullptr, 0, kSlotMax}};
+const fw::ArgSpec kArgPlate[] TC_FLASH = {{kG, nullptr, 0, tc::kPlateMaxG}};
+const fw::ArgSpec kArgKnown[] TC_FLASH = {{kW, nullptr, 1, tc::kKnownWeightMaxG}};
+const fw::ArgSpec kArgRange[] TC_FLASH = {{kMin, nullptr, tc::kSweepPwmLowestUs, tc::kSweepPwmHighestUs - 1},
+                                           {kMax, nullptr, tc::kSweepPwmLowestUs + 1, tc::kSweepPwmHighestUs}};
+const fw::ArgSpec kArgStep[] TC_FLASH = {{kUs, nullptr, tc::kSweepStepMinUs, tc::kSweepStepMaxUs}};
+const fw::ArgSpec kArgSettle[] TC_FLASH = {{kMs, nullptr, tc::kSweepSettleMinMs, tc::kSweepSettleMaxMs}};
+const fw::ArgSpec kArgAuto[] TC_FLASH = {{kWordAuto, kWordAuto, 0, 0}};
+const fw::ArgSpec kArgStore1[] TC_FLASH = {{kWord1, kWord1, 0, 0}};
+const fw::ArgSpec kArgStore2[] TC_FLASH = {{kWord2, kWord2, 0, 0}};
+const fw::ArgSpec kArgStoreV2[] TC_FLASH = {{kWordV2, kWordV2, 0, 0}};
+const fw::ArgSpec kArgEeprom[] TC_FLASH = {{kWordsEeprom, kWordsEeprom, 0, 0}};
+const fw::ArgSpec kArgDivider[] TC_FLASH = {{kR1, nullptr, 0, kDividerMax},
                                              {kR2, nullptr, 0, kDividerMax}};
-const fw::ArgSpec kArgOnOff[] TC_PROGMEM = {{kWordsOnOff, kWordsOnOff, 0, 0}};
+const fw::ArgSpec kArgOnOff[] TC_FLASH = {{kWordsOnOff, kWordsOnOff, 0, 0}};
 
 // Help lines. The numbers they quote are the constants' (checked below); the ranges of the
 // arguments are appended by fw::printHelp from the specs above.
 static_assert(kForceWindow == 201, "weigh's help quotes the median of 201");
 static_assert(kDefaultSettleCapMs == 500, "settle auto's help quotes the cap");
-static_assert(Settings().plate_g == 60 && Settings().step_us == 10 &&
-                  Settings().pwm_min_us == 1000 && Settings().pwm_max_us == 1800,
+static_assert(SweepSettings().plate_g == 60 && SweepSettings().step_us == 10 &&
+                  SweepSettings().pwm_min_us == 1000 && SweepSettings().pwm_max_us == 1800,
               "the defaults the help lines quote");
-GS_TEXT(kHelpHelp, "this list");
-GS_TEXT(kHelpMotor, "select motor slot N: ESC output and EEPROM record");
-GS_TEXT(kHelpPlate, "plate weight in g, default 60");
-GS_TEXT(kHelpWeigh, "weight on the plate (median of 201 readings)");
-GS_TEXT(kHelpCal, "calibrate: motor + propeller weigh W g; also tares");
-GS_TEXT(kHelpTare, "zerolize: force reads 0 g now (motor mounted, stopped)");
-GS_TEXT(kHelpSpan, "optional gain: after tare put W g on the plate,\nthen span W");
-GS_TEXT(kHelpRange, "sweep PWM range in us,\ndefault 1000 1800");
-GS_TEXT(kHelpStep, "sweep step in us, default 10");
-GS_TEXT(kHelpSettleMs, "wait per step in ms (thesis: 200); also the cap\nof settle auto");
-GS_TEXT(kHelpSettleAuto, "next step once the force stops changing\n(default, cap 500 ms)");
-GS_TEXT(kHelpSweep, "run the sweep, stream CSV; any key aborts (motor -> 1000 us)");
-GS_TEXT(kHelpStore1, "store the last sweep as curve 1 (+ start voltage, sag offsets)");
-GS_TEXT(kHelpStore2, "store the last sweep as curve 2 (another battery voltage)");
-GS_TEXT(kHelpStoreV2, "fit model v2 (effective voltage) to the last sweep and store it;\n"
-                      "a slot's v2 model from another voltage (>= 0.5 V) is refined");
-GS_TEXT(kHelpShow, "what the selected slot's EEPROM record holds (v1 or v2)");
-GS_TEXT(kHelpErase, "mark the selected slot not calibrated (v1 and both v2 copies)");
-GS_TEXT(kHelpStatus, "settings, live force and battery, last sweep, stack");
-GS_TEXT(kHelpEeprom, "EEPROM CRC-16 per slot and whole, or all of it as Intel HEX");
-GS_TEXT(kHelpDividerShow, "the battery divider (read_run flies with it too)");
-GS_TEXT(kHelpDivider, "set it in ohm: R1 pack-A1, R2 A1-ground,\ndefault 100000 47000 (15.638 V)");
-GS_TEXT(kHelpStrict, "sweep, store, erase and divider R1 R2 need a checksum\n(host clients)");
+const char kHelpHelp[] TC_FLASH = "this list";
+const char kHelpMotor[] TC_FLASH = "select motor slot N: ESC output and EEPROM record";
+const char kHelpPlate[] TC_FLASH = "plate weight in g, default 60";
+const char kHelpWeigh[] TC_FLASH = "weight on the plate (median of 201 readings)";
+const char kHelpCal[] TC_FLASH = "calibrate: motor + propeller weigh W g; also tares";
+const char kHelpTare[] TC_FLASH = "zerolize: force reads 0 g now (motor mounted, stopped)";
+const char kHelpSpan[] TC_FLASH = "optional gain: after tare put W g on the plate,\nthen span W";
+const char kHelpRange[] TC_FLASH = "sweep PWM range in us,\ndefault 1000 1800";
+const char kHelpStep[] TC_FLASH = "sweep step in us, default 10";
+const char kHelpSettleMs[] TC_FLASH = "wait per step in ms (thesis: 200); also the cap\nof settle auto";
+const char kHelpSettleAuto[] TC_FLASH = "next step once the force stops changing\n(default, cap 500 ms)";
+const char kHelpSweep[] TC_FLASH = "run the sweep, stream CSV; any key aborts (motor -> 1000 us)";
+const char kHelpStore1[] TC_FLASH = "store the last sweep as curve 1 (+ start voltage, sag offsets)";
+const char kHelpStore2[] TC_FLASH = "store the last sweep as curve 2 (another battery voltage)";
+const char kHelpStoreV2[] TC_FLASH = "fit model v2 (effective voltage) to the last sweep and store it;\n"
+                      "a slot's v2 model from another voltage (>= 0.5 V) is refined";
+const char kHelpShow[] TC_FLASH = "what the selected slot's EEPROM record holds (v1 or v2)";
+const char kHelpErase[] TC_FLASH = "mark the selected slot not calibrated (v1 and both v2 copies)";
+const char kHelpStatus[] TC_FLASH = "settings, live force and battery, last sweep, stack";
+const char kHelpEeprom[] TC_FLASH = "EEPROM CRC-16 per slot and whole, or all of it as Intel HEX";
+const char kHelpDividerShow[] TC_FLASH = "the battery divider (read_run flies with it too)";
+const char kHelpDivider[] TC_FLASH = "set it in ohm: R1 pack-A1, R2 A1-ground,\ndefault 100000 47000 (15.638 V)";
+const char kHelpStrict[] TC_FLASH = "sweep, store, erase and divider R1 R2 need a checksum\n(host clients)";
 static_assert(tc::kV2MinVoltageGapMv == 500, "store v2's help quotes 0.5 V");
 
-const fw::Command<GatherStoreApp> kCommands[] TC_PROGMEM = {
+const fw::Command<GatherStoreApp> kCommands[] TC_FLASH = {
     {{kHelp, nullptr, 0, 0, 0, kHelpHelp}, C::help},
     {{kMotor, kArgSlot, 1, 1, 0, kHelpMotor}, C::motor},
     {{kPlate, kArgPlate, 1, 1, 0, kHelpPlate}, C::plate},
@@ -187,10 +185,10 @@ void GatherStoreApp::runCommand(char* line, const fw::LineContext& context) {
 
 void GatherStoreApp::cmdHelp() {
   fw::printHelp(kCommands);
-  fw::say(TC_PSTR("lines: CR, LF or CRLF, at most "));
+  fw::say(TC_FLASH_TEXT("lines: CR, LF or CRLF, at most "));
   fw::printUint(fw::kLineMax);
-  fw::sayLine(TC_PSTR(" characters; optional checksum *HH = XOR"));
-  fw::sayLine(TC_PSTR("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
+  fw::sayLine(TC_FLASH_TEXT(" characters; optional checksum *HH = XOR"));
+  fw::sayLine(TC_FLASH_TEXT("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
 }
 
 }  // namespace gs

@@ -1,6 +1,6 @@
 // The console view of gather_store: every line the sweep, store, show and status commands
 // print, from the data they hand over (no decisions here, no EEPROM writes). Strings are
-// TC_PSTR literals, so they stay in flash on the AVR.
+// TC_FLASH_TEXT literals, so they stay in flash on the AVR.
 #pragma once
 #include <stdint.h>
 
@@ -63,7 +63,7 @@ void sayV2FitFailed(uint8_t slot, bool refine, tc::FitV2Status status);
 struct V2Outcome {
   uint8_t slot = 0;
   bool refine = false;
-  SlotModel before;
+  SlotContents before;
   uint16_t rest_mv = 0;  // this sweep's resting voltage
   uint16_t written = 0;
 };

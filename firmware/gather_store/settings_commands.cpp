@@ -1,6 +1,6 @@
 // The bench settings and load-cell commands of gather_store (thesis phase 1: weigh and
 // calibrate; phase 2: zerolize), status and the divider setting. Every constant string goes
-// through TC_PSTR so it stays in flash on the AVR.
+// through TC_FLASH_TEXT so it stays in flash on the AVR.
 #include "gather_store_app.hpp"
 
 #include "gather_store_view.hpp"
@@ -30,101 +30,101 @@ int16_t GatherStoreApp::forceDecigrams(uint16_t force_q4) const {
 // Settings
 
 void GatherStoreApp::cmdMotor(uint8_t slot) {
-  settings_.slot = slot;
-  say(TC_PSTR("motor "));
-  fw::printUint(settings_.slot);
-  say(TC_PSTR(" selected: ESC "));
-  fw::printEscPin(settings_.slot);
-  say(TC_PSTR(", "));
-  view::printRecordRange(settings_.slot);
+  sweep_settings_.slot = slot;
+  say(TC_FLASH_TEXT("motor "));
+  fw::printUint(sweep_settings_.slot);
+  say(TC_FLASH_TEXT(" selected: ESC "));
+  fw::printEscPin(sweep_settings_.slot);
+  say(TC_FLASH_TEXT(", "));
+  view::printRecordRange(sweep_settings_.slot);
   fw::newline();
 }
 
 void GatherStoreApp::cmdPlate(int16_t grams) {
-  settings_.plate_g = grams;
-  cell_.setPlateGrams(settings_.plate_g);
-  say(TC_PSTR("plate "));
+  sweep_settings_.plate_g = grams;
+  cell_.setPlateGrams(sweep_settings_.plate_g);
+  say(TC_FLASH_TEXT("plate "));
   fw::printInt(grams);
-  sayLine(TC_PSTR(" g (weigh and cal leave it out)"));
+  sayLine(TC_FLASH_TEXT(" g (weigh and cal leave it out)"));
 }
 
 // "range N..M us, K steps" / "step N us, K steps"
 void GatherStoreApp::sayPlannedSteps() {
-  say(TC_PSTR(" us, "));
+  say(TC_FLASH_TEXT(" us, "));
   fw::printUint(plannedSamples());
-  sayLine(TC_PSTR(" steps"));
+  sayLine(TC_FLASH_TEXT(" steps"));
 }
 
 void GatherStoreApp::cmdRange(uint16_t lo, uint16_t hi) {
   // Each bound's own range is the table's; that MAX lies above MIN is checked here.
   if (hi <= lo) {
-    say(TC_PSTR("error: range MAX must be above MIN ("));
+    say(TC_FLASH_TEXT("error: range MAX must be above MIN ("));
     fw::printUint(lo);
-    say(TC_PSTR(" us), got "));
+    say(TC_FLASH_TEXT(" us), got "));
     fw::printUint(hi);
-    sayLine(TC_PSTR("; nothing changed"));
+    sayLine(TC_FLASH_TEXT("; nothing changed"));
     return;
   }
-  const uint32_t samples = static_cast<uint32_t>(hi - lo) / settings_.step_us + 1u;
+  const uint32_t samples = static_cast<uint32_t>(hi - lo) / sweep_settings_.step_us + 1u;
   if (samples > kMaxSweepSamples) {
-    say(TC_PSTR("error: that range is "));
+    say(TC_FLASH_TEXT("error: that range is "));
     fw::printUint(samples);
-    say(TC_PSTR(" steps of "));
-    fw::printUint(settings_.step_us);
-    say(TC_PSTR(" us, at most "));
+    say(TC_FLASH_TEXT(" steps of "));
+    fw::printUint(sweep_settings_.step_us);
+    say(TC_FLASH_TEXT(" us, at most "));
     fw::printUint(kMaxSweepSamples);
-    say(TC_PSTR(" fit: set a step of at least "));
+    say(TC_FLASH_TEXT(" fit: set a step of at least "));
     fw::printUint(smallestStepUs(static_cast<uint16_t>(hi - lo), kMaxSweepSamples));
-    sayLine(TC_PSTR(" us first; nothing changed"));
+    sayLine(TC_FLASH_TEXT(" us first; nothing changed"));
     return;
   }
-  settings_.pwm_min_us = lo;
-  settings_.pwm_max_us = hi;
-  say(TC_PSTR("range "));
+  sweep_settings_.pwm_min_us = lo;
+  sweep_settings_.pwm_max_us = hi;
+  say(TC_FLASH_TEXT("range "));
   fw::printUint(lo);
-  say(TC_PSTR(".."));
+  say(TC_FLASH_TEXT(".."));
   fw::printUint(hi);
   sayPlannedSteps();
 }
 
 void GatherStoreApp::cmdStep(uint16_t step) {
   const uint32_t samples =
-      static_cast<uint32_t>(settings_.pwm_max_us - settings_.pwm_min_us) / step + 1u;
+      static_cast<uint32_t>(sweep_settings_.pwm_max_us - sweep_settings_.pwm_min_us) / step + 1u;
   if (samples > kMaxSweepSamples) {
-    say(TC_PSTR("error: a step of "));
+    say(TC_FLASH_TEXT("error: a step of "));
     fw::printUint(step);
-    say(TC_PSTR(" us makes "));
+    say(TC_FLASH_TEXT(" us makes "));
     fw::printUint(samples);
-    say(TC_PSTR(" steps, at most "));
+    say(TC_FLASH_TEXT(" steps, at most "));
     fw::printUint(kMaxSweepSamples);
-    sayLine(TC_PSTR(" fit: use a larger step or a smaller range; nothing changed"));
+    sayLine(TC_FLASH_TEXT(" fit: use a larger step or a smaller range; nothing changed"));
     return;
   }
-  settings_.step_us = step;
-  say(TC_PSTR("step "));
+  sweep_settings_.step_us = step;
+  say(TC_FLASH_TEXT("step "));
   fw::printUint(step);
   sayPlannedSteps();
 }
 
 void GatherStoreApp::cmdSettleAuto() {
-  settings_.settle_auto = true;
-  say(TC_PSTR("settle auto: next step once "));
+  sweep_settings_.settle_auto = true;
+  say(TC_FLASH_TEXT("settle auto: next step once "));
   fw::printUint(kSettledAgreements + 1u);
-  say(TC_PSTR(" force medians "));
+  say(TC_FLASH_TEXT(" force medians "));
   fw::printUint(kSettleProbeMs);
-  say(TC_PSTR(" ms apart agree within "));
+  say(TC_FLASH_TEXT(" ms apart agree within "));
   fw::printUint(kSettledCounts);
-  say(TC_PSTR(" counts, at most "));
-  fw::printUint(settings_.settle_ms);
-  sayLine(TC_PSTR(" ms per step (settle MS sets the cap and turns auto off)"));
+  say(TC_FLASH_TEXT(" counts, at most "));
+  fw::printUint(sweep_settings_.settle_ms);
+  sayLine(TC_FLASH_TEXT(" ms per step (settle MS sets the cap and turns auto off)"));
 }
 
 void GatherStoreApp::cmdSettle(uint16_t ms) {
-  settings_.settle_ms = ms;
-  settings_.settle_auto = false;
-  say(TC_PSTR("settle "));
+  sweep_settings_.settle_ms = ms;
+  sweep_settings_.settle_auto = false;
+  say(TC_FLASH_TEXT("settle "));
   fw::printUint(ms);
-  sayLine(TC_PSTR(" ms per step"));
+  sayLine(TC_FLASH_TEXT(" ms per step"));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -151,9 +151,9 @@ uint16_t GatherStoreApp::medianBatteryCounts() {
 bool GatherStoreApp::readSaneCell(uint16_t& counts) {
   counts = medianForceCounts();
   if (cell_.check(counts) != tc::LoadCellStatus::kImplausible) return true;
-  say(TC_PSTR("error: load cell reads "));
+  say(TC_FLASH_TEXT("error: load cell reads "));
   fw::printUint(counts);
-  sayLine(TC_PSTR(" counts (ADC rail): check the amplifier supply and the wire to A0; "
+  sayLine(TC_FLASH_TEXT(" counts (ADC rail): check the amplifier supply and the wire to A0; "
                   "nothing changed"));
   return false;
 }
@@ -161,17 +161,17 @@ bool GatherStoreApp::readSaneCell(uint16_t& counts) {
 void GatherStoreApp::cmdWeigh() {
   uint16_t counts;
   if (!readSaneCell(counts)) return;
-  say(TC_PSTR("weight "));
+  say(TC_FLASH_TEXT("weight "));
   fw::printInt(cell_.weightGrams(counts));
-  say(TC_PSTR(" g (plate "));
-  fw::printInt(settings_.plate_g);
-  say(TC_PSTR(" g left out), "));
+  say(TC_FLASH_TEXT(" g (plate "));
+  fw::printInt(sweep_settings_.plate_g);
+  say(TC_FLASH_TEXT(" g left out), "));
   fw::printUint(counts);
-  say(TC_PSTR(" counts"));
+  say(TC_FLASH_TEXT(" counts"));
   if (cell_.isTared()) {
-    say(TC_PSTR(", force "));
+    say(TC_FLASH_TEXT(", force "));
     fw::printFixed(forceDecigrams(forceQ4()), 1);
-    say(TC_PSTR(" g"));
+    say(TC_FLASH_TEXT(" g"));
   }
   fw::newline();
 }
@@ -185,9 +185,9 @@ void GatherStoreApp::cmdTare() {
   uint16_t counts;
   if (!readSaneCell(counts)) return;
   tareAt(counts);
-  say(TC_PSTR("tared: force reads 0.0 g now ("));
+  say(TC_FLASH_TEXT("tared: force reads 0.0 g now ("));
   fw::printUint(counts);
-  sayLine(TC_PSTR(" counts); ready to sweep"));
+  sayLine(TC_FLASH_TEXT(" counts); ready to sweep"));
 }
 
 void GatherStoreApp::cmdCal(int16_t grams) {
@@ -196,32 +196,32 @@ void GatherStoreApp::cmdCal(int16_t grams) {
   cell_.calibrateWeight(counts, grams);  // in range: cannot fail
   // Thesis: after calibration the program zerolizes and reads force upwards (phase 2).
   tareAt(counts);
-  say(TC_PSTR("calibrated: motor + propeller weigh "));
+  say(TC_FLASH_TEXT("calibrated: motor + propeller weigh "));
   fw::printInt(grams);
-  sayLine(TC_PSTR(" g; tared (force 0.0 g): ready to sweep"));
+  sayLine(TC_FLASH_TEXT(" g; tared (force 0.0 g): ready to sweep"));
 }
 
 void GatherStoreApp::cmdSpan(int16_t grams) {
   if (!cell_.isTared()) {
-    sayLine(TC_PSTR("error: span needs a tare first: tare, put the known weight on the "
+    sayLine(TC_FLASH_TEXT("error: span needs a tare first: tare, put the known weight on the "
                     "plate, then span W; nothing changed"));
     return;
   }
   uint16_t counts;
   if (!readSaneCell(counts)) return;
   if (!cell_.calibrateSpan(tare_counts_, counts, grams)) {
-    say(TC_PSTR("error: the reading moved from "));
+    say(TC_FLASH_TEXT("error: the reading moved from "));
     fw::printUint(tare_counts_);
-    say(TC_PSTR(" to "));
+    say(TC_FLASH_TEXT(" to "));
     fw::printUint(counts);
-    sayLine(TC_PSTR(" counts: a known weight must lower it by at least 10 counts at "
+    sayLine(TC_FLASH_TEXT(" counts: a known weight must lower it by at least 10 counts at "
                     "0.25..3 g per count; put the weight on the plate and try again; "
                     "nothing changed"));
     return;
   }
-  say(TC_PSTR("span: "));
+  say(TC_FLASH_TEXT("span: "));
   fw::printFixed(cell_.config().slope_ug_per_count, 6);
-  sayLine(TC_PSTR(" g per count; remove the weight, then tare before the sweep"));
+  sayLine(TC_FLASH_TEXT(" g per count; remove the weight, then tare before the sweep"));
 }
 
 
@@ -229,50 +229,50 @@ void GatherStoreApp::cmdSpan(int16_t grams) {
 // Status and the board setting
 
 void GatherStoreApp::cmdStatus() {
-  say(TC_PSTR("motor "));
-  fw::printUint(settings_.slot);
-  say(TC_PSTR(" (ESC "));
-  fw::printEscPin(settings_.slot);
-  say(TC_PSTR(" at "));
-  fw::printUint(hal::Esc::pulseUs(settings_.slot));
-  say(TC_PSTR(" us), plate "));
-  fw::printInt(settings_.plate_g);
-  say(TC_PSTR(" g, range "));
+  say(TC_FLASH_TEXT("motor "));
+  fw::printUint(sweep_settings_.slot);
+  say(TC_FLASH_TEXT(" (ESC "));
+  fw::printEscPin(sweep_settings_.slot);
+  say(TC_FLASH_TEXT(" at "));
+  fw::printUint(hal::Esc::pulseUs(sweep_settings_.slot));
+  say(TC_FLASH_TEXT(" us), plate "));
+  fw::printInt(sweep_settings_.plate_g);
+  say(TC_FLASH_TEXT(" g, range "));
   printSweepPlan();
   fw::newline();
 
   const uint16_t counts = medianForceCounts();
-  say(TC_PSTR("load cell "));
+  say(TC_FLASH_TEXT("load cell "));
   fw::printUint(counts);
-  say(TC_PSTR(" counts"));
+  say(TC_FLASH_TEXT(" counts"));
   if (cell_.check(counts) == tc::LoadCellStatus::kImplausible) {
-    say(TC_PSTR(" (ADC rail: check A0)"));
+    say(TC_FLASH_TEXT(" (ADC rail: check A0)"));
   } else if (cell_.isTared()) {
-    say(TC_PSTR(", force "));
+    say(TC_FLASH_TEXT(", force "));
     fw::printFixed(forceDecigrams(forceQ4()), 1);
-    say(TC_PSTR(" g"));
+    say(TC_FLASH_TEXT(" g"));
   } else {
-    say(TC_PSTR(", weight "));
+    say(TC_FLASH_TEXT(", weight "));
     fw::printInt(cell_.weightGrams(counts));
-    say(TC_PSTR(" g, not tared"));
+    say(TC_FLASH_TEXT(" g, not tared"));
   }
-  say(TC_PSTR("; battery "));
+  say(TC_FLASH_TEXT("; battery "));
   fw::sayVolts(battery_.millivoltsFromCounts(medianBatteryCounts()));
   fw::newline();
 
-  say(TC_PSTR("last sweep: "));
+  say(TC_FLASH_TEXT("last sweep: "));
   if (!sweep_.valid) {
-    sayLine(TC_PSTR("none kept"));
+    sayLine(TC_FLASH_TEXT("none kept"));
   } else {
-    say(TC_PSTR("motor "));
+    say(TC_FLASH_TEXT("motor "));
     fw::printUint(sweep_.slot);
-    say(TC_PSTR(", "));
+    say(TC_FLASH_TEXT(", "));
     fw::printUint(sweep_.samples);
-    say(TC_PSTR(" samples, max force "));
+    say(TC_FLASH_TEXT(" samples, max force "));
     fw::printFixed(sweep_.report.max_force_dg, 1);
-    say(TC_PSTR(" g, curve 1.."));
+    say(TC_FLASH_TEXT(" g, curve 1.."));
     fw::printUint(sweep_.curve.maxGrams());
-    sayLine(TC_PSTR(" g (store 1, store 2 or store v2 saves it)"));
+    sayLine(TC_FLASH_TEXT(" g (store 1, store 2 or store v2 saves it)"));
   }
   fw::printHealth(reader_);
 }
@@ -280,17 +280,17 @@ void GatherStoreApp::cmdStatus() {
 // `divider [R1 R2]`: the battery monitor's divider (thrustcal/board_settings.hpp). The last
 // sweep's volts came through the old one: it is dropped when the divider changes.
 void GatherStoreApp::cmdDividerShow() {
-  fw::printDivider(settings_board_);
+  fw::printDivider(board_settings_);
   fw::newline();
 }
 
 void GatherStoreApp::cmdDivider(uint32_t top_ohm, uint32_t bottom_ohm) {
-  if (!fw::setDivider(top_ohm, bottom_ohm, settings_board_)) return;
-  battery_ = tc::BatteryMonitor(settings_board_.batteryConfig());
+  if (!fw::setDivider(top_ohm, bottom_ohm, board_settings_)) return;
+  battery_ = tc::BatteryMonitor(board_settings_.batteryConfig());
   if (sweep_.complete) {
     sweep_.valid = false;
     sweep_.complete = false;
-    sayLine(TC_PSTR("note: the last sweep was measured with the old divider and is dropped: "
+    sayLine(TC_FLASH_TEXT("note: the last sweep was measured with the old divider and is dropped: "
                     "sweep again before store"));
   }
 }

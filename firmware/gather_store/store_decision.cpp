@@ -37,7 +37,7 @@ StoreRefusal planStoreV1(uint8_t which, const SweepResult& sweep, bool slot_hold
   return StoreRefusal::kNone;
 }
 
-V2Action decideV2(const SlotModel& slot, uint16_t sweep_rest_mv, uint16_t gap_mv) {
+V2Action decideV2(const SlotContents& slot, uint16_t sweep_rest_mv, uint16_t gap_mv) {
   const bool near_first = distanceMv(sweep_rest_mv, slot.rest_mv) < gap_mv;
   const bool near_second = distanceMv(sweep_rest_mv, slot.second_mv) < gap_mv;
   if (slot.has_v2 && slot.refined && near_second && !near_first) return V2Action::kRefuse;

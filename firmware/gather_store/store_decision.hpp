@@ -41,7 +41,7 @@ StoreRefusal planStoreV1(uint8_t which, const SweepResult& sweep, bool slot_hold
                          tc::MotorCalibration& record);
 
 // What the slot holds before a store v2.
-struct SlotModel {
+struct SlotContents {
   bool has_v2 = false;     // a valid model v2 record
   bool has_v1 = false;     // a thesis record (version byte 1) instead
   bool refined = false;    // the model v2 was refined already (tc::kV2Refined)
@@ -59,7 +59,7 @@ enum class V2Action : uint8_t {
 // The fit-or-refine rule (gather_store_app.hpp): a slot's v2 model from a sweep at least
 // `gap_mv` away is refined; one within `gap_mv` is replaced; a refined one whose second sweep
 // lies within `gap_mv` (and its first does not) refuses.
-V2Action decideV2(const SlotModel& slot, uint16_t sweep_rest_mv, uint16_t gap_mv);
+V2Action decideV2(const SlotContents& slot, uint16_t sweep_rest_mv, uint16_t gap_mv);
 
 // Whether the fitter's answer to this sweep alone rules model v2 out (the sweep itself is
 // unusable) rather than only the model failing (which the fit-or-refine step reports).

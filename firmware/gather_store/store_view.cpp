@@ -17,67 +17,67 @@ void sayRefusal(StoreRefusal why, const SweepResult& sweep, const RefusalFacts& 
     case StoreRefusal::kNone:
       return;
     case StoreRefusal::kNoSweep:
-      sayLine(TC_PSTR("error: nothing to store: run a complete sweep first"));
+      sayLine(TC_FLASH_TEXT("error: nothing to store: run a complete sweep first"));
       return;
     case StoreRefusal::kOtherSlot:
-      say(TC_PSTR("error: the last sweep was on motor "));
+      say(TC_FLASH_TEXT("error: the last sweep was on motor "));
       fw::printUint(sweep.slot);
-      say(TC_PSTR(" but motor "));
+      say(TC_FLASH_TEXT(" but motor "));
       fw::printUint(facts.slot);
-      say(TC_PSTR(" is selected: type motor "));
+      say(TC_FLASH_TEXT(" is selected: type motor "));
       fw::printUint(sweep.slot);
-      sayLine(TC_PSTR(" or sweep again; nothing changed"));
+      sayLine(TC_FLASH_TEXT(" or sweep again; nothing changed"));
       return;
     case StoreRefusal::kNoThesisCurve:
-      say(TC_PSTR("error: the last sweep gave no thesis curve ("));
+      say(TC_FLASH_TEXT("error: the last sweep gave no thesis curve ("));
       printBuildProblem(sweep.report.status);  // ends the line
       return;
     case StoreRefusal::kSlotHoldsV2:
-      say(TC_PSTR("error: motor "));
+      say(TC_FLASH_TEXT("error: motor "));
       fw::printUint(facts.slot);
-      sayLine(TC_PSTR(" holds model v2, not a thesis curve 1: store 1 first (it replaces "
+      sayLine(TC_FLASH_TEXT(" holds model v2, not a thesis curve 1: store 1 first (it replaces "
                       "model v2), or store v2; nothing changed"));
       return;
     case StoreRefusal::kNoFirstCurve:
-      say(TC_PSTR("error: motor "));
+      say(TC_FLASH_TEXT("error: motor "));
       fw::printUint(facts.slot);
-      say(TC_PSTR(" has no first curve ("));
+      say(TC_FLASH_TEXT(" has no first curve ("));
       hal::Uart::print(tc::decodeStatusText(facts.before));
-      sayLine(TC_PSTR("): store 1 first; nothing changed"));
+      sayLine(TC_FLASH_TEXT("): store 1 first; nothing changed"));
       return;
     case StoreRefusal::kVoltagesTooClose:
-      say(TC_PSTR("error: this sweep started at "));
+      say(TC_FLASH_TEXT("error: this sweep started at "));
       fw::sayVolts(facts.this_mv);
-      say(TC_PSTR(", within "));
+      say(TC_FLASH_TEXT(", within "));
       fw::sayVolts(facts.limit);
-      say(TC_PSTR(" of curve 1 ("));
+      say(TC_FLASH_TEXT(" of curve 1 ("));
       fw::sayVolts(facts.other_mv);
-      sayLine(TC_PSTR("): sweep again at another battery voltage; nothing changed"));
+      sayLine(TC_FLASH_TEXT("): sweep again at another battery voltage; nothing changed"));
       return;
     case StoreRefusal::kTooManySamples:
-      say(TC_PSTR("error: the last sweep has "));
+      say(TC_FLASH_TEXT("error: the last sweep has "));
       fw::printUint(sweep.samples);
-      say(TC_PSTR(" steps, model v2 keeps at most "));
+      say(TC_FLASH_TEXT(" steps, model v2 keeps at most "));
       fw::printUint(facts.limit);
-      say(TC_PSTR(" (SRAM): set a step of at least "));
+      say(TC_FLASH_TEXT(" (SRAM): set a step of at least "));
       fw::printUint(facts.step_us);
-      sayLine(TC_PSTR(" us for this range and sweep again; nothing changed"));
+      sayLine(TC_FLASH_TEXT(" us for this range and sweep again; nothing changed"));
       return;
     case StoreRefusal::kFitUnusable:
-      say(TC_PSTR("error: model v2 cannot use the last sweep: "));
+      say(TC_FLASH_TEXT("error: model v2 cannot use the last sweep: "));
       printFitProblem(facts.fit);
-      sayLine(TC_PSTR("; nothing changed"));
+      sayLine(TC_FLASH_TEXT("; nothing changed"));
       return;
     case StoreRefusal::kRefinedNear:
-      say(TC_PSTR("error: motor "));
+      say(TC_FLASH_TEXT("error: motor "));
       fw::printUint(facts.slot);
-      say(TC_PSTR(" already holds a model v2 refined by a sweep at "));
+      say(TC_FLASH_TEXT(" already holds a model v2 refined by a sweep at "));
       fw::sayVolts(facts.other_mv);
-      say(TC_PSTR(", within "));
+      say(TC_FLASH_TEXT(", within "));
       fw::sayVolts(facts.limit);
-      say(TC_PSTR(" of this one ("));
+      say(TC_FLASH_TEXT(" of this one ("));
       fw::sayVolts(facts.this_mv);
-      sayLine(TC_PSTR("): sweep at another voltage, or erase and store v2 to start over; "
+      sayLine(TC_FLASH_TEXT("): sweep at another voltage, or erase and store v2 to start over; "
                       "nothing changed"));
       return;
   }
@@ -87,139 +87,139 @@ void sayV1Outcome(const V1Outcome& outcome, const tc::StoreReport& report,
                   const SweepResult& sweep, const tc::MotorCalibration& record) {
   const uint8_t slot = outcome.slot;
   if (report.status == tc::StoreStatus::kImplausible) {
-    say(TC_PSTR("error: curve "));
+    say(TC_FLASH_TEXT("error: curve "));
     fw::printInt(outcome.which);
-    say(TC_PSTR(" of motor "));
+    say(TC_FLASH_TEXT(" of motor "));
     fw::printUint(slot);
-    say(TC_PSTR(" cannot be right, "));
+    say(TC_FLASH_TEXT(" cannot be right, "));
     fw::printRecordStatus(tc::DecodeStatus::kBadContent, report.why);
-    sayLine(TC_PSTR("; nothing stored: check the sweep (range, tare, divider) and sweep again"));
+    sayLine(TC_FLASH_TEXT("; nothing stored: check the sweep (range, tare, divider) and sweep again"));
     return;
   }
   if (report.status == tc::StoreStatus::kSettingsNoRoom) {
-    say(TC_PSTR("error: motor "));
+    say(TC_FLASH_TEXT("error: motor "));
     fw::printUint(slot);
-    sayLine(TC_PSTR("'s slot holds the divider setting and no other slot is free of thesis "
+    sayLine(TC_FLASH_TEXT("'s slot holds the divider setting and no other slot is free of thesis "
                     "records: a thesis record here would lose it; store v2 instead, or set "
                     "divider 100000 47000 first if that is the divider on A1; nothing changed"));
     return;
   }
   if (report.status != tc::StoreStatus::kStored ||
       outcome.after != tc::DecodeStatus::kOk) {
-    say(TC_PSTR("error: read-back of motor "));
+    say(TC_FLASH_TEXT("error: read-back of motor "));
     fw::printUint(slot);
-    say(TC_PSTR("'s record failed ("));
+    say(TC_FLASH_TEXT("'s record failed ("));
     hal::Uart::print(tc::decodeStatusText(outcome.after));
-    sayLine(TC_PSTR("): the EEPROM may be worn; try another slot"));
+    sayLine(TC_FLASH_TEXT("): the EEPROM may be worn; try another slot"));
     return;
   }
-  say(TC_PSTR("stored curve "));
+  say(TC_FLASH_TEXT("stored curve "));
   fw::printInt(outcome.which);
-  say(TC_PSTR(" of motor "));
+  say(TC_FLASH_TEXT(" of motor "));
   fw::printUint(slot);
-  say(TC_PSTR(" ("));
+  say(TC_FLASH_TEXT(" ("));
   printRecordRange(slot);
-  say(TC_PSTR("): start "));
+  say(TC_FLASH_TEXT("): start "));
   fw::sayVolts(sweep.curve.start_mv);
-  say(TC_PSTR(", 1.."));
+  say(TC_FLASH_TEXT(", 1.."));
   fw::printUint(sweep.curve.maxGrams());
-  say(TC_PSTR(" g"));
+  say(TC_FLASH_TEXT(" g"));
   if (outcome.which == 1) {
-    say(TC_PSTR(", sag offsets in "));
+    say(TC_FLASH_TEXT(", sag offsets in "));
     fw::printUint(tc::kSagBins);
-    say(TC_PSTR(" bins of "));
+    say(TC_FLASH_TEXT(" bins of "));
     fw::printUint(tc::kSagBinWidthUs);
-    say(TC_PSTR(" us from "));
+    say(TC_FLASH_TEXT(" us from "));
     fw::printUint(record.sag.base_pwm_us);
-    say(TC_PSTR(" us"));
-    if (record.hasSecondCurve()) say(TC_PSTR("; curve 2 kept"));
+    say(TC_FLASH_TEXT(" us"));
+    if (record.hasSecondCurve()) say(TC_FLASH_TEXT("; curve 2 kept"));
   }
-  if (outcome.had_v2) say(TC_PSTR("; replaced model v2 (the slot holds the thesis record now)"));
+  if (outcome.had_v2) say(TC_FLASH_TEXT("; replaced model v2 (the slot holds the thesis record now)"));
   sayWritten(outcome.written);
   sayStoreSafety(report, slot);
 }
 
 void sayV2FitFailed(uint8_t slot, bool refine, tc::FitV2Status status) {
-  say(refine ? TC_PSTR("error: refining motor ") : TC_PSTR("error: fitting model v2 of motor "));
+  say(refine ? TC_FLASH_TEXT("error: refining motor ") : TC_FLASH_TEXT("error: fitting model v2 of motor "));
   fw::printUint(slot);
-  say(TC_PSTR(" failed: "));
+  say(TC_FLASH_TEXT(" failed: "));
   printFitProblem(status);
-  sayLine(TC_PSTR("; check the sweep (range down to the ESC start, step 10 us); nothing changed"));
+  sayLine(TC_FLASH_TEXT("; check the sweep (range down to the ESC start, step 10 us); nothing changed"));
 }
 
 void sayV2Outcome(const V2Outcome& outcome, const tc::StoreReport& w,
                   const tc::ModelV2& model) {
   const uint8_t slot = outcome.slot;
   if (w.status == tc::StoreStatus::kUnchanged) {
-    say(TC_PSTR("motor "));
+    say(TC_FLASH_TEXT("motor "));
     fw::printUint(slot);
-    say(TC_PSTR(" already holds this model v2 ("));
+    say(TC_FLASH_TEXT(" already holds this model v2 ("));
     sayCopy(w.copy);
-    say(TC_PSTR(", sequence "));
+    say(TC_FLASH_TEXT(", sequence "));
     fw::printUint(w.sequence);
-    say(TC_PSTR("): nothing to write"));
+    say(TC_FLASH_TEXT("): nothing to write"));
     sayWritten(outcome.written);
     return;
   }
   if (w.status != tc::StoreStatus::kStored) {
-    say(TC_PSTR("error: storing model v2 of motor "));
+    say(TC_FLASH_TEXT("error: storing model v2 of motor "));
     fw::printUint(slot);
     if (w.status == tc::StoreStatus::kImplausible) {
-      say(TC_PSTR(" refused: the model cannot be right, "));
+      say(TC_FLASH_TEXT(" refused: the model cannot be right, "));
       fw::printRecordStatus(tc::DecodeStatus::kBadContent, w.why);
-      say(TC_PSTR("; check the sweep (range, tare, divider) and sweep again"));
+      say(TC_FLASH_TEXT("; check the sweep (range, tare, divider) and sweep again"));
     } else {
       say(w.status == tc::StoreStatus::kVerifyFailed
-              ? TC_PSTR(" failed: read-back of the copy just written is bad (EEPROM worn?); "
+              ? TC_FLASH_TEXT(" failed: read-back of the copy just written is bad (EEPROM worn?); "
                         "the previous copy is kept, try another slot")
-              : TC_PSTR(" failed: the model is out of range; sweep again"));
+              : TC_FLASH_TEXT(" failed: the model is out of range; sweep again"));
     }
     sayWritten(outcome.written);
     return;
   }
-  say(TC_PSTR("stored model v2 of motor "));
+  say(TC_FLASH_TEXT("stored model v2 of motor "));
   fw::printUint(slot);
-  say(TC_PSTR(" ("));
+  say(TC_FLASH_TEXT(" ("));
   printRecordRange(slot);
-  say(TC_PSTR(", "));
+  say(TC_FLASH_TEXT(", "));
   sayCopy(w.copy);
-  say(TC_PSTR(", sequence "));
+  say(TC_FLASH_TEXT(", sequence "));
   fw::printUint(w.sequence);
-  say(TC_PSTR("): "));
+  say(TC_FLASH_TEXT("): "));
   if (outcome.refine) {
-    say(TC_PSTR("refined with this sweep at "));
+    say(TC_FLASH_TEXT("refined with this sweep at "));
     fw::sayVolts(outcome.rest_mv);
-    say(TC_PSTR(" (first sweep "));
+    say(TC_FLASH_TEXT(" (first sweep "));
     fw::sayVolts(model.rest_mv);
-    say(TC_PSTR("), start "));
+    say(TC_FLASH_TEXT("), start "));
     printQ4Us(model.start_q4_us);
-    say(TC_PSTR(" (was "));
+    say(TC_FLASH_TEXT(" (was "));
     printQ4Us(outcome.before.start_q4_us);
-    say(TC_PSTR(")"));
+    say(TC_FLASH_TEXT(")"));
   } else {
-    say(TC_PSTR("fitted from one sweep at "));
+    say(TC_FLASH_TEXT("fitted from one sweep at "));
     fw::sayVolts(outcome.rest_mv);
-    say(TC_PSTR(", start "));
+    say(TC_FLASH_TEXT(", start "));
     printQ4Us(model.start_q4_us);
   }
-  say(TC_PSTR(", curve to "));
+  say(TC_FLASH_TEXT(", curve to "));
   fw::printFixed(model.maxForceDg(), 1);
-  say(TC_PSTR(" g in "));
+  say(TC_FLASH_TEXT(" g in "));
   fw::printUint(model.knots);
-  say(TC_PSTR(" knots"));
-  if (outcome.before.has_v1) say(TC_PSTR("; replaced the thesis record"));
+  say(TC_FLASH_TEXT(" knots"));
+  if (outcome.before.has_v1) say(TC_FLASH_TEXT("; replaced the thesis record"));
   if (outcome.before.has_v2 && !outcome.refine) {
-    say(TC_PSTR("; replaced the model of a sweep at "));
+    say(TC_FLASH_TEXT("; replaced the model of a sweep at "));
     fw::sayVolts(outcome.before.rest_mv);
   }
   sayWritten(outcome.written);
   sayStoreSafety(w, slot);
   if (!outcome.refine) {
-    say(TC_PSTR("# next: sweep at another voltage (>= "));
+    say(TC_FLASH_TEXT("# next: sweep at another voltage (>= "));
     fw::sayVolts(tc::kV2MinVoltageGapMv);
-    say(TC_PSTR(" from "));
+    say(TC_FLASH_TEXT(" from "));
     fw::sayVolts(outcome.rest_mv);
-    sayLine(TC_PSTR("), then store v2 to refine"));
+    sayLine(TC_FLASH_TEXT("), then store v2 to refine"));
   }
 }
 

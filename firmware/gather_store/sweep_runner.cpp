@@ -12,11 +12,11 @@ using fw::say;
 using fw::sayLine;
 
 uint16_t GatherStoreApp::plannedSamples() const {
-  return static_cast<uint16_t>((settings_.pwm_max_us - settings_.pwm_min_us) / settings_.step_us +
+  return static_cast<uint16_t>((sweep_settings_.pwm_max_us - sweep_settings_.pwm_min_us) / sweep_settings_.step_us +
                                1u);
 }
 
-void GatherStoreApp::stopMotor() { hal::Esc::writePulse(settings_.slot, kStopPwmUs); }
+void GatherStoreApp::stopMotor() { hal::Esc::writePulse(sweep_settings_.slot, kStopPwmUs); }
 
 bool GatherStoreApp::waitOrAbort(uint16_t ms) {
   const uint32_t start = hal::Clock::millis();
@@ -32,19 +32,19 @@ bool GatherStoreApp::waitOrAbort(uint16_t ms) {
 }
 
 void GatherStoreApp::printSweepPlan() {
-  fw::printUint(settings_.pwm_min_us);
-  say(TC_PSTR(".."));
-  fw::printUint(settings_.pwm_max_us);
-  say(TC_PSTR(" us, step "));
-  fw::printUint(settings_.step_us);
-  say(TC_PSTR(" us, "));
+  fw::printUint(sweep_settings_.pwm_min_us);
+  say(TC_FLASH_TEXT(".."));
+  fw::printUint(sweep_settings_.pwm_max_us);
+  say(TC_FLASH_TEXT(" us, step "));
+  fw::printUint(sweep_settings_.step_us);
+  say(TC_FLASH_TEXT(" us, "));
   printSettle();
 }
 
 void GatherStoreApp::printSettle() {
-  say(settings_.settle_auto ? TC_PSTR("settle auto (cap ") : TC_PSTR("settle "));
-  fw::printUint(settings_.settle_ms);
-  say(settings_.settle_auto ? TC_PSTR(" ms)") : TC_PSTR(" ms"));
+  say(sweep_settings_.settle_auto ? TC_FLASH_TEXT("settle auto (cap ") : TC_FLASH_TEXT("settle "));
+  fw::printUint(sweep_settings_.settle_ms);
+  say(sweep_settings_.settle_auto ? TC_FLASH_TEXT(" ms)") : TC_FLASH_TEXT(" ms"));
 }
 
 bool GatherStoreApp::settleForce(uint16_t& counts) {
@@ -62,7 +62,7 @@ bool GatherStoreApp::settleForce(uint16_t& counts) {
     }
     previous = counts;
     have_previous = true;
-    if (hal::Clock::millis() - start >= settings_.settle_ms) return true;  // the cap
+    if (hal::Clock::millis() - start >= sweep_settings_.settle_ms) return true;  // the cap
   }
 }
 
@@ -102,82 +102,82 @@ void GatherStoreApp::abortSweep(SweepEnd why, uint16_t value) {
   // The key that aborted is not a command, nor is the rest of its line (e.g. "xerase").
   if (why == SweepEnd::kKey)
     reader_.abortLine(value == kKeyUnread ? hal::Uart::read() : static_cast<int16_t>(value));
-  say(TC_PSTR("# aborted: "));
+  say(TC_FLASH_TEXT("# aborted: "));
   switch (why) {
     case SweepEnd::kKey:
-      say(TC_PSTR("key pressed"));
+      say(TC_FLASH_TEXT("key pressed"));
       break;
     case SweepEnd::kOverload:
-      say(TC_PSTR("load cell overload, force "));
+      say(TC_FLASH_TEXT("load cell overload, force "));
       fw::printInt(static_cast<int16_t>(value));
-      say(TC_PSTR(" g (limit "));
+      say(TC_FLASH_TEXT(" g (limit "));
       fw::printInt(cell_.config().overload_g);
-      say(TC_PSTR(" g): lower range MAX"));
+      say(TC_FLASH_TEXT(" g): lower range MAX"));
       break;
     case SweepEnd::kImplausible:
-      say(TC_PSTR("load cell reads "));
+      say(TC_FLASH_TEXT("load cell reads "));
       fw::printUint(value);
-      say(TC_PSTR(" counts (ADC rail): check the amplifier and the wire to A0"));
+      say(TC_FLASH_TEXT(" counts (ADC rail): check the amplifier and the wire to A0"));
       break;
     case SweepEnd::kBattery:
-      say(TC_PSTR("battery reads "));
+      say(TC_FLASH_TEXT("battery reads "));
       fw::sayVolts(value);
-      say(TC_PSTR(", outside "));
+      say(TC_FLASH_TEXT(", outside "));
       fw::sayVolts(battery_.config().min_sane_mv);
-      say(TC_PSTR(".."));
+      say(TC_FLASH_TEXT(".."));
       fw::sayVolts(battery_.config().max_sane_mv);
-      say(TC_PSTR(": check the pack and the divider on A1"));
+      say(TC_FLASH_TEXT(": check the pack and the divider on A1"));
       break;
     case SweepEnd::kDone:
       break;
   }
-  sayLine(TC_PSTR("; motor stopped (1000 us), nothing kept: type sweep to start again"));
+  sayLine(TC_FLASH_TEXT("; motor stopped (1000 us), nothing kept: type sweep to start again"));
 }
 
 void GatherStoreApp::cmdSweep() {
   if (!cell_.isTared()) {
-    sayLine(TC_PSTR("error: a sweep needs a tare first: with the motor mounted and stopped, "
+    sayLine(TC_FLASH_TEXT("error: a sweep needs a tare first: with the motor mounted and stopped, "
                     "type tare (or cal W)"));
     return;
   }
   const uint16_t planned = plannedSamples();
   if (planned > kMaxSweepSamples) {  // range and step refuse this already; kept as a guard
-    sayLine(TC_PSTR("error: too many steps for the sample buffer: use a larger step"));
+    sayLine(TC_FLASH_TEXT("error: too many steps for the sample buffer: use a larger step"));
     return;
   }
-  const uint8_t slot = settings_.slot;
+  const uint8_t slot = sweep_settings_.slot;
   sweep_.valid = false;
   sweep_.complete = false;
   if (!swallowLineFeed()) return;
   scratch_.startBuilder();
-  sag_builder_.reset(settings_.pwm_min_us);
+  sag_builder_.reset(sweep_settings_.pwm_min_us);
   fitter_.reset();
 
-  say(TC_PSTR("# sweep motor "));
+  say(TC_FLASH_TEXT("# sweep motor "));
   fw::printUint(slot);
-  say(TC_PSTR(": "));
+  say(TC_FLASH_TEXT(": "));
   printSweepPlan();
-  say(TC_PSTR(", "));
+  say(TC_FLASH_TEXT(", "));
   fw::printUint(planned);
-  sayLine(TC_PSTR(" steps; any key aborts"));
+  sayLine(TC_FLASH_TEXT(" steps; any key aborts"));
   if (planned > kMaxV2Samples) {
-    say(TC_PSTR("# note: model v2 keeps at most "));
+    say(TC_FLASH_TEXT("# note: model v2 keeps at most "));
     fw::printUint(kMaxV2Samples);
-    sayLine(TC_PSTR(" steps: store v2 will refuse this sweep (store 1 and store 2 work)"));
+    sayLine(TC_FLASH_TEXT(" steps: store v2 will refuse this sweep (store 1 and store 2 work)"));
   }
 
   const uint32_t since_arm = hal::Clock::millis() - armed_at_ms_;
   if (since_arm < kArmMs) {
-    sayLine(TC_PSTR("# arming the ESC (1000 us)"));
+    sayLine(TC_FLASH_TEXT("# arming the ESC (1000 us)"));
     if (!waitOrAbort(static_cast<uint16_t>(kArmMs - since_arm))) return;
   }
 
-  sayLine(TC_PSTR("pwm_us,force_g,vbat_v,t_s,motor,dir"));
+  sayLine(TC_FLASH_TEXT("pwm_us,force_g,vbat_v,t_s,motor,dir"));
   const uint32_t start_ms = hal::Clock::millis();
-  uint16_t pwm = settings_.pwm_min_us;
+  uint16_t pwm = sweep_settings_.pwm_min_us;
   int16_t max_force_dg = 0;
   for (uint16_t done = 1; done <= planned;
-       ++done, pwm = static_cast<uint16_t>(pwm + settings_.step_us)) {
+       ++done, pwm = static_cast<uint16_t>(pwm + sweep_settings_.step_us)) {
     int16_t force_dg;
     uint16_t vbat_mv;
     if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
@@ -208,12 +208,12 @@ bool GatherStoreApp::swallowLineFeed() {
 }
 
 bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {
-  hal::Esc::writePulse(settings_.slot, pwm_us);
+  hal::Esc::writePulse(sweep_settings_.slot, pwm_us);
   uint16_t force_counts;
-  if (settings_.settle_auto) {
+  if (sweep_settings_.settle_auto) {
     if (!settleForce(force_counts)) return false;
   } else {
-    if (!waitOrAbort(settings_.settle_ms)) return false;
+    if (!waitOrAbort(sweep_settings_.settle_ms)) return false;
     if (!readForceCounts(force_counts)) return false;
   }
   const tc::LoadCellStatus cell_status = cell_.check(force_counts);

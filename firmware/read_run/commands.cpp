@@ -1,209 +1,214 @@
-// read_run's console commands: one table in flash (fw::Command rows, firmware/common/shell.hpp)
-// and a handler per row. The shell parses and range-checks the arguments from the rows,
+// read_run's console commands: one table in flash (fw::Command rows, firmware/common/shell.hpp),
+// a one-call handler per row and the command methods they call. The shell parses and range-checks the arguments from the rows,
 // refuses guarded rows without a checksum in strict mode and prints `help` from them; a
 // handler runs only with arguments its row accepted. docs/read_run.md holds the help text a
 // host test compares with printHelp().
 #include "console_view.hpp"
 #include "eeprom_console.hpp"
 #include "read_run_app.hpp"
+#include "record_report.hpp"
 #include "shell.hpp"
+#include "slot_report.hpp"
 
 namespace rr {
 
 // `help` spells these defaults and this pace in flash text; a changed constant must change it.
-static_assert(kLiftoffDefaultRampMs == 2000 && kLiftoffDefaultHoldMs == 5000,
+static_assert(Liftoff::kDefaultRampMs == 2000 && Liftoff::kDefaultHoldMs == 5000,
               "the liftoff help row says default 2000 ms ramp, 5000 ms hold");
 static_assert(kStreamLinesPerSecond == 10 && kMotors == 4,
               "the stream help row says motor0..motor3, 10 lines/s");
 
 using fw::sayLine;
 
+// The table's handlers: one call each, from the parsed arguments to the app's command. The
+// logic is in the cmd methods below, next to the state they change (the same shape as
+// gather_store's GatherStoreCommands).
 struct Commands {
-  static void help(ReadRunApp&, const fw::ArgValues&) { ReadRunApp::printHelp(); }
+  using App = ReadRunApp;
+  using Args = fw::ArgValues;
+  static uint16_t u16(int32_t v) { return static_cast<uint16_t>(v); }
 
-  // f G: every calibrated motor; the others stay at 1000 us with a warning.
-  static void forceAll(ReadRunApp& app, const fw::ArgValues& args) {
-    uint8_t armable = 0;
-    for (uint8_t i = 0; i < kMotors; ++i) armable += app.motors_[i].isArmable() ? 1 : 0;
-    if (armable == 0) {
-      sayLine(TC_PSTR("error: no motor is calibrated; calibrate them with gather_store first"));
-      return;
-    }
-    for (uint8_t i = 0; i < kMotors; ++i) {
-      if (app.motors_[i].isArmable()) {
-        app.setForce(i, static_cast<uint16_t>(args[0]));
-      } else {
-        view::heldMotor(i, app.motors_[i]);
-      }
-    }
+  static void help(App&, const Args&) { App::printHelp(); }
+  static void forceAll(App& app, const Args& a) { app.cmdForceAll(u16(a[0])); }
+  static void forceOne(App& app, const Args& a) { app.cmdForceOne(static_cast<uint8_t>(a[0]), u16(a[1])); }
+  static void stop(App& app, const Args&) { app.cmdStop(); }
+  static void status(App& app, const Args&) { app.cmdStatus(); }
+  static void liftoff(App& app, const Args& a) {
+    app.cmdLiftoff(u16(a[0]), a.has(1) ? u16(a[1]) : Liftoff::kDefaultRampMs,
+                   a.has(2) ? u16(a[2]) : Liftoff::kDefaultHoldMs);
   }
-
-  static void forceOne(ReadRunApp& app, const fw::ArgValues& args) {
-    const uint8_t index = static_cast<uint8_t>(args[0]);
-    if (!app.requireArmable(index)) return;
-    app.setForce(index, static_cast<uint16_t>(args[1]));
+  static void stream(App& app, const Args& a) { app.cmdStream(a[0] == 0); }  // on|off
+  static void rate(App& app, const Args& a) { app.cmdRate(u16(a[0])); }
+  static void eeprom(App& app, const Args& a) { app.cmdEeprom(a[0] != 0); }  // crc|dump
+  static void dividerShow(App& app, const Args&) { app.cmdDividerShow(); }
+  static void dividerSet(App& app, const Args& a) {
+    app.cmdDivider(static_cast<uint32_t>(a[0]), static_cast<uint32_t>(a[1]));
   }
-
-  static void stop(ReadRunApp& app, const fw::ArgValues&) {
-    app.stopAll();
-    sayLine(TC_PSTR("stopped: every ESC at 1000 us"));
-  }
-
-  static void status(ReadRunApp& app, const fw::ArgValues&) {
-    view::status(app, &ReadRunApp::serviceHook);
-  }
-
-  static void liftoff(ReadRunApp& app, const fw::ArgValues& args) {
-    for (uint8_t i = 0; i < kMotors; ++i) {
-      if (!app.motors_[i].isArmable()) {
-        view::liftoffNeedsAll(i, app.motors_[i]);
-        return;
-      }
-    }
-    if (app.isRunning()) {
-      sayLine(TC_PSTR("error: motors are running; send stop first, then liftoff"));
-      return;
-    }
-    const uint32_t now_ms = hal::Clock::millis();
-    app.liftoff_force_g_ = static_cast<uint16_t>(args[0]);
-    app.liftoff_ramp_ms_ = args.has(1) ? static_cast<uint16_t>(args[1]) : kLiftoffDefaultRampMs;
-    app.liftoff_hold_ms_ = args.has(2) ? static_cast<uint16_t>(args[2]) : kLiftoffDefaultHoldMs;
-    app.liftoff_start_ms_ = now_ms;
-    app.liftoff_next_progress_ms_ = now_ms;
-    app.liftoff_holding_ = false;
-    app.last_line_ms_ = now_ms;  // the link timeout counts from the command
-    app.mode_ = Mode::kLiftoff;
-    app.hold_prompt_ = true;  // its progress lines follow; the prompt comes at the end
-    view::liftoffStarted(app.liftoff_force_g_, app.liftoff_ramp_ms_, app.liftoff_hold_ms_);
-  }
-
-  static void stream(ReadRunApp& app, const fw::ArgValues& args) {
-    if (args[0] == 0) {  // on
-      view::streamHeader();
-      app.stream_ = true;
-      app.stream_countdown_ = 0;
-      app.hold_prompt_ = true;  // the next line is a CSV row, and must start clean
-    } else {
-      app.stream_ = false;
-      sayLine(TC_PSTR("# stream off"));
-    }
-  }
-
-  static void rate(ReadRunApp& app, const fw::ArgValues& args) {
-    const uint16_t hz = static_cast<uint16_t>(args[0]);
-    if (app.isRunning()) {
-      sayLine(TC_PSTR("error: motors are running; send stop first, then change the rate"));
-      return;
-    }
-    if (!hal::Esc::setFrameRate(hz)) {
-      sayLine(TC_PSTR("error: the ESC driver refused that rate; nothing changed"));
-      return;
-    }
-    app.setFrameRate(hz);
-    app.scheduleFrames(hal::Clock::millis());
-    fw::say(TC_PSTR("frame rate "));
-    fw::printUint(hz);
-    sayLine(TC_PSTR(" Hz"));
-  }
-
-  static void eeprom(ReadRunApp& app, const fw::ArgValues& args) {
-    if (app.isRunning()) {
-      sayLine(TC_PSTR("error: eeprom: motors are running; send stop first"));
-    } else if (args[0] == 0) {
-      fw::eepromCrc();
-    } else {
-      fw::eepromDump();
-    }
-  }
-
-  static void dividerShow(ReadRunApp& app, const fw::ArgValues&) {
-    fw::printDivider(app.settings_);
-    fw::newline();
-  }
-
-  // `divider R1 R2`: the battery monitor's divider (thrustcal/board_settings.hpp). A new value
-  // is stored, then the calibration is loaded again against it: volts come from counts through
-  // it, and a record's voltages must lie within its full scale.
-  static void dividerSet(ReadRunApp& app, const fw::ArgValues& args) {
-    if (app.isRunning()) {
-      sayLine(TC_PSTR("error: motors are running; send stop first, then set the divider"));
-      return;
-    }
-    if (!fw::setDivider(static_cast<uint32_t>(args[0]), static_cast<uint32_t>(args[1]),
-                        app.settings_)) {
-      return;
-    }
-    const uint8_t shift = app.v2_.bus.shift;
-    app.v2_.bus = tc::BusVoltageFilter();  // its millivolts came through the old divider
-    app.v2_.bus.shift = shift;
-    app.v2_.sag = tc::BusSagFilter();
-    app.bus_sample_sane_ = false;
-    app.loadCalibration();
-  }
-
-  static void strict(ReadRunApp& app, const fw::ArgValues& args) {
-    app.line_.strictCommand(args[0] == 0);
-  }
+  static void strict(App& app, const Args& a) { app.cmdStrict(a[0] == 0); }  // on|off
 };
+
+// f G: every calibrated motor; the others stay at 1000 us with a warning.
+void ReadRunApp::cmdForceAll(uint16_t force_g) {
+  if (motors_.armableCount() == 0) {
+    sayLine(TC_FLASH_TEXT("error: no motor is calibrated; calibrate them with gather_store first"));
+    return;
+  }
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    if (motors_.isArmable(i)) {
+      motors_.setForce(i, force_g);
+    } else {
+      view::heldMotor(i, motors_.motor(i));
+    }
+  }
+}
+
+void ReadRunApp::cmdForceOne(uint8_t index, uint16_t force_g) {
+  if (!requireArmable(index)) return;
+  motors_.setForce(index, force_g);
+}
+
+void ReadRunApp::cmdStop() {
+  stopAll();
+  sayLine(TC_FLASH_TEXT("stopped: every ESC at 1000 us"));
+}
+
+void ReadRunApp::cmdStatus() { view::status(*this, &ReadRunApp::serviceHook); }
+
+void ReadRunApp::cmdLiftoff(uint16_t force_g, uint16_t ramp_ms, uint16_t hold_ms) {
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    if (!motors_.isArmable(i)) {
+      view::liftoffNeedsAll(i, motors_.motor(i));
+      return;
+    }
+  }
+  if (isRunning()) {
+    sayLine(TC_FLASH_TEXT("error: motors are running; send stop first, then liftoff"));
+    return;
+  }
+  const uint32_t now_ms = hal::Clock::millis();
+  liftoff_.start(force_g, ramp_ms, hold_ms, now_ms);
+  link_.heard(now_ms);  // the link timeout counts from the command
+  mode_ = Mode::kLiftoff;
+  hold_prompt_ = true;  // its progress lines follow; the prompt comes at the end
+  view::liftoffStarted(force_g, ramp_ms, hold_ms);
+}
+
+void ReadRunApp::cmdStream(bool on) {
+  if (on) {
+    view::streamHeader();
+    stream_.on = true;
+    stream_.countdown = 0;
+    hold_prompt_ = true;  // the next line is a CSV row, and must start clean
+  } else {
+    stream_.on = false;
+    sayLine(TC_FLASH_TEXT("# stream off"));
+  }
+}
+
+void ReadRunApp::cmdRate(uint16_t frame_hz) {
+  if (isRunning()) {
+    sayLine(TC_FLASH_TEXT("error: motors are running; send stop first, then change the rate"));
+    return;
+  }
+  if (!hal::Esc::setFrameRate(frame_hz)) {
+    sayLine(TC_FLASH_TEXT("error: the ESC driver refused that rate; nothing changed"));
+    return;
+  }
+  setFrameRate(frame_hz);
+  scheduleFrames(hal::Clock::millis());
+  fw::say(TC_FLASH_TEXT("frame rate "));
+  fw::printUint(frame_hz);
+  sayLine(TC_FLASH_TEXT(" Hz"));
+}
+
+void ReadRunApp::cmdEeprom(bool dump) {
+  if (isRunning()) {
+    sayLine(TC_FLASH_TEXT("error: eeprom: motors are running; send stop first"));
+  } else if (dump) {
+    fw::eepromDump();
+  } else {
+    fw::eepromCrc();
+  }
+}
+
+void ReadRunApp::cmdDividerShow() {
+  fw::printDivider(motors_.boardSettings());
+  fw::newline();
+}
+
+// `divider R1 R2`: the battery monitor's divider (thrustcal/board_settings.hpp). A new value is
+// stored, then the calibration is loaded again against it: volts come from counts through it,
+// and a record's voltages must lie within its full scale.
+void ReadRunApp::cmdDivider(uint32_t top_ohm, uint32_t bottom_ohm) {
+  if (isRunning()) {
+    sayLine(TC_FLASH_TEXT("error: motors are running; send stop first, then set the divider"));
+    return;
+  }
+  if (!fw::setDivider(top_ohm, bottom_ohm, motors_.boardSettings())) return;
+  motors_.restartFilters();
+  loadCalibration();
+}
+
+void ReadRunApp::cmdStrict(bool on) { line_.strictCommand(on); }
 
 namespace {
 
 // Argument specs: names as `help` and the errors show them, ranges from the named limits.
-const char kG[] TC_PROGMEM = "G";
-const char kN[] TC_PROGMEM = "N";
-const char kRampMs[] TC_PROGMEM = "RAMP_MS";
-const char kHoldMs[] TC_PROGMEM = "HOLD_MS";
-const char kHz[] TC_PROGMEM = "HZ";
-const char kR1[] TC_PROGMEM = "R1_OHM";
-const char kR2[] TC_PROGMEM = "R2_OHM";
-const char kOnOff[] TC_PROGMEM = "on|off";
-const char kCrcDump[] TC_PROGMEM = "crc|dump";
+const char kG[] TC_FLASH = "G";
+const char kN[] TC_FLASH = "N";
+const char kRampMs[] TC_FLASH = "RAMP_MS";
+const char kHoldMs[] TC_FLASH = "HOLD_MS";
+const char kHz[] TC_FLASH = "HZ";
+const char kR1[] TC_FLASH = "R1_OHM";
+const char kR2[] TC_FLASH = "R2_OHM";
+const char kOnOff[] TC_FLASH = "on|off";
+const char kCrcDump[] TC_FLASH = "crc|dump";
 
 constexpr int32_t kDividerMax = static_cast<int32_t>(tc::kDividerMaxOhm);
 
-const fw::ArgSpec kForceAllArgs[] TC_PROGMEM = {{kG, nullptr, 0, kForceMaxG}};
-const fw::ArgSpec kForceOneArgs[] TC_PROGMEM = {{kN, nullptr, 0, kMotors - 1},
+const fw::ArgSpec kForceAllArgs[] TC_FLASH = {{kG, nullptr, 0, kForceMaxG}};
+const fw::ArgSpec kForceOneArgs[] TC_FLASH = {{kN, nullptr, 0, kMotors - 1},
                                                 {kG, nullptr, 0, kForceMaxG}};
-const fw::ArgSpec kLiftoffArgs[] TC_PROGMEM = {{kG, nullptr, 1, kForceMaxG},
-                                               {kRampMs, nullptr, 0, kLiftoffMaxMs},
-                                               {kHoldMs, nullptr, 0, kLiftoffMaxMs}};
-const fw::ArgSpec kOnOffArgs[] TC_PROGMEM = {{kOnOff, kOnOff, 0, 0}};
-const fw::ArgSpec kRateArgs[] TC_PROGMEM = {{kHz, nullptr, hal::kEscMinFrameHz, hal::kEscMaxFrameHz}};
-const fw::ArgSpec kEepromArgs[] TC_PROGMEM = {{kCrcDump, kCrcDump, 0, 0}};
-const fw::ArgSpec kDividerArgs[] TC_PROGMEM = {{kR1, nullptr, 0, kDividerMax},
+const fw::ArgSpec kLiftoffArgs[] TC_FLASH = {{kG, nullptr, 1, kForceMaxG},
+                                               {kRampMs, nullptr, 0, Liftoff::kMaxMs},
+                                               {kHoldMs, nullptr, 0, Liftoff::kMaxMs}};
+const fw::ArgSpec kOnOffArgs[] TC_FLASH = {{kOnOff, kOnOff, 0, 0}};
+const fw::ArgSpec kRateArgs[] TC_FLASH = {{kHz, nullptr, hal::kEscMinFrameHz, hal::kEscMaxFrameHz}};
+const fw::ArgSpec kEepromArgs[] TC_FLASH = {{kCrcDump, kCrcDump, 0, 0}};
+const fw::ArgSpec kDividerArgs[] TC_FLASH = {{kR1, nullptr, 0, kDividerMax},
                                                {kR2, nullptr, 0, kDividerMax}};
 
-const char kHelpName[] TC_PROGMEM = "help";
-const char kFName[] TC_PROGMEM = "f";
-const char kStopName[] TC_PROGMEM = "stop";
-const char kStatusName[] TC_PROGMEM = "status";
-const char kLiftoffName[] TC_PROGMEM = "liftoff";
-const char kStreamName[] TC_PROGMEM = "stream";
-const char kRateName[] TC_PROGMEM = "rate";
-const char kEepromName[] TC_PROGMEM = "eeprom";
-const char kDividerName[] TC_PROGMEM = "divider";
-const char kStrictName[] TC_PROGMEM = "strict";
+const char kHelpName[] TC_FLASH = "help";
+const char kFName[] TC_FLASH = "f";
+const char kStopName[] TC_FLASH = "stop";
+const char kStatusName[] TC_FLASH = "status";
+const char kLiftoffName[] TC_FLASH = "liftoff";
+const char kStreamName[] TC_FLASH = "stream";
+const char kRateName[] TC_FLASH = "rate";
+const char kEepromName[] TC_FLASH = "eeprom";
+const char kDividerName[] TC_FLASH = "divider";
+const char kStrictName[] TC_FLASH = "strict";
 
-const char kHelpHelp[] TC_PROGMEM = "this list";
-const char kForceAllHelp[] TC_PROGMEM = "all calibrated motors to G grams";
-const char kForceOneHelp[] TC_PROGMEM = "motor N to G grams";
-const char kStopHelp[] TC_PROGMEM = "all motors to 0 g (1000 us)";
-const char kStatusHelp[] TC_PROGMEM = "per motor: force, pwm, battery, flags; v2 motors: headroom";
-const char kLiftoffHelp[] TC_PROGMEM =
+const char kHelpHelp[] TC_FLASH = "this list";
+const char kForceAllHelp[] TC_FLASH = "all calibrated motors to G grams";
+const char kForceOneHelp[] TC_FLASH = "motor N to G grams";
+const char kStopHelp[] TC_FLASH = "all motors to 0 g (1000 us)";
+const char kStatusHelp[] TC_FLASH = "per motor: force, pwm, battery, flags; v2 motors: headroom";
+const char kLiftoffHelp[] TC_FLASH =
     "ramp all four 0->G g (default 2000 ms),\nhold (default 5000 ms), stop; empty lines keep it "
     "going,\nany other key aborts";
-const char kStreamHelp[] TC_PROGMEM = "CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s";
-const char kRateHelp[] TC_PROGMEM = "ESC frames per second (motors stopped)";
-const char kEepromHelp[] TC_PROGMEM = "EEPROM CRC-16 per slot and whole, or Intel HEX (stopped)";
-const char kDividerShowHelp[] TC_PROGMEM = "the battery divider and its full scale";
-const char kDividerSetHelp[] TC_PROGMEM =
+const char kStreamHelp[] TC_FLASH = "CSV t_s,motor0_pwm_us..motor3_pwm_us,vbat_v, 10 lines/s";
+const char kRateHelp[] TC_FLASH = "ESC frames per second (motors stopped)";
+const char kEepromHelp[] TC_FLASH = "EEPROM CRC-16 per slot and whole, or Intel HEX (stopped)";
+const char kDividerShowHelp[] TC_FLASH = "the battery divider and its full scale";
+const char kDividerSetHelp[] TC_FLASH =
     "battery divider in ohm: R1 pack-A1, R2 A1-ground\n(thesis 100000 47000); reloads the "
     "calibration,\nmotors stopped";
-const char kStrictHelp[] TC_PROGMEM = "f (above 0 g), liftoff, divider R1_OHM R2_OHM need a checksum";
+const char kStrictHelp[] TC_FLASH = "f (above 0 g), liftoff, divider R1_OHM R2_OHM need a checksum";
 
 // Every console command. kCmdGuarded marks what strict mode refuses without a checksum: what
 // can spin a motor (f above 0 g, liftoff) or write the EEPROM (divider R1 R2).
-const fw::Command<ReadRunApp> kCommands[] TC_PROGMEM = {
+const fw::Command<ReadRunApp> kCommands[] TC_FLASH = {
     {{kHelpName, nullptr, 0, 0, 0, kHelpHelp}, &Commands::help},
     {{kFName, kForceAllArgs, 1, 1, fw::kCmdGuarded | fw::kCmdZeroIsStop, kForceAllHelp},
      &Commands::forceAll},
@@ -240,9 +245,8 @@ void ReadRunApp::handleLine(char* line) {
 }
 
 bool ReadRunApp::requireArmable(uint8_t index) const {
-  const Motor& m = motors_[index];
-  if (m.isArmable()) return true;
-  view::refuseMotor(index, m);
+  if (motors_.isArmable(index)) return true;
+  view::refuseMotor(index, motors_.motor(index));
   return false;
 }
 

@@ -1,6 +1,7 @@
 // read_run's console view: every line the image prints about motors, records, the lift-off
 // and its status, in one place. It only reads (the app's observers and the motor structs) and
-// prints; deciding and flying stay in read_run_app.cpp, frame.cpp and commands.cpp.
+// prints; deciding and flying stay in read_run_app.cpp, frame.cpp and commands.cpp. What any
+// force-API image says about a motor's slot is shared (firmware/common/slot_report.hpp).
 #pragma once
 #include <stdint.h>
 
@@ -10,15 +11,6 @@ namespace rr {
 namespace view {
 
 void banner();
-// "motor N"
-void sayMotor(uint8_t index);
-// Why a motor is not armed: "not calibrated: <status>" (a v2 slot: both copies' reasons).
-void sayRecordStatus(const Motor& m);
-// The start-up line of one slot: "motor N: ok, <summary>" or why it is refused. `v2`/`v1`
-// are the decoded record (whichever the slot held).
-void slotLoaded(uint8_t index, const Motor& m, const tc::ModelV2& v2,
-                const tc::MotorCalibration& v1);
-void calibratedCount(uint8_t calibrated);
 // "error: motor N is <why>; it stays at 1000 us - recalibrate it with gather_store"
 void refuseMotor(uint8_t index, const Motor& m);
 // `f G` with a motor that is not calibrated: "warning: motor N <why>; held at 1000 us"

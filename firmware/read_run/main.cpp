@@ -12,7 +12,7 @@ AVR_MCU(F_CPU, "atmega2560");
 AVR_MCU_VOLTAGES(5000, 5000, 5000);
 
 namespace {
-rr::ReadRunApp app;  // four motor structs (~4.5 KB) live here, in .bss
+rr::ReadRunApp app;  // the four motors and the console live here, in .bss
 }  // namespace
 
 int main() {

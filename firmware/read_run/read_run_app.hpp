@@ -40,82 +40,38 @@
 //    hal::Uart::write, which runs service() from its wait hook, so frames stay on time;
 //  - service() kicks the watchdog; nothing else in the loop does (docs/safety.md).
 //
-// Files, by lifetime: read_run_app.cpp (start-up, the loop's pass, failsafe, lift-off),
-// frame.cpp (the ESC frame), commands.cpp (the console's command table and handlers: parsing,
-// ranges, strict mode and help come from the table, firmware/common/shell.hpp),
-// console_view.cpp (every line printed), run_rules.hpp (the pure decisions).
+// Parts, one job each: fw::ForceActuators (the force API: the four slots, the battery, the ESC
+// frame; firmware/common), Liftoff (liftoff.hpp), LinkWatch and StreamPace (run_rules.hpp),
+// the console's fw::LineReader. Files: read_run_app.cpp (start-up, the loop's pass, failsafe,
+// lift-off), frame.cpp (the frame's schedule and what it notes), commands.cpp (the command
+// table and what each command does), console_view.cpp (every line printed).
 //
 // The per-frame path (battery samples, voltage filter, both models, ESC write) is integer
-// only; the image links no floating-point routine at all.
-// Host tests drive the same class against the fake HAL.
-//
-// Measured on the ATmega2560 image in simavr 1.6 (cycles the CPU was awake, four motors
-// running, whole ESC frame including the 1 ms ticks, the four ADC conversions and the median):
-//   50 Hz: four v1 motors 18816 cycles per frame, four v2 motors 16608;
-//   400 Hz: v1 28.0 % CPU, v2 23.8 %.
-// Static SRAM 1895 bytes (avr-size), this object 1388 (`thrustcal bench footprint`): four
-// slots of 169 bytes (rr::SlotModel: tc::ThesisRun 168 or tc::ModelV2Run 159), four Motor
-// structs of 198 with their slot, the V2Frame (58) and the 414-byte battery median. At start-up
-// tc::loadSlot decodes each record on the stack (tc::MotorCalibration 1114 + tc::ModelV2 124).
+// only; the image links no floating-point routine at all. Host tests drive the same class
+// against the fake HAL.
 #pragma once
 #include <stdint.h>
 
 #include "console.hpp"
+#include "force_actuators.hpp"
 #include "hal/hal.hpp"
-#include "record_report.hpp"
-#include "thrustcal/battery_monitor.hpp"
-#include "thrustcal/board_settings.hpp"
-#include "thrustcal/eeprom_codec.hpp"
-#include "thrustcal/force_pwm.hpp"
-#include "thrustcal/limits.hpp"
-#include "thrustcal/median_filter.hpp"
-#include "thrustcal/model_v2.hpp"
-#include "thrustcal/model_v2_runtime.hpp"
-#include "thrustcal/motor_calibration.hpp"
-#include "thrustcal/record_v2.hpp"
-#include "thrustcal/thesis_runtime.hpp"
+#include "liftoff.hpp"
 #include "run_rules.hpp"
-#include "slot_model.hpp"
+#include "thrustcal/limits.hpp"
 
 namespace rr {
 
-constexpr uint8_t kMotors = tc::kMotorSlots;
+using fw::Motor;
+constexpr uint8_t kMotors = fw::ForceActuators::kMotors;
 static_assert(kMotors == hal::kEscChannels, "one ESC output per calibration slot");
 
 using tc::kArmMs;  // thrustcal/limits.hpp
 using tc::kFailsafeMs;
 using tc::kStopPwmUs;
 constexpr uint16_t kForceMaxG = tc::kRecordMaxForceG;  // 5 kg: v1 curves saturate at 500 g
-using tc::kBatteryWindow;
-constexpr uint8_t kBatterySamplesPerFrame = 4;  // v2 filter input: mean of the middle two
-constexpr uint16_t kLiftoffDefaultRampMs = 2000;  // `help` spells both (static_assert there)
-constexpr uint16_t kLiftoffDefaultHoldMs = 5000;
-constexpr uint16_t kLiftoffMaxMs = 60000;
-constexpr uint16_t kLiftoffProgressMs = 500;  // one "# " progress line this often
-constexpr uint8_t kStreamLinesPerSecond = 10;
-constexpr uint8_t kNoLane = 0xFF;             // a motor that does not fly v2
 // Received bytes one loop pass handles at most: one longest line and its CR LF.
 constexpr uint8_t kRxBytesPerPass = fw::kLineMax + 2;
 
-// One motor as the thesis's motor_struct: the model loaded from EEPROM plus the controller's
-// run-time state.
-struct Motor {
-  SlotModel model;                               // v1 ThesisRun or v2 ModelV2Run (a union)
-  tc::SlotLayout layout = tc::SlotLayout::kNone; // what the slot holds
-  tc::DecodeStatus record = tc::DecodeStatus::kErased;  // kOk: `model` is loaded and flown
-  uint8_t v2_copy = tc::kNoCopy;                 // v2: copy flown (0 = A, 1 = B)
-  tc::DecodeStatus v2_copy_status[2] = {tc::DecodeStatus::kErased, tc::DecodeStatus::kErased};
-  uint8_t lane = kNoLane;           // v2: its lane in the frame (command in, pulse out)
-  tc::Plausibility why;             // record kBadContent: the plausibility rule it broke
-  uint16_t force_g = 0;             // commanded force
-  uint16_t pwm_us = kStopPwmUs;     // last pulse written to the ESC
-  uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
-                                    // v2 the bus filter's value
-  uint8_t flags = 0;                // tc::ForcePwmFlag bits of that pulse
-
-  bool isArmable() const { return record == tc::DecodeStatus::kOk; }
-  bool fliesV2() const { return isArmable() && model.holdsV2(); }
-};
 enum class Mode : uint8_t {
   kBoot,     // before arm()
   kArming,   // 1000 us on every ESC, input ignored
@@ -127,7 +83,7 @@ class ReadRunApp {
  public:
   // Prints the program name and how to get help.
   void printBanner();
-  // H.2: reads the four EEPROM records once into the motor structs and reports each slot.
+  // H.2: reads the board settings and the four EEPROM records once and reports each slot.
   // Returns how many motors are calibrated.
   uint8_t loadCalibration();
   // Holds every ESC at 1000 us for kArmMs while the battery median fills; input received
@@ -139,25 +95,17 @@ class ReadRunApp {
   void runOnce();
 
   // Observers (status command, tests).
-  const Motor& motor(uint8_t index) const { return motors_[index]; }
+  const fw::ForceActuators& motors() const { return motors_; }
+  const Motor& motor(uint8_t index) const { return motors_.motor(index); }
   Mode mode() const { return mode_; }
-  bool isRunning() const;               // any motor commanded above 0 g
-  uint16_t batteryMv() const { return battery_mv_; }  // median reading, uncompensated
-  const tc::BoardSettings& settings() const { return settings_; }
-  // v2 motors' voltage: this frame's reading through the IIR filter, and its reciprocal.
-  const tc::BusVoltageFilter& busFilter() const { return v2_.bus; }
-  bool busSampleSane() const { return bus_sample_sane_; }  // this frame's reading was usable
-  // v2: the bench sag of the commands the filtered voltage reflects (1/16 of 10 mV).
-  const tc::BusSagFilter& sagFilter() const { return v2_.sag; }
-  bool isStreaming() const { return stream_; }
+  bool isRunning() const { return motors_.isRunning(); }  // any motor commanded above 0 g
+  uint16_t batteryMv() const { return motors_.batteryMv(); }  // median reading, uncompensated
+  const tc::BusVoltageFilter& busFilter() const { return motors_.busFilter(); }
+  const tc::BusSagFilter& sagFilter() const { return motors_.sagFilter(); }
+  bool isStreaming() const { return stream_.on; }
   uint16_t frameHz() const { return frame_hz_; }
-  uint8_t v2Motors() const { return v2_.count; }  // motors flying model v2
-  // Lift-off progress: since its command, its force, whether it holds.
-  uint32_t liftoffStartMs() const { return liftoff_start_ms_; }
-  bool liftoffHolding() const { return liftoff_holding_; }
-  uint16_t liftoffForceG() const { return liftoff_force_g_; }
-  uint16_t liftoffHoldMs() const { return liftoff_hold_ms_; }
-  uint32_t failsafeTrips() const { return failsafe_trips_; }
+  const Liftoff& liftoff() const { return liftoff_; }
+  uint32_t failsafeTrips() const { return link_.trips; }
   const fw::LineReader& console() const { return line_; }
 
   // `help`: every row of the command table (usage, help text, ranges), then the console rules
@@ -165,15 +113,28 @@ class ReadRunApp {
   static void printHelp();
 
  private:
-  friend struct Commands;  // commands.cpp: the console's command table and its handlers
+  friend struct Commands;  // commands.cpp: the table's handlers, one call each to a cmd method
+
+  // Commands (commands.cpp), arguments parsed and range-checked by the table.
+  void cmdForceAll(uint16_t force_g);
+  void cmdForceOne(uint8_t index, uint16_t force_g);
+  void cmdStop();
+  void cmdStatus();
+  void cmdLiftoff(uint16_t force_g, uint16_t ramp_ms, uint16_t hold_ms);
+  void cmdStream(bool on);
+  void cmdRate(uint16_t frame_hz);
+  void cmdEeprom(bool dump);
+  void cmdDividerShow();
+  void cmdDivider(uint32_t top_ohm, uint32_t bottom_ohm);
+  void cmdStrict(bool on);
 
   void handleLine(char* line);
   bool requireArmable(uint8_t index) const;  // prints the refusal when not
-  void stopAll();                      // forces to 0, every ESC to 1000 us at once
+  void stopAll() { motors_.stopAll(); }     // forces to 0, every ESC to 1000 us at once
 
   // The time-critical part of a pass, also run from inside a blocked write (the UART wait
-  // hook): kicks the watchdog, the ESC frame when due (battery filter, models, pulses), the
-  // failsafe and the lift-off link timeout. Prints nothing: it leaves notes_ for printNotes().
+  // hook): kicks the watchdog, the ESC frame when due, the failsafe and the lift-off link
+  // timeout. Prints nothing: it leaves notes_ for printNotes().
   void service();
   static void serviceHook();
   void handleInput();
@@ -185,25 +146,20 @@ class ReadRunApp {
   void scheduleFrames(uint32_t now_ms);
   void setFrameRate(uint16_t frame_hz);  // filter constant and stream pace follow it
   void frame(uint32_t now_ms);
-  void sampleBattery();
-  void setFilterShift(uint16_t frame_hz);
-  void setForce(uint8_t index, uint16_t force_g);  // a v2 motor's lane too
-  void flyMotor(Motor& m);
   void prompt();
 
-  Motor motors_[kMotors];
-  tc::MedianFilter<kBatteryWindow> battery_counts_;
-  tc::BoardSettings settings_;      // the divider (EEPROM), loaded with the calibration
-  tc::BatteryMonitor monitor_;      // configured from settings_
-  tc::V2Frame v2_;                  // the motors flying v2: bus filter, sag, their lanes
-  bool bus_sample_sane_ = false;
+  fw::ForceActuators motors_;
+  Liftoff liftoff_;
+  LinkWatch link_;        // last keep-alive (lift-off: last line end), failsafe trips
+  StreamPace stream_;
+  FrameClock frames_;     // ESC frame schedule (run_rules.hpp)
+  uint16_t frame_hz_ = hal::kEscDefaultFrameHz;
   fw::LineReader line_;
   Mode mode_ = Mode::kBoot;
-  uint16_t battery_mv_ = 0;
-  uint32_t last_line_ms_ = 0;      // last keep-alive (lift-off: last line end)
-  uint32_t failsafe_trips_ = 0;
+  bool in_service_ = false;
+  bool hold_prompt_ = false;  // the command's reply goes on (lift-off progress, stream rows)
 
-  // service() -> printNotes()
+  // service() -> printNotes(): what happened, and the frame it is about.
   static constexpr uint8_t kNoteHold = 0x01;
   static constexpr uint8_t kNoteProgress = 0x02;
   static constexpr uint8_t kNoteDone = 0x04;
@@ -211,25 +167,9 @@ class ReadRunApp {
   static constexpr uint8_t kNoteFailsafe = 0x10;
   static constexpr uint8_t kNoteStream = 0x20;
   uint8_t notes_ = 0;
-  bool in_service_ = false;
   uint16_t note_force_g_ = 0;   // lift-off progress: force at that frame
   uint32_t note_ms_ = 0;        // time of the frame the notes are about
   static ReadRunApp* active_;   // the instance the UART wait hook serves
-
-  FrameClock frames_;  // ESC frame schedule (run_rules.hpp)
-  uint16_t frame_hz_ = hal::kEscDefaultFrameHz;
-
-  bool stream_ = false;
-  bool hold_prompt_ = false;  // the command's reply goes on (lift-off progress, stream rows)
-  uint8_t stream_every_frames_ = 5;
-  uint8_t stream_countdown_ = 0;
-
-  uint32_t liftoff_start_ms_ = 0;
-  uint32_t liftoff_next_progress_ms_ = 0;
-  uint16_t liftoff_force_g_ = 0;
-  uint16_t liftoff_ramp_ms_ = 0;
-  uint16_t liftoff_hold_ms_ = 0;
-  bool liftoff_holding_ = false;
 };
 
 }  // namespace rr

@@ -13,6 +13,34 @@ inline bool linkLost(uint32_t now_ms, uint32_t last_keepalive_ms) {
   return now_ms - last_keepalive_ms >= tc::kFailsafeMs;
 }
 
+// The link's state: when the last keep-alive came, and how often the failsafe stopped the motors.
+struct LinkWatch {
+  uint32_t last_ms = 0;
+  uint32_t trips = 0;
+
+  void heard(uint32_t now_ms) { last_ms = now_ms; }
+  bool lost(uint32_t now_ms) const { return linkLost(now_ms, last_ms); }
+};
+
+// `stream on`: one CSV row every `every_frames` frames (kStreamLinesPerSecond at any rate).
+constexpr uint8_t kStreamLinesPerSecond = 10;
+struct StreamPace {
+  bool on = false;
+  uint8_t every_frames = 5;
+  uint8_t countdown = 0;
+
+  void setFrameRate(uint16_t frame_hz) {
+    every_frames = static_cast<uint8_t>(frame_hz / kStreamLinesPerSecond);
+  }
+  // Called once per frame: true when this frame's row is due.
+  bool frameDue() {
+    const bool due = countdown == 0;
+    if (due) countdown = every_frames;
+    --countdown;
+    return due;
+  }
+};
+
 // The lift-off sequence (thesis sec. 7.4) at `elapsed_ms` after its command: a linear ramp
 // 0 -> force_g over ramp_ms, then force_g for hold_ms, then done (stop).
 enum class LiftoffPhase : uint8_t { kRamp, kHold, kDone };
@@ -28,29 +56,6 @@ inline LiftoffStep liftoffStep(uint32_t elapsed_ms, uint16_t force_g, uint16_t r
   }
   if (elapsed_ms < static_cast<uint32_t>(ramp_ms) + hold_ms) return {LiftoffPhase::kHold, force_g};
   return {LiftoffPhase::kDone, 0};
-}
-
-// The v2 bus-voltage filter's constant per frame rate, 1/2^shift per frame: 1/8 at 50-99 Hz,
-// 1/16 at 100-199, 1/32 at 200-399, 1/64 at 400 Hz, so its time constant stays about 150 ms.
-inline uint8_t filterShiftFor(uint16_t frame_hz) {
-  uint8_t shift = 3;
-  for (uint16_t hz = 100; hz <= frame_hz && shift < 6; hz = static_cast<uint16_t>(hz * 2)) ++shift;
-  return shift;
-}
-
-// Sum of the middle two of four ADC readings, each clamped to adc_max (one spike either way
-// is ignored): the v2 frame's battery reading in half counts, at most 2 * adc_max.
-inline uint16_t middleTwoCounts(const uint16_t (&counts)[4], uint16_t adc_max) {
-  uint16_t sum = 0;
-  uint16_t lo = 0xFFFF;
-  uint16_t hi = 0;
-  for (uint8_t k = 0; k < 4; ++k) {
-    const uint16_t c = counts[k] < adc_max ? counts[k] : adc_max;
-    sum = static_cast<uint16_t>(sum + c);
-    if (c < lo) lo = c;
-    if (c > hi) hi = c;
-  }
-  return static_cast<uint16_t>(sum - lo - hi);
 }
 
 // The ESC frame schedule on a 1 ms clock: period 1000/hz ms as whole ms plus a remainder, so

@@ -140,8 +140,8 @@ uint16_t Esc::frameRateHz() { return g_frame_hz; }
 
 void Esc::writePulse(uint8_t channel, uint16_t pwm_us) {
   if (channel >= kEscChannels) return;
-  if (pwm_us < kEscPulseMinUs) pwm_us = kEscPulseMinUs;
-  if (pwm_us > kEscPulseMaxUs) pwm_us = kEscPulseMaxUs;
+  if (pwm_us < kPulseClampMinUs) pwm_us = kPulseClampMinUs;
+  if (pwm_us > kPulseClampMaxUs) pwm_us = kPulseClampMaxUs;
   g_pulse_us[channel] = pwm_us;
   writeCompare(channel, static_cast<uint16_t>(2u * pwm_us - 1u));
 }

@@ -150,8 +150,8 @@ uint16_t Esc::frameRateHz() { return state().frame_hz; }
 
 void Esc::writePulse(uint8_t channel, uint16_t pwm_us) {
   if (channel >= kEscChannels) return;  // same as the AVR backend: ignored
-  if (pwm_us < kEscPulseMinUs) pwm_us = kEscPulseMinUs;
-  if (pwm_us > kEscPulseMaxUs) pwm_us = kEscPulseMaxUs;
+  if (pwm_us < kPulseClampMinUs) pwm_us = kPulseClampMinUs;
+  if (pwm_us > kPulseClampMaxUs) pwm_us = kPulseClampMaxUs;
   state().pulse_us[channel] = pwm_us;
 }
 

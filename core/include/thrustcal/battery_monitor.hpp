@@ -27,7 +27,7 @@ uint16_t dividerFullScaleMillivolts(uint32_t r1_ohm, uint32_t r2_ohm, uint16_t v
 
 // Sag offsets: offset_mv[i] is how much lower the monitor read in PWM bin i than in bin 0.
 struct SagTable {
-  uint16_t base_pwm_us = 1000;          // PWM at the start of bin 0
+  uint16_t base_pwm_us = kThrottleMinUs;  // PWM at the start of bin 0
   int16_t offset_mv[kSagBins] = {};     // >= 0 normally; bin 0 is always 0
 
   // Bin of a PWM: (pwm - base) / 40, clamped to 0..12 (below base: bin 0).
@@ -75,7 +75,7 @@ class SagBuilder {
   uint16_t samples(uint8_t bin) const { return bin < kSagBins ? count_[bin] : 0; }
 
  private:
-  uint16_t base_pwm_us_ = 1000;
+  uint16_t base_pwm_us_ = kThrottleMinUs;
   uint32_t sum_mv_[kSagBins] = {};
   uint16_t count_[kSagBins] = {};
 };

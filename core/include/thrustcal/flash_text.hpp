@@ -1,12 +1,42 @@
-// Constant texts that stay in flash on the AVR (PSTR) and are plain strings on the host.
-// A function returning TC_FLASH_TEXT("...") returns a flash address on the AVR: print it with
-// hal::Uart::printP (firmware), never with a RAM string routine. On the host it is an ordinary
-// C string.
+// The one way to keep constant data in flash: on the AVR texts and tables stay in program memory
+// (avr-libc's PSTR / PROGMEM, read back with the pgm_ routines); on the host they are ordinary
+// data, so the same code runs in host tests.
+//   TC_FLASH_TEXT("...")        a text literal in flash (an expression: pass it, return it)
+//   const char kName[] TC_FLASH  an array or table in flash
+//   tc::flashByte(p)            one byte of either
+//   tc::flashCopy(dst, p, n)    n bytes of either into RAM (a table row)
+// A pointer into flash is a flash address on the AVR: print it with hal::Uart::printP, never
+// with a RAM string routine.
 #pragma once
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
 
 #if defined(__AVR__)
 #include <avr/pgmspace.h>
 #define TC_FLASH_TEXT(s) PSTR(s)
+#define TC_FLASH PROGMEM
 #else
 #define TC_FLASH_TEXT(s) (s)
+#define TC_FLASH
 #endif
+
+namespace tc {
+
+inline uint8_t flashByte(const char* p) {
+#if defined(__AVR__)
+  return pgm_read_byte(p);
+#else
+  return static_cast<uint8_t>(*p);
+#endif
+}
+
+inline void flashCopy(void* dst, const void* src, size_t length) {
+#if defined(__AVR__)
+  memcpy_P(dst, src, length);
+#else
+  memcpy(dst, src, length);
+#endif
+}
+
+}  // namespace tc

@@ -23,8 +23,8 @@
 namespace tc {
 
 struct ForcePwmLimits {
-  uint16_t pwm_min_us = 1000;
-  uint16_t pwm_max_us = 2000;
+  uint16_t pwm_min_us = kThrottleMinUs;
+  uint16_t pwm_max_us = kThrottleMaxUs;
   uint16_t v_min_mv = kVbatSaneMinMv;
   uint16_t v_max_mv = kVbatSaneMaxMv;
   uint16_t min_voltage_span_mv = 100;

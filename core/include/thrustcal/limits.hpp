@@ -10,7 +10,7 @@
 namespace tc {
 
 // ESC pulses.
-constexpr uint16_t kStopPwmUs = kEscMinPulseUs;  // "motor off", also the arming pulse
+constexpr uint16_t kStopPwmUs = kThrottleMinUs;  // "motor off", also the arming pulse
 constexpr uint16_t kArmMs = 2000;  // ESCs see kStopPwmUs this long before any command or sweep
 
 // Battery readings the controller and the bench trust: below, a sensor fault or a dead pack

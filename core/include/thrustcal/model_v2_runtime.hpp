@@ -87,7 +87,7 @@ struct V2Lane {
   uint16_t force_dg = 0;
   uint8_t start_q17[3] = {};  // bytes 1..3 of the model's start_round_q17_us (byte 0 is 0)
   uint8_t flags = kNotCalibrated;  // tc::ForcePwmFlag bits of pwm_us
-  uint16_t pwm_us = 1000;
+  uint16_t pwm_us = kStopPwmUs;
 
   // Flies `m` (a loaded model): keeps its start threshold next to the command.
   void setModel(const ModelV2Run* m) {
@@ -108,8 +108,8 @@ struct V2Lane {
 struct V2Frame {
   BusVoltageFilter bus;  // the battery reading through the first-order filter
   BusSagFilter sag;      // the commands' bench sag, filtered alike
-  uint16_t pwm_min_us = 1000;
-  uint16_t pwm_max_us = 2000;
+  uint16_t pwm_min_us = kThrottleMinUs;
+  uint16_t pwm_max_us = kThrottleMaxUs;
   uint8_t count = 0;     // lanes in use (<= kV2FrameMaxMotors)
   V2Lane lane[kV2FrameMaxMotors];
 

@@ -10,10 +10,12 @@
 
 namespace tc {
 
-// ESC pulse range (servo PWM, 50..400 Hz): read_run never sends anything outside it, so a
-// curve that needs a pulse outside it cannot be what the motor did on the bench.
-constexpr uint16_t kEscMinPulseUs = 1000;
-constexpr uint16_t kEscMaxPulseUs = 2000;
+// The ESC's throttle range (servo PWM, 50..400 Hz): kThrottleMinUs is zero throttle (motor
+// off), kThrottleMaxUs full throttle. The firmware never commands a pulse outside it, so a curve
+// that needs one cannot be what the motor did on the bench. (The timer driver's own clamp,
+// wider, is hal::kPulseClampMinUs/MaxUs in hal/board.hpp.)
+constexpr uint16_t kThrottleMinUs = 1000;
+constexpr uint16_t kThrottleMaxUs = 2000;
 
 // Battery packs, 1S..6S LiPo: 3.0 V (one cell, empty) .. 26.0 V (six cells at 4.2 V are 25.2 V;
 // 0.8 V more for the divider's tolerance). Readings and stored voltages outside are a fault.

@@ -18,6 +18,10 @@ namespace hal {
 
 constexpr uint32_t kCpuHz = 16000000UL;  // the crystal; the AVR backend asserts F_CPU == this
 
+// ---- memories (ATmega2560) ----
+constexpr uint32_t kFlashBytes = 256UL * 1024;
+constexpr uint16_t kEepromBytes = 4096;
+
 // ---- ADC channels ----
 constexpr uint8_t kAdcLoadCell = 0;  // A0
 constexpr uint8_t kAdcBattery = 1;   // A1
@@ -45,8 +49,10 @@ constexpr uint8_t kEscChannels = sizeof kEscPins / sizeof kEscPins[0];
 constexpr uint16_t kEscDefaultFrameHz = 50;
 constexpr uint16_t kEscMinFrameHz = 50;
 constexpr uint16_t kEscMaxFrameHz = 400;
-constexpr uint16_t kEscPulseMinUs = 500;
-constexpr uint16_t kEscPulseMaxUs = 2500;
+// What Esc::writePulse will put on a pin at all: a clamp around any ESC protocol's range (the
+// throttle range, 1000..2000 us, is tc::kThrottleMinUs/MaxUs; the firmware stays inside it).
+constexpr uint16_t kPulseClampMinUs = 500;
+constexpr uint16_t kPulseClampMaxUs = 2500;
 constexpr uint8_t kEscPrescaler = 8;  // clk / 8: CSn1
 constexpr uint32_t kEscTicksPerSecond = kCpuHz / kEscPrescaler;
 
@@ -115,6 +121,8 @@ constexpr uint32_t uartErrorBasisPoints(uint32_t baud) {
 }  // namespace board
 
 constexpr uint32_t kUartBaud = 115200;
+// The Mega2560's stock STK500v2 bootloader talks on UART0 at this rate (avrdude -b).
+constexpr uint32_t kBootloaderBaud = 115200;
 // 115200 from 16 MHz is 117647 baud, +2.1 %: the Mega2560's USB bridge (ATmega16U2, also
 // 16 MHz, same divisor) runs at the same rate, so the two ends agree, and a double-speed
 // receiver tolerates +3.5/-4.6 % (ATmega2560 datasheet, table 22-3). 2.5 % bounds it; a
@@ -157,7 +165,7 @@ static_assert(board::escPinsValid(), "each ESC pin is a compare output A..C of t
 static_assert(board::escPinsUnique(), "no two ESCs share a compare output or an Arduino pin");
 static_assert(kEscTicksPerSecond == 2000000UL, "0.5 us ticks: OCRnx = 2 * pwm_us - 1");
 static_assert(kEscTicksPerSecond / kEscMinFrameHz - 1 <= 0xFFFFu, "TOP fits ICRn at the slowest frame");
-static_assert(kEscTicksPerSecond / kEscMaxFrameHz >= 2u * kEscPulseMaxUs,
+static_assert(kEscTicksPerSecond / kEscMaxFrameHz >= 2u * kPulseClampMaxUs,
               "the longest pulse fits in the fastest frame");
 static_assert(kEscMinFrameHz <= kEscDefaultFrameHz && kEscDefaultFrameHz <= kEscMaxFrameHz,
               "the default frame rate is a valid one");

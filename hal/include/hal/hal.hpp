@@ -9,13 +9,6 @@
 
 #include "hal/board.hpp"
 
-#ifdef __AVR__
-#include <avr/pgmspace.h>
-#define TC_PSTR(s) PSTR(s)
-#else
-#define TC_PSTR(s) (s)
-#endif
-
 namespace hal {
 
 // Millisecond clock (Timer0, 1 kHz interrupt) and delays.
@@ -52,7 +45,7 @@ struct Esc {
 // 4 KB EEPROM. updateByte reads first and skips bytes that already hold the value; it kicks the
 // watchdog (a byte write takes 3.4 ms on the chip).
 struct Eeprom {
-  static constexpr uint16_t kSize = 4096;
+  static constexpr uint16_t kSize = kEepromBytes;
   static uint8_t readByte(uint16_t addr);
   static void updateByte(uint16_t addr, uint8_t value);
   static void readBlock(uint16_t addr, void* dst, uint16_t length);
@@ -77,7 +70,7 @@ struct Uart {
   static int16_t read();    // a byte 0..255, kRxDamaged or kNothing
   static void write(uint8_t byte);
   static void print(const char* text);          // string in RAM
-  static void printP(const char* progmem_text);  // string made with TC_PSTR
+  static void printP(const char* progmem_text);  // string made with TC_FLASH_TEXT
   // Called (repeatedly) while write() waits for room; nullptr for none. Must not print.
   static void setWaitHook(WaitHook hook);
   static uint16_t rxDamageCount();  // damage marks produced since init (saturates)

@@ -378,11 +378,11 @@ TEST_F(Console, ParseIntOfNullIsFalse) {
 }
 
 TEST_F(Console, EqualsPComparesWholeStringsCaseSensitively) {
-  EXPECT_TRUE(fw::equalsP("sweep", TC_PSTR("sweep")));
-  EXPECT_TRUE(fw::equalsP("", TC_PSTR("")));
-  EXPECT_FALSE(fw::equalsP("swee", TC_PSTR("sweep")));
-  EXPECT_FALSE(fw::equalsP("sweeps", TC_PSTR("sweep")));
-  EXPECT_FALSE(fw::equalsP("Sweep", TC_PSTR("sweep")));
+  EXPECT_TRUE(fw::equalsP("sweep", TC_FLASH_TEXT("sweep")));
+  EXPECT_TRUE(fw::equalsP("", TC_FLASH_TEXT("")));
+  EXPECT_FALSE(fw::equalsP("swee", TC_FLASH_TEXT("sweep")));
+  EXPECT_FALSE(fw::equalsP("sweeps", TC_FLASH_TEXT("sweep")));
+  EXPECT_FALSE(fw::equalsP("Sweep", TC_FLASH_TEXT("sweep")));
 }
 
 struct IntPrintRow {

@@ -336,7 +336,7 @@ TEST_F(GatherStore, SettleAutoStepsOnOnceTheForceStopsChanging) {
   // and settle MS turns it off again
   EXPECT_NE(run("settle 150").find("settle 150 ms per step"), std::string::npos);
   EXPECT_NE(run("status").find("settle 150 ms"), std::string::npos);
-  EXPECT_FALSE(app_->settings().settle_auto);
+  EXPECT_FALSE(app_->sweepSettings().settle_auto);
 }
 
 TEST_F(GatherStore, DefaultSweepSettlesByMeasurementAndSettle200IsTheThesisTiming) {
@@ -344,8 +344,8 @@ TEST_F(GatherStore, DefaultSweepSettlesByMeasurementAndSettle200IsTheThesisTimin
   hal::fake::advanceMs(gs::kArmMs);
   calibrateAndTare();
   // then: the default settles by measurement with a 500 ms cap
-  EXPECT_TRUE(app_->settings().settle_auto);
-  EXPECT_EQ(app_->settings().settle_ms, gs::kDefaultSettleCapMs);
+  EXPECT_TRUE(app_->sweepSettings().settle_auto);
+  EXPECT_EQ(app_->sweepSettings().settle_ms, gs::kDefaultSettleCapMs);
   EXPECT_NE(run("status").find("settle auto (cap 500 ms)"), std::string::npos);
   // when: the thesis's fixed 200 ms
   EXPECT_NE(run("settle 200").find("settle 200 ms per step"), std::string::npos);
@@ -644,14 +644,14 @@ TEST_F(GatherStore, BadInputGetsOneErrorLineAndChangesNothing) {
       {too_long.c_str(), "error: line longer than 48 characters, ignored; nothing changed"},
   };
   for (const auto& row : rows) {
-    const gs::Settings before = app_->settings();
+    const gs::SweepSettings before = app_->sweepSettings();
     const std::vector<uint8_t> eeprom_before = eepromSnapshot();
     const uint16_t pulse_before = hal::fake::pulseUs(before.slot);
     const std::string out = run(row.input);
     const auto lines = responseLines(out);
     ASSERT_EQ(lines.size(), 1u) << row.input << " -> " << out;
     EXPECT_TRUE(startsWith(lines[0], row.error_start)) << row.input << " -> " << lines[0];
-    const gs::Settings after = app_->settings();
+    const gs::SweepSettings after = app_->sweepSettings();
     EXPECT_EQ(after.slot, before.slot) << row.input;
     EXPECT_EQ(after.plate_g, before.plate_g) << row.input;
     EXPECT_EQ(after.pwm_min_us, before.pwm_min_us) << row.input;
@@ -672,7 +672,7 @@ TEST_F(GatherStore, RangeThatNeedsMoreSamplesThanTheBufferIsRefusedWithTheStepTh
   ASSERT_EQ(lines.size(), 1u);
   EXPECT_EQ(lines[0], "error: that range is 201 steps of 5 us, at most 161 fit: set a step of "
                       "at least 7 us first; nothing changed");
-  EXPECT_EQ(app_->settings().pwm_max_us, 1800u);
+  EXPECT_EQ(app_->sweepSettings().pwm_max_us, 1800u);
   // and the suggested step does fit
   run("step 7");
   EXPECT_NE(run("range 1000 2000").find("range 1000..2000 us, 143 steps"), std::string::npos);

@@ -141,7 +141,7 @@ TEST(StoreDecision, StoreV2FitsRefinesOrRefusesByTheVoltageGap) {
        V2Action::kFit},
   };
   for (const V2Row& row : rows) {
-    gs::SlotModel slot;
+    gs::SlotContents slot;
     slot.has_v2 = row.has_v2;
     slot.refined = row.refined;
     slot.rest_mv = row.rest_mv;

@@ -24,6 +24,7 @@
 #include <utility>
 #include <vector>
 
+#include "hal/board.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 
 #ifndef GATHER_STORE_ELF
@@ -62,12 +63,11 @@ class SimBoard {
     avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT),
                             &SimBoard::onUartOut, this);
     uart_in_ = avr_io_getirq(avr_, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT);
-    const char ports[4] = {'H', 'H', 'H', 'B'};
-    const int pins[4] = {3, 4, 5, 5};
-    for (int ch = 0; ch < 4; ++ch) {
+    for (int ch = 0; ch < 4; ++ch) {  // the pins the board table names (hal/board.hpp)
       pin_ctx_[ch] = {this, ch};
-      avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(ports[ch]), pins[ch]),
-                              &SimBoard::onPin, &pin_ctx_[ch]);
+      avr_irq_register_notify(
+          avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(hal::kEscPins[ch].port), hal::kEscPins[ch].bit),
+          &SimBoard::onPin, &pin_ctx_[ch]);
     }
     adc_[0] = avr_io_getirq(avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0);
     adc_[1] = avr_io_getirq(avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC1);

@@ -192,7 +192,7 @@ TEST_F(FakeHal, UartDeliversFedInputInOrderThenReportsEmpty) {
 TEST_F(FakeHal, UartOutputCollectsWritesPrintsAndProgmemPrints) {
   hal::Uart::write('x');
   hal::Uart::print("yz");
-  hal::Uart::printP(TC_PSTR("!"));
+  hal::Uart::printP("!");  // on the host a flash text is an ordinary string
   EXPECT_EQ(hal::fake::output(), "xyz!");
   EXPECT_EQ(hal::fake::takeOutput(), "xyz!");
   EXPECT_EQ(hal::fake::output(), "");
@@ -290,8 +290,8 @@ TEST(FakeHalBoard, WriteAllSetsTheFourPulsesClampedLikeWritePulseInOneCall) {
   EXPECT_EQ(hal::fake::escWriteAlls(), 1u);
   EXPECT_EQ(hal::fake::pulseUs(0), 1000);
   EXPECT_EQ(hal::fake::pulseUs(1), 1500);
-  EXPECT_EQ(hal::fake::pulseUs(2), hal::kEscPulseMinUs);
-  EXPECT_EQ(hal::fake::pulseUs(3), hal::kEscPulseMaxUs);
+  EXPECT_EQ(hal::fake::pulseUs(2), hal::kPulseClampMinUs);
+  EXPECT_EQ(hal::fake::pulseUs(3), hal::kPulseClampMaxUs);
 }
 
 TEST(FakeHalBoard, TheBoardTableIsWhatTheDocsSay) {

@@ -629,7 +629,7 @@ TEST_F(ReadRun, RateChangesTheEscFrameRateAndTheControlLoopFollows) {
     EXPECT_TRUE(contains(out, "frame rate " + std::to_string(c.hz) + " Hz")) << out;
     EXPECT_EQ(fake::frameRateHz(), c.hz);
     const uint32_t frames = (fake::adcConversions() - conversions_before) /
-                            rr::kBatterySamplesPerFrame;
+                            fw::BatteryInput::kSamplesPerFrame;
     EXPECT_NEAR(static_cast<double>(frames), c.hz, 1.0);
   }
 }

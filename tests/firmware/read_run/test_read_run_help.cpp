@@ -93,16 +93,16 @@ TEST(RunRules, TheBusFilterKeepsItsTimeConstantAcrossFrameRates) {
     uint16_t hz;
     uint8_t shift;
   } cases[] = {{50, 3}, {99, 3}, {100, 4}, {199, 4}, {200, 5}, {399, 5}, {400, 6}};
-  for (const auto& c : cases) EXPECT_EQ(rr::filterShiftFor(c.hz), c.shift) << c.hz;
+  for (const auto& c : cases) EXPECT_EQ(fw::filterShiftFor(c.hz), c.shift) << c.hz;
 }
 
 TEST(RunRules, TheMiddleTwoReadingsIgnoreOneSpikeEitherWayAndClampToTheAdcRange) {
   const uint16_t steady[4] = {700, 700, 700, 700};
-  EXPECT_EQ(rr::middleTwoCounts(steady, 1023), 1400);
+  EXPECT_EQ(fw::middleTwoCounts(steady, 1023), 1400);
   const uint16_t spikes[4] = {0, 701, 1023, 699};
-  EXPECT_EQ(rr::middleTwoCounts(spikes, 1023), 1400);
+  EXPECT_EQ(fw::middleTwoCounts(spikes, 1023), 1400);
   const uint16_t beyond[4] = {2000, 2000, 2000, 2000};
-  EXPECT_EQ(rr::middleTwoCounts(beyond, 1023), 2046);
+  EXPECT_EQ(fw::middleTwoCounts(beyond, 1023), 2046);
 }
 
 TEST(RunRules, The400HzFrameScheduleAveragesTwoAndAHalfMillisecondsAndRestartsWhenBehind) {

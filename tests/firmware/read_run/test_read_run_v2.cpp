@@ -56,7 +56,7 @@ class ReadRunV2 : public ReadRun {
   // Runs the loop until exactly `frames` more ESC frames have run (each samples the battery
   // kBatterySamplesPerFrame times, and nothing else converts).
   void runFrames(uint32_t frames) {
-    const uint32_t target = fake::adcConversions() + frames * rr::kBatterySamplesPerFrame;
+    const uint32_t target = fake::adcConversions() + frames * fw::BatteryInput::kSamplesPerFrame;
     while (fake::adcConversions() < target) {
       hal::Clock::sleepUntilInterrupt();
       app_->runOnce();

@@ -21,8 +21,7 @@
 #include <string.h>
 
 #include "hal/hal.hpp"
-#include "read_run_app.hpp"
-#include "slot_model.hpp"
+#include "force_actuators.hpp"  // the public force API: read_run's (and fly's) motor storage
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
@@ -67,7 +66,7 @@ static inline void ready(const T& v) { __asm__ volatile("" ::"r"(v) : "memory");
 
 // read_run's storage: four slots and the frame of its v2 motors (the symbols' sizes are what
 // the image holds).
-rr::SlotModel bench_slots[4];
+fw::SlotModel bench_slots[4];
 tc::V2Frame bench_frame;
 static tc::ModelV2 models[4];
 static tc::MotorCalibration decoded;  // one at a time, as read_run's loader
@@ -118,10 +117,10 @@ int main() {
   markEnd();
   report(kSizeofModelV2, sizeof(tc::ModelV2));
   report(kSizeofMotorCalibration, sizeof(tc::MotorCalibration));
-  report(kSizeofSlotModel, sizeof(rr::SlotModel));
+  report(kSizeofSlotModel, sizeof(fw::SlotModel));
   report(kSizeofModelV2Run, sizeof(tc::ModelV2Run));
   report(kSizeofThesisRun, sizeof(tc::ThesisRun));
-  report(kSizeofMotor, sizeof(rr::Motor));
+  report(kSizeofMotor, sizeof(fw::Motor));
   report(kSizeofV2Frame, sizeof(tc::V2Frame));
   uint16_t failures = 0;
   const uint16_t kFramesRun = 500;

@@ -237,13 +237,13 @@ Section footprintSection(const AvrPaths& paths) {
     const uint64_t v2run = r.values.at(0x85), v1run = r.values.at(0x86), motor = r.values.at(0x87),
                    frame = r.values.at(0x88);
     const bool slots_met = 4 * slot <= kModelsSramTarget;
-    t.addRow({fmt::format("read_run's four slots, v1 or v2 (4 x sizeof(rr::SlotModel) = 4 x {})", slot),
+    t.addRow({fmt::format("read_run's four slots, v1 or v2 (4 x sizeof(fw::SlotModel) = 4 x {})", slot),
               std::to_string(4 * slot), "", "<= 1024", verdict(slots_met)});
     t.addRow({fmt::format("  four v2 models as flown (4 x sizeof(tc::ModelV2Run) = 4 x {})", v2run),
               std::to_string(4 * v2run), "", "-", "-"});
     t.addRow({fmt::format("  four thesis models as flown (4 x sizeof(tc::ThesisRun) = 4 x {})", v1run),
               std::to_string(4 * v1run), "", "-", "-"});
-    t.addRow({fmt::format("read_run's per-motor state (4 x rr::Motor of {} + tc::V2Frame of {})", motor, frame),
+    t.addRow({fmt::format("read_run's per-motor state (4 x fw::Motor of {} + tc::V2Frame of {})", motor, frame),
               std::to_string(4 * motor + frame), "", "-", "-"});
     t.addRow({fmt::format("decoded records at start-up, on the stack (tc::MotorCalibration {} + tc::ModelV2 {})", v1, v2),
               std::to_string(v1 + v2), "", "-", "-"});

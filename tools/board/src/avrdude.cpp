@@ -1,5 +1,7 @@
 #include "board/avrdude.hpp"
 
+#include "hal/board.hpp"
+
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -44,7 +46,7 @@ std::string findAvrdude() {
 }
 
 std::vector<std::string> avrdudeArgs(const std::string& port) {
-  return {"-p", "m2560", "-c", "wiring", "-P", port, "-b", "115200", "-D"};
+  return {"-p", "m2560", "-c", "wiring", "-P", port, "-b", std::to_string(hal::kBootloaderBaud), "-D"};
 }
 
 AvrdudeRun runAvrdude(const std::vector<std::string>& args, double timeout_s,

@@ -6,6 +6,10 @@
 
 #include <fmt/format.h>
 
+#include "hal/board.hpp"
+#include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/sweep_limits.hpp"
+
 namespace board {
 namespace {
 
@@ -26,28 +30,30 @@ CommandLimits sweepLimits(const CalibrateOptions& o) {
 
 void checkOptions(const CalibrateOptions& o) {
   auto bad = [](const std::string& what) { throw std::invalid_argument(what); };
-  if (o.slot < 0 || o.slot > 3) bad(fmt::format("--slot {} is not a motor slot (0..3)", o.slot));
-  if (o.mount_g < 1 || o.mount_g > 950)
-    bad(fmt::format("--mount-g {} is outside 1..950 g (motor + propeller + mount on the plate)",
-                    o.mount_g));
+  if (o.slot < 0 || o.slot >= tc::kMotorSlots)
+    bad(fmt::format("--slot {} is not a motor slot (0..{})", o.slot, tc::kMotorSlots - 1));
+  if (o.mount_g < 1 || o.mount_g > tc::kKnownWeightMaxG)
+    bad(fmt::format("--mount-g {} is outside 1..{} g (motor + propeller + mount on the plate)",
+                    o.mount_g, tc::kKnownWeightMaxG));
   if (o.model != "v1" && o.model != "v2") bad(fmt::format("--model {}: use v1 or v2", o.model));
-  if (o.pwm_min_us < 1000 || o.pwm_max_us > 2000 || o.pwm_min_us >= o.pwm_max_us)
-    bad(fmt::format("--range {} {}: need 1000 <= MIN < MAX <= 2000 us", o.pwm_min_us,
-                    o.pwm_max_us));
-  if (o.step_us < 1 || o.step_us > 100) bad(fmt::format("--step {}: need 1..100 us", o.step_us));
-  if (o.settle_ms < 0 || o.settle_ms > 10000)
-    bad(fmt::format("--settle {}: need 0..10000 ms", o.settle_ms));
+  if (o.pwm_min_us < tc::kSweepPwmLowestUs || o.pwm_max_us > tc::kSweepPwmHighestUs ||
+      o.pwm_min_us >= o.pwm_max_us)
+    bad(fmt::format("--range {} {}: need {} <= MIN < MAX <= {} us", o.pwm_min_us, o.pwm_max_us,
+                    tc::kSweepPwmLowestUs, tc::kSweepPwmHighestUs));
+  if (o.step_us < tc::kSweepStepMinUs || o.step_us > tc::kSweepStepMaxUs)
+    bad(fmt::format("--step {}: need {}..{} us", o.step_us, tc::kSweepStepMinUs,
+                    tc::kSweepStepMaxUs));
+  if (o.settle_ms < tc::kSweepSettleMinMs || o.settle_ms > tc::kSweepSettleMaxMs)
+    bad(fmt::format("--settle {}: need {}..{} ms", o.settle_ms, tc::kSweepSettleMinMs,
+                    tc::kSweepSettleMaxMs));
 }
 
 }  // namespace
 
-const char* escPinName(int slot) {
-  switch (slot) {
-    case 0: return "D6 (PH3, OC4A)";
-    case 1: return "D7 (PH4, OC4B)";
-    case 2: return "D8 (PH5, OC4C)";
-    default: return "D11 (PB5, OC1A)";
-  }
+std::string escPinName(int slot) {
+  const hal::EscPin& pin = hal::kEscPins[slot];
+  return fmt::format("D{} (P{}{}, OC{}{})", pin.arduino_pin, pin.port, pin.bit, pin.timer,
+                     pin.compare);
 }
 
 std::string SweepLog::csv(const std::string& first_comment) const {

@@ -1,5 +1,6 @@
 // `thrustcal board flash|eeprom put|eeprom get|calibrate|liftoff`.
 #include "board/cli.hpp"
+#include "hal/board.hpp"
 #include "thrustcal/record_limits.hpp"
 
 #include <unistd.h>
@@ -176,9 +177,10 @@ nlohmann::json diagnoseSweeps(const std::vector<std::string>& csvs, const std::s
 void addFlash(CLI::App& board) {
   auto* cmd = board.add_subcommand(
       "flash",
-      "Write a firmware image through the Mega2560's stock bootloader: avrdude -p m2560 -c wiring\n"
-      "-b 115200 -D -U flash:w:IMAGE:i (its verify included), then open the port again and wait\n"
-      "for the image's prompt.");
+      fmt::format("Write a firmware image through the Mega2560's stock bootloader: avrdude -p m2560 "
+                  "-c wiring\n-b {} -D -U flash:w:IMAGE:i (its verify included), then open the port "
+                  "again and wait\nfor the image's prompt.",
+                  hal::kBootloaderBaud));
   auto port = std::make_shared<std::string>();
   auto image = std::make_shared<std::string>();
   auto timeout = std::make_shared<double>(180.0);

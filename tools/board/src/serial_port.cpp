@@ -28,9 +28,9 @@ speed_t baudConstant(unsigned baud) {
     case 115200: return B115200;
     case 230400: return B230400;
     default:
-      throw PortError(fmt::format("baud {} is not supported; the Mega2560's bootloader and both "
-                                  "images use 115200",
-                                  baud));
+      throw PortError(fmt::format("baud {} is not supported; the Mega2560's bootloader uses {} "
+                                  "and the images {}",
+                                  baud, hal::kBootloaderBaud, hal::kUartBaud));
   }
 }
 

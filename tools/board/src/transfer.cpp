@@ -179,7 +179,7 @@ FlashResult flashImage(const std::string& port, const std::string& hex_path,
   FlashResult r;
   std::vector<uint8_t> flash;
   const std::vector<bool> given =
-      givenBytes(readText(hex_path, "flash image"), 256 * 1024, hex_path, flash);
+      givenBytes(readText(hex_path, "flash image"), hal::kFlashBytes, hex_path, flash);
   uint32_t hi = 0;
   for (uint32_t a = 0; a < given.size(); ++a)
     if (given[a]) {

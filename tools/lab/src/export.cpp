@@ -65,8 +65,8 @@ RecordLimitsForExport recordLimits() {
   l.rest_max_v = tc::kPackMaxMv / 1000.0;
   l.force_min_g = tc::kRecordMinForceG;
   l.force_max_g = tc::kRecordMaxForceG;
-  l.pwm_min_us = tc::kEscMinPulseUs;
-  l.pwm_max_us = tc::kEscMaxPulseUs;
+  l.pwm_min_us = tc::kThrottleMinUs;
+  l.pwm_max_us = tc::kThrottleMaxUs;
   l.max_sag_pct = tc::kMaxSagPercent;
   l.source = "core's thrustcal/record_limits.hpp";
 #else

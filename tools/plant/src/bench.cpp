@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "hal/board.hpp"
+
 namespace plant {
 
 BenchParams BenchParams::thesis(const std::string& preset) {
@@ -52,8 +54,8 @@ void Bench::run(double duration_s, double dt_s) {
 
 double Bench::adcMillivolts(int channel) {
   switch (channel) {
-    case 0: return load_cell_.adcMillivolts();
-    case 1: return battery_sensor_.adcMillivolts();
+    case hal::kAdcLoadCell: return load_cell_.adcMillivolts();
+    case hal::kAdcBattery: return battery_sensor_.adcMillivolts();
     default: return 0.0;
   }
 }

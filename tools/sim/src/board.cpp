@@ -42,11 +42,6 @@ constexpr uint16_t kEecr = 0x3F;   // I/O 0x1F
 constexpr uint8_t kEepeBit = 1, kEempeBit = 2;
 constexpr uint16_t kSramStart = 0x200;
 
-struct EscWire {
-  char port;
-  int pin;
-};
-constexpr EscWire kEscWires[kEscChannels] = {{'H', 3}, {'H', 4}, {'H', 5}, {'B', 5}};
 
 void noSleep(avr_t*, avr_cycle_count_t) {}
 
@@ -204,7 +199,7 @@ void Board::wire() {
   for (int ch = 0; ch < kEscChannels; ++ch) {
     edge_params_[ch] = EdgeParam{this, ch};
     avr_irq_t* irq =
-        avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(kEscWires[ch].port), kEscWires[ch].pin);
+        avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(hal::kEscPins[ch].port), hal::kEscPins[ch].bit);
     avr_irq_register_notify(irq, &Board::onEscEdge, &edge_params_[ch]);
   }
   avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_OUT_TRIGGER),

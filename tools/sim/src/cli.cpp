@@ -1,5 +1,6 @@
 // `thrustcal sim gather|liftoff|console`.
 #include "sim/cli.hpp"
+#include "hal/board.hpp"
 
 #include <fmt/format.h>
 
@@ -280,13 +281,14 @@ void addLiftoff(CLI::App& sim) {
 void addConsole(CLI::App& sim) {
   auto* cmd = sim.add_subcommand(
       "console",
-      "The simulated board on a pseudo-terminal: open the printed /dev/pts/N with\n"
-      "'screen /dev/pts/N 115200' or 'picocom -b 115200 /dev/pts/N' and type as on the real\n"
-      "board. gather_store gets the thesis bench (motor on the load cell), read_run the tethered\n"
-      "quad. Ctrl-C ends it and saves the EEPROM back to --eeprom.\n"
-      "Any image: --imu mpu6050 puts an MPU-6050 on its I2C bus; --rig seesaw|gimbal an attitude\n"
-      "rig on its ESC outputs that the IMU measures, --log FILE its true attitude as it runs;\n"
-      "--fault KIND@T injects faults (docs/sim.md, \"The virtual airframe\").");
+      fmt::format("The simulated board on a pseudo-terminal: open the printed /dev/pts/N with\n"
+                  "'screen /dev/pts/N {0}' or 'picocom -b {0} /dev/pts/N' and type as on the real\n"
+                  "board. gather_store gets the thesis bench (motor on the load cell), read_run the "
+                  "tethered\nquad. Ctrl-C ends it and saves the EEPROM back to --eeprom.\n"
+                  "Any image: --imu mpu6050 puts an MPU-6050 on its I2C bus; --rig seesaw|gimbal an "
+                  "attitude\nrig on its ESC outputs that the IMU measures, --log FILE its true attitude "
+                  "as it runs;\n--fault KIND@T injects faults (docs/sim.md, \"The virtual airframe\").",
+                  hal::kUartBaud));
   auto elf = std::make_shared<std::string>(defaultElf("gather_store"));
   auto eeprom = std::make_shared<std::string>();
   auto rig = std::make_shared<std::string>("auto");
@@ -351,8 +353,8 @@ void addConsole(CLI::App& sim) {
       PtyBridge pty(*board);
       fmt::print("simulated board ({}, {} rig) on {}\n", fs::path(*elf).filename().string(), which,
                  pty.path());
-      fmt::print("open it with:  screen {} 115200   or   picocom -b 115200 {}\n", pty.path(),
-                 pty.path());
+      fmt::print("open it with:  screen {0} {1}   or   picocom -b {1} {0}\n", pty.path(),
+                 hal::kUartBaud);
       fmt::print("Ctrl-C here ends the simulation{}.\n",
                  *read_only || eeprom->empty() ? "" : " and saves the EEPROM to " + *eeprom);
       std::fflush(stdout);
@@ -441,8 +443,9 @@ void addBoard(CLI::App& sim) {
       fmt::print("  plant: {}\n", sb.rigText());
       fmt::print("use it as the board's port:\n");
       fmt::print("  thrustcal board flash --port {} build/avr/firmware/gather_store/gather_store.hex\n", port);
-      fmt::print("  avrdude -p m2560 -c wiring -P {} -b 115200 -D -U flash:w:IMAGE.hex:i\n", port);
-      fmt::print("  screen {} 115200\n", port);
+      fmt::print("  avrdude -p m2560 -c wiring -P {} -b {} -D -U flash:w:IMAGE.hex:i\n", port,
+                 hal::kBootloaderBaud);
+      fmt::print("  screen {} {}\n", port, hal::kUartBaud);
       fmt::print("Ctrl-C here ends the simulation{}.\n",
                  *read_only || eeprom->empty() ? "" : " and saves the EEPROM to " + *eeprom);
       std::fflush(stdout);

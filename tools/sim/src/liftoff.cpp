@@ -50,7 +50,7 @@ void QuadRig::wire() {
   last_t = board.timeS();
   board.addPulseListener(
       [this](int ch, double width_us, double t_s) { quad.setPulse(ch, width_us, t_s); });
-  board.setAdcSource([this](int ch) { return ch == 1 ? vsense.adcMillivolts() : 0.0; });
+  board.setAdcSource([this](int ch) { return ch == hal::kAdcBattery ? vsense.adcMillivolts() : 0.0; });
   vsense.settle(quad.power().restingVoltage_v());
   board.setTickHook([this](double t_s) {
     const double dt = t_s - last_t;

@@ -80,6 +80,6 @@ struct CalibrateResult {
 CalibrateResult calibrate(ConsoleClient& con, const CalibrateOptions& o, Operator& op);
 
 // The ESC pin of a slot on the Mega2560, for messages ("D6 (PH3)").
-const char* escPinName(int slot);
+std::string escPinName(int slot);
 
 }  // namespace board

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "hal/board.hpp"
+
 namespace board {
 
 // The port is missing, cannot be opened, or was lost (unplugged, the simulator ended);
@@ -19,7 +21,7 @@ class PortError : public std::runtime_error {
 class SerialPort {
  public:
   // Opens `path`; `reset` pulses DTR/RTS and flushes (see above). Throws PortError.
-  explicit SerialPort(const std::string& path, unsigned baud = 115200, bool reset = true);
+  explicit SerialPort(const std::string& path, unsigned baud = hal::kUartBaud, bool reset = true);
   ~SerialPort();
   SerialPort(const SerialPort&) = delete;
   SerialPort& operator=(const SerialPort&) = delete;

@@ -14,11 +14,12 @@
 
 #include "lab/dataset.hpp"
 #include "lab/model.hpp"
+#include "hal/board.hpp"
 #include "thrustcal/record_v2.hpp"
 
 namespace lab {
 
-constexpr std::size_t kEepromBytes = 4096;  // ATmega2560
+using hal::kEepromBytes;  // the board table (hal/board.hpp)
 constexpr uint8_t kEepromSlots = static_cast<uint8_t>(kEepromBytes / tc::kRecordBytes);
 
 // Throws std::invalid_argument naming the first effect of `spec` the firmware cannot run and

@@ -32,6 +32,8 @@
 #include <string>
 #include <vector>
 
+#include "hal/board.hpp"
+
 struct avr_t;
 struct avr_irq_t;
 
@@ -39,10 +41,11 @@ namespace sim {
 
 class Twi;
 
-constexpr uint32_t kCpuHz = 16000000;
-constexpr int kEscChannels = 4;
-constexpr std::size_t kEepromBytes = 4096;
-constexpr std::size_t kFlashBytes = 256 * 1024;
+// The board's facts come from the table the firmware is built from (hal/board.hpp).
+using hal::kCpuHz;
+using hal::kEepromBytes;
+using hal::kFlashBytes;
+constexpr int kEscChannels = hal::kEscChannels;
 
 inline uint64_t secondsToCycles(double s) { return static_cast<uint64_t>(s * kCpuHz + 0.5); }
 inline double cyclesToSeconds(uint64_t c) { return static_cast<double>(c) / kCpuHz; }

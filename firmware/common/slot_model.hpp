@@ -1,9 +1,8 @@
 // The force model one motor slot flies, in one piece of SRAM: either the thesis model (layout v1,
-// tc::ThesisRun: option 2.1 with the curves' PWM steps read from the EEPROM on demand, 165
-// bytes on the AVR) or model v2 (tc::ModelV2Run, the model as the frame reads it, 158 bytes).
-// A slot holds one or the other, never both, so the two share their storage (a union): four
-// slots stay under 1 KB whatever mix of layouts the EEPROM holds (the decoded thesis record is
-// 1114 bytes: four of them were 4.4 KB).
+// tc::ThesisRun: option 2.1 with the curves' PWM steps read from the EEPROM on demand) or model
+// v2 (tc::ModelV2Run, the model as the frame reads it). A slot holds one or the other, never
+// both, so the two share their storage (a union): four slots stay small whatever mix of layouts
+// the EEPROM holds, where four decoded thesis records would not fit the SRAM at all.
 //
 // Which member is alive is explicit: holdsV2(). v1() and v2() may only be called for the
 // member that is alive (callers check holdsV2() first; Motor::fliesV2() does).
@@ -15,7 +14,7 @@
 #include "thrustcal/model_v2_runtime.hpp"
 #include "thrustcal/thesis_runtime.hpp"
 
-namespace rr {
+namespace fw {
 
 class SlotModel {
  public:
@@ -56,4 +55,4 @@ class SlotModel {
   bool holds_v2_ = false;
 };
 
-}  // namespace rr
+}  // namespace fw

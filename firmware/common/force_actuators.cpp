@@ -1,0 +1,175 @@
+// The force API (force_actuators.hpp): loading the four slots once, and the ESC frame.
+#include "force_actuators.hpp"
+
+#include "hal/hal.hpp"
+
+namespace fw {
+
+// ---------------------------------------------------------------------------------------------
+// Battery
+
+void BatteryInput::sample(bool frame_reading) {
+  static_assert(kSamplesPerFrame == 4, "middleTwoCounts takes four readings");
+  uint16_t counts[kSamplesPerFrame];
+  for (uint8_t k = 0; k < kSamplesPerFrame; ++k) {
+    counts[k] = hal::Adc::readCounts(hal::kAdcBattery);
+    counts_.push(counts[k]);
+  }
+  median_mv_ = monitor_.millivoltsFromCounts(counts_.median());
+  if (!frame_reading) return;
+  // Mean of the middle two through the thesis map() at half-count resolution: equal readings
+  // give exactly map(reading).
+  frame_mv_ = monitor_.millivoltsFromTwoCounts(middleTwoCounts(counts, monitor_.config().adc_max_counts));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Loading (start-up, and after a divider change)
+
+void ForceActuators::loadSettings() {
+  tc::readSettings<hal::Eeprom>(board_settings_);
+  battery_.configure(board_settings_);
+}
+
+uint8_t ForceActuators::loadSlots(SlotReport report) {
+  v2_.count = 0;
+  for (uint8_t i = 0; i < kMotors; ++i) loadSlot(i, report);
+  return armableCount();
+}
+
+void ForceActuators::loadSlot(uint8_t index, SlotReport report) {
+  hal::Watchdog::kick();  // decoding a slot reads and checks up to 1 KB of EEPROM
+  Motor& m = motors_[index];
+  // The loader decodes into these (start-up only, on the stack); the slot keeps the compact
+  // form the frame flies (the thesis curves' steps stay in the EEPROM).
+  tc::ModelV2 v2;
+  tc::MotorCalibration v1;
+  const tc::SlotLoad load = tc::loadSlot<hal::Eeprom>(index, v2, v1, board_settings_.recordLimits());
+  m.layout = load.layout;
+  // Neither layout recognized: copy A's status is that of the version byte at the slot start
+  // (erased or unknown), which both layouts share; the loader's "most telling copy" would
+  // report stale v1 bytes at copy B's offset instead.
+  m.record = load.layout == tc::SlotLayout::kNone ? load.v2.copy_status[0] : load.status;
+  m.v2_copy = load.v2.copy;
+  m.v2_copy_status[0] = load.v2.copy_status[0];
+  m.v2_copy_status[1] = load.v2.copy_status[1];
+  m.why = load.why;
+  m.lane = kNoLane;
+  m.model.clear();
+  if (m.record == tc::DecodeStatus::kOk) {
+    const bool loaded = load.layout == tc::SlotLayout::kModelV2 ? m.model.setV2(v2)
+                                                                : m.model.setV1<hal::Eeprom>(v1, index);
+    if (!loaded) {  // the EEPROM changed under the loader: never flown
+      m.record = tc::DecodeStatus::kBadContent;
+      m.model.clear();
+    } else if (m.model.holdsV2()) {
+      m.lane = v2_.count++;
+      v2_.lane[m.lane].setModel(&m.model.v2());
+    }
+  }
+  m.force_g = 0;
+  m.pwm_us = tc::kStopPwmUs;
+  m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
+  if (report != nullptr) report(index, m, v2, v1);
+}
+
+void ForceActuators::restartFilters() {
+  const uint8_t shift = v2_.bus.shift;
+  v2_.bus = tc::BusVoltageFilter();
+  v2_.bus.shift = shift;
+  v2_.sag = tc::BusSagFilter();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Commands
+
+uint8_t ForceActuators::armableCount() const {
+  uint8_t n = 0;
+  for (uint8_t i = 0; i < kMotors; ++i) n += motors_[i].isArmable() ? 1 : 0;
+  return n;
+}
+
+bool ForceActuators::isRunning() const {
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    if (motors_[i].force_g > 0) return true;
+  }
+  return false;
+}
+
+void ForceActuators::setForce(uint8_t index, uint16_t force_g) {
+  Motor& m = motors_[index];
+  if (m.isArmable()) m.force_g = force_g;
+}
+
+void ForceActuators::stopAll() {
+  uint16_t pulses_us[kMotors];
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    Motor& m = motors_[i];
+    m.force_g = 0;
+    m.pwm_us = tc::kStopPwmUs;
+    m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
+    pulses_us[i] = tc::kStopPwmUs;
+  }
+  hal::Esc::writeAll(pulses_us);
+}
+
+// A new filter constant re-seeds the filter at its value (one division) and rescales the
+// motors' seen forces.
+void ForceActuators::setFrameRate(uint16_t frame_hz) {
+  const uint8_t shift = filterShiftFor(frame_hz);
+  if (shift == v2_.bus.shift) return;
+  v2_.bus.shift = shift;
+  if (v2_.bus.isValid()) v2_.bus.reset(v2_.bus.mv);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The ESC frame (thesis fig. 6.9, H.3). Integer only.
+
+void ForceActuators::frame() {
+  battery_.sample(v2_.count != 0);
+  if (v2_.count != 0) flyV2Motors();
+  uint16_t pulses_us[kMotors];
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    flyMotor(motors_[i]);
+    pulses_us[i] = motors_[i].pwm_us;
+  }
+  hal::Esc::writeAll(pulses_us);  // the four outputs back to back
+}
+
+// The v2 motors in one pass (tc::V2Frame: the bus filter, the sag prediction, every v2 motor's
+// pulse): their commands go into their lanes, this frame's reading into the filter; an insane
+// reading is skipped by the filter (it keeps the last good value) and flagged on the results.
+void ForceActuators::flyV2Motors() {
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    const Motor& m = motors_[i];
+    if (m.lane != kNoLane) v2_.lane[m.lane].force_dg = static_cast<uint16_t>(m.force_g * 10u);  // <= 5000
+  }
+  v2_.fly(battery_.frameMv(), battery_.frameSane() ? 0 : tc::kVoltageInvalid);
+}
+
+// One motor's pulse for this frame from its model. The v2 motors' pulses come from their
+// lanes (flyV2Motors), with no division on their path.
+void ForceActuators::flyMotor(Motor& m) {
+  if (!m.isArmable()) {
+    m.force_g = 0;
+    m.pwm_us = tc::kStopPwmUs;
+    m.flags = tc::kNotCalibrated;
+    m.vbat_mv = battery_.medianMv();
+    return;
+  }
+  if (m.fliesV2()) {
+    const tc::V2Lane& lane = v2_.lane[m.lane];
+    m.pwm_us = lane.pwm_us;
+    m.flags = lane.flags;
+    m.vbat_mv = v2_.bus.mv;
+    return;
+  }
+  // Thesis fig. 6.9: the reading sags under this motor's load; add the offset of the PWM it
+  // was last sent.
+  const tc::ThesisRun& thesis = m.model.v1();
+  m.vbat_mv = battery_.monitor().compensatedMillivolts(battery_.medianMv(), m.pwm_us, thesis.sag);
+  const tc::ForcePwmResult result = tc::forceToPwm<hal::Eeprom>(thesis, m.force_g, m.vbat_mv);
+  m.pwm_us = result.pwm_us;
+  m.flags = result.flags;
+}
+
+}  // namespace fw

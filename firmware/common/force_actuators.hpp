@@ -1,0 +1,134 @@
+// The force API: four calibrated motors as flight code sees them. Load the slots once, then
+// command each motor's force in grams and call frame() once per ESC frame; every motor gets
+// the pulse that produces its force on *this* motor at the present battery voltage, through
+// the model its EEPROM slot holds (thesis option 2.1 for a v1 record, model v2 for a v2 one).
+// read_run flies it from console commands, fly from its attitude controller; a user's own
+// flight code uses it the same way (docs/fly.md):
+//
+//   fw::ForceActuators motors;
+//   motors.loadSettings();                    // the battery divider (EEPROM)
+//   motors.loadSlots(&printSlot);             // the four records, once (thesis H.2)
+//   ... every frame:
+//   motors.setForce(i, force_g);              // armable motors only (isArmable(i))
+//   motors.frame();                           // battery, models, four pulses written at once
+//   motors.stopAll();                         // 0 g and the stop pulse on every ESC, now
+//
+// Safety rules kept here: a motor whose record did not load whole and plausible is never armed
+// (held at the stop pulse, every force to it ignored); the per-frame path is integer only.
+// Files: force_actuators.cpp (loading, the frame), slot_model.hpp (the model a slot flies),
+// frame_rules.hpp (the frame's pure decisions).
+#pragma once
+#include <stdint.h>
+
+#include "frame_rules.hpp"
+#include "slot_model.hpp"
+#include "thrustcal/battery_monitor.hpp"
+#include "thrustcal/board_settings.hpp"
+#include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/limits.hpp"
+#include "thrustcal/median_filter.hpp"
+#include "thrustcal/model_v2.hpp"
+#include "thrustcal/model_v2_runtime.hpp"
+#include "thrustcal/plausibility.hpp"
+#include "thrustcal/record_v2.hpp"
+
+namespace fw {
+
+constexpr uint8_t kNoLane = 0xFF;  // a motor that does not fly v2
+
+// One motor as the thesis's motor_struct: the model loaded from EEPROM plus the state of the
+// pulse it was last given.
+struct Motor {
+  SlotModel model;                               // v1 ThesisRun or v2 ModelV2Run (a union)
+  tc::SlotLayout layout = tc::SlotLayout::kNone; // what the slot holds
+  tc::DecodeStatus record = tc::DecodeStatus::kErased;  // kOk: `model` is loaded and flown
+  uint8_t v2_copy = tc::kNoCopy;                 // v2: copy flown (0 = A, 1 = B)
+  tc::DecodeStatus v2_copy_status[2] = {tc::DecodeStatus::kErased, tc::DecodeStatus::kErased};
+  uint8_t lane = kNoLane;           // v2: its lane in the frame
+  tc::Plausibility why;             // record kBadContent: the plausibility rule it broke
+  uint16_t force_g = 0;             // the force command: the one place it is kept
+  uint16_t pwm_us = tc::kStopPwmUs; // last pulse written to the ESC
+  uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
+                                    // v2 the bus filter's value
+  uint8_t flags = 0;                // tc::ForcePwmFlag bits of that pulse
+
+  bool isArmable() const { return record == tc::DecodeStatus::kOk; }
+  bool fliesV2() const { return isArmable() && model.holdsV2(); }
+};
+
+// The battery as the frame reads it: four conversions of the monitor's pin per frame, into the
+// thesis's median of 101 (v1 motors, status) and this frame's own reading (the v2 bus filter's
+// input: the mean of the middle two).
+class BatteryInput {
+ public:
+  static constexpr uint8_t kSamplesPerFrame = 4;
+
+  void configure(const tc::BoardSettings& settings) { monitor_ = tc::BatteryMonitor(settings.batteryConfig()); }
+  // The frame's four conversions into the median; with `frame_reading`, also this frame's own
+  // reading (skipped when no motor flies v2: it is their filter's input only).
+  void sample(bool frame_reading);
+  uint16_t medianMv() const { return median_mv_; }   // uncompensated
+  uint16_t frameMv() const { return frame_mv_; }     // this frame's reading
+  bool frameSane() const { return monitor_.isSane(frame_mv_); }
+  const tc::BatteryMonitor& monitor() const { return monitor_; }
+
+ private:
+  tc::MedianFilter<tc::kBatteryWindow> counts_;
+  tc::BatteryMonitor monitor_;
+  uint16_t median_mv_ = 0;
+  uint16_t frame_mv_ = 0;
+};
+
+class ForceActuators {
+ public:
+  static constexpr uint8_t kMotors = tc::kMotorSlots;
+  // Called as each slot loads, with the record it decoded (whichever layout the slot held).
+  using SlotReport = void (*)(uint8_t index, const Motor& m, const tc::ModelV2& v2,
+                              const tc::MotorCalibration& v1);
+
+  // The board settings (the battery divider) from the EEPROM; counts -> volts and the voltages
+  // a record may hold follow them.
+  void loadSettings();
+  // Thesis H.2: the four records, read once; `report` hears each. Every force is 0 afterwards.
+  // Returns how many motors are calibrated (armable).
+  uint8_t loadSlots(SlotReport report);
+  // After the divider changed: the v2 filters restart (their millivolts came through the old
+  // divider); load the settings and the slots again after it.
+  void restartFilters();
+
+  // Motor `index`'s force command, 0..tc::kRecordMaxForceG. Ignored for a motor that is not
+  // armable (it stays at the stop pulse).
+  void setForce(uint8_t index, uint16_t force_g);
+  // 0 g and the stop pulse on every ESC at once (not waiting for the next frame).
+  void stopAll();
+  // One ESC frame: the battery's readings, each motor's pulse from its force through its model,
+  // the four pulses written back to back.
+  void frame();
+  // The v2 bus filter's constant follows the frame rate (its time constant stays the same).
+  void setFrameRate(uint16_t frame_hz);
+
+  const Motor& motor(uint8_t index) const { return motors_[index]; }
+  bool isArmable(uint8_t index) const { return motors_[index].isArmable(); }
+  uint8_t armableCount() const;
+  bool isRunning() const;  // any motor commanded above 0 g
+  const tc::BoardSettings& boardSettings() const { return board_settings_; }
+  tc::BoardSettings& boardSettings() { return board_settings_; }
+  const BatteryInput& battery() const { return battery_; }
+  uint16_t batteryMv() const { return battery_.medianMv(); }
+  // v2 motors: the voltage filter and the bench-sag filter.
+  const tc::BusVoltageFilter& busFilter() const { return v2_.bus; }
+  const tc::BusSagFilter& sagFilter() const { return v2_.sag; }
+  uint8_t v2Motors() const { return v2_.count; }
+
+ private:
+  void loadSlot(uint8_t index, SlotReport report);
+  void flyV2Motors();
+  void flyMotor(Motor& m);
+
+  Motor motors_[kMotors];
+  tc::BoardSettings board_settings_;  // the divider (EEPROM)
+  BatteryInput battery_;
+  tc::V2Frame v2_;  // the motors flying v2: bus filter, sag, their lanes
+};
+
+}  // namespace fw
