@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 
 #include "hex/intel_hex.hpp"
+#include "sim/twi.hpp"
 
 extern "C" {
 #include <simavr/avr_adc.h>
@@ -217,6 +218,7 @@ void Board::load(const FlashImages& images) {
 }
 
 void Board::wire() {
+  twi_ = std::make_unique<Twi>(avr_);
   for (int ch = 0; ch < kEscChannels; ++ch) {
     edge_params_[ch] = EdgeParam{this, ch};
     avr_irq_t* irq =
@@ -239,6 +241,7 @@ void Board::wire() {
 }
 
 Board::~Board() {
+  twi_.reset();  // its IRQs live in the core's pool: before avr_terminate
   if (avr_) {
     avr_terminate(avr_);
     std::free(avr_);
@@ -300,6 +303,7 @@ void Board::afterReset() {
   rx_armed_ = false;
   xoff_ = false;
   armRx();
+  if (twi_) twi_->afterReset();
   for (auto& listener : reset_listeners_) listener(avr_->cycle);
 }
 

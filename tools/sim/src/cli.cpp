@@ -11,6 +11,7 @@
 #include <fstream>
 #include <memory>
 
+#include "sim/air_cli.hpp"
 #include "sim/board.hpp"
 #include "hex/intel_hex.hpp"
 #include "sim/pty_bridge.hpp"
@@ -299,85 +300,117 @@ void addLiftoff(CLI::App& sim) {
   cmd->callback([a] { guarded([&] { runLiftoffCommand(*a); }); });
 }
 
+// What `sim console` reads from its command line.
+struct ConsoleArgs {
+  std::string elf = defaultElf("gather_store");
+  std::string eeprom;
+  std::string rig = "auto";
+  std::string preset = "kv1100_9x4.7";
+  std::vector<uint64_t> seeds{1, 2, 3, 4};
+  double speed = 1.0;
+  double duration = 0.0;
+  bool read_only = false;
+  int slot = 0;
+  AirCliOptions air;
+};
+
+void declareConsoleOptions(CLI::App* cmd, ConsoleArgs& a) {
+  cmd->add_option("--elf", a.elf, "firmware ELF image")->capture_default_str();
+  cmd->add_option("--eeprom", a.eeprom, "Intel HEX EEPROM image (loaded if it exists, saved at exit)");
+  cmd->add_option("--rig", a.rig, "bench, quad, seesaw, gimbal or auto (bench for gather_store, quad "
+                                  "otherwise)")
+      ->check(CLI::IsMember({"auto", "bench", "quad", "seesaw", "gimbal"}))
+      ->capture_default_str();
+  addAirOptions(cmd, a.air);
+  cmd->add_option("--preset", a.preset, "motor + propeller preset")->capture_default_str();
+  cmd->add_option("--slot", a.slot, "bench: the ESC output (0..3) the motor is wired to; select "
+                                    "it with 'motor N' in gather_store")
+      ->check(CLI::Range(0, 3))
+      ->capture_default_str();
+  cmd->add_option("--seeds", a.seeds, "motor seeds (bench: the first; quad: slot 0..3)")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--speed", a.speed, "simulated seconds per wall second (0: as fast as possible)")
+      ->capture_default_str();
+  cmd->add_option("--duration", a.duration, "stop after this many simulated seconds (0: Ctrl-C)")
+      ->capture_default_str();
+  cmd->add_flag("--read-only", a.read_only, "do not write the EEPROM back");
+}
+
+// The plant `sim console` wires to the image: one of the rigs (kept alive here) and its board.
+struct ConsoleRig {
+  std::unique_ptr<BenchRig> bench;
+  std::unique_ptr<QuadRig> quad;
+  std::unique_ptr<AirframeRig> airframe;
+  std::unique_ptr<StillAirframe> still;  // the IMU and faults on a board without an attitude rig
+  Board* board = nullptr;
+};
+
+ConsoleRig makeConsoleRig(const ConsoleArgs& a, const std::string& which) {
+  ConsoleRig r;
+  if (isAirRig(which)) {
+    r.airframe = makeAirframeRig(a.elf, which, a.preset, a.seeds, a.air);
+    r.board = &r.airframe->board();
+  } else if (which == "bench") {
+    plant::BenchParams p = plant::BenchParams::thesis(a.preset);
+    p.actuator = motorForSeed(a.preset, a.seeds.at(0), 0.03);
+    r.bench = std::make_unique<BenchRig>(a.elf, p, a.slot);
+    r.board = &r.bench->board;
+  } else {
+    std::array<plant::ActuatorParams, 4> motors;
+    for (int i = 0; i < 4; ++i)
+      motors[i] = motorForSeed(a.preset, a.seeds.size() > static_cast<std::size_t>(i) ? a.seeds[i] : i + 1, 0.03);
+    r.quad = std::make_unique<QuadRig>(a.elf, plant::QuadFrameParams{}, motors);
+    r.board = &r.quad->board;
+  }
+  return r;
+}
+
+void runConsoleCommand(const ConsoleArgs& a) {
+  std::string which = a.rig;
+  if (which == "auto")
+    which = fs::path(a.elf).filename().string().find("gather") != std::string::npos ? "bench" : "quad";
+  const auto image = loadEepromOrErased(a.eeprom, false);
+  ConsoleRig r = makeConsoleRig(a, which);
+  Board& board = *r.board;
+  board.setEeprom(image);
+  if (!r.airframe) r.still = std::make_unique<StillAirframe>(board, which, a.air);
+  if (r.airframe) fmt::print("rig: {}\n", r.airframe->describe());
+  PtyBridge pty(board);
+  fmt::print("simulated board ({}, {} rig) on {}\n", fs::path(a.elf).filename().string(), which,
+             pty.path());
+  fmt::print("open it with:  screen {0} {1}   or   picocom -b {1} {0}\n", pty.path(), hal::kUartBaud);
+  fmt::print("Ctrl-C here ends the simulation{}.\n",
+             a.read_only || a.eeprom.empty() ? "" : " and saves the EEPROM to " + a.eeprom);
+  std::fflush(stdout);
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+  pty.run(a.speed, a.duration, g_stop);
+  if (!a.read_only && !a.eeprom.empty()) {
+    hex::writeIntelHexFile(a.eeprom, board.eeprom());
+    fmt::print("EEPROM saved: {}\n", a.eeprom);
+  }
+  fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {:.0f}x real time)\n",
+             board.simulatedSeconds(), a.speed, board.realtimeFactor());
+  for (const auto& f : r.airframe ? r.airframe->faultsApplied() : r.still->faultsApplied())
+    fmt::print("fault applied: {}\n", f);
+  if (!a.air.log.empty()) fmt::print("truth log: {}\n", a.air.log);
+}
+
 void addConsole(CLI::App& sim) {
   auto* cmd = sim.add_subcommand(
       "console",
       fmt::format("The simulated board on a pseudo-terminal: open the printed /dev/pts/N with\n"
                   "'screen /dev/pts/N {0}' or 'picocom -b {0} /dev/pts/N' and type as on the real\n"
                   "board. gather_store gets the thesis bench (motor on the load cell), read_run the "
-                  "tethered\nquad. Ctrl-C ends it and saves the EEPROM back to --eeprom.",
+                  "tethered\nquad. Ctrl-C ends it and saves the EEPROM back to --eeprom.\n"
+                  "Any image: --imu mpu6050 puts an MPU-6050 on its I2C bus; --rig seesaw|gimbal an "
+                  "attitude\nrig on its ESC outputs that the IMU measures, --log FILE its true attitude "
+                  "as it runs;\n--fault KIND@T injects faults (docs/sim.md, \"The virtual airframe\").",
                   hal::kUartBaud));
-  auto elf = std::make_shared<std::string>(defaultElf("gather_store"));
-  auto eeprom = std::make_shared<std::string>();
-  auto rig = std::make_shared<std::string>("auto");
-  auto preset = std::make_shared<std::string>("kv1100_9x4.7");
-  auto seeds = std::make_shared<std::vector<uint64_t>>(std::vector<uint64_t>{1, 2, 3, 4});
-  auto speed = std::make_shared<double>(1.0);
-  auto duration = std::make_shared<double>(0.0);
-  auto read_only = std::make_shared<bool>(false);
-  auto slot = std::make_shared<int>(0);
-  cmd->add_option("--elf", *elf, "firmware ELF image")->capture_default_str();
-  cmd->add_option("--eeprom", *eeprom, "Intel HEX EEPROM image (loaded if it exists, saved at exit)");
-  cmd->add_option("--rig", *rig, "bench, quad or auto (bench for gather_store, quad otherwise)")
-      ->check(CLI::IsMember({"auto", "bench", "quad"}))
-      ->capture_default_str();
-  cmd->add_option("--preset", *preset, "motor + propeller preset")->capture_default_str();
-  cmd->add_option("--slot", *slot, "bench: the ESC output (0..3) the motor is wired to; select "
-                                   "it with 'motor N' in gather_store")
-      ->check(CLI::Range(0, 3))
-      ->capture_default_str();
-  cmd->add_option("--seeds", *seeds, "motor seeds (bench: the first; quad: slot 0..3)")
-      ->delimiter(',')
-      ->capture_default_str();
-  cmd->add_option("--speed", *speed, "simulated seconds per wall second (0: as fast as possible)")
-      ->capture_default_str();
-  cmd->add_option("--duration", *duration, "stop after this many simulated seconds (0: Ctrl-C)")
-      ->capture_default_str();
-  cmd->add_flag("--read-only", *read_only, "do not write the EEPROM back");
-  cmd->callback([=] {
-    guarded([&] {
-      std::string which = *rig;
-      if (which == "auto")
-        which = fs::path(*elf).filename().string().find("gather") != std::string::npos ? "bench"
-                                                                                       : "quad";
-      const auto image = loadEepromOrErased(*eeprom, false);
-      std::unique_ptr<BenchRig> bench;
-      std::unique_ptr<QuadRig> quad;
-      Board* board = nullptr;
-      if (which == "bench") {
-        plant::BenchParams p = plant::BenchParams::thesis(*preset);
-        p.actuator = motorForSeed(*preset, seeds->at(0), 0.03);
-        bench = std::make_unique<BenchRig>(*elf, p, *slot);
-        board = &bench->board;
-      } else {
-        std::array<plant::ActuatorParams, 4> motors;
-        for (int i = 0; i < 4; ++i)
-          motors[i] = motorForSeed(*preset, seeds->size() > static_cast<std::size_t>(i) ? (*seeds)[i] : i + 1, 0.03);
-        plant::QuadFrameParams qp;
-        quad = std::make_unique<QuadRig>(*elf, qp, motors);
-        board = &quad->board;
-      }
-      board->setEeprom(image);
-      PtyBridge pty(*board);
-      fmt::print("simulated board ({}, {} rig) on {}\n", fs::path(*elf).filename().string(), which,
-                 pty.path());
-      fmt::print("open it with:  screen {0} {1}   or   picocom -b {1} {0}\n", pty.path(),
-                 hal::kUartBaud);
-      fmt::print("Ctrl-C here ends the simulation{}.\n",
-                 *read_only || eeprom->empty() ? "" : " and saves the EEPROM to " + *eeprom);
-      std::fflush(stdout);
-      std::signal(SIGINT, onSignal);
-      std::signal(SIGTERM, onSignal);
-      pty.run(*speed, *duration, g_stop);
-      if (!*read_only && !eeprom->empty()) {
-        hex::writeIntelHexFile(*eeprom, board->eeprom());
-        fmt::print("EEPROM saved: {}\n", *eeprom);
-      }
-      fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {:.0f}x real "
-                 "time)\n",
-                 board->simulatedSeconds(), *speed, board->realtimeFactor());
-    });
-  });
+  auto a = std::make_shared<ConsoleArgs>();
+  declareConsoleOptions(cmd, *a);
+  cmd->callback([a] { guarded([&] { runConsoleCommand(*a); }); });
 }
 
 // What `sim board` reads from its command line.
@@ -598,6 +631,8 @@ void registerCommands(CLI::App& app) {
   addConsole(*sim);
   addBoard(*sim);
   addFleet(*sim);
+  addRunCommand(*sim);
+  addImuCommand(*sim);
 }
 
 }  // namespace sim

@@ -85,6 +85,11 @@ class Actuator {
   // (bisection; returns esc.full_us if thrust_g is out of reach, esc.start_us if <= 0).
   double pulseForThrust_us(double thrust_g, double bus_v) const;
 
+  // --- damage (fault injection) --------------------------------------------------------------
+  // The propeller loses `share` (0..1) of its thrust from now on, e.g. a blade tip gone: C_T and
+  // C_P both scale by (1 - share), so the motor also spins up against less drag.
+  void damagePropeller(double share);
+
   // --- parameters --------------------------------------------------------------------------
   const ActuatorParams& params() const { return p_; }
   const Environment& environment() const { return env_; }
