@@ -66,17 +66,17 @@ TEST_F(TwiProbe, WritesReachTheImuAndReadBack) {
   EXPECT_NE(r.at(0).find("data 18"), std::string::npos) << r.at(0);
 }
 
-struct RateCase {
+struct TwiRateCase {
   int twbr;
   int twps;
   uint64_t bit_cycles;  // 16 + 2 TWBR 4^TWPS (datasheet 24.5.2)
 };
 
-class TwiTiming : public TwiProbe, public ::testing::WithParamInterface<RateCase> {};
+class TwiTiming : public TwiProbe, public ::testing::WithParamInterface<TwiRateCase> {};
 
 TEST_P(TwiTiming, EveryByteTakesNineBitsOf16Plus2TwbrTimes4PowTwps) {
   // given
-  const RateCase c = GetParam();
+  const TwiRateCase c = GetParam();
   wake();
   command(fmt::format("rate {} {}", c.twbr, c.twps));
   ASSERT_EQ(board->twi().bitCycles(), c.bit_cycles);
@@ -114,8 +114,8 @@ TEST_P(TwiTiming, EveryByteTakesNineBitsOf16Plus2TwbrTimes4PowTwps) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Datasheet, TwiTiming,
-                         ::testing::Values(RateCase{12, 0, 40}, RateCase{72, 0, 160},
-                                           RateCase{18, 1, 160}),
+                         ::testing::Values(TwiRateCase{12, 0, 40}, TwiRateCase{72, 0, 160},
+                                           TwiRateCase{18, 1, 160}),
                          [](const auto& info) {
                            return fmt::format("twbr{}_twps{}", info.param.twbr, info.param.twps);
                          });
