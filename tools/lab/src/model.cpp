@@ -600,121 +600,114 @@ struct Model::Impl {
     return start;
   }
 
-  // `warm_rss`: the smaller model's RSS on these rows (its curve coefficients are in `warm`),
-  // so its optimum need not be evaluated again; NaN: evaluate it.
-  FitResult fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties, double warm_rss) {
-    FitResult r;
-    r.model = spec.text();
-    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+  // A parameter with a scan (deadband's start threshold) has local minima (the curve can bend
+  // to mimic a later start): when it is new (not in `known`), scan it from its scan_from value
+  // to its first guess with the linear solve alone and start LM at the best.
+  Eigen::VectorXd scanStart(Eigen::VectorXd th, const std::vector<Param>* known) const {
     const double inf = std::numeric_limits<double>::infinity();
-    theta = initialTheta();
-    double best_rss = inf;
-    if (np > 0) {
-      const bool have_warm = warm && !warm->empty();
-      std::vector<Eigen::VectorXd> searched;  // LM results
-      // A parameter with a scan (deadband's start threshold) has local minima (the curve can bend
-      // to mimic a later start): when it is new, scan it from its scan_from value to its first
-      // guess with the linear solve alone and start LM at the best.
-      auto scanStart = [&](Eigen::VectorXd th, const std::vector<Param>* known) {
-        for (std::size_t j = 0; j < defs.size(); ++j) {
-          const auto i = static_cast<Eigen::Index>(j);
-          const double lo = defs[j].scan_from;
-          bool is_new = std::isfinite(lo);
-          if (known)
-            for (const auto& w : *known) is_new = is_new && w.name != defs[j].name;
-          if (!is_new) continue;
-          const double hi = initialTheta()[i];
-          double best = inf, best_start = hi;
-          for (int k = 0; k <= 16; ++k) {
-            th[i] = lo + (hi - lo) * k / 16.0;
-            const double rss = rssAt(fit_bound, y_fit, th);
-            if (rss < best) best = rss, best_start = th[i];
-          }
-          th[i] = best_start;
-        }
-        return th;
-      };
-      bool cold = !have_warm;
-      Eigen::VectorXd neutral;
-      if (have_warm) {
-        // Warm start from a smaller model's optimum: with the new effects switched off it is
-        // itself a candidate, so a model with an added effect never fits worse than the model
-        // without it; LM starts from it with the new effects switched on.
-        neutral = warmStart(*warm);
-        Eigen::VectorXd start = warmStart(*warm, /*neutral=*/false);
-        start = scanStart(start, warm);
-        // A generic probe asks whether anything is left in a variable: the model's own
-        // parameters stay where they are, only the probe's move (cheap, and it cannot borrow
-        // from the effects already fitted).
-        std::vector<bool> fixed;
-        if (warm_only && !spec.probes.empty()) {
-          fixed.assign(defs.size(), false);
-          for (std::size_t i = 0; i < defs.size(); ++i) fixed[i] = defs[i].effect != "probe";
-        }
-        searched.push_back(runLm(start, r, warm_only, fixed.empty() ? nullptr : &fixed));
-        // and from a cold start too (multi-start): the start threshold and the voltage exponent
-        // have local minima the continuation can end in
-        cold = !warm_only;
+    for (std::size_t j = 0; j < defs.size(); ++j) {
+      const auto i = static_cast<Eigen::Index>(j);
+      const double lo = defs[j].scan_from;
+      bool is_new = std::isfinite(lo);
+      if (known)
+        for (const auto& w : *known) is_new = is_new && w.name != defs[j].name;
+      if (!is_new) continue;
+      const double hi = initialTheta()[i];
+      double best = inf, best_start = hi;
+      for (int k = 0; k <= 16; ++k) {
+        th[i] = lo + (hi - lo) * k / 16.0;
+        const double rss = rssAt(fit_bound, y_fit, th);
+        if (rss < best) best = rss, best_start = th[i];
       }
-      if (cold) searched.push_back(runLm(scanStart(initialTheta(), nullptr), r));
-      // the best search result on the fit rows, then on every row against the smaller model
-      double best_fit_rows = inf;
-      theta = searched.front();
-      for (const auto& th : searched) {
-        Eigen::VectorXd c;
-        const double rss = rssAt(fit_bound, y_fit, th, &c);
-        if (rss < best_fit_rows) {
-          best_fit_rows = rss;
-          theta = th;
-          coef = c;
-        }
-      }
-      best_rss = fit_data ? rssAt(train_bound, y, theta, &coef) : best_fit_rows;
-      if (have_warm) {
-        Eigen::VectorXd c;
-        double rss = inf;
-        if (std::isfinite(warm_rss) && !own_base && warmCurve(*warm, c)) rss = warm_rss;
-        else rss = rssAt(train_bound, y, neutral, &c);
-        if (rss < best_rss || !std::isfinite(best_rss)) {
-          best_rss = rss;
-          theta = neutral;
-          coef = c;
-        }
-      }
-    } else {
-      best_rss = rssAt(train_bound, y, theta, &coef);
+      th[i] = best_start;
     }
-    fitted = true;
-    if (!uncertainties && fit_data && !own_base) {
-      // A quick fit on many rows (continuation, ranking): the parameters and the error, not
-      // every row's prediction.
-      r.n = static_cast<std::size_t>(y.size());
-      r.k = static_cast<int>(coef.size() + np);
-      r.rss = best_rss;
-      const double n = static_cast<double>(r.n);
-      r.rmse_g = std::sqrt(r.rss / n);
-      r.max_g = r.max_pct = kNaN;
-      r.rmse_pct = 100 * r.rmse_g / std::max(y.cwiseAbs().maxCoeff(), 1e-9);
-      const double ll = n * std::log(std::max(r.rss / n, 1e-300));
-      r.aic = ll + 2.0 * r.k;
-      r.bic = ll + std::log(n) * r.k;
-      for (Eigen::Index j = 0; j < coef.size(); ++j)
-        r.params.push_back({linear->linearName(static_cast<int>(j)), "g", linear_effect, coef[j], kNaN});
-      for (Eigen::Index j = 0; j < np; ++j) {
-        const auto& d = defs[static_cast<std::size_t>(j)];
-        r.params.push_back({d.name, d.unit, d.effect, theta[j], kNaN});
-      }
-      return r;
-    }
-    Eigen::VectorXd pred_c = coef;
-    const Eigen::VectorXd pred = predictWith(train_bound, theta, pred_c, own_base, &y);
+    return th;
+  }
 
+  // The nonlinear search: LM from the smaller model's optimum (`warm`) and cold, the best on
+  // the fit rows, then on every row against the smaller model itself. Sets theta and coef;
+  // returns the RSS on every row.
+  double search(const std::vector<Param>* warm, bool warm_only, double warm_rss, FitResult& r) {
+    const double inf = std::numeric_limits<double>::infinity();
+    const bool have_warm = warm && !warm->empty();
+    std::vector<Eigen::VectorXd> searched;  // LM results
+    bool cold = !have_warm;
+    Eigen::VectorXd neutral;
+    if (have_warm) {
+      // Warm start from a smaller model's optimum: with the new effects switched off it is
+      // itself a candidate, so a model with an added effect never fits worse than the model
+      // without it; LM starts from it with the new effects switched on.
+      neutral = warmStart(*warm);
+      Eigen::VectorXd start = warmStart(*warm, /*neutral=*/false);
+      start = scanStart(start, warm);
+      // A generic probe asks whether anything is left in a variable: the model's own
+      // parameters stay where they are, only the probe's move (cheap, and it cannot borrow
+      // from the effects already fitted).
+      std::vector<bool> fixed;
+      if (warm_only && !spec.probes.empty()) {
+        fixed.assign(defs.size(), false);
+        for (std::size_t i = 0; i < defs.size(); ++i) fixed[i] = defs[i].effect != "probe";
+      }
+      searched.push_back(runLm(start, r, warm_only, fixed.empty() ? nullptr : &fixed));
+      // and from a cold start too (multi-start): the start threshold and the voltage exponent
+      // have local minima the continuation can end in
+      cold = !warm_only;
+    }
+    if (cold) searched.push_back(runLm(scanStart(initialTheta(), nullptr), r));
+    // the best search result on the fit rows, then on every row against the smaller model
+    double best_fit_rows = inf;
+    theta = searched.front();
+    for (const auto& th : searched) {
+      Eigen::VectorXd c;
+      const double rss = rssAt(fit_bound, y_fit, th, &c);
+      if (rss < best_fit_rows) {
+        best_fit_rows = rss;
+        theta = th;
+        coef = c;
+      }
+    }
+    double best_rss = fit_data ? rssAt(train_bound, y, theta, &coef) : best_fit_rows;
+    if (have_warm) {
+      Eigen::VectorXd c;
+      double rss = inf;
+      if (std::isfinite(warm_rss) && !own_base && warmCurve(*warm, c)) rss = warm_rss;
+      else rss = rssAt(train_bound, y, neutral, &c);
+      if (rss < best_rss || !std::isfinite(best_rss)) {
+        best_rss = rss;
+        theta = neutral;
+        coef = c;
+      }
+    }
+    return best_rss;
+  }
+
+  // A quick fit on many rows (continuation, ranking): the parameters and the error, not
+  // every row's prediction.
+  FitResult quickResult(FitResult& r, double best_rss) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
     r.n = static_cast<std::size_t>(y.size());
-    const Eigen::Index nl = own_base ? 0 : coef.size();
-    std::vector<Eigen::Index> active;
-    for (Eigen::Index j = 0; j < nl; ++j)
-      if (j == 0 || coef[j] > 0) active.push_back(j);
-    const Eigen::Index ncol = static_cast<Eigen::Index>(active.size()) + np;
+    r.k = static_cast<int>(coef.size() + np);
+    r.rss = best_rss;
+    const double n = static_cast<double>(r.n);
+    r.rmse_g = std::sqrt(r.rss / n);
+    r.max_g = r.max_pct = kNaN;
+    r.rmse_pct = 100 * r.rmse_g / std::max(y.cwiseAbs().maxCoeff(), 1e-9);
+    const double ll = n * std::log(std::max(r.rss / n, 1e-300));
+    r.aic = ll + 2.0 * r.k;
+    r.bic = ll + std::log(n) * r.k;
+    for (Eigen::Index j = 0; j < coef.size(); ++j)
+      r.params.push_back({linear->linearName(static_cast<int>(j)), "g", linear_effect, coef[j], kNaN});
+    for (Eigen::Index j = 0; j < np; ++j) {
+      const auto& d = defs[static_cast<std::size_t>(j)];
+      r.params.push_back({d.name, d.unit, d.effect, theta[j], kNaN});
+    }
+    return r;
+  }
+
+  // The errors and criteria of the fit on every row, and the warnings about it.
+  void errorsOf(FitResult& r, const Eigen::VectorXd& pred, Eigen::Index nl) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    r.n = static_cast<std::size_t>(y.size());
     r.k = static_cast<int>(nl + np) + (own ? own->countedParams() : 0);
     const Eigen::VectorXd res = y - pred;
     r.rss = res.squaredNorm();
@@ -734,50 +727,62 @@ struct Model::Impl {
       r.warnings.push_back(fmt::format("{} samples for {} parameters: the fit interpolates, its error says "
                                        "nothing; log more samples or use fewer effects", r.n, r.k));
     for (const Term* t : terms) t->warn(y, r.warnings);
+  }
 
-    // Uncertainties: J = d pred / d (linear, nonlinear) at the optimum, J^T J summed row by row.
+  // Uncertainties: J = d pred / d (linear, nonlinear) at the optimum, J^T J summed row by row;
+  // one standard uncertainty per active linear and every nonlinear parameter (NaN when not
+  // determined).
+  Eigen::VectorXd sigmas(FitResult& r, const Eigen::VectorXd& pred, const std::vector<Eigen::Index>& active,
+                         Eigen::Index nl) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    const Eigen::Index ncol = static_cast<Eigen::Index>(active.size()) + np;
     Eigen::VectorXd sig = Eigen::VectorXd::Constant(ncol, kNaN);
-    if (uncertainties && ncol > 0 && res.allFinite()) {
-      std::vector<Eigen::VectorXd> dcol(static_cast<std::size_t>(np));
-      for (Eigen::Index j = 0; j < np; ++j) {
-        Eigen::VectorXd tp = theta;
-        const double h = 1e-3 * defs[static_cast<std::size_t>(j)].scale;
-        tp[j] += h;
-        Eigen::VectorXd c = coef;
-        dcol[static_cast<std::size_t>(j)] = (predictWith(train_bound, tp, c, false, nullptr) - pred) / h;
-      }
-      Eigen::VectorXd mul, add;
-      std::vector<double> x;
-      if (nl > 0) {
-        x = drive(train_bound, theta);
-        factors(train_bound, theta, x, mul, add);
-      }
-      Eigen::MatrixXd JtJ = Eigen::MatrixXd::Zero(ncol, ncol);
-      Eigen::VectorXd jrow(ncol);
-      double row[64];
-      bool finite = true;
-      for (std::size_t i = 0; i < r.n && finite; ++i) {
-        const auto ri = static_cast<Eigen::Index>(i);
-        if (nl > 0) basisRow(x[i], mul[ri], row);
-        for (std::size_t k = 0; k < active.size(); ++k) jrow[static_cast<Eigen::Index>(k)] = row[active[k]];
-        for (Eigen::Index j = 0; j < np; ++j)
-          jrow[static_cast<Eigen::Index>(active.size()) + j] = dcol[static_cast<std::size_t>(j)][ri];
-        finite = jrow.allFinite();
-        for (Eigen::Index a = 0; a < ncol; ++a)
-          for (Eigen::Index b = 0; b <= a; ++b) JtJ(a, b) += jrow[a] * jrow[b];
-      }
-      if (finite) {
-        JtJ = JtJ.selfadjointView<Eigen::Lower>();
-        const double dof = std::max(n - static_cast<double>(ncol), 1.0);
-        const double s2 = r.rss / dof;
-        Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(JtJ);
-        const Eigen::MatrixXd cov = cod.pseudoInverse() * s2;
-        for (Eigen::Index j = 0; j < ncol; ++j) sig[j] = std::sqrt(std::max(cov(j, j), 0.0));
-        if (cod.rank() < ncol)
-          r.warnings.push_back(fmt::format("{} parameter combination(s) are not determined by the data "
-                                           "(their uncertainties are not meaningful)", ncol - cod.rank()));
-      }
+    std::vector<Eigen::VectorXd> dcol(static_cast<std::size_t>(np));
+    for (Eigen::Index j = 0; j < np; ++j) {
+      Eigen::VectorXd tp = theta;
+      const double h = 1e-3 * defs[static_cast<std::size_t>(j)].scale;
+      tp[j] += h;
+      Eigen::VectorXd c = coef;
+      dcol[static_cast<std::size_t>(j)] = (predictWith(train_bound, tp, c, false, nullptr) - pred) / h;
     }
+    Eigen::VectorXd mul, add;
+    std::vector<double> x;
+    if (nl > 0) {
+      x = drive(train_bound, theta);
+      factors(train_bound, theta, x, mul, add);
+    }
+    Eigen::MatrixXd JtJ = Eigen::MatrixXd::Zero(ncol, ncol);
+    Eigen::VectorXd jrow(ncol);
+    double row[64];
+    bool finite = true;
+    for (std::size_t i = 0; i < r.n && finite; ++i) {
+      const auto ri = static_cast<Eigen::Index>(i);
+      if (nl > 0) basisRow(x[i], mul[ri], row);
+      for (std::size_t k = 0; k < active.size(); ++k) jrow[static_cast<Eigen::Index>(k)] = row[active[k]];
+      for (Eigen::Index j = 0; j < np; ++j)
+        jrow[static_cast<Eigen::Index>(active.size()) + j] = dcol[static_cast<std::size_t>(j)][ri];
+      finite = jrow.allFinite();
+      for (Eigen::Index a = 0; a < ncol; ++a)
+        for (Eigen::Index b = 0; b <= a; ++b) JtJ(a, b) += jrow[a] * jrow[b];
+    }
+    if (!finite) return sig;
+    JtJ = JtJ.selfadjointView<Eigen::Lower>();
+    const double dof = std::max(static_cast<double>(r.n) - static_cast<double>(ncol), 1.0);
+    const double s2 = r.rss / dof;
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(JtJ);
+    const Eigen::MatrixXd cov = cod.pseudoInverse() * s2;
+    for (Eigen::Index j = 0; j < ncol; ++j) sig[j] = std::sqrt(std::max(cov(j, j), 0.0));
+    if (cod.rank() < ncol)
+      r.warnings.push_back(fmt::format("{} parameter combination(s) are not determined by the data "
+                                       "(their uncertainties are not meaningful)", ncol - cod.rank()));
+    return sig;
+  }
+
+  // Every parameter with its uncertainty and, for the nonlinear ones, whether it stopped at a
+  // bound of its range.
+  void paramsOf(FitResult& r, const Eigen::VectorXd& sig, const std::vector<Eigen::Index>& active, Eigen::Index nl,
+                bool uncertainties) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
     for (Eigen::Index j = 0; j < nl; ++j) {
       Param pr;
       pr.name = linear->linearName(static_cast<int>(j));
@@ -805,6 +810,31 @@ struct Model::Impl {
       }
       r.params.push_back(pr);
     }
+  }
+
+  // `warm_rss`: the smaller model's RSS on these rows (its curve coefficients are in `warm`),
+  // so its optimum need not be evaluated again; NaN: evaluate it.
+  FitResult fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties, double warm_rss) {
+    FitResult r;
+    r.model = spec.text();
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    theta = initialTheta();
+    double best_rss;
+    if (np > 0) best_rss = search(warm, warm_only, warm_rss, r);
+    else best_rss = rssAt(train_bound, y, theta, &coef);
+    fitted = true;
+    if (!uncertainties && fit_data && !own_base) return quickResult(r, best_rss);
+    Eigen::VectorXd pred_c = coef;
+    const Eigen::VectorXd pred = predictWith(train_bound, theta, pred_c, own_base, &y);
+    const Eigen::Index nl = own_base ? 0 : coef.size();
+    std::vector<Eigen::Index> active;
+    for (Eigen::Index j = 0; j < nl; ++j)
+      if (j == 0 || coef[j] > 0) active.push_back(j);
+    const Eigen::Index ncol = static_cast<Eigen::Index>(active.size()) + np;
+    errorsOf(r, pred, nl);
+    Eigen::VectorXd sig = Eigen::VectorXd::Constant(ncol, kNaN);
+    if (uncertainties && ncol > 0 && (y - pred).allFinite()) sig = sigmas(r, pred, active, nl);
+    paramsOf(r, sig, active, nl, uncertainties);
     return r;
   }
 
