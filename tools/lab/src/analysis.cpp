@@ -206,6 +206,130 @@ Dataset evenlySpaced(const Dataset& data, std::size_t max_rows) {
   return data.subset(keep);
 }
 
+// A candidate column as the ranking sees it: NaN when it is constant or not logged on every row.
+struct Profile {
+  bool usable = false;
+  bool categorical = false;
+  double mean = 0;
+};
+Profile profileOf(const std::vector<double>& z) {
+  std::set<double> distinct;
+  bool integral = true, complete = true;
+  double sum = 0;
+  for (double v : z) {
+    if (!std::isfinite(v)) { complete = false; continue; }
+    if (distinct.size() <= 17) distinct.insert(v);
+    integral = integral && v == std::round(v);
+    sum += v;
+  }
+  Profile p;
+  p.usable = distinct.size() >= 2 && complete;
+  p.categorical = (integral && distinct.size() <= 16) || distinct.size() <= 3;
+  p.mean = sum / static_cast<double>(z.size());
+  return p;
+}
+
+// The refits that ask how much of the residual a variable explains: the model with each effect
+// the variable points to, or, when no catalogue effect covers it, a generic factor in it.
+std::vector<std::pair<std::string, ModelSpec>> trialsFor(const Suspect& s, const Advice& a, const ModelSpec& spec,
+                                                         const Dataset& data) {
+  std::vector<std::pair<std::string, ModelSpec>> trials;
+  for (const auto& t : a.trials) {
+    try {
+      trials.emplace_back(t, combine(spec, parseSpec(t)));
+    } catch (const std::invalid_argument&) {
+    }
+  }
+  const std::string name = s.variable;
+  const bool probe = a.trials.empty() && name != "pwm_us" &&
+                     !((startsWith(lowerCopy(name), "pressure") || startsWith(lowerCopy(name), "baro")) &&
+                       data.has("rho_kg_m3"));
+  if (probe) {
+    ModelSpec p = spec;
+    p.probes.push_back({name, s.categorical});
+    trials.emplace_back(a.suggest, p);
+  }
+  return trials;
+}
+
+// The added-variable fit: each trial refitted from the model's optimum; the best trial's score
+// and p-value count. Returns the trials that could be fitted with their scores, best first.
+std::vector<std::pair<double, std::string>> scoreTrials(Suspect& s,
+                                                        const std::vector<std::pair<std::string, ModelSpec>>& trials,
+                                                        const Dataset& work, const FitResult& fit) {
+  const double n = static_cast<double>(work.rows());
+  std::vector<std::pair<double, std::string>> scored;
+  for (const auto& [label, t] : trials) {
+    try {
+      const FitResult r = fitModel(work, t, &fit.params, /*warm_only=*/true, /*uncertainties=*/false, fit.rss);
+      if (!std::isfinite(r.rss)) continue;
+      const double dk = std::max(1, r.k - fit.k);
+      const double score =
+          fit.rss > 0 ? std::max(0.0, 1.0 - (r.rss / fit.rss) * std::exp(dk * std::log(n) / n)) : 0.0;
+      double p = 1.0;
+      const double dof = n - r.k;
+      if (r.rss > 0 && dof > 0 && fit.rss > r.rss)
+        p = fSurvival(((fit.rss - r.rss) / dk) / (r.rss / dof), dk, dof);
+      else
+        p = fit.rss > r.rss ? 0.0 : 1.0;
+      if (!s.tested || score > s.score) {
+        s.score = score;
+        s.p_value = p;
+      }
+      s.tested = true;
+      scored.emplace_back(score, label);
+    } catch (const std::exception&) {
+      // this effect cannot be built on these data (a missing column): try the next
+    }
+  }
+  std::stable_sort(scored.begin(), scored.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  return scored;
+}
+
+// One candidate cause: its advice, and its score from the refits.
+Suspect rankCause(Suspect s, const Profile& pr, const std::vector<double>& z, const std::vector<double>& pwm,
+                  const Dataset& data, const Dataset& work, const FitResult& fit, const ModelSpec& spec) {
+  const std::string& name = s.variable;
+  const Advice a = adviceFor(name, pr.mean, spec, fit, data.has("rho_kg_m3"));
+  s.advice = a.words;
+  if ((name == "t_s" || startsWith(lowerCopy(name), "time"))) {
+    const double r2 = explainedByDrive(z, pwm);
+    if (r2 > 0.9) {
+      s.advice = fmt::format("{} moves with the drive in these data (the PWM explains {:.0f} % of it: a ramp), so "
+                             "drift cannot be told from the curve's shape here; to test drift, repeat a sweep or "
+                             "hold a PWM for a while",
+                             name, 100 * r2);
+      return s;
+    }
+  }
+  const auto scored = scoreTrials(s, trialsFor(s, a, spec, data), work, fit);
+  if (!a.suggest.empty()) {
+    for (const auto& sc : scored) s.effects.push_back(sc.second);
+    if (s.effects.empty()) s.effects.push_back(a.suggest);
+  }
+  // the effect the data prefer among the candidates
+  const auto at = s.advice.find("$E");
+  if (at != std::string::npos) s.advice.replace(at, 2, s.effects.empty() ? a.suggest : s.effects.front());
+  return s;
+}
+
+// Significance against a Bonferroni level over the tested variables, then the order: causes
+// first, tested ones by score; `run` (which file or sweep) is a catch-all after them; then the
+// variables not tested.
+void orderSuspects(std::vector<Suspect>& out) {
+  std::size_t tested = 0;
+  for (const auto& s : out) tested += s.tested ? 1 : 0;
+  const double alpha = 1e-3 / static_cast<double>(std::max<std::size_t>(tested, 1));
+  for (auto& s : out) s.significant = s.tested && s.p_value < alpha && s.score >= 0.01;
+  std::stable_sort(out.begin(), out.end(), [](const Suspect& a, const Suspect& b) {
+    if (a.significant != b.significant) return a.significant;
+    const bool ar = a.variable == "run", br = b.variable == "run";
+    if (ar != br) return br;
+    if (a.tested != b.tested) return a.tested;
+    return a.score > b.score;
+  });
+}
+
 }  // namespace
 
 Role roleOf(const std::string& name) {
@@ -245,117 +369,28 @@ std::vector<Suspect> rankVariables(const Dataset& data_in, const FitResult& fit_
     candidates.emplace_back("run", &run_column);
   }
   const auto& pwm = data.col("pwm_us");
-  const double n = static_cast<double>(data.rows());
   std::vector<Suspect> out;
   for (const auto& [name, zp] : candidates) {
-    const auto& z = *zp;
-    std::set<double> distinct;
-    bool integral = true, complete = true;
-    double sum = 0;
-    for (double v : z) {
-      if (!std::isfinite(v)) { complete = false; continue; }
-      if (distinct.size() <= 17) distinct.insert(v);
-      integral = integral && v == std::round(v);
-      sum += v;
-    }
-    if (distinct.size() < 2 || !complete) continue;
+    const Profile pr = profileOf(*zp);
+    if (!pr.usable) continue;
     Suspect s;
     s.variable = name;
-    s.categorical = (integral && distinct.size() <= 16) || distinct.size() <= 3;
+    s.categorical = pr.categorical;
     s.role = name == "pwm_us" ? Role::kCause : roleOf(name);
     if (s.role == Role::kCause && name != "pwm_us" && name != "t_s" && !s.categorical &&
-        correlation(z, pwm) > 0.999)
+        correlation(*zp, pwm) > 0.999)
       s.role = Role::kDriveCopy;
-    if (s.role == Role::kResponse) {
+    if (s.role == Role::kResponse)
       s.advice = name + " is a response of the motor (it follows the drive): it shows the residual, it does not "
                         "cause it; not a suspect";
-      out.push_back(s);
-      continue;
-    }
-    if (s.role == Role::kDriveCopy) {
+    else if (s.role == Role::kDriveCopy)
       s.advice = name + " is a copy of the drive (it moves with pwm_us): a factor in it would only reshape the curve; "
                         "not a suspect (map one drive column with --map)";
-      out.push_back(s);
-      continue;
-    }
-    const Advice a = adviceFor(name, sum / static_cast<double>(z.size()), spec, fit, data.has("rho_kg_m3"));
-    s.advice = a.words;
-    if ((name == "t_s" || startsWith(lowerCopy(name), "time"))) {
-      const double r2 = explainedByDrive(z, pwm);
-      if (r2 > 0.9) {
-        s.advice = fmt::format("{} moves with the drive in these data (the PWM explains {:.0f} % of it: a ramp), so "
-                               "drift cannot be told from the curve's shape here; to test drift, repeat a sweep or "
-                               "hold a PWM for a while",
-                               name, 100 * r2);
-        out.push_back(s);
-        continue;
-      }
-    }
-    // The added-variable fit: refit the model with each effect the variable points to (or, when
-    // no catalogue effect covers it, a generic factor in it) and see how much of the residual
-    // goes away. The best trial counts.
-    std::vector<std::pair<std::string, ModelSpec>> trials;
-    for (const auto& t : a.trials) {
-      try {
-        trials.emplace_back(t, combine(spec, parseSpec(t)));
-      } catch (const std::invalid_argument&) {
-      }
-    }
-    const bool probe = a.trials.empty() && name != "pwm_us" &&
-                       !((startsWith(lowerCopy(name), "pressure") || startsWith(lowerCopy(name), "baro")) &&
-                         data.has("rho_kg_m3"));
-    if (probe) {
-      ModelSpec p = spec;
-      p.probes.push_back({name, s.categorical});
-      trials.emplace_back(a.suggest, p);
-    }
-    std::vector<std::pair<double, std::string>> scored;
-    for (const auto& [label, t] : trials) {
-      try {
-        const FitResult r = fitModel(*work, t, &fit.params, /*warm_only=*/true, /*uncertainties=*/false, fit.rss);
-        if (!std::isfinite(r.rss)) continue;
-        const double dk = std::max(1, r.k - fit.k);
-        const double score =
-            fit.rss > 0 ? std::max(0.0, 1.0 - (r.rss / fit.rss) * std::exp(dk * std::log(n) / n)) : 0.0;
-        double p = 1.0;
-        const double dof = n - r.k;
-        if (r.rss > 0 && dof > 0 && fit.rss > r.rss)
-          p = fSurvival(((fit.rss - r.rss) / dk) / (r.rss / dof), dk, dof);
-        else
-          p = fit.rss > r.rss ? 0.0 : 1.0;
-        if (!s.tested || score > s.score) {
-          s.score = score;
-          s.p_value = p;
-        }
-        s.tested = true;
-        scored.emplace_back(score, label);
-      } catch (const std::exception&) {
-        // this effect cannot be built on these data (a missing column): try the next
-      }
-    }
-    std::stable_sort(scored.begin(), scored.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-    if (!a.suggest.empty()) {
-      for (const auto& sc : scored) s.effects.push_back(sc.second);
-      if (s.effects.empty()) s.effects.push_back(a.suggest);
-    }
-    // the effect the data prefer among the candidates
-    const auto at = s.advice.find("$E");
-    if (at != std::string::npos) s.advice.replace(at, 2, s.effects.empty() ? a.suggest : s.effects.front());
+    else
+      s = rankCause(s, pr, *zp, pwm, data, *work, fit, spec);
     out.push_back(s);
   }
-  std::size_t tested = 0;
-  for (const auto& s : out) tested += s.tested ? 1 : 0;
-  const double alpha = 1e-3 / static_cast<double>(std::max<std::size_t>(tested, 1));
-  for (auto& s : out) s.significant = s.tested && s.p_value < alpha && s.score >= 0.01;
-  // Causes first, tested ones by score; `run` (which file or sweep) is a catch-all after them;
-  // then the variables not tested.
-  std::stable_sort(out.begin(), out.end(), [](const Suspect& a, const Suspect& b) {
-    if (a.significant != b.significant) return a.significant;
-    const bool ar = a.variable == "run", br = b.variable == "run";
-    if (ar != br) return br;
-    if (a.tested != b.tested) return a.tested;
-    return a.score > b.score;
-  });
+  orderSuspects(out);
   return out;
 }
 

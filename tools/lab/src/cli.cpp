@@ -423,16 +423,7 @@ int guarded(F f) {
   return 2;
 }
 
-}  // namespace
-
-void registerCommands(CLI::App& app) {
-  auto* lab = app.add_subcommand(
-      "lab",
-      "model lab: compare the force model with measurements, see where it fails, find the missing "
-      "effect, add it, watch the error fall");
-  lab->require_subcommand(1);
-  lab->footer(effectsText());
-
+void addDiagnose(CLI::App* lab) {
   auto diag = std::make_shared<Common>();
   auto* d = lab->add_subcommand("diagnose", "fit a model, then rank the variables that explain what it misses");
   addCommon(d, *diag);
@@ -442,7 +433,9 @@ void registerCommands(CLI::App& app) {
     const int rc = guarded([&] { return runDiagnose(*diag); });
     if (rc) throw CLI::RuntimeError(rc);
   });
+}
 
+void addLadder(CLI::App* lab) {
   auto lad = std::make_shared<Common>();
   auto adds = std::make_shared<std::vector<std::string>>();
   auto* l = lab->add_subcommand("ladder", "the error ladder: one step per added effect, with RMSE, max error and BIC");
@@ -454,7 +447,9 @@ void registerCommands(CLI::App& app) {
     const int rc = guarded([&] { return runLadder(*lad, *adds); });
     if (rc) throw CLI::RuntimeError(rc);
   });
+}
 
+void addExport(CLI::App* lab) {
   auto ex = std::make_shared<ExportArgs>();
   auto* x = lab->add_subcommand(
       "export", "fit a model and write it as the firmware's model v2 record into an EEPROM image (Intel HEX) "
@@ -481,12 +476,43 @@ void registerCommands(CLI::App& app) {
     });
     if (rc) throw CLI::RuntimeError(rc);
   });
+}
 
+void addEffects(CLI::App* lab) {
   auto* e = lab->add_subcommand("effects", "document every effect: physics, columns, parameters with units");
   auto markdown = std::make_shared<bool>(false);
   e->add_flag("--markdown", *markdown, "print docs/lab.md's effect table instead (names, columns, parameters)");
   e->callback([markdown] { std::fputs((*markdown ? effects::markdownTable() : effectsText()).c_str(), stdout); });
+}
 
+// `generate`: the data set in the project's CSV or a thrust stand's layout, to a file or stdout.
+int runGenerate(const GenerateOptions& gen, const std::string& out, const std::string& layout,
+                const StandLayout& stand) {
+  std::vector<std::string> comments;
+  const Dataset d = generate(gen, &comments);
+  std::string csv;
+  if (layout == "project") {
+    csv = toCsv(d, comments);
+  } else if (layout.rfind("rcbenchmark-", 0) == 0) {
+    StandLayout l = stand;
+    l.series = layout.substr(12);
+    csv = toStandCsv(d, l);
+  } else {
+    throw std::invalid_argument("--layout '" + layout + "': project, rcbenchmark-1520 or rcbenchmark-1585");
+  }
+  if (out.empty()) {
+    std::fputs(csv.c_str(), stdout);
+    return 0;
+  }
+  std::ofstream f(out, std::ios::binary);
+  if (!f) throw std::runtime_error("cannot write " + out);
+  f << csv;
+  std::fprintf(stderr, "wrote %s (%zu samples, %zu runs)\n", out.c_str(), d.rows(), d.runs());
+  for (std::size_t i = 1; i < comments.size(); ++i) std::fprintf(stderr, "  %s\n", comments[i].c_str());
+  return 0;
+}
+
+void addGenerate(CLI::App* lab) {
   auto gen = std::make_shared<GenerateOptions>();
   auto out = std::make_shared<std::string>();
   auto* g = lab->add_subcommand("generate", "write a synthetic bench log from the plant model with a hidden effect");
@@ -513,32 +539,25 @@ void registerCommands(CLI::App& app) {
       ->capture_default_str();
   g->add_flag("--negative-thrust", stand->negative_thrust, "log thrust negative (a stand pulling the other way)");
   g->callback([gen, out, layout, stand] {
-    const int rc = guarded([&] {
-      std::vector<std::string> comments;
-      const Dataset d = generate(*gen, &comments);
-      std::string csv;
-      if (*layout == "project") {
-        csv = toCsv(d, comments);
-      } else if (layout->rfind("rcbenchmark-", 0) == 0) {
-        StandLayout l = *stand;
-        l.series = layout->substr(12);
-        csv = toStandCsv(d, l);
-      } else {
-        throw std::invalid_argument("--layout '" + *layout + "': project, rcbenchmark-1520 or rcbenchmark-1585");
-      }
-      if (out->empty()) {
-        std::fputs(csv.c_str(), stdout);
-      } else {
-        std::ofstream f(*out, std::ios::binary);
-        if (!f) throw std::runtime_error("cannot write " + *out);
-        f << csv;
-        std::fprintf(stderr, "wrote %s (%zu samples, %zu runs)\n", out->c_str(), d.rows(), d.runs());
-        for (std::size_t i = 1; i < comments.size(); ++i) std::fprintf(stderr, "  %s\n", comments[i].c_str());
-      }
-      return 0;
-    });
+    const int rc = guarded([&] { return runGenerate(*gen, *out, *layout, *stand); });
     if (rc) throw CLI::RuntimeError(rc);
   });
+}
+
+}  // namespace
+
+void registerCommands(CLI::App& app) {
+  auto* lab = app.add_subcommand(
+      "lab",
+      "model lab: compare the force model with measurements, see where it fails, find the missing "
+      "effect, add it, watch the error fall");
+  lab->require_subcommand(1);
+  lab->footer(effectsText());
+  addDiagnose(lab);
+  addLadder(lab);
+  addExport(lab);
+  addEffects(lab);
+  addGenerate(lab);
 }
 
 }  // namespace lab
