@@ -10,6 +10,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "lab/evidence.hpp"
 #include "lab/stats.hpp"
 
 namespace lab {
@@ -521,40 +522,10 @@ std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,
 std::vector<ForceCollapse> findForceCollapse(const Dataset& data) {
   std::vector<ForceCollapse> out;
   if (!data.has("pwm_us") || !data.has("force_g")) return out;
-  const auto& pwm = data.col("pwm_us");
-  const auto& force = data.col("force_g");
-  std::vector<std::vector<std::size_t>> rows(data.runs());
-  for (std::size_t i = 0; i < data.rows(); ++i) rows[static_cast<std::size_t>(data.run[i])].push_back(i);
+  const auto rows = rowsOfRuns(data);
   for (std::size_t r = 0; r < rows.size(); ++r) {
-    const auto& idx = rows[r];
-    if (idx.size() < 8) continue;
-    double lo = pwm[idx[0]], hi = lo;
-    std::set<double> levels;
-    for (std::size_t i : idx) {
-      lo = std::min(lo, pwm[i]), hi = std::max(hi, pwm[i]);
-      if (levels.size() <= 200) levels.insert(pwm[i]);
-    }
-    if (!(hi > lo)) continue;
-    // bins: the PWM levels of a step sweep, or 40 equal bins of a ramp
-    std::vector<double> edges;
-    if (levels.size() <= 200) {
-      edges.assign(levels.begin(), levels.end());
-    } else {
-      for (int k = 0; k < 40; ++k) edges.push_back(lo + (hi - lo) * k / 40.0);
-    }
-    std::vector<std::vector<double>> bin(edges.size());
-    for (std::size_t i : idx) {
-      const auto it = std::upper_bound(edges.begin(), edges.end(), pwm[i]);
-      bin[static_cast<std::size_t>(std::max<long>(0, (it - edges.begin()) - 1))].push_back(force[i]);
-    }
-    std::vector<std::pair<double, double>> med;  // pwm, median force
-    for (std::size_t k = 0; k < bin.size(); ++k) {
-      auto& b = bin[k];
-      if (b.empty()) continue;
-      std::nth_element(b.begin(), b.begin() + static_cast<long>(b.size() / 2), b.end());
-      const double center = levels.size() <= 200 ? edges[k] : edges[k] + (hi - lo) / 80.0;
-      med.emplace_back(center, b[b.size() / 2]);
-    }
+    if (rows[r].size() < 8) continue;
+    const auto med = binnedMedians(data.col("pwm_us"), data.col("force_g"), rows[r]);  // pwm, median force
     if (med.size() < 4) continue;
     std::size_t peak = 0;
     for (std::size_t k = 1; k < med.size(); ++k)

@@ -39,6 +39,11 @@ const std::vector<HiddenEffectInfo> kHidden = {
      "the motor warms up through long sweeps (2 s per point) and cools between runs; temp_c is "
      "a thermocouple on the motor (winding resistance +0.39 %/K, magnets -0.1 %/K)",
      "curve+deadband+voltage", "thermal", "temp_c"},
+    {"current_limit",
+     "a bench supply current-limited at 6.32 A (the thesis's: two 3.16 A outputs in parallel) at four set "
+     "voltages (10.0 to 12.4 V): above the limit it folds its voltage back and the force falls while the drive "
+     "rises; vbat_v is the supply's set voltage (read at the supply, not at the ESC), current_a its current",
+     "curve+deadband+voltage", "current_limit", "current_a (a response: evidence, not a suspect)"},
     {"plate",
      "a deflector plate under the propeller at a height varied per point (plate_height_m): "
      "ground effect, force x 1/(1 - (R/4z)^2); not in the catalogue",
@@ -152,6 +157,14 @@ std::vector<RunSetup> runSetups(const std::string& h, const plant::ActuatorParam
         runs.push_back(r);
       }
     }
+  } else if (h == "current_limit") {
+    for (double v : {12.4, 11.6, 10.8, 10.0}) {
+      RunSetup r;
+      r.params = base;
+      r.battery = plant::BatteryParams::benchSupply(v, 6.32);
+      r.battery.wiring_r_ohm = 0.03;
+      runs.push_back(r);
+    }
   } else if (h == "sag") {
     for (double v : {12.6, 11.8, 11.0, 10.2}) {
       RunSetup r;
@@ -253,7 +266,7 @@ class Session {
     }
     force += creep_g_per_min_ * now / 60.0;
     r.force_g = force + (o_.noise_g > 0 ? rng_.normal(o_.noise_g, 4.0) : 0.0);
-    r.vbat_v = h_ == "sag" ? ps.restingVoltage_v() : pt.bus_v;
+    r.vbat_v = h_ == "sag" || h_ == "current_limit" ? ps.restingVoltage_v() : pt.bus_v;
     r.current_a = pt.bus_current + pt.other_a;
     r.rpm = act.rpm();
     r.temp_c = h_ == "thermal" ? act.windingTemp_c() : env.temp_c;
