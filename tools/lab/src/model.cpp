@@ -195,6 +195,7 @@ struct Model::Impl {
   std::string linear_effect;
   const Term* own = nullptr;                 // a base with a force of its own (thesis)
   bool own_base = false;                     // own != nullptr: no linear solve
+  bool capped = false;                       // a term caps the force (no normal-equation RSS)
   std::vector<long> motor_ids;               // training motors, index 0 = reference
   double pmin = 0, span = 1, vref = 1, xtop = 1;
   Eigen::VectorXd theta;  // fitted nonlinear parameters
@@ -284,6 +285,7 @@ struct Model::Impl {
     xtop = linear ? linear->driveTop() : 1.0;
 
     train_bound = bind(train);
+    capped = !capsOf(train_bound, initialTheta()).empty();
     y = Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
     if (train.rows() > kMaxFitRows) {
       const std::size_t stride = (train.rows() + kMaxFitRows - 1) / kMaxFitRows;
@@ -326,10 +328,16 @@ struct Model::Impl {
       }
     }
     for (const Term* t : terms) t->check(d);
+    for (const Term* t : terms) {
+      std::vector<double> v = t->perRow(d);
+      if (!v.empty()) b.derived[t] = std::move(v);
+    }
     return b;
   }
 
-  Frame frame(const Rows& b, const Eigen::VectorXd& th) const { return Frame{b, th, defs, terms, vref, xtop}; }
+  Frame frame(const Rows& b, const Eigen::VectorXd& th) const {
+    return Frame{b, th, defs, terms, vref, xtop, pmin, span};
+  }
 
   Eigen::VectorXd initialTheta() const {
     Eigen::VectorXd t(static_cast<Eigen::Index>(defs.size()));
@@ -342,12 +350,7 @@ struct Model::Impl {
   }
 
   // Where the drive counts from: a term's origin (deadband), else the smallest training PWM.
-  double origin(const Frame& f) const {
-    double start = pmin;
-    for (const Term* t : terms)
-      if (t->origin(f, start)) break;
-    return start;
-  }
+  double origin(const Frame& f) const { return f.startUs(); }
 
   // A drive for a base of its own (the effects that depend on it): PWM over the span.
   std::vector<double> plainDrive(const Rows& b) const {
@@ -376,6 +379,16 @@ struct Model::Impl {
     for (const Term* t : terms) t->factors(f, x, mul, add);
   }
 
+  // The largest force per row the terms allow (current_limit); empty when no term caps.
+  std::vector<double> capsOf(const Rows& b, const Eigen::VectorXd& th) const {
+    std::vector<double> cap(b.n, std::numeric_limits<double>::infinity());
+    const Frame f = frame(b, th);
+    bool any = false;
+    for (const Term* t : terms) any = t->caps(f, cap) || any;
+    if (!any) cap.clear();
+    return cap;
+  }
+
   int basisSize() const { return linear ? linear->linearSize() : 0; }  // incl. the constant
 
   // Row i of the design matrix of the linear parameters: 1 (the offset), then mul * S_j(x).
@@ -398,7 +411,8 @@ struct Model::Impl {
   // not kept unless `keep` asks for it, row-major). False when a row is not finite.
   bool normalEquations(const Rows& b, const std::vector<double>& x, const Eigen::VectorXd& mul,
                        const Eigen::VectorXd& add, const Eigen::VectorXd& target, Eigen::MatrixXd& G,
-                       Eigen::VectorXd& h, double& rr, std::vector<double>* keep) const {
+                       Eigen::VectorXd& h, double& rr, std::vector<double>* keep,
+                       const std::vector<char>* skip = nullptr) const {
     const int nb = basisSize();
     constexpr Eigen::Index kBlock = 512;
     G = Eigen::MatrixXd::Zero(nb, nb);
@@ -416,6 +430,7 @@ struct Model::Impl {
       k = 0;
     };
     for (std::size_t i = 0; i < b.n; ++i) {
+      if (skip && (*skip)[i]) continue;
       const auto r = static_cast<Eigen::Index>(i);
       const double rhs = target[r] - add[r];
       double* row = blk.row(k).data();
@@ -444,7 +459,13 @@ struct Model::Impl {
     Eigen::VectorXd mul, add;
     const std::vector<double> x = own_base ? plainDrive(b) : drive(b, th);
     factors(b, th, x, mul, add);
-    if (own_base) return mul.cwiseProduct(ownBase(b, th)) + add;
+    const std::vector<double> cap = capsOf(b, th);
+    if (own_base) {
+      Eigen::VectorXd out = mul.cwiseProduct(ownBase(b, th)) + add;
+      if (!cap.empty()) applyCap(b, th, cap, out);
+      return out;
+    }
+    if (!cap.empty()) return predictCapped(b, th, x, mul, add, cap, c, solve, target);
     const int nb = basisSize();
     // the rows of the design matrix are kept between the two passes when they are few
     thread_local std::vector<double> cache;
@@ -475,11 +496,83 @@ struct Model::Impl {
     return out;
   }
 
+  // The curve's prediction on every row (no cap), from the coefficients c.
+  Eigen::VectorXd uncapped(const Rows& b, const std::vector<double>& x, const Eigen::VectorXd& mul,
+                           const Eigen::VectorXd& add, const Eigen::VectorXd& c) const {
+    const int nb = basisSize();
+    Eigen::VectorXd out(static_cast<Eigen::Index>(b.n));
+    double row[64];
+    for (std::size_t i = 0; i < b.n; ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      basisRow(x[i], mul[r], row);
+      double v = add[r];
+      for (int a = 0; a < nb; ++a) v += row[a] * c[a];
+      out[r] = v;
+    }
+    return out;
+  }
+
+  // min(curve, cap) per row. Solving: the rows at the cap do not depend on the curve, so its
+  // coefficients are solved on the rows below it, and the rows at the cap found again from the
+  // new curve until they stay the same (a few passes).
+  Eigen::VectorXd predictCapped(const Rows& b, const Eigen::VectorXd& th, const std::vector<double>& x,
+                                const Eigen::VectorXd& mul, const Eigen::VectorXd& add, const std::vector<double>& cap,
+                                Eigen::VectorXd& c, bool solve, const Eigen::VectorXd* target) const {
+    const int nb = basisSize();
+    Eigen::VectorXd free_force;
+    if (!solve) {
+      free_force = uncapped(b, x, mul, add, c);
+    } else {
+      std::vector<char> at_cap(b.n, 0);
+      for (int pass = 0; pass < 8; ++pass) {
+        Eigen::MatrixXd G;
+        Eigen::VectorXd h;
+        double rr;
+        if (!normalEquations(b, x, mul, add, *target, G, h, rr, nullptr, &at_cap)) {
+          c = Eigen::VectorXd::Zero(nb);
+          return Eigen::VectorXd::Constant(static_cast<Eigen::Index>(b.n), kNaN);
+        }
+        c = solveCurve(G, h);
+        free_force = uncapped(b, x, mul, add, c);
+        bool same = true;
+        for (std::size_t i = 0; i < b.n; ++i) {
+          const char now = free_force[static_cast<Eigen::Index>(i)] > cap[i];
+          same = same && now == at_cap[i];
+          at_cap[i] = now;
+        }
+        if (same) break;
+      }
+    }
+    applyCap(b, th, cap, free_force);
+    return free_force;
+  }
+
+  // force = min(force, cap), or what a term says the force under its cap is.
+  void applyCap(const Rows& b, const Eigen::VectorXd& th, const std::vector<double>& cap, Eigen::VectorXd& force) const {
+    const Frame f = frame(b, th);
+    for (const Term* t : terms)
+      if (t->underCap(f, cap, force)) return;
+    for (std::size_t i = 0; i < b.n; ++i) force[static_cast<Eigen::Index>(i)] = std::min(force[static_cast<Eigen::Index>(i)], cap[i]);
+  }
+
+  // The rows where the curve's force is above the cap (they do not depend on the curve).
+  std::vector<char> atCap(const Rows& b, const Eigen::VectorXd& th, const Eigen::VectorXd& c) const {
+    const std::vector<double> cap = capsOf(b, th);
+    std::vector<char> at(b.n, 0);
+    if (cap.empty() || own_base) return at;
+    Eigen::VectorXd mul, add;
+    const std::vector<double> x = drive(b, th);
+    factors(b, th, x, mul, add);
+    const Eigen::VectorXd free_force = uncapped(b, x, mul, add, c);
+    for (std::size_t i = 0; i < b.n; ++i) at[i] = free_force[static_cast<Eigen::Index>(i)] > cap[i];
+    return at;
+  }
+
   double rssAt(const Rows& b, const Eigen::VectorXd& target, const Eigen::VectorXd& th,
                Eigen::VectorXd* coef_out = nullptr) const {
     Eigen::VectorXd c;
     double rss;
-    if (!own_base && b.n > kMaxFitRows) {
+    if (!own_base && b.n > kMaxFitRows && !capped) {
       // Many rows: RSS = r'r - 2 c'h + c'Gc from the normal equations, one pass over the rows.
       Eigen::VectorXd mul, add;
       const std::vector<double> x = drive(b, th);
@@ -751,6 +844,7 @@ struct Model::Impl {
       x = drive(train_bound, theta);
       factors(train_bound, theta, x, mul, add);
     }
+    const std::vector<char> at_cap = atCap(train_bound, theta, coef);  // the curve does not move these rows
     Eigen::MatrixXd JtJ = Eigen::MatrixXd::Zero(ncol, ncol);
     Eigen::VectorXd jrow(ncol);
     double row[64];
@@ -758,7 +852,7 @@ struct Model::Impl {
     for (std::size_t i = 0; i < r.n && finite; ++i) {
       const auto ri = static_cast<Eigen::Index>(i);
       if (nl > 0) basisRow(x[i], mul[ri], row);
-      for (std::size_t k = 0; k < active.size(); ++k) jrow[static_cast<Eigen::Index>(k)] = row[active[k]];
+      for (std::size_t k = 0; k < active.size(); ++k) jrow[static_cast<Eigen::Index>(k)] = at_cap[i] ? 0.0 : row[active[k]];
       for (Eigen::Index j = 0; j < np; ++j)
         jrow[static_cast<Eigen::Index>(active.size()) + j] = dcol[static_cast<std::size_t>(j)][ri];
       finite = jrow.allFinite();
