@@ -10,6 +10,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "lab/effect.hpp"
 #include "lab/evidence.hpp"
 #include "lab/stats.hpp"
 
@@ -27,10 +28,6 @@ std::string lowerCopy(std::string s) {
   return s;
 }
 
-bool isVoltageName(const std::string& v) {
-  return v == "vbat_v" || startsWith(v, "vbat") || startsWith(v, "voltage") || v == "v_v" || v == "v";
-}
-
 // Parameters of `effect` that the fit left at a bound, in words ("gamma at its bound 0").
 std::vector<std::string> boundsOf(const FitResult& fit, const std::string& effect) {
   std::vector<std::string> out;
@@ -39,128 +36,110 @@ std::vector<std::string> boundsOf(const FitResult& fit, const std::string& effec
   return out;
 }
 
+// What the registry says about a variable or a finding, given what the model already has.
 struct Advice {
-  std::vector<std::string> trials;  // effects to refit with, best guess first
-  std::string suggest;              // the effect the words name (empty: none to add)
-  std::string words;
+  std::vector<std::string> trials;           // effects to refit with, in registry order (the data pick)
+  std::map<std::string, std::string> words_for;  // each trial's advice, if the data pick it
+  std::string generic;                       // a factor to probe when no effect applies ("": none)
+  std::string words;                         // the advice before the data pick
 };
 
-// Why the residual can still follow a variable whose effect is in the model.
-std::string stillFollows(const std::string& var, const std::vector<std::string>& effects, const FitResult& fit,
-                         const char* other_reason) {
-  std::vector<std::string> bounds;
-  for (const auto& e : effects)
-    for (const auto& b : boundsOf(fit, e)) bounds.push_back(b);
-  std::string in;
-  for (const auto& e : effects) in += (in.empty() ? "`" : ", `") + e + "`";
+// A column name against an entry's patterns: exact, or a prefix ending in '*'; any case.
+bool matches(const std::string& name, const std::vector<std::string>& patterns) {
+  const std::string v = lowerCopy(name);
+  for (const auto& p : patterns) {
+    if (!p.empty() && p.back() == '*' ? startsWith(v, p.substr(0, p.size() - 1).c_str()) : v == p) return true;
+  }
+  return false;
+}
+
+// The SPEC's base (the default one when it names none).
+const effects::EffectDef* baseOf(const ModelSpec& spec) {
+  for (const auto& e : spec.effects)
+    if (const auto* d = effects::find(e); d && d->role == effects::Role::kBase) return d;
+  for (const auto* d : effects::registry())
+    if (d->role == effects::Role::kBase) return d;
+  return nullptr;
+}
+
+bool inModel(const effects::EffectDef& d, const ModelSpec& spec) { return spec.has(d.name) || baseOf(spec) == &d; }
+
+// An effect the model can add: not in it, what it needs is there, and it fits this base.
+bool addable(const effects::EffectDef& d, const ModelSpec& spec) {
+  if (d.role != effects::Role::kEffect || inModel(d, spec)) return false;
+  if (!d.needs.empty() && !spec.has(d.needs)) return false;
+  return !(d.shapes_curve && baseOf(spec) != baseOf(ModelSpec()));
+}
+
+std::string quoted(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "`" : ", `") + n + "`";
+  return s;
+}
+
+// Why the residual can still follow a variable whose effects are in the model: a parameter
+// pulled to a bound, else what each of them says it cannot do.
+std::string stillFollows(const std::string& var, const std::vector<const effects::EffectDef*>& in, const FitResult& fit) {
+  std::vector<std::string> names, bounds, reasons;
+  for (const auto* d : in) {
+    names.push_back(d->name);
+    for (const auto& b : boundsOf(fit, d->name)) bounds.push_back(b);
+    if (!d->suggests.still.empty()) reasons.push_back(d->suggests.still);
+  }
+  const char* verb = in.size() > 1 ? "are" : "is";
   if (!bounds.empty())
     return fmt::format("residual still follows {} although {} {} in the model: {} (the data pull it past its "
                        "range; check the column and the physics before trusting it)",
-                       var, in, effects.size() > 1 ? "are" : "is", fmt::join(bounds, ", "));
-  return fmt::format("residual still follows {} although {} {} in the model: {}", var, in,
-                     effects.size() > 1 ? "are" : "is", other_reason);
+                       var, quoted(names), verb, fmt::join(bounds, ", "));
+  return fmt::format("residual still follows {} although {} {} in the model: {}", var, quoted(names), verb,
+                     fmt::join(reasons, "; "));
 }
 
-// What the catalogue says about a cause, given what the model already has. Never suggests an
-// effect that is in the model.
-Advice adviceFor(const std::string& var, double mean, const ModelSpec& spec, const FitResult& fit, bool have_rho) {
-  const std::string v = lowerCopy(var);
-  const bool thesis = spec.has("thesis");
+// The advice of the entries that `kind` (a variable's name, or an evidence kind when
+// `evidence`) points at. Never suggests an effect that is in the model.
+Advice adviceFor(const std::string& var, const std::string& lead, const ModelSpec& spec, const FitResult& fit,
+                 bool evidence) {
   Advice a;
-  auto fresh = [&](const char* e) { return !spec.has(e); };
-  if (v == "pwm_us") {
-    if (fresh("deadband") && !thesis) {
-      a.trials = {"deadband"};
-      a.suggest = "deadband";
-      a.words = "residual follows pwm_us: the curve's shape near the ESC start threshold is off; add `deadband`";
-    } else {
-      a.words = "residual follows pwm_us: the curve cannot follow the data's shape (an effect that bends the curve "
-                "is missing, the force collapses at the top, or the PWM logged is not the PWM the ESC saw)";
+  std::vector<const effects::EffectDef*> in, other_base;
+  for (const auto* d : effects::registry()) {
+    if (!matches(var, evidence ? d->suggests.evidence : d->suggests.variables)) continue;
+    if (inModel(*d, spec)) {
+      in.push_back(d);
+    } else if (addable(*d, spec)) {
+      a.trials.push_back(d->name);
+      const std::string although = d->needs.empty() ? "" : fmt::format(" although `{}` is in the model", d->needs);
+      a.words_for[d->name] = lead + although + ": " + d->suggests.advice;
+    } else if (d->shapes_curve && d->role == effects::Role::kEffect) {
+      other_base.push_back(d);
     }
-  } else if (isVoltageName(v)) {
-    if (thesis) {
-      a.words = "residual follows " + var + ": the thesis model interpolates between two voltages only";
-    } else if (fresh("voltage")) {
-      a.trials = {"voltage"};
-      a.suggest = "voltage";
-      a.words = "residual follows " + var + ": the force follows the motor voltage duty*V, not the PWM alone; add `voltage`";
-    } else if (fresh("sag")) {
-      a.trials = {"sag"};
-      a.suggest = "sag";
-      a.words = "residual follows " + var + " although `voltage` is in the model: the motor sees less than the logged "
-                "voltage under load (the battery and its wiring sag); add `sag` (it uses current_a when logged)";
-    } else {
-      a.words = stillFollows(var, {"voltage", "sag"}, fit,
-                             "the sag is not linear in the current, or the voltage logged is not the one at the ESC");
-    }
-  } else if (v == "t_s" || startsWith(v, "time")) {
-    for (const char* e : {"drift", "lag"})
-      if (fresh(e)) a.trials.push_back(e);
-    if (!a.trials.empty()) {
-      a.suggest = a.trials.front();
-      a.words = "residual changes with time (" + var + "): something drifts (load-cell creep, a warming rig) or the "
-                "force trails the command; add `$E`";
-    } else {
-      a.words = stillFollows(var, {"drift", "lag"}, fit, "the change is not linear in time (warming, a draining pack?)");
-    }
-  } else if (v == "temp_c" || startsWith(v, "temp")) {
-    // thermal uses the temperature itself; density uses it through rho_kg_m3 (ranked there)
-    if (fresh("thermal")) {
-      a.trials.push_back("thermal");
-      a.suggest = "thermal";
-      a.words = "residual follows " + var + ": the motor's temperature (copper and magnets) or the air density "
-                "changes the force; add `thermal`" +
-                std::string(fresh("density") ? ", or `density` if a pressure column is logged" : "");
-    } else if (fresh("density")) {
-      a.words = stillFollows(var, {"thermal"}, fit, "the air density may change with it: log a pressure column "
-                                                    "and add `density`");
-    } else {
-      a.words = stillFollows(var, {"thermal", "density"}, fit, "the temperature logged is not the motor's");
-    }
-  } else if ((startsWith(v, "pressure") || startsWith(v, "baro")) && have_rho) {
-    a.words = var + " acts through the air density: see rho_kg_m3";
-  } else if (startsWith(v, "pressure") || startsWith(v, "baro")) {
-    const std::string expr = fmt::format("mul: 1 + a*({} - {:.4g})", var, mean);
-    a.suggest = expr;
-    a.words = "residual follows " + var + ": the air density changes the force; log the air temperature (temp_c) "
-              "too so `density` can use rho = p/(R T), or try `" + expr + "`";
-  } else if (v == "rho_kg_m3") {
-    if (fresh("density")) {
-      a.trials = {"density"};
-      a.suggest = "density";
-      a.words = "residual follows the air density (" + var + "): thrust is proportional to rho = p/(R T); add `density`";
-    } else {
-      a.words = stillFollows(var, {"density"}, fit, "the exponent changes differently with the drive");
-    }
-  } else if (v == "motor") {
-    if (fresh("motor")) {
-      a.trials = {"motor"};
-      a.suggest = "motor";
-      a.words = "motors differ from each other (motor and propeller variation); add `motor`";
-    } else {
-      a.words = stillFollows(var, {"motor"}, fit, "motors differ in the curve's shape, not only in gain and Kv");
-    }
-  } else if (v == "run") {
-    a.words = "runs differ from each other: a per-run condition (motor, voltage, time) is not modelled; look at the "
-              "causes above";
-  } else if (v == "dpwm_us" || v == "dir") {
-    if (fresh("lag")) {
-      a.trials = {"lag"};
-      a.suggest = "lag";
-      a.words = v == "dir" ? "up and down sweeps differ: the force trails the command (motor inertia, a slow load "
-                             "cell); add `lag`"
-                           : "residual follows the last PWM step (dpwm_us): the force lags the command (motor "
-                             "inertia, a slow load cell); add `lag`";
-    } else {
-      a.words = stillFollows(var, {"lag"}, fit, "up and down differ by more than a first-order lag (hysteresis, "
-                                                 "a load cell that creeps)");
-    }
-  } else {
-    const std::string expr = fmt::format("mul: 1 + a*({} - {:.4g})", var, mean);
-    a.suggest = expr;
-    a.words = "residual follows " + var + ", which no catalogue effect covers; try `" + expr + "`";
+  }
+  if (!a.trials.empty()) {
+    a.words = a.words_for[a.trials.front()];
+  } else if (!in.empty() && !evidence) {
+    a.words = stillFollows(var, in, fit);
+  } else if (!other_base.empty()) {
+    std::vector<std::string> names;
+    for (const auto* d : other_base) names.push_back(d->name);
+    a.words = fmt::format("{}: {} shape the `{}` base, which this model (`{}`) does not use; compare with a model on "
+                          "that base",
+                          lead, quoted(names), baseOf(ModelSpec())->name, baseOf(spec)->name);
   }
   return a;
+}
+
+// A variable no entry covers: a generic factor in it is what can be tried.
+void genericAdvice(Advice& a, const std::string& var, double mean, bool categorical) {
+  const effects::EffectDef* mul = nullptr;
+  for (const auto* d : effects::registry())
+    if (d->role == effects::Role::kExpression && d->multiplicative) mul = d;
+  if (var == "run") {
+    a.words = "runs differ from each other: a per-run condition (motor, voltage, time) is not modelled; look at the "
+              "causes above";
+    return;  // the catch-all: probed, never an effect to add
+  }
+  a.generic = categorical ? std::string() : fmt::format("{} 1 + a*({} - {:.4g})", mul ? mul->prefix : "mul:", var, mean);
+  a.words = categorical ? fmt::format("residual follows {}, which no catalogue effect covers: its levels differ", var)
+                        : fmt::format("residual follows {}, which no catalogue effect covers; try `{}`", var, a.generic);
 }
 
 // |Pearson correlation| of two columns.
@@ -232,8 +211,7 @@ Profile profileOf(const std::vector<double>& z) {
 
 // The refits that ask how much of the residual a variable explains: the model with each effect
 // the variable points to, or, when no catalogue effect covers it, a generic factor in it.
-std::vector<std::pair<std::string, ModelSpec>> trialsFor(const Suspect& s, const Advice& a, const ModelSpec& spec,
-                                                         const Dataset& data) {
+std::vector<std::pair<std::string, ModelSpec>> trialsFor(const Suspect& s, const Advice& a, const ModelSpec& spec) {
   std::vector<std::pair<std::string, ModelSpec>> trials;
   for (const auto& t : a.trials) {
     try {
@@ -241,14 +219,10 @@ std::vector<std::pair<std::string, ModelSpec>> trialsFor(const Suspect& s, const
     } catch (const std::invalid_argument&) {
     }
   }
-  const std::string name = s.variable;
-  const bool probe = a.trials.empty() && name != "pwm_us" &&
-                     !((startsWith(lowerCopy(name), "pressure") || startsWith(lowerCopy(name), "baro")) &&
-                       data.has("rho_kg_m3"));
-  if (probe) {
+  if (a.trials.empty() && s.variable != "pwm_us") {
     ModelSpec p = spec;
-    p.probes.push_back({name, s.categorical});
-    trials.emplace_back(a.suggest, p);
+    p.probes.push_back({s.variable, s.categorical});
+    trials.emplace_back(a.generic, p);
   }
   return trials;
 }
@@ -291,26 +265,29 @@ std::vector<std::pair<double, std::string>> scoreTrials(Suspect& s,
 Suspect rankCause(Suspect s, const Profile& pr, const std::vector<double>& z, const std::vector<double>& pwm,
                   const Dataset& data, const Dataset& work, const FitResult& fit, const ModelSpec& spec) {
   const std::string& name = s.variable;
-  const Advice a = adviceFor(name, pr.mean, spec, fit, data.has("rho_kg_m3"));
-  s.advice = a.words;
-  if ((name == "t_s" || startsWith(lowerCopy(name), "time"))) {
+  const std::string lname = lowerCopy(name);
+  if ((startsWith(lname, "pressure") || startsWith(lname, "baro")) && data.has("rho_kg_m3")) {
+    s.advice = name + " acts through the air density: see rho_kg_m3";
+    return s;
+  }
+  if (name == "t_s" || startsWith(lname, "time")) {
     const double r2 = explainedByDrive(z, pwm);
     if (r2 > 0.9) {
-      s.advice = fmt::format("{} moves with the drive in these data (the PWM explains {:.0f} % of it: a ramp), so "
-                             "drift cannot be told from the curve's shape here; to test drift, repeat a sweep or "
-                             "hold a PWM for a while",
+      s.advice = fmt::format("{} moves with the drive in these data (the PWM explains {:.0f} % of it: a ramp), so a "
+                             "change with time cannot be told from the curve's shape here; to test it, repeat a sweep "
+                             "or hold a PWM for a while",
                              name, 100 * r2);
       return s;
     }
   }
-  const auto scored = scoreTrials(s, trialsFor(s, a, spec, data), work, fit);
-  if (!a.suggest.empty()) {
-    for (const auto& sc : scored) s.effects.push_back(sc.second);
-    if (s.effects.empty()) s.effects.push_back(a.suggest);
-  }
+  Advice a = adviceFor(name, "residual follows " + name, spec, fit, false);
+  if (a.trials.empty() && a.words.empty()) genericAdvice(a, name, pr.mean, s.categorical);
+  s.advice = a.words;
+  const auto scored = scoreTrials(s, trialsFor(s, a, spec), work, fit);
+  for (const auto& sc : scored)
+    if (!sc.second.empty()) s.effects.push_back(sc.second);
   // the effect the data prefer among the candidates
-  const auto at = s.advice.find("$E");
-  if (at != std::string::npos) s.advice.replace(at, 2, s.effects.empty() ? a.suggest : s.effects.front());
+  if (!s.effects.empty() && a.words_for.count(s.effects.front())) s.advice = a.words_for[s.effects.front()];
   return s;
 }
 

@@ -164,6 +164,15 @@ class Setup {
   int add(std::size_t k) { return add(param(k)); }
 };
 
+// What points the diagnosis at an effect, and what it says then (analysis.cpp reads only this:
+// it names no effect itself).
+struct Suggests {
+  std::vector<std::string> variables{};  // columns whose residual suggests it ("vbat*": a prefix; any case)
+  std::vector<std::string> evidence{};   // findings in the responses that suggest it (evidence.hpp's kinds)
+  std::string advice{};  // the physics in a phrase, ending with what to add: "...; add `voltage`"
+  std::string still{};   // when it is in the model and the residual still follows the variable: why
+};
+
 enum class Role { kBase, kEffect, kExpression };
 enum class Export { kInRecord, kOneMotor, kRefused };
 
@@ -177,6 +186,7 @@ struct EffectDef {
   std::string export_note{};  // why a record cannot hold it, and what to do
   bool shapes_curve = false;  // only with the `curve` base (not with a base of its own curve)
   std::string needs{}, needs_why{};  // another effect it needs before it, and why
+  Suggests suggests{};             // what points the diagnosis at it
   std::string prefix{};            // kExpression: the spec prefix ("mul:")
   bool multiplicative = false;   // kExpression: a factor (else grams added)
   std::unique_ptr<Term> (*make)(Setup&) = nullptr;  // nullptr: expressions, made from the spec

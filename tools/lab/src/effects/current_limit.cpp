@@ -251,6 +251,10 @@ const EffectDef kCurrentLimit = {
     .exports = Export::kRefused,
     .export_note = "model v2 records have no current limit (read_run cannot know the source's); fit and "
                    "export below the limit (--where 'pwm_us < P', P where the force stops rising)",
+    .suggests = {.evidence = {"current_plateau", "force_falls"},
+                 .advice = "the bus current is held at a ceiling, so the motor current (ceiling / duty) and the thrust "
+                           "fall as the drive rises; add `current_limit`",
+                 .still = "the cap's shape or its settling is not the data's"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<CurrentLimit>(s); },
 };
 

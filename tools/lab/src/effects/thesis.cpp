@@ -199,6 +199,9 @@ const EffectDef kThesis = {
     .params = {},
     .export_note = "the thesis model is the v1 record, which gather_store writes on the board; export a "
                    "curve model, e.g. curve+deadband+voltage+sag",
+    .suggests = {.variables = {"pwm_us", "vbat*", "voltage*", "v_v", "v"},
+                 .still = "the thesis model is two measured curves interpolated linearly between their two voltages "
+                          "(option 2.1): it cannot follow other voltages or shapes; compare with a curve model"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Thesis>(s); },
 };
 
