@@ -80,16 +80,13 @@ struct Window {
   double w[kWindow] = {};
 };
 
-// The sweep direction of each row: the `dir` column when logged, else the sign of the PWM's
-// change in logging order within its run (a repeated set point keeps the direction it had).
+// The sweep direction of each row: the sign of the PWM's change in logging order within its run
+// (a repeated set point keeps the direction it had), times the `dir` column's sign when logged,
+// so a sweep restarting from the bottom, or a logged turn, starts a new sweep.
 std::vector<int> directions(const Dataset& d) {
   std::vector<int> sign(d.rows(), 0);
-  if (d.has("dir")) {
-    const auto& dir = d.col("dir");
-    for (std::size_t i = 0; i < d.rows(); ++i) sign[i] = std::isfinite(dir[i]) ? (dir[i] > 0 ? 1 : -1) : 0;
-    return sign;
-  }
   const auto& pwm = d.col("pwm_us");
+  const std::vector<double>* dir = d.has("dir") ? &d.col("dir") : nullptr;
   std::map<int, std::size_t> last;      // run -> its previous row
   std::map<int, int> last_sign;         // run -> the direction so far
   std::map<int, std::vector<std::size_t>> unsigned_rows;  // rows before the run's first change
@@ -106,6 +103,9 @@ std::vector<int> directions(const Dataset& d) {
     last_sign[r] = s;
     last[r] = i;
   }
+  if (dir)
+    for (std::size_t i = 0; i < d.rows(); ++i)
+      if (std::isfinite((*dir)[i]) && (*dir)[i] < 0) sign[i] = 2 + sign[i];  // a turn the log says: its own sweep
   return sign;
 }
 
