@@ -55,7 +55,8 @@ TEST(LabEvidence, ACurrentThatStopsAtOneCeilingInEveryRunIsACurrentLimit) {
   EXPECT_GT(c->from_pwm_us, 1550);
   EXPECT_LT(c->from_pwm_us, 1750);
   // and the force that falls above it is put down to that limit, not to a stall
-  const lab::Evidence* f = find(ev, "force_falls");
+  EXPECT_EQ(find(ev, "force_falls"), nullptr);
+  const lab::Evidence* f = find(ev, "force_falls_at_limit");
   ASSERT_NE(f, nullptr);
   EXPECT_EQ(f->runs.size(), 4u);
   EXPECT_NE(f->cause.find("current limit"), std::string::npos) << f->cause;

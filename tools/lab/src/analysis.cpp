@@ -231,12 +231,12 @@ std::vector<std::pair<std::string, ModelSpec>> trialsFor(const Suspect& s, const
 // and p-value count. Returns the trials that could be fitted with their scores, best first.
 std::vector<std::pair<double, std::string>> scoreTrials(Suspect& s,
                                                         const std::vector<std::pair<std::string, ModelSpec>>& trials,
-                                                        const Dataset& work, const FitResult& fit) {
+                                                        const Dataset& work, const FitResult& fit, bool quick = true) {
   const double n = static_cast<double>(work.rows());
   std::vector<std::pair<double, std::string>> scored;
   for (const auto& [label, t] : trials) {
     try {
-      const FitResult r = fitModel(work, t, &fit.params, /*warm_only=*/true, /*uncertainties=*/false, fit.rss);
+      const FitResult r = fitModel(work, t, &fit.params, /*warm_only=*/quick, /*uncertainties=*/false, fit.rss);
       if (!std::isfinite(r.rss)) continue;
       const double dk = std::max(1, r.k - fit.k);
       const double score =
@@ -291,13 +291,16 @@ Suspect rankCause(Suspect s, const Profile& pr, const std::vector<double>& z, co
   return s;
 }
 
+// The significance level of one test among `tested` (Bonferroni).
+double alphaFor(std::size_t tested) { return 1e-3 / static_cast<double>(std::max<std::size_t>(tested, 1)); }
+
 // Significance against a Bonferroni level over the tested variables, then the order: causes
 // first, tested ones by score; `run` (which file or sweep) is a catch-all after them; then the
 // variables not tested.
 void orderSuspects(std::vector<Suspect>& out) {
   std::size_t tested = 0;
   for (const auto& s : out) tested += s.tested ? 1 : 0;
-  const double alpha = 1e-3 / static_cast<double>(std::max<std::size_t>(tested, 1));
+  const double alpha = alphaFor(tested);
   for (auto& s : out) s.significant = s.tested && s.p_value < alpha && s.score >= 0.01;
   std::stable_sort(out.begin(), out.end(), [](const Suspect& a, const Suspect& b) {
     if (a.significant != b.significant) return a.significant;
@@ -308,7 +311,109 @@ void orderSuspects(std::vector<Suspect>& out) {
   });
 }
 
+// The rows the refits of a ranking run on: all of them, or on big data evenly spaced ones with
+// the model refitted there from its optimum.
+struct RefitRows {
+  Dataset sampled;
+  FitResult sampled_fit;
+  bool big;
+  const Dataset& data;
+  const FitResult& fit;
+  RefitRows(const Dataset& d, const FitResult& f, const ModelSpec& spec)
+      : big(d.rows() > kMaxRankRows),
+        data(big ? (sampled = evenlySpaced(d, kMaxRankRows)) : d),
+        fit(big ? (sampled_fit = fitModel(sampled, spec, &f.params, /*warm_only=*/true, /*uncertainties=*/false)) : f) {}
+};
+
+// The advice to follow: rows that do not measure the force first, else the effect that explains
+// most of the residual among the suspects' and the findings'.
+Next nextAdvice(const std::vector<Suspect>& vars, const std::vector<Evidence>& ev) {
+  Next next;
+  for (const auto& e : ev)
+    if (!e.where.empty()) return {e.where, "", e.cause, 0, {}};
+  struct Option {
+    bool significant;
+    double score;
+    std::string effect, why;
+  };
+  std::vector<Option> options;
+  for (const auto& s : vars)
+    if (s.tested && s.role == Role::kCause && !s.effects.empty())
+      options.push_back({s.significant, s.score, s.effects.front(), s.advice});
+  for (const auto& e : ev)
+    if (!e.effects.empty()) options.push_back({e.significant, e.score, e.effects.front(), e.advice});
+  std::stable_sort(options.begin(), options.end(), [](const Option& a, const Option& b) {
+    return a.significant != b.significant ? a.significant : a.score > b.score;
+  });
+  for (const auto& o : options) {
+    if (std::find(next.candidates.begin(), next.candidates.end(), o.effect) == next.candidates.end())
+      next.candidates.push_back(o.effect);
+    if (next.add.empty() && o.significant) next.add = o.effect, next.why = o.why, next.score = o.score;
+  }
+  return next;
+}
+
+// The verdict against the noise floor, in words with where to look.
+void judge(Assessment& d, const Dataset& data, const FitResult& fit, const std::vector<Suspect>& variables) {
+  const double rmse = fit.rmse_g;
+  const NoiseEstimate& n = d.noise;
+  d.unexplained_g = n.known() ? std::sqrt(std::max(0.0, rmse * rmse - n.sigma_g * n.sigma_g)) : rmse;
+  bool explained = !d.next.where.empty();
+  for (const auto& s : variables) explained = explained || (s.significant && s.role == Role::kCause);
+  for (const auto& e : d.evidence) explained = explained || e.significant;
+  if (n.known() && rmse <= n.hi_g) {
+    d.verdict = Verdict::kAtNoiseFloor;
+    d.verdict_text = fmt::format("at the noise floor: RMSE {:.3g} g is within the measurement noise, {}", rmse,
+                                 describe(n));
+    return;
+  }
+  const std::string above = n.known() ? fmt::format("above the noise floor of {}", describe(n))
+                                      : "(the noise floor is " + describe(n) + ")";
+  d.regions = residualRegions(data, fit, n);
+  if (explained) {
+    d.verdict = Verdict::kSuspects;
+    d.verdict_text = fmt::format("{:.3g} g unexplained {}; the suspects and findings above explain part of it",
+                                 d.unexplained_g, above);
+    return;
+  }
+  d.verdict = Verdict::kUnexplained;
+  d.verdict_text = fmt::format("{:.3g} g unexplained {}: no logged variable explains it; look where it is, at a "
+                               "condition not logged (a temperature, the voltage at the ESC, the rig's mount, the "
+                               "load cell's tare), or at an effect not in the catalogue (`mul: EXPR`, `add: EXPR`)",
+                               d.unexplained_g, above);
+}
+
 }  // namespace
+
+const char* verdictName(Verdict v) {
+  switch (v) {
+    case Verdict::kAtNoiseFloor: return "at_noise_floor";
+    case Verdict::kSuspects: return "suspects";
+    case Verdict::kUnexplained: return "unexplained";
+  }
+  return "unexplained";
+}
+
+void scoreEvidence(const Dataset& data_in, const FitResult& fit_in, const ModelSpec& spec,
+                   std::vector<Evidence>& evidence, std::size_t tested) {
+  const RefitRows rows(data_in, fit_in, spec);
+  const double alpha = alphaFor(tested + evidence.size());
+  for (auto& e : evidence) {
+    Advice a = adviceFor(e.kind, e.cause, spec, rows.fit, true);
+    e.advice = a.words;
+    if (a.trials.empty()) continue;
+    Suspect s;
+    s.variable = e.kind;
+    std::vector<std::pair<std::string, ModelSpec>> trials;
+    for (const auto& t : a.trials) trials.emplace_back(t, combine(spec, parseSpec(t)));
+    // a finding's effects are few: each gets the full search (a cold start too), as the ladder
+    for (const auto& sc : scoreTrials(s, trials, rows.data, rows.fit, /*quick=*/false)) e.effects.push_back(sc.second);
+    e.score = s.score;
+    e.p_value = s.p_value;
+    e.significant = s.tested && s.p_value < alpha && s.score >= 0.01;
+    if (!e.effects.empty()) e.advice = a.words_for[e.effects.front()];
+  }
+}
 
 Role roleOf(const std::string& name) {
   const std::string v = lowerCopy(name);
@@ -323,15 +428,9 @@ Role roleOf(const std::string& name) {
 
 std::vector<Suspect> rankVariables(const Dataset& data_in, const FitResult& fit_in, const ModelSpec& spec) {
   // Big data: the refits run on evenly spaced rows, against the model refitted there.
-  Dataset sampled;
-  FitResult sampled_fit;
-  const bool big = data_in.rows() > kMaxRankRows;
-  if (big) {
-    sampled = evenlySpaced(data_in, kMaxRankRows);
-    sampled_fit = fitModel(sampled, spec, &fit_in.params, /*warm_only=*/true, /*uncertainties=*/false);
-  }
-  const Dataset& data = big ? sampled : data_in;
-  const FitResult& fit = big ? sampled_fit : fit_in;
+  const RefitRows rows(data_in, fit_in, spec);
+  const Dataset& data = rows.data;
+  const FitResult& fit = rows.fit;
 
   std::vector<std::pair<std::string, const std::vector<double>*>> candidates;
   for (std::size_t c = 0; c < data.names.size(); ++c)
@@ -447,50 +546,71 @@ double holdoutRmse(const Dataset& data, const ModelSpec& spec, Holdout kind, int
   return std::sqrt(sse / static_cast<double>(count));
 }
 
+Assessment assess(const Dataset& data, const ModelSpec& spec, const FitResult& fit,
+                  const std::vector<Suspect>& variables, const NoiseEstimate* noise) {
+  Assessment a;
+  a.noise = noise ? *noise : estimateNoise(data);
+  std::size_t tested = 0;
+  for (const auto& s : variables) tested += s.tested ? 1 : 0;
+  a.evidence = gatherEvidence(data);
+  scoreEvidence(data, fit, spec, a.evidence, tested);
+  a.next = nextAdvice(variables, a.evidence);
+  judge(a, data, fit, variables);
+  return a;
+}
+
 Diagnosis diagnose(const Dataset& data, const ModelSpec& spec, Holdout holdout) {
   Diagnosis d;
   d.fit = fitModel(data, spec);
   d.variables = rankVariables(data, d.fit, spec);
+  static_cast<Assessment&>(d) = assess(data, spec, d.fit, d.variables);
   d.holdout_rmse_g = holdoutRmse(data, spec, holdout, &d.holdout_groups);
   return d;
+}
+
+LadderStep addStep(const Dataset& data, const LadderStep& prev, const std::string& add, Holdout holdout) {
+  LadderStep step;
+  step.added = add;
+  const ModelSpec added = parseSpec(add);
+  step.spec = combine(prev.spec, added);
+  step.fit = fitModel(data, step.spec, &prev.fit.params, false, true, prev.fit.rss);
+  step.holdout_rmse_g = holdoutRmse(data, step.spec, holdout);
+  step.delta_bic = step.fit.bic - prev.fit.bic;
+  step.delta_aic = step.fit.aic - prev.fit.aic;
+  std::vector<std::string> names = added.effects;
+  for (const auto& u : added.user) names.push_back((u.multiplicative ? "mul: " : "add: ") + u.expression);
+  for (const auto& e : names)
+    for (const auto& b : boundsOf(step.fit, e)) step.at_bound.push_back(b);
+  const bool falls = step.delta_bic < -2.0;
+  step.earns = falls && step.at_bound.empty();
+  if (step.earns)
+    step.verdict = "earns its parameters";
+  else if (!step.at_bound.empty())
+    step.verdict = fmt::format("no credit: {}", fmt::join(step.at_bound, ", "));
+  else
+    step.verdict = "does NOT earn its parameters";
+  return step;
 }
 
 std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,
                                const std::vector<std::string>& adds, Holdout holdout) {
   std::vector<LadderStep> steps;
-  ModelSpec spec = base;
+  const NoiseEstimate noise = estimateNoise(data);
   for (std::size_t s = 0; s <= adds.size(); ++s) {
     LadderStep step;
-    ModelSpec added;
-    if (s > 0) {
-      step.added = adds[s - 1];
-      added = parseSpec(adds[s - 1]);
-      spec = combine(spec, added);
-    }
-    step.spec = spec;
-    step.fit = steps.empty() ? fitModel(data, spec)
-                             : fitModel(data, spec, &steps.back().fit.params, false, true, steps.back().fit.rss);
-    // the diagnosis of the first and the last step (the report and the text use those)
-    if (s == 0 || s == adds.size()) step.variables = rankVariables(data, step.fit, spec);
-    step.holdout_rmse_g = holdoutRmse(data, spec, holdout);
-    if (steps.empty()) {
+    if (s == 0) {
+      step.spec = base;
+      step.fit = fitModel(data, base);
+      step.holdout_rmse_g = holdoutRmse(data, base, holdout);
       step.verdict = "start";
     } else {
-      step.delta_bic = step.fit.bic - steps.back().fit.bic;
-      step.delta_aic = step.fit.aic - steps.back().fit.aic;
-      std::vector<std::string> names = added.effects;
-      for (const auto& u : added.user) names.push_back((u.multiplicative ? "mul: " : "add: ") + u.expression);
-      for (const auto& e : names)
-        for (const auto& b : boundsOf(step.fit, e)) step.at_bound.push_back(b);
-      const bool falls = step.delta_bic < -2.0;
-      step.earns = falls && step.at_bound.empty();
-      if (step.earns)
-        step.verdict = "earns its parameters";
-      else if (!step.at_bound.empty())
-        step.verdict = fmt::format("no credit: {}", fmt::join(step.at_bound, ", "));
-      else
-        step.verdict = "does NOT earn its parameters";
+      step = addStep(data, steps.back(), adds[s - 1], holdout);
     }
+    // the diagnosis of the first and the last step (the report and the text use those)
+    if (s == 0 || s == adds.size()) step.variables = rankVariables(data, step.fit, step.spec);
+    step.at_noise_floor = noise.known() && step.fit.rmse_g <= noise.hi_g;
+    step.assessment.noise = noise;
+    if (s == adds.size()) step.assessment = assess(data, step.spec, step.fit, step.variables, &noise);
     steps.push_back(std::move(step));
   }
   return steps;

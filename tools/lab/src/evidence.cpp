@@ -158,7 +158,7 @@ Evidence forcePlateauEvidence(const Dataset& d, const Plateau& pf, const std::st
 Evidence fallEvidence(const Dataset& d, const ForceCollapse& c, int run, const std::string& rpm,
                       const std::optional<Plateau>& pc) {
   Evidence e;
-  e.kind = "force_falls";
+  e.kind = "force_falls";  // force_falls_at_limit when the current's ceiling explains it
   e.column = "force_g";
   e.level = c.peak_force_g;
   e.from_pwm_us = c.peak_pwm_us;
@@ -171,7 +171,7 @@ Evidence fallEvidence(const Dataset& d, const ForceCollapse& c, int run, const s
     if (!bins.empty()) rpm_top = bins.back().second;
   }
   if (limited)
-    e.cause = fmt::format("the current limit at {:.3g} A", pc->level);
+    e.kind = "force_falls_at_limit", e.cause = fmt::format("the current limit at {:.3g} A", pc->level);
   else if (std::isfinite(rpm_top) && rpm_top < 0.5 * rpm_peak)
     e.cause = "a stalled motor (the rotor slows to less than half its speed while the drive rises: a desync or a "
               "stall)";

@@ -314,6 +314,34 @@ void residualPlots(Plots& plots, const Dataset& data, const std::vector<LadderSt
   }
 }
 
+// The residual along the drive, the first and the last step: the noise floor as a band of two
+// standard deviations, the regions where the residual above it concentrates shaded.
+void residualAlongDrivePlot(Plots& plots, const Dataset& data, const std::vector<LadderStep>& steps,
+                            const std::string& data_file, const std::string& sample_note) {
+  const Assessment& a = steps.back().assessment;
+  std::string cmd = fmt::format("set xlabel {}\nset ylabel 'residual: measured - model (g)'\nset key outside right\n",
+                                quote(axisLabel(data, "pwm_us")));
+  cmd += fmt::format("set title {}\n", quote("residual along the drive" + sample_note +
+                                             (a.noise.known() ? fmt::format(", noise floor {:.3g} g (band: 2 SD)",
+                                                                            a.noise.sigma_g)
+                                                              : std::string(", noise floor not estimated"))));
+  for (std::size_t k = 0; k < a.regions.size(); ++k)
+    cmd += fmt::format("set object {} rect from {:.6g}, graph 0 to {:.6g}, graph 1 fc rgb '#fde0c5' fs solid 0.5 "
+                       "noborder behind\n",
+                       k + 1, a.regions[k].pwm_lo_us, a.regions[k].pwm_hi_us);
+  const std::size_t last = steps.size() - 1;
+  cmd += fmt::format("plot {} using 1:4 with points pt 7 ps 0.35 lc rgb '#70d62728' title {}", data_file,
+                     quote(fmt::format("{} (RMSE {:.3g} g)", stepName(steps.front(), 0), steps.front().fit.rmse_g)));
+  if (last > 0)
+    cmd += fmt::format(", '' using 1:{} with points pt 7 ps 0.35 lc rgb '#701f77b4' title {}", 4 + 2 * last,
+                       quote(fmt::format("{} (RMSE {:.3g} g)", steps.back().spec.text(), steps.back().fit.rmse_g)));
+  if (a.noise.known())
+    cmd += fmt::format(", {:.6g} with lines dt 2 lc rgb '#444444' title 'noise: +-2 SD', {:.6g} with lines dt 2 lc rgb "
+                       "'#444444' notitle",
+                       2 * a.noise.sigma_g, -2 * a.noise.sigma_g);
+  plots.emplace_back("residual_along_drive", cmd + "\n");
+}
+
 void ladderPlot(Plots& plots, const fs::path& dir, std::size_t steps) {
   std::string cmd = "set style fill solid 0.7\nset boxwidth 0.6\nset ylabel 'error (g)'\nset xtics rotate by -20\n";
   cmd += "set key left top\nset title 'the error ladder: green earns its parameters, grey does not, orange gets no "
@@ -353,11 +381,16 @@ bool drawPlots(const fs::path& dir, const std::string& dir_name, const Plots& pl
 
 Block ladderTable(const std::vector<LadderStep>& steps) {
   Block table{Block::Kind::kTable, "", {}, {}, ""};
-  table.rows.push_back({"step", "model", "k", "RMSE (g)", "max (g)", "RMSE (% of max force)", "BIC", "dBIC", "verdict"});
+  table.rows.push_back({"step", "model", "k", "RMSE (g)", "RMSE / noise", "max (g)", "RMSE (% of max force)", "BIC",
+                        "dBIC", "verdict"});
   for (std::size_t k = 0; k < steps.size(); ++k) {
     const auto& s = steps[k];
+    const NoiseEstimate& n = s.assessment.noise;
     table.rows.push_back({std::to_string(k), "`" + stepName(s, k) + "`", std::to_string(s.fit.k),
-                          fmt::format("{:.3f}", s.fit.rmse_g), fmt::format("{:.2f}", s.fit.max_g),
+                          fmt::format("{:.3f}", s.fit.rmse_g),
+                          n.known() ? fmt::format("{:.2f}{}", s.fit.rmse_g / n.sigma_g, s.at_noise_floor ? " (floor)" : "")
+                                    : std::string("-"),
+                          fmt::format("{:.2f}", s.fit.max_g),
                           fmt::format("{:.2f}", s.fit.rmse_pct), fmt::format("{:.1f}", s.fit.bic),
                           k ? fmt::format("{:.1f}", s.delta_bic) : "", s.verdict});
   }
@@ -386,6 +419,30 @@ void causesSection(std::vector<Block>& page, const std::vector<LadderStep>& step
                     {}, {}, ""});
   for (const auto& v : suspects)
     page.push_back({Block::Kind::kImage, "residual vs " + v, {}, {}, "residual_vs_" + v + ".png"});
+}
+
+// The last step against the noise floor: the verdict, where the residual is, the findings in
+// the responses.
+void noiseSection(std::vector<Block>& page, const LadderStep& last) {
+  const Assessment& a = last.assessment;
+  page.push_back({Block::Kind::kH2, "Against the noise floor", {}, {}, ""});
+  page.push_back({Block::Kind::kPara,
+                  fmt::format("Noise floor (the measurement noise, estimated from neighbouring rows): {}. Verdict for "
+                              "`{}`: {}.",
+                              describe(a.noise), last.spec.text(),
+                              a.verdict_text.empty() ? std::string("not judged") : a.verdict_text),
+                  {}, {}, ""});
+  Block where{Block::Kind::kList, "", {}, {}, ""};
+  for (const auto& r : a.regions) where.items.push_back(r.text);
+  if (!where.items.empty()) page.push_back(where);
+  page.push_back({Block::Kind::kImage, "residual along the drive", {}, {}, "residual_along_drive.png"});
+  if (a.evidence.empty()) return;
+  Block ev{Block::Kind::kList, "", {}, {}, ""};
+  for (const auto& e : a.evidence)
+    ev.items.push_back(e.text + (e.effects.empty() ? std::string()
+                                                   : fmt::format(" -> `{}` (score {:.3f})", e.effects.front(), e.score)));
+  page.push_back({Block::Kind::kPara, "Evidence from the responses (they name causes; they are not suspects):", {}, {}, ""});
+  page.push_back(ev);
 }
 
 Block paramsTable(const LadderStep& last) {
@@ -420,6 +477,7 @@ std::vector<Block> reportPage(const Dataset& data, const std::vector<LadderStep>
   page.push_back({Block::Kind::kH2, "Measured vs model", {}, {}, ""});
   page.push_back({Block::Kind::kImage, "measured vs model", {}, {}, "measured_vs_model.png"});
   causesSection(page, steps, suspects);
+  noiseSection(page, steps.back());
   page.push_back({Block::Kind::kH2, "Fitted parameters of the last step", {}, {}, ""});
   page.push_back(paramsTable(steps.back()));
   page.push_back({Block::Kind::kPara,
@@ -453,6 +511,7 @@ ReportFiles writeReport(const std::string& dir_name, const Dataset& data, const 
       thinned ? fmt::format(" ({} of {} samples shown)", rows.size(), data.rows()) : std::string();
   measuredVsModelPlot(plots, data, steps, data_file, sample_note);
   residualPlots(plots, data, steps, rows, suspects, data_file, sample_note);
+  residualAlongDrivePlot(plots, data, steps, data_file, sample_note);
   ladderPlot(plots, dir, steps.size());
   const bool drawn = drawPlots(dir, dir_name, plots, files);
 

@@ -44,7 +44,7 @@ std::vector<bool> runsAtCeiling(const Dataset& data, const std::string& column, 
 struct Evidence {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   // current_plateau, esc_saturated, rpm_plateau, power_plateau, force_clipped, force_plateau,
-  // force_falls
+  // force_falls, force_falls_at_limit (a fall the current's ceiling explains: the same finding)
   std::string kind;
   std::string column;                 // the response it was found in
   double level = kNaN;                // the ceiling, in the column's unit
@@ -57,7 +57,9 @@ struct Evidence {
   // score of the best (as for a suspect) and whether it is significant
   std::vector<std::string> effects;
   double score = 0;
+  double p_value = 1;
   bool significant = false;
+  std::string advice;  // the registry's words for the best effect ("" when none applies)
 };
 
 // Every finding in the data's responses (current_a, rpm, power_w and their RCbenchmark names)
