@@ -203,25 +203,25 @@ double effectiveDof(const std::vector<Window>& win, const std::vector<bool>& kee
   return (static_cast<double>(n_kept) - static_cast<double>(k)) * static_cast<double>(n_kept) / sum_c2;
 }
 
-// Least squares of e on the columns of Z over the kept rows; returns the residuals of every row
-// and the rank used.
+// Least squares of e on the columns of Z over the kept rows, from the normal equations (Z's
+// columns have unit RMS; a combination the rows do not determine is dropped); returns the
+// residuals of every row and the rank used.
 Eigen::VectorXd regressOut(const Eigen::VectorXd& e, const Eigen::MatrixXd& z, const std::vector<bool>& keep,
                            Eigen::Index& rank) {
   rank = 0;
   if (z.cols() == 0) return e;
-  std::vector<Eigen::Index> rows;
-  for (std::size_t i = 0; i < keep.size(); ++i)
-    if (keep[i]) rows.push_back(static_cast<Eigen::Index>(i));
-  Eigen::MatrixXd zk(static_cast<Eigen::Index>(rows.size()), z.cols());
-  Eigen::VectorXd ek(static_cast<Eigen::Index>(rows.size()));
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    zk.row(static_cast<Eigen::Index>(r)) = z.row(rows[r]);
-    ek[static_cast<Eigen::Index>(r)] = e[rows[r]];
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(z.cols(), z.cols());
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(z.cols());
+  for (Eigen::Index i = 0; i < z.rows(); ++i) {
+    if (!keep[static_cast<std::size_t>(i)]) continue;
+    g.selfadjointView<Eigen::Lower>().rankUpdate(z.row(i).transpose());
+    h.noalias() += z.row(i).transpose() * e[i];
   }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(zk);
-  qr.setThreshold(1e-8);
-  rank = qr.rank();
-  const Eigen::VectorXd beta = qr.solve(ek);
+  g = g.selfadjointView<Eigen::Lower>();
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(g);
+  cod.setThreshold(1e-12);
+  rank = cod.rank();
+  const Eigen::VectorXd beta = cod.solve(h);
   return e - z * beta;
 }
 
@@ -270,6 +270,10 @@ void contrastsOf(const Dataset& d, const std::vector<std::vector<std::size_t>>& 
       used.push_back(col);
     }
     names.push_back(d.names[cond[static_cast<std::size_t>(c)]]);
+  }
+  if (used.size() == static_cast<std::size_t>(all.cols())) {
+    z = std::move(all);
+    return;
   }
   z.resize(n, static_cast<Eigen::Index>(used.size()));
   for (std::size_t c = 0; c < used.size(); ++c) z.col(static_cast<Eigen::Index>(c)) = all.col(used[c]);
