@@ -314,31 +314,27 @@ void residualPlots(Plots& plots, const Dataset& data, const std::vector<LadderSt
   }
 }
 
-// The residual along the drive, the first and the last step: the noise floor as a band of two
-// standard deviations, the regions where the residual above it concentrates shaded.
+// The residual of the last step along the drive (the one the verdict judges): the noise floor as
+// a band of two standard deviations, the regions where the residual above it concentrates shaded.
 void residualAlongDrivePlot(Plots& plots, const Dataset& data, const std::vector<LadderStep>& steps,
                             const std::string& data_file, const std::string& sample_note) {
   const Assessment& a = steps.back().assessment;
-  std::string cmd = fmt::format("set xlabel {}\nset ylabel 'residual: measured - model (g)'\nset key outside right\n",
+  std::string cmd = fmt::format("set xlabel {}\nset ylabel 'residual: measured - model (g)'\nset key below\n",
                                 quote(axisLabel(data, "pwm_us")));
-  cmd += fmt::format("set title {}\n", quote("residual along the drive" + sample_note +
-                                             (a.noise.known() ? fmt::format(", noise floor {:.3g} g (band: 2 SD)",
-                                                                            a.noise.sigma_g)
-                                                              : std::string(", noise floor not estimated"))));
+  cmd += fmt::format("set title {}\n", quote(fmt::format("residual of {} along the drive (RMSE {:.3g} g){}",
+                                                         steps.back().spec.text(), steps.back().fit.rmse_g,
+                                                         sample_note)));
   for (std::size_t k = 0; k < a.regions.size(); ++k)
     cmd += fmt::format("set object {} rect from {:.6g}, graph 0 to {:.6g}, graph 1 fc rgb '#fde0c5' fs solid 0.5 "
                        "noborder behind\n",
                        k + 1, a.regions[k].pwm_lo_us, a.regions[k].pwm_hi_us);
-  const std::size_t last = steps.size() - 1;
-  cmd += fmt::format("plot {} using 1:4 with points pt 7 ps 0.35 lc rgb '#70d62728' title {}", data_file,
-                     quote(fmt::format("{} (RMSE {:.3g} g)", stepName(steps.front(), 0), steps.front().fit.rmse_g)));
-  if (last > 0)
-    cmd += fmt::format(", '' using 1:{} with points pt 7 ps 0.35 lc rgb '#701f77b4' title {}", 4 + 2 * last,
-                       quote(fmt::format("{} (RMSE {:.3g} g)", steps.back().spec.text(), steps.back().fit.rmse_g)));
+  cmd += fmt::format("plot {} using 1:{} with points pt 7 ps 0.4 lc rgb '#801f77b4' title 'residual{}'", data_file,
+                     4 + 2 * (steps.size() - 1), a.regions.empty() ? "" : " (shaded: where most of it is)");
   if (a.noise.known())
-    cmd += fmt::format(", {:.6g} with lines dt 2 lc rgb '#444444' title 'noise: +-2 SD', {:.6g} with lines dt 2 lc rgb "
-                       "'#444444' notitle",
-                       2 * a.noise.sigma_g, -2 * a.noise.sigma_g);
+    cmd += fmt::format(", {:.6g} with lines dt 2 lc rgb '#444444' title {}, {:.6g} with lines dt 2 lc rgb '#444444' "
+                       "notitle",
+                       2 * a.noise.sigma_g,
+                       quote(fmt::format("noise floor {:.3g} g: +-2 SD", a.noise.sigma_g)), -2 * a.noise.sigma_g);
   plots.emplace_back("residual_along_drive", cmd + "\n");
 }
 
