@@ -640,8 +640,9 @@ std::vector<ForceCollapse> findForceCollapse(const Dataset& data) {
 
 std::string describe(const ForceCollapse& c) {
   return fmt::format("{}: the force falls while the drive rises, from {:.4g} g at {:.0f} us to {:.4g} g at {:.0f} us "
-                     "(an ESC or current limit?); a monotone curve cannot follow it: fit below it with --where "
-                     "'pwm_us < {:.0f}'",
+                     "(a current limit, a saturated ESC or a stall: `thrustcal lab diagnose` tells which from the "
+                     "current and the speed); a curve that only rises cannot follow it: model the limit, or fit below "
+                     "it with --where 'pwm_us < {:.0f}'",
                      c.run, c.peak_force_g, c.peak_pwm_us, c.top_force_g, c.top_pwm_us, c.peak_pwm_us);
 }
 

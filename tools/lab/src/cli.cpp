@@ -453,7 +453,7 @@ int runWalk(const Common& c, int max_adds) {
   const Dataset data = load(c, warnings, /*collapse_warnings=*/false);
   const ModelSpec spec = parseSpec(c.model);
   if (max_adds < 1) throw std::invalid_argument("--max-adds must be 1 or more");
-  const Walk w = walk(data, spec, max_adds);
+  const Walk w = walk(data, spec, max_adds, parseHoldout(c.holdout));
   ReportFiles rep;
   Common as_ladder = c;
   as_ladder.where = w.where.empty() ? c.where : (c.where.empty() ? w.where : "(" + c.where + ") and " + w.where);

@@ -49,7 +49,7 @@ LadderStep firstThatEarns(const Dataset& data, const ModelSpec& spec, const Diag
 
 }  // namespace
 
-Walk walk(const Dataset& data, const ModelSpec& start, int max_adds) {
+Walk walk(const Dataset& data, const ModelSpec& start, int max_adds, Holdout holdout) {
   Walk w;
   w.data = data;
   ModelSpec spec = start;
@@ -86,7 +86,7 @@ Walk walk(const Dataset& data, const ModelSpec& start, int max_adds) {
     spec = next.spec;
     w.adds.push_back(next.added);
   }
-  w.ladder = ladder(w.data, start, w.adds, Holdout::kNone);
+  w.ladder = ladder(w.data, start, w.adds, holdout);
   return w;
 }
 

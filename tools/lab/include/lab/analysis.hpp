@@ -150,11 +150,13 @@ struct Walk {
   std::vector<LadderStep> ladder;  // start to the end model on the rows kept (the last assessed)
   std::string stop;                // why it stopped
 };
-Walk walk(const Dataset& data, const ModelSpec& start, int max_adds = 8);
+// `holdout`: for the ladder it walked (the walk itself judges by BIC on every row).
+Walk walk(const Dataset& data, const ModelSpec& start, int max_adds = 8, Holdout holdout = Holdout::kNone);
 
-// Thrust that falls while the drive rises (an ESC or current limit at the top of a ramp): per
-// run, the force binned by PWM drops by more than 3 % of its peak above the peak's PWM and stays
-// down. A monotone curve cannot follow it; fit below it (--where 'pwm_us < PEAK').
+// Thrust that falls while the drive rises (a current limit, a saturated ESC or a stall at the top
+// of a ramp): per run, the force binned by PWM drops by more than 3 % of its peak above the
+// peak's PWM and stays down. A curve that only rises cannot follow it: model the limit, or fit
+// below it (--where 'pwm_us < PEAK'); a record cannot hold it (export refuses).
 struct ForceCollapse {
   std::string run;
   double peak_pwm_us = 0, peak_force_g = 0;  // where it starts
