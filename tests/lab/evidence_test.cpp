@@ -119,7 +119,7 @@ TEST(LabEvidence, AForceThatFallsWithTheRotorSlowingToAFractionIsAStall) {
   no_current.run = d.run, no_current.run_labels = d.run_labels;
   for (const char* c : {"pwm_us", "force_g", "rpm", "dir"}) no_current.set(c, d.col(c));
   const auto ev = lab::gatherEvidence(no_current);
-  const lab::Evidence* e = find(ev, "force_falls");
+  const lab::Evidence* e = find(ev, "motor_stalls");
   ASSERT_NE(e, nullptr);
   EXPECT_NE(e->cause.find("stalled motor"), std::string::npos) << e->cause;
 }

@@ -158,7 +158,7 @@ Evidence forcePlateauEvidence(const Dataset& d, const Plateau& pf, const std::st
 Evidence fallEvidence(const Dataset& d, const ForceCollapse& c, int run, const std::string& rpm,
                       const std::optional<Plateau>& pc) {
   Evidence e;
-  e.kind = "force_falls";  // force_falls_at_limit when the current's ceiling explains it
+  e.kind = "force_falls";  // the kinds below name what speed and current add
   e.column = "force_g";
   e.level = c.peak_force_g;
   e.from_pwm_us = c.peak_pwm_us;
@@ -173,11 +173,12 @@ Evidence fallEvidence(const Dataset& d, const ForceCollapse& c, int run, const s
   if (limited)
     e.kind = "force_falls_at_limit", e.cause = fmt::format("the current limit at {:.3g} A", pc->level);
   else if (std::isfinite(rpm_top) && rpm_top < 0.5 * rpm_peak)
-    e.cause = "a stalled motor (the rotor slows to less than half its speed while the drive rises: a desync or a "
-              "stall)";
+    e.kind = "motor_stalls", e.cause = "a stalled motor (the rotor slows to less than half its speed while the drive "
+                                       "rises: a desync or a stall)";
   else if (std::isfinite(rpm_top) && rpm_top < rpm_peak * (1 - kStillRising))
     e.cause = "a limit of the source or the ESC (the rotor slows down; log current_a to tell which)";
   else if (std::isfinite(rpm_top))
+    e.kind = "force_falls_rotor_rises",
     e.cause = "the measurement (the load cell or its mount) or the propeller, not the motor: the rotor keeps speeding up";
   else
     e.cause = "an ESC or current limit (log current_a and rpm to tell)";

@@ -44,7 +44,8 @@ std::vector<bool> runsAtCeiling(const Dataset& data, const std::string& column, 
 struct Evidence {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   // current_plateau, esc_saturated, rpm_plateau, power_plateau, force_clipped, force_plateau,
-  // force_falls, force_falls_at_limit (a fall the current's ceiling explains: the same finding)
+  // force_falls (a limit), force_falls_at_limit (the current's ceiling explains it: the same
+  // finding), motor_stalls, force_falls_rotor_rises (the measurement, not the motor)
   std::string kind;
   std::string column;                 // the response it was found in
   double level = kNaN;                // the ceiling, in the column's unit
