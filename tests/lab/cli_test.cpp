@@ -146,7 +146,7 @@ TEST(LabCli, LadderAndWalkJsonCarryTheNoiseFloor) {
   ladder.insert(ladder.end(), files.begin(), files.end());
   walk.insert(walk.end(), files.begin(), files.end());
   for (const char* a : {"--model", "curve+deadband+voltage", "--add", "current_limit", "--json"}) ladder.push_back(a);
-  for (const char* a : {"--model", "curve", "--json"}) walk.push_back(a);
+  for (const char* a : {"--model", "curve+deadband+voltage", "--json"}) walk.push_back(a);  // the short walk
   std::string out;
   ASSERT_EQ(run(ladder, out), 0);
   auto j = nlohmann::json::parse(out);
