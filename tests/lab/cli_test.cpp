@@ -142,6 +142,7 @@ TEST(LabCli, DiagnoseJsonHasTheNoiseFloorTheVerdictWhereTheResidualIsAndTheEvide
 
 TEST(LabCli, LadderAndWalkJsonCarryTheNoiseFloor) {
   auto files = writeRuns("current_limit");
+  files = {files.front(), files.back()};  // the highest and the lowest set voltage: enough, and quick
   std::vector<std::string> ladder = {"lab", "ladder"}, walk = {"lab", "walk"};
   ladder.insert(ladder.end(), files.begin(), files.end());
   walk.insert(walk.end(), files.begin(), files.end());

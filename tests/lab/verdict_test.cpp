@@ -93,7 +93,12 @@ TEST(LabRegions, TheResidualIsFoundWhereItIsAlongTheDriveAndAtItsVoltage) {
 }
 
 TEST(LabWalk, FollowsTheAdviceToTheNoiseFloorOnACurrentLimitedBench) {
-  const lab::Walk w = lab::walk(generated("current_limit"), lab::parseSpec("curve"));
+  // given the limited supply at its highest and lowest set voltage (two runs keep the test quick)
+  const lab::Dataset all = generated("current_limit");
+  std::vector<bool> keep(all.rows());
+  for (std::size_t i = 0; i < all.rows(); ++i) keep[i] = all.run[i] == 0 || all.run[i] == 3;
+  lab::Dataset two = all.subset(keep);
+  const lab::Walk w = lab::walk(two, lab::parseSpec("curve"));
   ASSERT_FALSE(w.steps.empty());
   EXPECT_EQ(w.steps.back().verdict, lab::Verdict::kAtNoiseFloor) << w.stop;
   EXPECT_NE(std::find(w.adds.begin(), w.adds.end(), "current_limit"), w.adds.end());
