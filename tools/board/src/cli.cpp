@@ -165,13 +165,15 @@ nlohmann::json diagnoseSweeps(const std::vector<std::string>& csvs, const std::s
                 fmt::format("{}", fmt::join(s.effects, ", ")).c_str(), s.advice.c_str());
     suspects.push_back({{"variable", s.variable}, {"score", s.score}, {"effects", s.effects}});
   }
-  if (k == 0)
-    std::printf("  no variable explains a significant part of what the model misses (noise)\n");
+  if (k == 0) std::printf("  no logged variable explains a significant part of what the model misses\n");
+  std::printf("  verdict: %s\n", d.verdict_text.c_str());
   std::string files;
   for (const auto& c : csvs) files += c + " ";
   std::printf("more: thrustcal lab ladder %s--model curve --add deadband --add voltage\n",
               files.c_str());
   j["suspects"] = suspects;
+  j["noise_g"] = d.noise.known() ? nlohmann::json(d.noise.sigma_g) : nlohmann::json(nullptr);
+  j["verdict"] = lab::verdictName(d.verdict);
   return j;
 }
 
