@@ -32,12 +32,12 @@ namespace ardu = lab::autopilot::ardupilot;
 namespace px4 = lab::autopilot::px4;
 namespace bf = lab::autopilot::betaflight;
 
-std::string tmp(const std::string& name) {
+std::string tmpAutopilot(const std::string& name) {
   fs::create_directories(THRUSTCAL_LAB_TMP_DIR);
   return std::string(THRUSTCAL_LAB_TMP_DIR) + "/" + name;
 }
 
-std::string slurp(const std::string& path) {
+std::string slurpAutopilot(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   std::stringstream s;
   s << f.rdbuf();
@@ -416,7 +416,7 @@ double bestArduPilotRms(const std::vector<ap::Row>& rows, const ap::ArduPilotPar
 TEST(ArduPilotFit, TheWrittenParametersReachArduPilotsBestErrorOnPlantDataWithin5Percent) {
   for (const char* hidden : {"none", "sag"}) {
     // given: the plant's motor on the bench (true curve: the plant's steady state)
-    const lab::Dataset d = generatedSet(hidden, tmp(std::string("ap_best_") + hidden + ".csv"));
+    const lab::Dataset d = generatedSet(hidden, tmpAutopilot(std::string("ap_best_") + hidden + ".csv"));
     ap::ExportOptions o;
     o.to = "ardupilot";
     // when: exported, and the file read back as a ground station would
@@ -466,7 +466,7 @@ double bestPx4Rms(const std::vector<ap::Row>& rows) {
 }
 
 TEST(Px4Fit, ReachesTheBestErrorOfPx4sModelOnPlantData) {
-  const lab::Dataset d = generatedSet("none", tmp("px4_best.csv"));
+  const lab::Dataset d = generatedSet("none", tmpAutopilot("px4_best.csv"));
   const std::vector<ap::Row> rows = rowsOf(d);
   ap::FitSetup setup;
   setup.cells = 3;
@@ -479,7 +479,7 @@ TEST(Px4Fit, ReachesTheBestErrorOfPx4sModelOnPlantData) {
 }
 
 TEST(BetaflightFit, ReachesTheBestErrorOfBetaflightsModelOnPlantData) {
-  const lab::Dataset d = generatedSet("none", tmp("bf_best.csv"));
+  const lab::Dataset d = generatedSet("none", tmpAutopilot("bf_best.csv"));
   const std::vector<ap::Row> rows = rowsOf(d);
   ap::FitSetup setup;
   setup.use_voltage = false;
@@ -517,7 +517,7 @@ double rmsColumn(const ap::ExportReport& r, const std::string& prefix) {
 
 TEST(AutopilotExport, ComparesFittedDefaultsAndModelV2PerVoltageAndMotor) {
   // given four varied motors at two voltages
-  const lab::Dataset d = generatedSet("motor", tmp("ap_motor.csv"));
+  const lab::Dataset d = generatedSet("motor", tmpAutopilot("ap_motor.csv"));
   for (const char* to : {"ardupilot", "px4", "betaflight"}) {
     ap::ExportOptions o;
     o.to = to;
@@ -541,7 +541,7 @@ TEST(AutopilotExport, ComparesFittedDefaultsAndModelV2PerVoltageAndMotor) {
 }
 
 TEST(AutopilotExport, DataWithoutAVoltageColumnFitWithoutVoltageScalingAndSaySo) {
-  lab::Dataset d = generatedSet("none", tmp("ap_nov.csv"));
+  lab::Dataset d = generatedSet("none", tmpAutopilot("ap_nov.csv"));
   const int v = d.find("vbat_v");
   d.names.erase(d.names.begin() + v);
   d.columns.erase(d.columns.begin() + v);
@@ -556,7 +556,7 @@ TEST(AutopilotExport, DataWithoutAVoltageColumnFitWithoutVoltageScalingAndSaySo)
 }
 
 TEST(AutopilotExport, TooFewRowsOrTooLittleForceAreRefusedWithWhatToLog) {
-  const lab::Dataset d = generatedSet("none", tmp("ap_short.csv"));
+  const lab::Dataset d = generatedSet("none", tmpAutopilot("ap_short.csv"));
   ap::ExportOptions o;
   o.to = "px4";
   // eight rows
@@ -585,7 +585,7 @@ TEST(AutopilotExport, TooFewRowsOrTooLittleForceAreRefusedWithWhatToLog) {
 }
 
 TEST(AutopilotExport, HoverThrustFromTheTakeOffWeightMakesTheModelLiftItsShare) {
-  const lab::Dataset d = generatedSet("none", tmp("ap_hover.csv"));
+  const lab::Dataset d = generatedSet("none", tmpAutopilot("ap_hover.csv"));
   ap::ExportOptions o;
   o.to = "ardupilot";
   o.auw_g = 1400;
@@ -604,19 +604,19 @@ TEST(AutopilotExport, HoverThrustFromTheTakeOffWeightMakesTheModelLiftItsShare) 
   EXPECT_THROW(ap::buildExport(d, o), std::invalid_argument);
 }
 
-struct CliRun {
+struct CliRunAutopilot {
   int rc = 0;
   std::string out, err;
 };
 
-CliRun thrustcal(std::vector<std::string> args) {
+CliRunAutopilot thrustcalAutopilot(std::vector<std::string> args) {
   CLI::App app{"thrustcal"};
   app.require_subcommand(1);
   lab::registerCommands(app);
   args.insert(args.begin(), "thrustcal");
   std::vector<const char*> argv;
   for (const auto& a : args) argv.push_back(a.c_str());
-  CliRun r;
+  CliRunAutopilot r;
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
   try {
@@ -631,54 +631,54 @@ CliRun thrustcal(std::vector<std::string> args) {
 }
 
 TEST(AutopilotExportCli, WritesTheFileEachGroundStationLoads) {
-  const std::string data = tmp("ap_cli.csv");
+  const std::string data = tmpAutopilot("ap_cli.csv");
   generatedSet("none", data);
   // ArduPilot: NAME,VALUE lines (Mission Planner, MAVProxy), comments with '#'
-  const std::string parm = tmp("quad.parm");
-  CliRun r = thrustcal({"lab", "export", data, "--to", "ardupilot", "-o", parm, "--auw-g", "1400", "--motors", "4"});
+  const std::string parm = tmpAutopilot("quad.parm");
+  CliRunAutopilot r = thrustcalAutopilot({"lab", "export", data, "--to", "ardupilot", "-o", parm, "--auw-g", "1400", "--motors", "4"});
   ASSERT_EQ(r.rc, 0) << r.err;
-  const auto ap_file = parmFile(slurp(parm));
+  const auto ap_file = parmFile(slurpAutopilot(parm));
   for (const char* name : {"MOT_THST_EXPO", "MOT_SPIN_MIN", "MOT_SPIN_MAX", "MOT_PWM_MIN", "MOT_PWM_MAX",
                            "MOT_BAT_VOLT_MAX", "MOT_BAT_VOLT_MIN", "MOT_THST_HOVER"})
     EXPECT_EQ(ap_file.count(name), 1u) << name;
   EXPECT_NE(r.out.find("force error, g"), std::string::npos);
   EXPECT_NE(r.out.find("wrote " + parm), std::string::npos);
   // PX4: QGroundControl's tab-separated lines, type 9 for floats and 6 for integers
-  const std::string params = tmp("quad.params");
-  r = thrustcal({"lab", "export", data, "--to", "px4", "-o", params});
+  const std::string params = tmpAutopilot("quad.params");
+  r = thrustcalAutopilot({"lab", "export", data, "--to", "px4", "-o", params});
   ASSERT_EQ(r.rc, 0) << r.err;
-  const std::string px4_text = slurp(params);
+  const std::string px4_text = slurpAutopilot(params);
   EXPECT_NE(px4_text.find("# Vehicle-Id Component-Id Name Value Type\n"), std::string::npos);
   EXPECT_NE(px4_text.find("1\t1\tTHR_MDL_FAC\t"), std::string::npos);
   EXPECT_NE(px4_text.find("1\t1\tPWM_MAIN_MIN4\t"), std::string::npos);
   EXPECT_EQ(px4_text.find("PWM_MAIN_MIN5"), std::string::npos);
   // Betaflight: CLI set lines ending with save
-  const std::string cli = tmp("quad.txt");
-  r = thrustcal({"lab", "export", data, "--to", "betaflight", "-o", cli});
+  const std::string cli = tmpAutopilot("quad.txt");
+  r = thrustcalAutopilot({"lab", "export", data, "--to", "betaflight", "-o", cli});
   ASSERT_EQ(r.rc, 0) << r.err;
-  const std::string bf_text = slurp(cli);
+  const std::string bf_text = slurpAutopilot(cli);
   EXPECT_NE(bf_text.find("\nset thrust_linear = "), std::string::npos);
   EXPECT_NE(bf_text.find("\nset motor_idle = "), std::string::npos);
   EXPECT_EQ(bf_text.substr(bf_text.size() - 5), "save\n");
 }
 
 TEST(AutopilotExportCli, MixingTheBoardExportWithToOrForgettingTheOutputIsRefused) {
-  const std::string data = tmp("ap_cli_refuse.csv");
+  const std::string data = tmpAutopilot("ap_cli_refuse.csv");
   generatedSet("none", data);
-  EXPECT_NE(thrustcal({"lab", "export", data, "--to", "ardupilot"}).rc, 0);  // no -o
-  CliRun r = thrustcal({"lab", "export", data, "--to", "ardupilot", "-o", tmp("x.parm"), "--slot", "1"});
+  EXPECT_NE(thrustcalAutopilot({"lab", "export", data, "--to", "ardupilot"}).rc, 0);  // no -o
+  CliRunAutopilot r = thrustcalAutopilot({"lab", "export", data, "--to", "ardupilot", "-o", tmpAutopilot("x.parm"), "--slot", "1"});
   EXPECT_NE(r.rc, 0);
   EXPECT_NE(r.err.find("use one or the other"), std::string::npos) << r.err;
-  EXPECT_NE(thrustcal({"lab", "export", data, "--to", "inav", "-o", tmp("x.parm")}).rc, 0);
+  EXPECT_NE(thrustcalAutopilot({"lab", "export", data, "--to", "inav", "-o", tmpAutopilot("x.parm")}).rc, 0);
   // the board export still needs its options
-  EXPECT_NE(thrustcal({"lab", "export", data, "--slot", "1"}).rc, 0);
+  EXPECT_NE(thrustcalAutopilot({"lab", "export", data, "--slot", "1"}).rc, 0);
 }
 
 TEST(AutopilotExportCli, PlotsThroughGnuplot) {
-  const std::string data = tmp("ap_plot.csv");
+  const std::string data = tmpAutopilot("ap_plot.csv");
   generatedSet("none", data);
-  const std::string base = tmp("ap_plot_fit");
-  const CliRun r = thrustcal({"lab", "export", data, "--to", "px4", "-o", tmp("plot.params"), "--plot", base});
+  const std::string base = tmpAutopilot("ap_plot_fit");
+  const CliRunAutopilot r = thrustcalAutopilot({"lab", "export", data, "--to", "px4", "-o", tmpAutopilot("plot.params"), "--plot", base});
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_TRUE(fs::exists(base + ".tsv"));
   EXPECT_TRUE(fs::exists(base + ".gp"));

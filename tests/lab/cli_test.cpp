@@ -19,7 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string tmp(const std::string& name) {
+std::string tmpCli(const std::string& name) {
   fs::create_directories(THRUSTCAL_LAB_TMP_DIR);
   return std::string(THRUSTCAL_LAB_TMP_DIR) + "/" + name;
 }
@@ -34,7 +34,7 @@ std::vector<std::string> writeRuns(const char* hidden) {
   for (std::size_t r = 0; r < d.runs(); ++r) {
     std::vector<bool> keep(d.rows());
     for (std::size_t i = 0; i < d.rows(); ++i) keep[i] = d.run[i] == static_cast<int>(r);
-    const std::string path = tmp(std::string(hidden) + "_run" + std::to_string(r) + ".csv");
+    const std::string path = tmpCli(std::string(hidden) + "_run" + std::to_string(r) + ".csv");
     std::ofstream(path) << lab::toCsv(d.subset(keep), {"generated for cli_test"});
     files.push_back(path);
   }
@@ -85,7 +85,7 @@ TEST(LabCli, DiagnoseJsonHasTheIssueShapeWithSuspectsBestFirst) {
 
 TEST(LabCli, LadderJsonListsTheStepsInOrderAndTheReportIsWritten) {
   auto files = writeRuns("sag");
-  const std::string dir = tmp("report_sag");
+  const std::string dir = tmpCli("report_sag");
   fs::remove_all(dir);
   std::vector<std::string> args = {"lab", "ladder"};
   args.insert(args.end(), files.begin(), files.end());
@@ -163,7 +163,7 @@ TEST(LabCli, LadderAndWalkJsonCarryTheNoiseFloor) {
 }
 
 TEST(LabCli, BadInputIsAnErrorExitNotACrash) {
-  const std::string bad = tmp("bad.csv");
+  const std::string bad = tmpCli("bad.csv");
   std::ofstream(bad) << "pwm_us,force_g\n1000,1\n1100,x\n";
   std::string out;
   testing::internal::CaptureStderr();
@@ -184,7 +184,7 @@ std::string standFile(const std::string& name, double log_hz = 0) {
   l.series = "1585";
   l.thrust_unit = "N";
   l.negative_thrust = true;
-  const std::string path = tmp(name);
+  const std::string path = tmpCli(name);
   std::ofstream(path) << lab::toStandCsv(lab::generate(o), l);
   return path;
 }
@@ -229,7 +229,7 @@ TEST(LabCli, HoldoutOnOneRunIsAnErrorNotNan) {
 TEST(LabCli, ReportIsOneSelfContainedPageWithUnitsAndStaysSmallOnLargeData) {
   // given 14,800 rows (each point logged at 100 Hz while it settles) in the 1585 layout
   const std::string file = standFile("stand_100hz.csv", 100);
-  const std::string dir = tmp("report_100hz");
+  const std::string dir = tmpCli("report_100hz");
   fs::remove_all(dir);
   std::string out;
   // when the ladder writes its report

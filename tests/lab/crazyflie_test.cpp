@@ -47,7 +47,7 @@ TEST(LabCrazyflie, DiagnosisOfAPwmOnlyCurveBlamesTheLagFirst) {
   EXPECT_EQ(diag.variables.front().effects.front(), "lag");
 }
 
-double param(const lab::FitResult& f, const std::string& name) {
+double paramCrazyflie(const lab::FitResult& f, const std::string& name) {
   for (const auto& p : f.params)
     if (p.name == name) return p.value;
   return NAN;
@@ -63,9 +63,9 @@ TEST(LabCrazyflie, DirectFitOfCurveLagVoltageEqualsTheLadder) {
   const auto steps = lab::ladder(d, lab::parseSpec("curve"), {"lag", "voltage"}, lab::Holdout::kNone);
   // then both give the same fit, gamma inside its range
   EXPECT_NEAR(direct.rmse_g, steps[2].fit.rmse_g, 1e-9 * steps[2].fit.rmse_g);
-  EXPECT_NEAR(param(direct, "gamma"), param(steps[2].fit, "gamma"), 1e-9);
+  EXPECT_NEAR(paramCrazyflie(direct, "gamma"), paramCrazyflie(steps[2].fit, "gamma"), 1e-9);
   EXPECT_LT(direct.rmse_g, 0.130);
-  EXPECT_GT(param(direct, "gamma"), 0.5);
+  EXPECT_GT(paramCrazyflie(direct, "gamma"), 0.5);
   for (const auto& p : direct.params) EXPECT_FALSE(p.at_bound) << p.name;
 }
 

@@ -17,7 +17,7 @@ namespace {
 
 constexpr double kNoiseG = 0.5;
 
-lab::Dataset generated(const char* hidden) {
+lab::Dataset generatedCurrentLimit(const char* hidden) {
   lab::GenerateOptions o;
   o.hidden = hidden;
   o.noise_g = kNoiseG;
@@ -26,7 +26,7 @@ lab::Dataset generated(const char* hidden) {
   return d;
 }
 
-double param(const lab::FitResult& f, const char* name) {
+double paramCurrentLimit(const lab::FitResult& f, const char* name) {
   for (const auto& p : f.params)
     if (p.name == name) return p.value;
   return NAN;
@@ -34,7 +34,7 @@ double param(const lab::FitResult& f, const char* name) {
 
 TEST(LabCurrentLimit, EarnsItsParameterFindsTheLimitAndTheLadderReachesTheNoiseFloor) {
   // given the thesis's supply (6.32 A) at four set voltages, vbat_v the set voltage
-  const lab::Dataset d = generated("current_limit");
+  const lab::Dataset d = generatedCurrentLimit("current_limit");
   // when the ladder adds current_limit, then sag (the leads: vbat_v is read at the supply)
   const auto steps = lab::ladder(d, lab::parseSpec("curve+deadband+voltage"), {"current_limit", "sag"},
                                  lab::Holdout::kNone);
@@ -43,7 +43,7 @@ TEST(LabCurrentLimit, EarnsItsParameterFindsTheLimitAndTheLadderReachesTheNoiseF
   EXPECT_TRUE(steps[1].earns) << steps[1].verdict;
   EXPECT_LT(steps[1].delta_bic, -100);
   EXPECT_GT(steps[0].fit.rmse_g / steps[1].fit.rmse_g, 20.0);
-  EXPECT_NEAR(param(steps[1].fit, "i_limit_a"), 6.32, 0.02);
+  EXPECT_NEAR(paramCurrentLimit(steps[1].fit, "i_limit_a"), 6.32, 0.02);
   // and the error ends at the noise floor estimated from the data
   const lab::NoiseEstimate n = lab::estimateNoise(d);
   ASSERT_TRUE(n.known());
@@ -54,7 +54,7 @@ TEST(LabCurrentLimit, EarnsItsParameterFindsTheLimitAndTheLadderReachesTheNoiseF
 TEST(LabCurrentLimit, GetsNoCreditWhereThereIsNoLimit) {
   for (const char* hidden : {"none", "sag"}) {
     // given sweeps whose current never stops rising
-    const lab::Dataset d = generated(hidden);
+    const lab::Dataset d = generatedCurrentLimit(hidden);
     const auto steps = lab::ladder(d, lab::parseSpec("curve+deadband+voltage"), {"current_limit"},
                                    lab::Holdout::kNone);
     // then the effect changes nothing and the criterion says so
@@ -66,7 +66,7 @@ TEST(LabCurrentLimit, GetsNoCreditWhereThereIsNoLimit) {
 
 TEST(LabCurrentLimit, WithoutCurrentTheCapIsFittedInGramsOnTheRunsWhoseForceFalls) {
   // given the same bench with no current column
-  const lab::Dataset full = generated("current_limit");
+  const lab::Dataset full = generatedCurrentLimit("current_limit");
   lab::Dataset d;
   d.run = full.run, d.run_labels = full.run_labels;
   for (const char* c : {"t_s", "pwm_us", "force_g", "vbat_v", "dir"}) d.set(c, full.col(c));
@@ -75,12 +75,12 @@ TEST(LabCurrentLimit, WithoutCurrentTheCapIsFittedInGramsOnTheRunsWhoseForceFall
   EXPECT_TRUE(steps[1].earns) << steps[1].verdict;
   EXPECT_GT(steps[0].fit.rmse_g / steps[1].fit.rmse_g, 10.0)
       << steps[0].fit.rmse_g << " -> " << steps[1].fit.rmse_g;
-  EXPECT_TRUE(std::isnan(param(steps[1].fit, "i_limit_a"))) << "amperes cannot be told from grams";
-  EXPECT_GT(param(steps[1].fit, "cap_top_g"), 300);
+  EXPECT_TRUE(std::isnan(paramCurrentLimit(steps[1].fit, "i_limit_a"))) << "amperes cannot be told from grams";
+  EXPECT_GT(paramCurrentLimit(steps[1].fit, "cap_top_g"), 300);
 }
 
 TEST(LabCurrentLimit, PredictsARunItWasNotFittedOn) {
-  const lab::Dataset d = generated("current_limit");
+  const lab::Dataset d = generatedCurrentLimit("current_limit");
   const double with = lab::holdoutRmse(d, lab::parseSpec("curve+deadband+voltage+current_limit"), lab::Holdout::kRuns);
   const double without = lab::holdoutRmse(d, lab::parseSpec("curve+deadband+voltage"), lab::Holdout::kRuns);
   EXPECT_LT(with, 3.0);

@@ -12,7 +12,7 @@
 
 namespace {
 
-lab::Dataset generated(const char* hidden) {
+lab::Dataset generatedEvidence(const char* hidden) {
   lab::GenerateOptions o;
   o.hidden = hidden;
   o.noise_g = 0.5;
@@ -43,7 +43,7 @@ void freezeAbove(lab::Dataset& d, double from_us, const std::vector<std::string>
 
 TEST(LabEvidence, ACurrentThatStopsAtOneCeilingInEveryRunIsACurrentLimit) {
   // given a bench supply limited at 6.32 A at four set voltages
-  const lab::Dataset d = generated("current_limit");
+  const lab::Dataset d = generatedEvidence("current_limit");
   // when the responses are read
   const auto ev = lab::gatherEvidence(d);
   // then the current's ceiling is found in every run and named as a current limit
@@ -65,12 +65,12 @@ TEST(LabEvidence, ACurrentThatStopsAtOneCeilingInEveryRunIsACurrentLimit) {
 
 TEST(LabEvidence, CleanSweepsGiveNoEvidence) {
   for (const char* hidden : {"none", "sag", "motor"})
-    EXPECT_TRUE(lab::gatherEvidence(generated(hidden)).empty()) << hidden;
+    EXPECT_TRUE(lab::gatherEvidence(generatedEvidence(hidden)).empty()) << hidden;
 }
 
 TEST(LabEvidence, AForceThatStopsWhileTheRotorSpeedsUpIsAClippedLoadCell) {
   // given a load cell whose reading stops at 600 g (its ADC's full scale)
-  lab::Dataset d = generated("none");
+  lab::Dataset d = generatedEvidence("none");
   std::vector<double> f = d.col("force_g");
   for (auto& x : f) x = std::min(x, 600.0);
   d.set("force_g", f);
@@ -84,7 +84,7 @@ TEST(LabEvidence, AForceThatStopsWhileTheRotorSpeedsUpIsAClippedLoadCell) {
 
 TEST(LabEvidence, CurrentAndSpeedThatStopTogetherAreASaturatedEsc) {
   // given an ESC at full throttle from 1800 us: nothing changes above it
-  lab::Dataset d = generated("none");
+  lab::Dataset d = generatedEvidence("none");
   freezeAbove(d, 1800, {"force_g", "current_a", "rpm", "torque_nm"});
   const auto ev = lab::gatherEvidence(d);
   const lab::Evidence* e = find(ev, "esc_saturated");
@@ -96,7 +96,7 @@ TEST(LabEvidence, CurrentAndSpeedThatStopTogetherAreASaturatedEsc) {
 }
 
 TEST(LabEvidence, APowerThatStopsRisingIsAPowerLimit) {
-  lab::Dataset d = generated("none");
+  lab::Dataset d = generatedEvidence("none");
   std::vector<double> w(d.rows());
   for (std::size_t i = 0; i < d.rows(); ++i) w[i] = d.col("vbat_v")[i] * d.col("current_a")[i];
   d.set("power_w", w);
@@ -109,7 +109,7 @@ TEST(LabEvidence, APowerThatStopsRisingIsAPowerLimit) {
 
 TEST(LabEvidence, AForceThatFallsWithTheRotorSlowingToAFractionIsAStall) {
   // given a motor that loses sync above 1800 us: speed and force collapse, no current logged
-  lab::Dataset d = generated("none");
+  lab::Dataset d = generatedEvidence("none");
   const auto& p = d.col("pwm_us");
   std::vector<double> f = d.col("force_g"), rpm = d.col("rpm");
   for (std::size_t i = 0; i < d.rows(); ++i)

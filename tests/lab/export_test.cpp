@@ -24,31 +24,31 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string tmp(const std::string& name) {
+std::string tmpExport(const std::string& name) {
   fs::create_directories(THRUSTCAL_LAB_TMP_DIR);
   return std::string(THRUSTCAL_LAB_TMP_DIR) + "/" + name;
 }
 
-std::string slurp(const std::string& path) {
+std::string slurpExport(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   std::stringstream s;
   s << f.rdbuf();
   return s.str();
 }
 
-struct CliRun {
+struct CliRunExport {
   int rc = 0;
   std::string out, err;
 };
 
-CliRun thrustcal(std::vector<std::string> args) {
+CliRunExport thrustcalExport(std::vector<std::string> args) {
   CLI::App app{"thrustcal"};
   app.require_subcommand(1);
   lab::registerCommands(app);
   args.insert(args.begin(), "thrustcal");
   std::vector<const char*> argv;
   for (const auto& a : args) argv.push_back(a.c_str());
-  CliRun r;
+  CliRunExport r;
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
   try {
@@ -61,7 +61,7 @@ CliRun thrustcal(std::vector<std::string> args) {
   return r;
 }
 
-lab::Dataset generated(const char* hidden, const std::string& path) {
+lab::Dataset generatedExport(const char* hidden, const std::string& path) {
   lab::GenerateOptions o;
   o.hidden = hidden;
   o.noise_g = 0.5;
@@ -89,12 +89,12 @@ constexpr const char* kSpec = "curve+deadband+voltage+sag";
 
 TEST(LabExport, RecordReadBackFromTheHexFileFliesTheLabModelsForceWithin1Percent) {
   // given the sag data set from the plant and an EEPROM image with other slots in use
-  const std::string csv = tmp("export_sag.csv"), hex = tmp("export_sag.hex");
-  const lab::Dataset data = generated("sag", csv);
+  const std::string csv = tmpExport("export_sag.csv"), hex = tmpExport("export_sag.hex");
+  const lab::Dataset data = generatedExport("sag", csv);
   hex::writeIntelHexFile(hex, patterned());
 
   // when the fitted model is exported into slot 1
-  const CliRun r = thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "1", "--eeprom", hex});
+  const CliRunExport r = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "1", "--eeprom", hex});
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("wrote slot 1 copy A, sequence 1"), std::string::npos) << r.out;
 
@@ -165,14 +165,14 @@ TEST(LabExport, RecordReadBackFromTheHexFileFliesTheLabModelsForceWithin1Percent
 
 TEST(LabExport, SecondExportIsTheNextSequenceInTheOtherCopyAndTheFirstStaysValid) {
   // given slot 2 exported once
-  const std::string csv = tmp("export_seq.csv"), hex = tmp("export_seq.hex");
-  generated("sag", csv);
+  const std::string csv = tmpExport("export_seq.csv"), hex = tmpExport("export_seq.hex");
+  generatedExport("sag", csv);
   fs::remove(hex);
-  ASSERT_EQ(thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "2", "--eeprom", hex}).rc, 0);
+  ASSERT_EQ(thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "2", "--eeprom", hex}).rc, 0);
 
   // when a different model goes into the same slot (one that misses the sag: 3.7 % RMS, let
   // through by a looser limit)
-  const CliRun r = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "2", "--eeprom", hex,
+  const CliRunExport r = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "2", "--eeprom", hex,
                               "--max-error-pct", "5"});
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("wrote slot 2 copy B, sequence 2"), std::string::npos) << r.out;
@@ -192,10 +192,10 @@ TEST(LabExport, SecondExportIsTheNextSequenceInTheOtherCopyAndTheFirstStaysValid
 }
 
 TEST(LabExport, EffectsTheFirmwareCannotRunAreRefusedByNameAndTheFileIsUntouched) {
-  const std::string csv = tmp("export_refuse.csv"), hex = tmp("export_refuse.hex");
-  generated("sag", csv);
+  const std::string csv = tmpExport("export_refuse.csv"), hex = tmpExport("export_refuse.hex");
+  generatedExport("sag", csv);
   hex::writeIntelHexFile(hex, patterned());
-  const std::string before = slurp(hex);
+  const std::string before = slurpExport(hex);
   const struct {
     const char* spec;
     const char* named;
@@ -210,27 +210,27 @@ TEST(LabExport, EffectsTheFirmwareCannotRunAreRefusedByNameAndTheFileIsUntouched
   };
   for (const auto& c : cases) {
     // when exporting a model with the effect
-    const CliRun r = thrustcal({"lab", "export", csv, "--model", c.spec, "--slot", "1", "--eeprom", hex});
+    const CliRunExport r = thrustcalExport({"lab", "export", csv, "--model", c.spec, "--slot", "1", "--eeprom", hex});
     // then it fails, names the effect with a reason, and writes nothing
     EXPECT_NE(r.rc, 0) << c.spec;
     EXPECT_NE(r.err.find(std::string("cannot export ") + c.named), std::string::npos) << r.err;
-    EXPECT_EQ(slurp(hex), before) << c.spec;
+    EXPECT_EQ(slurpExport(hex), before) << c.spec;
     EXPECT_FALSE(fs::exists(hex + ".tmp"));
   }
 }
 
 TEST(LabExport, SeveralMotorsAreRefusedUnlessMotorPicksOne) {
   // given four varied motors in one file
-  const std::string csv = tmp("export_motors.csv"), hex = tmp("export_motors.hex");
-  generated("motor", csv);
+  const std::string csv = tmpExport("export_motors.csv"), hex = tmpExport("export_motors.hex");
+  generatedExport("motor", csv);
   fs::remove(hex);
   // when exported as one model, then refused and no file appears
-  const CliRun all = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "0", "--eeprom", hex});
+  const CliRunExport all = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "0", "--eeprom", hex});
   EXPECT_NE(all.rc, 0);
   EXPECT_NE(all.err.find("--motor"), std::string::npos) << all.err;
   EXPECT_FALSE(fs::exists(hex));
   // when one motor is picked (the `motor` effect is then moot), then its record lands
-  const CliRun one = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage+motor", "--motor", "2",
+  const CliRunExport one = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage+motor", "--motor", "2",
                              "--slot", "0", "--eeprom", hex});
   ASSERT_EQ(one.rc, 0) << one.err;
   g_image = hex::readIntelHexFile(hex, lab::kEepromBytes);
@@ -249,7 +249,7 @@ std::string editedCsv(const std::string& name, const std::function<void(lab::Dat
   o.noise_g = 0.5;
   lab::Dataset d = lab::generate(o);
   edit(d);
-  const std::string path = tmp(name);
+  const std::string path = tmpExport(name);
   std::ofstream(path) << lab::toCsv(d, {"edited for export_test"});
   return path;
 }
@@ -292,18 +292,18 @@ TEST(LabExport, DataOrFitsThatCannotMakeARightRecordAreRefusedNamingTheLimitAndN
   for (const auto& c : cases) {
     // given data (or a fit) that would make a record that cannot be right, and an image in use
     const std::string csv = editedCsv(std::string("refuse_") + c.name + ".csv", c.edit);
-    const std::string hex = tmp("refuse.hex");
+    const std::string hex = tmpExport("refuse.hex");
     hex::writeIntelHexFile(hex, patterned());
-    const std::string before = slurp(hex);
+    const std::string before = slurpExport(hex);
     // when exported
     std::vector<std::string> args = {"lab", "export", csv, "--model", c.model, "--slot", "1", "--eeprom", hex};
     args.insert(args.end(), c.extra_args.begin(), c.extra_args.end());
-    const CliRun r = thrustcal(args);
+    const CliRunExport r = thrustcalExport(args);
     // then refused with what failed, its value and what to do, and nothing written
     EXPECT_EQ(r.rc, 2) << c.name << "\n" << r.out;
     EXPECT_NE(r.err.find("cannot export"), std::string::npos) << c.name << ": " << r.err;
     for (const char* s : c.says) EXPECT_NE(r.err.find(s), std::string::npos) << c.name << " lacks '" << s << "': " << r.err;
-    EXPECT_TRUE(slurp(hex) == before) << c.name;
+    EXPECT_TRUE(slurpExport(hex) == before) << c.name;
     EXPECT_FALSE(fs::exists(hex + ".tmp")) << c.name;
   }
   // the limits are core's record limits
@@ -320,16 +320,16 @@ TEST(LabExport, ForceThatFallsAsTheDriveRisesIsRefusedUntilWhereCutsItOff) {
       if (p[i] > 1800) f[i] *= 1.0 - (p[i] - 1800) / 400.0;
     d.set("force_g", f);
   });
-  const std::string hex = tmp("collapse.hex");
+  const std::string hex = tmpExport("collapse.hex");
   fs::remove(hex);
   // when exported as is, then refused with the PWM where it starts and the --where that helps
-  const CliRun all = thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex});
+  const CliRunExport all = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex});
   EXPECT_EQ(all.rc, 2);
   EXPECT_NE(all.err.find("the force falls while the drive rises"), std::string::npos) << all.err;
   EXPECT_NE(all.err.find("--where 'pwm_us < 1800'"), std::string::npos) << all.err;
   EXPECT_FALSE(fs::exists(hex));
   // when the rows below the collapse are exported, then the record lands
-  const CliRun cut = thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex, "--where",
+  const CliRunExport cut = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex, "--where",
                                 "pwm_us < 1800"});
   EXPECT_EQ(cut.rc, 0) << cut.err;
   EXPECT_NE(cut.err.find("kept"), std::string::npos) << cut.err;

@@ -66,7 +66,7 @@ TEST(LabCatalogue, DocumentsEveryEffectWithPhysicsColumnsAndParameters) {
   }
 }
 
-lab::Dataset generated(const char* hidden, double noise_g = 0.5) {
+lab::Dataset generatedFit(const char* hidden, double noise_g = 0.5) {
   lab::GenerateOptions o;
   o.hidden = hidden;
   o.noise_g = noise_g;
@@ -78,7 +78,7 @@ lab::Dataset generated(const char* hidden, double noise_g = 0.5) {
 
 TEST(LabFit, UserExpressionRecoversTheGroundEffectConstantWithItsUncertainty) {
   // given data with a plate under the propeller: F x 1/(1 - (R/4z)^2), R = 0.1143 m
-  const lab::Dataset d = generated("plate");
+  const lab::Dataset d = generatedFit("plate");
   // when the ground effect is fitted as a user expression with a free parameter k
   const auto fit = lab::fitModel(d, lab::parseSpec("curve+deadband+voltage+mul: 1/(1 - k/plate_height_m^2)"));
   // then k = (R/4)^2 within three standard uncertainties, and the uncertainty is small
@@ -95,7 +95,7 @@ TEST(LabFit, UserExpressionRecoversTheGroundEffectConstantWithItsUncertainty) {
 TEST(LabFit, DeadbandAndVoltageRecoverThePlantsEscStartAndAnIdealMotorExponent) {
   // given the plant's ESC starting at 1097 us (plus the no-load current's share) and force
   // following duty * V
-  const lab::Dataset d = generated("none");
+  const lab::Dataset d = generatedFit("none");
   const auto fit = lab::fitModel(d, lab::parseSpec("curve+deadband+voltage"));
   double start = 0, gamma = 0;
   for (const auto& p : fit.params) {
@@ -108,7 +108,7 @@ TEST(LabFit, DeadbandAndVoltageRecoverThePlantsEscStartAndAnIdealMotorExponent) 
 }
 
 TEST(LabFit, ExpressionWithoutFreeParameterOrWithBadSyntaxIsRefusedClearly) {
-  const lab::Dataset d = generated("none");
+  const lab::Dataset d = generatedFit("none");
   EXPECT_THROW(lab::fitModel(d, lab::parseSpec("curve+mul: 1 + vbat_v")), std::invalid_argument);
   EXPECT_THROW(lab::fitModel(d, lab::parseSpec("curve+mul: 1 + (a*")), std::invalid_argument);
   EXPECT_THROW(lab::fitModel(d, lab::parseSpec("curve+density")), std::invalid_argument);
@@ -116,7 +116,7 @@ TEST(LabFit, ExpressionWithoutFreeParameterOrWithBadSyntaxIsRefusedClearly) {
 
 TEST(LabFit, HoldingOutVoltagesValidatesTheVoltageEffect) {
   // given four runs at four bench voltages
-  const lab::Dataset d = generated("none");
+  const lab::Dataset d = generatedFit("none");
   int groups = 0;
   // when each voltage is predicted by a model fitted on the other three
   const double with_voltage = lab::holdoutRmse(d, lab::parseSpec("curve+deadband+voltage"), lab::Holdout::kVoltage, &groups);
@@ -130,7 +130,7 @@ TEST(LabFit, HoldingOutVoltagesValidatesTheVoltageEffect) {
 TEST(LabThesis, TwoCurveModelThroughCoreFollowsTheDataNearItsCalibrationVoltages) {
   // given sweeps at four voltages (the thesis model takes the highest and the most different),
   // within the thesis curve's 500 g
-  const lab::Dataset all = generated("none");
+  const lab::Dataset all = generatedFit("none");
   std::vector<bool> keep(all.rows());
   for (std::size_t i = 0; i < all.rows(); ++i) keep[i] = all.col("force_g")[i] < 450;
   const lab::Dataset d = all.subset(keep);

@@ -12,7 +12,7 @@
 
 namespace {
 
-lab::Dataset generated(const char* hidden, double noise_g, double log_hz = 0, uint64_t seed = 1) {
+lab::Dataset generatedNoise(const char* hidden, double noise_g, double log_hz = 0, uint64_t seed = 1) {
   lab::GenerateOptions o;
   o.hidden = hidden;
   o.noise_g = noise_g;
@@ -35,7 +35,7 @@ TEST(LabNoise, ChiSquareQuantilesMatchTheTablesWithinOnePercent) {
 TEST(LabNoise, FindsTheGeneratorsNoiseWithinItsInterval) {
   for (double noise_g : {0.5, 2.0}) {
     // given sweeps with nothing hidden and a load cell of known noise
-    const lab::Dataset d = generated("none", noise_g);
+    const lab::Dataset d = generatedNoise("none", noise_g);
     // when the noise is estimated from the data alone
     const lab::NoiseEstimate n = lab::estimateNoise(d);
     // then the interval holds the true value and the estimate is within 15 % of it
@@ -52,7 +52,7 @@ TEST(LabNoise, FindsTheGeneratorsNoiseWithinItsInterval) {
 TEST(LabNoise, AConditionThatChangesFromPointToPointIsNotTakenForNoise) {
   // given a pack that also feeds other motors (0-8 A changing point by point: the force moves
   // by tens of grams between neighbours) and the current logged
-  const lab::Dataset d = generated("sag", 0.5);
+  const lab::Dataset d = generatedNoise("sag", 0.5);
   const lab::NoiseEstimate n = lab::estimateNoise(d);
   // then the current's contrasts are regressed out and the load cell's noise remains
   ASSERT_TRUE(n.known()) << n.why_not;
@@ -63,7 +63,7 @@ TEST(LabNoise, AConditionThatChangesFromPointToPointIsNotTakenForNoise) {
 
 TEST(LabNoise, RowsLoggedWhileAPointSettlesUseTimeAtOneSetPoint) {
   // given rows logged at 20 Hz while each point settles (a transient inside each set point)
-  const lab::Dataset d = generated("none", 1.0, 20.0);
+  const lab::Dataset d = generatedNoise("none", 1.0, 20.0);
   const lab::NoiseEstimate n = lab::estimateNoise(d);
   ASSERT_TRUE(n.known()) << n.why_not;
   EXPECT_NEAR(n.sigma_g, 1.0, 0.15) << lab::describe(n);
@@ -71,7 +71,7 @@ TEST(LabNoise, RowsLoggedWhileAPointSettlesUseTimeAtOneSetPoint) {
 
 TEST(LabNoise, AReadingHeldOverSeveralRowsCountsOnce) {
   // given each reading logged on five rows in a row (a logger faster than its load cell)
-  const lab::Dataset d = generated("none", 1.0);
+  const lab::Dataset d = generatedNoise("none", 1.0);
   lab::Dataset held;
   held.run_labels = d.run_labels;
   std::vector<double> pwm, force, t;

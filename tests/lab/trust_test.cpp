@@ -14,7 +14,7 @@
 
 namespace {
 
-lab::Dataset generated(const char* hidden, double noise_g = 0.5) {
+lab::Dataset generatedTrust(const char* hidden, double noise_g = 0.5) {
   lab::GenerateOptions o;
   o.hidden = hidden;
   o.noise_g = noise_g;
@@ -38,7 +38,7 @@ TEST(LabTrust, AddingAnEffectNeverFitsWorse) {
       {"thermal", "curve", {"deadband", "drift", "voltage", "thermal", "mul: 1 + a*(temp_c - 25)"}},
   };
   for (const auto& c : chains) {
-    const lab::Dataset d = generated(c.hidden);
+    const lab::Dataset d = generatedTrust(c.hidden);
     const auto steps = lab::ladder(d, lab::parseSpec(c.base), c.adds, lab::Holdout::kNone);
     for (std::size_t k = 1; k < steps.size(); ++k)
       EXPECT_LE(steps[k].fit.rss, steps[k - 1].fit.rss * (1 + 1e-12))
@@ -71,7 +71,7 @@ TEST(LabTrust, AddingAnEffectNeverFitsWorseOnManyRows) {
 TEST(LabTrust, AnEffectPinnedAtABoundGetsNoCreditAndTheVerdictSaysWhich) {
   // given data without sag or lag (the climate-box runs, a bench supply read at the ESC),
   // fitted by the right model
-  const lab::Dataset d = generated("density");
+  const lab::Dataset d = generatedTrust("density");
   const auto steps =
       lab::ladder(d, lab::parseSpec("curve+deadband+voltage+density"), {"sag", "lag"}, lab::Holdout::kNone);
   // then the sag resistance and the lag stop at the bound that switches them off, and earn
@@ -96,7 +96,7 @@ TEST(LabTrust, NoEffectAlreadyInTheModelIsSuggested) {
                         {"thermal", "curve+deadband+voltage+thermal"}, {"motor", "curve+deadband+voltage+motor+lag"},
                         {"density", "curve+deadband+voltage+density+lag"}};
   for (const auto& c : cases) {
-    const lab::Dataset d = generated(c.hidden, c.hidden == std::string("thermal") ? 0.3 : 0.5);
+    const lab::Dataset d = generatedTrust(c.hidden, c.hidden == std::string("thermal") ? 0.3 : 0.5);
     const lab::ModelSpec spec = lab::parseSpec(c.model);
     const lab::Diagnosis diag = lab::diagnose(d, spec, lab::Holdout::kNone);
     for (const auto& s : diag.variables) {
@@ -110,7 +110,7 @@ TEST(LabTrust, NoEffectAlreadyInTheModelIsSuggested) {
 TEST(LabTrust, ResponsesAndCopiesOfTheDriveAreNeverSuspects) {
   // given the sag data (current, rpm and torque follow the drive) plus a throttle column that
   // is the PWM in percent (a second copy of the drive, as a stand's software may log it)
-  lab::Dataset d = generated("sag");
+  lab::Dataset d = generatedTrust("sag");
   std::vector<double> throttle = d.col("pwm_us");
   for (auto& t : throttle) t = (t - 1000) / 10;
   d.set("throttle_pct", throttle);
@@ -134,7 +134,7 @@ TEST(LabTrust, ResponsesAndCopiesOfTheDriveAreNeverSuspects) {
 
 TEST(LabTrust, TimeThatMovesWithTheDriveInARampIsNotBlamedAsDrift) {
   // given one up-ramp (time grows with the PWM) of the drift data
-  lab::Dataset all = generated("drift");
+  lab::Dataset all = generatedTrust("drift");
   std::vector<bool> keep(all.rows());
   for (std::size_t i = 0; i < all.rows(); ++i) keep[i] = all.run[i] == 0 && all.col("dir")[i] > 0;
   lab::Dataset ramp = all.subset(keep);
@@ -157,7 +157,7 @@ TEST(LabTrust, TimeThatMovesWithTheDriveInARampIsNotBlamedAsDrift) {
 }
 
 TEST(LabTrust, HoldoutWithFewerThanTwoGroupsIsRefused) {
-  lab::Dataset all = generated("none");
+  lab::Dataset all = generatedTrust("none");
   std::vector<bool> keep(all.rows());
   for (std::size_t i = 0; i < all.rows(); ++i) keep[i] = all.run[i] == 2;
   const lab::Dataset one = all.subset(keep);

@@ -13,7 +13,7 @@
 
 namespace {
 
-lab::Dataset generated(const char* hidden) {
+lab::Dataset generatedVerdict(const char* hidden) {
   lab::GenerateOptions o;
   o.hidden = hidden;
   o.noise_g = 0.5;
@@ -31,7 +31,7 @@ lab::Dataset without(const lab::Dataset& d, const std::string& column) {
 }
 
 TEST(LabVerdict, ALogWithNoHiddenEffectIsAtTheNoiseFloorWithNoSuspect) {
-  const lab::Diagnosis d = lab::diagnose(generated("none"), lab::parseSpec("curve+deadband+voltage"), lab::Holdout::kNone);
+  const lab::Diagnosis d = lab::diagnose(generatedVerdict("none"), lab::parseSpec("curve+deadband+voltage"), lab::Holdout::kNone);
   EXPECT_EQ(d.verdict, lab::Verdict::kAtNoiseFloor) << d.verdict_text;
   EXPECT_STREQ(lab::verdictName(d.verdict), "at_noise_floor");
   for (const auto& s : d.variables) EXPECT_FALSE(s.significant) << s.variable;
@@ -44,7 +44,7 @@ TEST(LabVerdict, ALogWithNoHiddenEffectIsAtTheNoiseFloorWithNoSuspect) {
 TEST(LabVerdict, ALargeResidualNoLoggedVariableExplainsIsUnexplainedNotNoise) {
   // given the deflector plate's ground effect with its height not logged: the force moves by
   // grams from point to point and nothing logged says why
-  const lab::Dataset data = without(generated("plate"), "plate_height_m");
+  const lab::Dataset data = without(generatedVerdict("plate"), "plate_height_m");
   const lab::Diagnosis d = lab::diagnose(data, lab::parseSpec("curve+deadband+voltage"), lab::Holdout::kNone);
   // then it is not called noise: the error is far above the floor, unexplained, and said so
   EXPECT_EQ(d.verdict, lab::Verdict::kUnexplained) << d.verdict_text;
@@ -55,7 +55,7 @@ TEST(LabVerdict, ALargeResidualNoLoggedVariableExplainsIsUnexplainedNotNoise) {
 }
 
 TEST(LabVerdict, SuspectsWhenALoggedVariableExplainsTheResidual) {
-  const lab::Diagnosis d = lab::diagnose(generated("sag"), lab::parseSpec("curve+deadband+voltage"), lab::Holdout::kNone);
+  const lab::Diagnosis d = lab::diagnose(generatedVerdict("sag"), lab::parseSpec("curve+deadband+voltage"), lab::Holdout::kNone);
   EXPECT_EQ(d.verdict, lab::Verdict::kSuspects) << d.verdict_text;
   EXPECT_EQ(d.next.add, "sag");
   EXPECT_GT(d.unexplained_g, 10.0);
@@ -64,7 +64,7 @@ TEST(LabVerdict, SuspectsWhenALoggedVariableExplainsTheResidual) {
 TEST(LabRegions, TheResidualIsFoundWhereItIsAlongTheDriveAndAtItsVoltage) {
   // given clean sweeps whose force falls above 1700 us in the lowest-voltage run only (a limit
   // there), which a model that rises with the drive cannot follow
-  lab::Dataset d = generated("none");
+  lab::Dataset d = generatedVerdict("none");
   const auto& v = d.col("vbat_v");
   const auto& p = d.col("pwm_us");
   const double lowest = *std::min_element(v.begin(), v.end());
@@ -94,7 +94,7 @@ TEST(LabRegions, TheResidualIsFoundWhereItIsAlongTheDriveAndAtItsVoltage) {
 
 TEST(LabWalk, FollowsTheAdviceToTheNoiseFloorOnACurrentLimitedBench) {
   // given the limited supply at its highest and lowest set voltage (two runs keep the test quick)
-  const lab::Dataset all = generated("current_limit");
+  const lab::Dataset all = generatedVerdict("current_limit");
   std::vector<bool> keep(all.rows());
   for (std::size_t i = 0; i < all.rows(); ++i) keep[i] = all.run[i] == 0 || all.run[i] == 3;
   lab::Dataset two = all.subset(keep);
@@ -110,7 +110,7 @@ TEST(LabWalk, FollowsTheAdviceToTheNoiseFloorOnACurrentLimitedBench) {
 
 TEST(LabWalk, DropsTheRowsOfAClippedReadingBeforeModelling) {
   // given a load cell that reads no more than 600 g
-  lab::Dataset d = generated("none");
+  lab::Dataset d = generatedVerdict("none");
   std::vector<double> f = d.col("force_g");
   for (auto& x : f) x = std::min(x, 600.0);
   d.set("force_g", f);
