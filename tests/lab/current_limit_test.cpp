@@ -15,12 +15,12 @@
 
 namespace {
 
-constexpr double kNoiseG = 0.5;
+constexpr double kLimitNoiseG = 0.5;
 
 lab::Dataset generatedCurrentLimit(const char* hidden) {
   lab::GenerateOptions o;
   o.hidden = hidden;
-  o.noise_g = kNoiseG;
+  o.noise_g = kLimitNoiseG;
   lab::Dataset d = lab::generate(o);
   lab::addDerivedColumns(d);
   return d;
@@ -48,7 +48,7 @@ TEST(LabCurrentLimit, EarnsItsParameterFindsTheLimitAndTheLadderReachesTheNoiseF
   const lab::NoiseEstimate n = lab::estimateNoise(d);
   ASSERT_TRUE(n.known());
   EXPECT_LE(steps[2].fit.rmse_g, n.hi_g) << "noise " << lab::describe(n);
-  EXPECT_LE(steps[2].fit.rmse_g, 1.2 * kNoiseG);
+  EXPECT_LE(steps[2].fit.rmse_g, 1.2 * kLimitNoiseG);
 }
 
 TEST(LabCurrentLimit, GetsNoCreditWhereThereIsNoLimit) {
