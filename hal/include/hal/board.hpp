@@ -8,6 +8,7 @@
 //   ESC 0  D6  PH3 OC4A      ESC 2  D8  PH5 OC4C
 //   ESC 1  D7  PH4 OC4B      ESC 3  D11 PB5 OC1A
 //   UART0 (USB) 115200 8N1, double speed
+//   TWI   SDA D20 PD1, SCL D21 PD0: the MPU-6050 IMU at 0x68 (closed loop, docs/sim.md)
 // The ESC pins are timer compare outputs that are not external-interrupt pins (simavr polls
 // INT pins held low every cycle: docs/hardware.md).
 #pragma once
@@ -127,6 +128,37 @@ constexpr uint32_t kBootloaderBaud = 115200;
 // receiver tolerates +3.5/-4.6 % (ATmega2560 datasheet, table 22-3). 2.5 % bounds it; a
 // crystal or baud rate that is further off fails the build here, not on the bench.
 constexpr uint32_t kUartMaxErrorBasisPoints = 250;
+
+// ---- TWI (I2C) bus and the IMU on it ----
+// The ATmega2560's one TWI: SDA PD1 (D20), SCL PD0 (D21), both also INT1 / INT0, so no image
+// may use those as level-triggered interrupts. An MPU-6050 with AD0 low answers at 0x68.
+struct TwiPins {
+  char port;             // 'D'
+  uint8_t sda_bit;       // PD1
+  uint8_t scl_bit;       // PD0
+  uint8_t sda_arduino_pin;
+  uint8_t scl_arduino_pin;
+};
+constexpr TwiPins kTwiPins = {'D', 1, 0, 20, 21};
+constexpr uint8_t kImuI2cAddress = 0x68;  // 7-bit; SLA+W = 0xD0, SLA+R = 0xD1
+constexpr uint8_t kImuWhoAmI = 0x68;      // what its WHO_AM_I register (0x75) reads
+constexpr uint32_t kTwiFastHz = 400000;   // I2C fast mode, the MPU-6050's highest rate
+
+namespace board {
+// SCL = F_CPU / (16 + 2 * TWBR * 4^TWPS) (ATmega2560 datasheet, 24.5.2): the TWBR value for a
+// bus rate with TWPS = 0, and the rate it gives.
+constexpr uint8_t twiBitRateRegister(uint32_t scl_hz) {
+  return static_cast<uint8_t>((kCpuHz / scl_hz - 16u) / 2u);
+}
+constexpr uint32_t twiSclHz(uint8_t twbr, uint8_t twps = 0) {
+  return kCpuHz / (16u + 2u * twbr * (1u << (2u * twps)));
+}
+}  // namespace board
+
+static_assert(kTwiPins.sda_bit != kTwiPins.scl_bit, "SDA and SCL are two pins");
+static_assert(board::twiSclHz(board::twiBitRateRegister(kTwiFastHz)) == kTwiFastHz,
+              "400 kHz is exact from 16 MHz (TWBR 12)");
+static_assert((kImuI2cAddress >> 7) == 0, "a 7-bit I2C address");
 
 static_assert(kEscChannels == 4, "four ESC outputs: one per calibration slot (tc::kMotorSlots)");
 static_assert(board::escPinsValid(), "each ESC pin is a compare output A..C of timer 1, 3, 4 or 5");
