@@ -84,7 +84,8 @@ void ForceActuators::assignLanes() {
 }
 
 bool ForceActuators::setModelSource(uint8_t index, uint8_t slot) {
-  if (index >= kMotors || slot >= kMotors || isRunning() || !motors_[slot].isArmable()) return false;
+  if (index >= kMotors || slot >= kMotors || isRunning()) return false;
+  if (slot != index && !motors_[slot].isArmable()) return false;
   motors_[index].source = slot;
   assignLanes();
   return true;

@@ -116,9 +116,9 @@ class ForceActuators {
   // written back to back.
   void output();
 
-  // Motor `index` flies the model of slot `slot` from now on (slot == index: its own again).
-  // Only while no motor runs; false (nothing changed) then, for an index or slot outside 0..3,
-  // or when that slot is not armable.
+  // Motor `index` flies the model of slot `slot` from now on (slot == index: its own again,
+  // whatever it holds). Only while no motor runs; false (nothing changed) then, for an index or
+  // slot outside 0..3, or when another slot is not armable.
   bool setModelSource(uint8_t index, uint8_t slot);
   // The heaviest force motor `index`'s model makes, in grams (v1: the lighter of its curves'
   // heaviest gram; v2: its last knot); 0 when it is not armable.

@@ -81,10 +81,14 @@ TEST_F(ForceApi, AnUncalibratedMotorFliesOnlyWhileItsSourceIsACalibratedSlot) {
   EXPECT_TRUE(motors_.isArmable(3));
   EXPECT_FALSE(motors_.motor(3).isArmable()) << "its own slot is still erased";
   EXPECT_EQ(motors_.motor(3).pwm_us, motors_.motor(0).pwm_us);
+  EXPECT_EQ(motors_.armableCount(), 1) << "calibrated slots, not motors";
   // and back to its own slot: held at the stop pulse, the force ignored
   motors_.stopAll();
-  EXPECT_FALSE(motors_.setModelSource(3, 3)) << "an erased slot is no source, even its own";
-  EXPECT_EQ(motors_.armableCount(), 1) << "calibrated slots, not motors";
+  EXPECT_TRUE(motors_.setModelSource(3, 3)) << "its own slot, whatever it holds";
+  EXPECT_FALSE(motors_.isArmable(3));
+  fly(200);
+  EXPECT_EQ(motors_.motor(3).pwm_us, tc::kStopPwmUs);
+  EXPECT_EQ(motors_.motor(3).force_g, 0);
 }
 
 TEST_F(ForceApi, ModelSourcesChangeOnlyWhileNothingRunsAndOnlyToCalibratedSlots) {
