@@ -311,6 +311,8 @@ struct ImuFailure {
   const char* says;
 };
 
+void PrintTo(const ImuFailure& f, std::ostream* os) { *os << f.name; }  // names, not bytes, in ctest
+
 class FlyImuFailure : public Fly, public ::testing::WithParamInterface<ImuFailure> {};
 
 TEST_P(FlyImuFailure, DisarmsWithin100MsAndSaysWhy) {
