@@ -187,7 +187,10 @@ void FlyApp::frame(const ImuFrame& f) {
   const uint16_t since = static_cast<uint16_t>(frames_since_sample_ + f.frames);
   frames_since_sample_ = since > 255 ? 255 : static_cast<uint8_t>(since);
   if (f.fault_now) imuFaulted();
-  if (imu_.running() && !imu_was_running_ && imu_.faults() != 0) notes_ |= kNoteImuRunning;
+  if (imu_.running() && !imu_was_running_ && imu_.faults() != 0) {
+    notes_ |= kNoteImuRunning;
+    said_fault_ = ImuFault::kNone;
+  }
   imu_was_running_ = imu_.running();
   if (f.has_sample) {
     const float dt_s = frames_since_sample_ * kFramePeriodS;
@@ -264,12 +267,14 @@ void FlyApp::checkFailsafes(uint32_t now_ms) {
   }
 }
 
-// The IMU faulted (mpu6050.hpp): disarm, and measure the gyro again once it runs.
+// The IMU faulted (mpu6050.hpp): disarm, and measure the gyro again once it runs. Said once per
+// kind of fault: a start-up that fails every second alike stays quiet.
 void FlyApp::imuFaulted() {
   if (flight_.armed) disarm(DisarmCause::kImu);
   gyro_cal_.restart();
   estimator_.stop();
-  notes_ |= kNoteImuFault;
+  if (imu_.fault() != said_fault_) notes_ |= kNoteImuFault;
+  said_fault_ = imu_.fault();
 }
 
 void FlyApp::updateOutputLimits() {

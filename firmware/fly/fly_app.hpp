@@ -199,6 +199,7 @@ class FlyApp {
   uint32_t start_ms_ = 0;
   uint8_t frames_since_sample_ = 0;
   bool imu_was_running_ = false;
+  ImuFault said_fault_ = ImuFault::kNone;  // the fault last printed: a retry that fails alike is not news
   bool starting_ = false;  // start() .. calibrateGyro(): they say what the notes would
   bool streaming_ = false;
   bool in_service_ = false;

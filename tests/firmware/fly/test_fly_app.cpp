@@ -80,6 +80,13 @@ TEST_F(Fly, NoImuOnTheBusSaysWhatToCheck) {
   boot();
   EXPECT_TRUE(contains(fake::output(), "imu: error: no answer at its address (wiring: SDA D20, SCL D21")) << fake::output();
   EXPECT_EQ(app_->imu().fault(), fly::ImuFault::kNoAnswer);
+  fake::takeOutput();
+  runFor(3000);
+  EXPECT_GE(app_->imu().faults(), 3) << "tried again every second";
+  EXPECT_FALSE(contains(fake::output(), "imu:")) << "the same fault again is not news\n" << fake::output();
+  fake::twiSetNack(false);  // plugged in: at the next try (within 1 s) and its start-up (~0.13 s)
+  runFor(1200);
+  EXPECT_TRUE(contains(fake::output(), "imu: running again; measuring the gyro bias")) << fake::output();
 }
 
 TEST_F(Fly, AVehicleMovedDuringTheGyroCalibrationIsCalibratedOnceStill) {
