@@ -346,18 +346,21 @@ void crashLimit(const FlyApp& app) {
   sayLine(TC_FLASH_TEXT(" deg of roll or pitch"));
 }
 
-void status(const FlyApp& app, void (*yield)()) {
-  const FlightState& f = app.flight();
-  const Mpu6050& imu = app.imu();
-  say(f.armed ? TC_FLASH_TEXT("state: armed") : TC_FLASH_TEXT("state: disarmed"));
+namespace {
+
+void statusState(const FlyApp& app) {
+  say(app.flight().armed ? TC_FLASH_TEXT("state: armed") : TC_FLASH_TEXT("state: disarmed"));
   say(TC_FLASH_TEXT(", disarms "));
-  fw::printUint(f.disarms);
+  fw::printUint(app.flight().disarms);
   say(TC_FLASH_TEXT(", mode "));
   say(modeName(app.output().mode()));
   say(TC_FLASH_TEXT(", layout "));
   say(layoutName(app.mixer().layout()));
   newline();
+}
 
+void statusImu(const FlyApp& app) {
+  const Mpu6050& imu = app.imu();
   say(TC_FLASH_TEXT("imu: "));
   if (imu.fault() != ImuFault::kNone) {
     say(TC_FLASH_TEXT("fault: "));
@@ -377,7 +380,9 @@ void status(const FlyApp& app, void (*yield)()) {
   fw::printUint(imu.recoveries());
   say(app.gyroCalibration().done() ? TC_FLASH_TEXT(", gyro calibrated") : TC_FLASH_TEXT(", gyro not calibrated"));
   newline();
+}
 
+void statusAttitude(const FlyApp& app) {
   const Attitude& a = app.attitude();
   say(TC_FLASH_TEXT("attitude: roll "));
   sayDeg(a.roll_rad);
@@ -389,12 +394,9 @@ void status(const FlyApp& app, void (*yield)()) {
     sayDeg(a.rate_rad_s[i]);
   }
   sayLine(TC_FLASH_TEXT(" deg/s"));
+}
 
-  setpoint(app);
-  thrust(app);
-  gains(app);
-  crashLimit(app);
-
+void statusLoop(const FlyApp& app) {
   const LoopStats& s = app.loopStats();
   say(TC_FLASH_TEXT("loop: "));
   sayFrameLayout(app);
@@ -405,27 +407,42 @@ void status(const FlyApp& app, void (*yield)()) {
   say(TC_FLASH_TEXT(" us before the edge, late "));
   fw::printUint(s.late);
   say(TC_FLASH_TEXT(", frames skipped "));
-  fw::printUint(imu.skippedFrames());
+  fw::printUint(app.imu().skippedFrames());
   newline();
+}
 
-  for (uint8_t i = 0; i < kMotors; ++i) {
-    const fw::Motor& m = app.motors().motor(i);
-    fw::sayMotor(i);
-    say(TC_FLASH_TEXT(": "));
-    sayFloat(f.force_g[i], 0);
-    say(TC_FLASH_TEXT(" g, "));
-    fw::printUint(app.output().pulseUs(i));
-    say(TC_FLASH_TEXT(" us; slot "));
-    fw::printUint(m.source);
-    say(TC_FLASH_TEXT(" "));
-    if (app.motors().isArmable(i)) {
-      say(app.motors().motor(m.source).fliesV2() ? TC_FLASH_TEXT("(model v2)") : TC_FLASH_TEXT("(thesis record)"));
-    } else {
-      fw::sayRecordStatus(app.motors().motor(m.source));
-    }
-    if (!app.mixer().flies(i)) say(TC_FLASH_TEXT(", not in this layout"));
-    newline();
+// "motor N: F g, P us; slot S (model v2)" and what keeps it from flying.
+void statusMotor(const FlyApp& app, uint8_t i) {
+  const fw::Motor& m = app.motors().motor(i);
+  fw::sayMotor(i);
+  say(TC_FLASH_TEXT(": "));
+  sayFloat(app.flight().force_g[i], 0);
+  say(TC_FLASH_TEXT(" g, "));
+  fw::printUint(app.output().pulseUs(i));
+  say(TC_FLASH_TEXT(" us; slot "));
+  fw::printUint(m.source);
+  say(TC_FLASH_TEXT(" "));
+  if (app.motors().isArmable(i)) {
+    say(app.motors().motor(m.source).fliesV2() ? TC_FLASH_TEXT("(model v2)") : TC_FLASH_TEXT("(thesis record)"));
+  } else {
+    fw::sayRecordStatus(app.motors().motor(m.source));
   }
+  if (!app.mixer().flies(i)) say(TC_FLASH_TEXT(", not in this layout"));
+  newline();
+}
+
+}  // namespace
+
+void status(const FlyApp& app, void (*yield)()) {
+  statusState(app);
+  statusImu(app);
+  statusAttitude(app);
+  setpoint(app);
+  thrust(app);
+  gains(app);
+  crashLimit(app);
+  statusLoop(app);
+  for (uint8_t i = 0; i < kMotors; ++i) statusMotor(app, i);
   say(TC_FLASH_TEXT("battery "));
   fw::sayVolts(app.motors().batteryMv());
   say(TC_FLASH_TEXT(" raw; link failsafe trips "));

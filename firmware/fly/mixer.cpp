@@ -77,7 +77,7 @@ uint8_t Mixer::mix(float collective_g, const Torque& torque, float min_g, float 
 // The spread of roll, pitch and yaw exceeds the motors' range: roll and pitch keep what they
 // can (all of it when they fit alone), yaw the rest. The spread is convex in the yaw share, so
 // the share (range - rp spread) / (spread - rp spread) fits.
-uint8_t Mixer::fit(float (&rp)[4], float z, float range, float (&e)[4], float& lo, float& hi) const {
+uint8_t Mixer::fit(const float (&rp)[4], float z, float range, float (&e)[4], float& lo, float& hi) const {
   const uint8_t n = motorCount();
   const float full_spread = hi - lo;
   bounds(rp, n, lo, hi);

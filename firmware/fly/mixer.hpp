@@ -41,7 +41,7 @@ class Mixer {
 
  private:
   void rollPitch(float x, float y, float (&rp)[4]) const;
-  uint8_t fit(float (&rp)[4], float z, float range, float (&e)[4], float& lo, float& hi) const;
+  uint8_t fit(const float (&rp)[4], float z, float range, float (&e)[4], float& lo, float& hi) const;
 
   Layout layout_ = Layout::kX;
   float g_per_nm_xy_ = 0;  // grams on each motor per N m of roll or pitch torque
