@@ -16,6 +16,10 @@ bool isPositive(float x) { return x >= FLT_EPSILON; }
 void ArduPilotCurve::setParams(const ArduPilotParams& p) {
   p_ = p;
   expo_ = clamp(p.expo, -1.0f, 1.0f);
+  const float vmax = p.bat_volt_max_v;
+  inv_vmax_ = vmax > 0 ? 1.0f / vmax : 0.0f;
+  // batt_voltage_min is raised to 0.6 V_MAX (and stays so).
+  vmin_v_ = p.bat_volt_min_v > 0.6f * vmax ? p.bat_volt_min_v : 0.6f * vmax;
   filter_set_ = false;
   ratio_filt_ = 1.0f;
   derive();
@@ -23,10 +27,8 @@ void ArduPilotCurve::setParams(const ArduPilotParams& p) {
 
 float ArduPilotCurve::ratioFor(float vbat_v) const {
   const float vmax = p_.bat_volt_max_v;
-  // batt_voltage_min is raised to 0.6 V_MAX (and stays so).
-  const float vmin = p_.bat_volt_min_v > 0.6f * vmax ? p_.bat_volt_min_v : 0.6f * vmax;
-  if (!(vmax > 0) || p_.bat_volt_min_v >= vmax || vbat_v < 0.25f * vmin) return 1.0f;
-  return clamp(vbat_v, vmin, vmax) / vmax;
+  if (!(vmax > 0) || p_.bat_volt_min_v >= vmax || vbat_v < 0.25f * vmin_v_) return 1.0f;
+  return clamp(vbat_v, vmin_v_, vmax) * inv_vmax_;
 }
 
 void ArduPilotCurve::updateBattery(uint16_t vbat_mv, float dt_s) {
@@ -35,9 +37,11 @@ void ArduPilotCurve::updateBattery(uint16_t vbat_mv, float dt_s) {
     ratio_filt_ = ratio;
     filter_set_ = true;
   } else {
-    // LowPassFilter: alpha = dt / (dt + 1 / (2 pi fc))
-    const float alpha = dt_s / (dt_s + 1.0f / (2.0f * 3.14159265f * kFilterHz));
-    ratio_filt_ += alpha * (ratio - ratio_filt_);
+    if (dt_s != alpha_dt_s_) {  // LowPassFilter: alpha = dt / (dt + 1 / (2 pi fc))
+      alpha_ = dt_s / (dt_s + 1.0f / (2.0f * 3.14159265f * kFilterHz));
+      alpha_dt_s_ = dt_s;
+    }
+    ratio_filt_ += alpha_ * (ratio - ratio_filt_);
   }
   derive();
 }

@@ -53,6 +53,10 @@ class ArduPilotCurve {
 
   ArduPilotParams p_;
   float expo_ = 0.65f;       // clamped
+  float inv_vmax_ = 0;       // 1 / MOT_BAT_VOLT_MAX
+  float vmin_v_ = 0;         // MOT_BAT_VOLT_MIN raised to 0.6 MOT_BAT_VOLT_MAX
+  float alpha_dt_s_ = -1;    // the filter's alpha for this dt (one dt in practice: no division)
+  float alpha_ = 0;
   float ratio_filt_ = 1.0f;  // v through the filter
   bool filter_set_ = false;
   float lift_max_ = 1.0f;

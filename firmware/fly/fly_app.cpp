@@ -79,7 +79,7 @@ void FlyApp::runUntil(bool (FlyApp::*done)() const, uint16_t max_ms) {
   for (;;) {
     runOnce();
     if ((this->*done)() || hal::Clock::millis() - from_ms >= max_ms) return;
-    hal::Clock::sleepUntilInterrupt();
+    hal::Clock::sleepUntil(&FlyApp::hasWork);
   }
 }
 
@@ -124,6 +124,10 @@ void FlyApp::runOnce() {
   printNotes();
 }
 
+bool FlyApp::hasWork() {
+  return active_ != nullptr && (active_->imu_.frameDue() || hal::Uart::available());
+}
+
 void FlyApp::phaseHook() {
   if (active_ != nullptr) active_->imu_.onPhase();
 }
@@ -133,11 +137,12 @@ void FlyApp::serviceHook() {
 }
 
 void FlyApp::service() {
-  if (in_service_) return;
+  if (in_service_ || !imu_.frameDue()) return;
   in_service_ = true;
   ImuFrame f;
+  const uint16_t t0_us = hal::Esc::frameTimeUs();  // the computation counts from here
   if (imu_.poll(f)) {
-    frame(f);
+    frame(f, t0_us);
     hal::Watchdog::kick();  // a frame came round: the only kick while flying
   }
   in_service_ = false;
@@ -181,17 +186,17 @@ void FlyApp::prompt() { fw::say(TC_FLASH_TEXT("fly> ")); }
 // ---------------------------------------------------------------------------------------------
 // The frame
 
-void FlyApp::frame(const ImuFrame& f) {
-  const uint16_t t0_us = hal::Esc::frameTimeUs();
+void FlyApp::frame(const ImuFrame& f, uint16_t t0_us) {
   frame_ += f.frames;
   const uint16_t since = static_cast<uint16_t>(frames_since_sample_ + f.frames);
   frames_since_sample_ = since > 255 ? 255 : static_cast<uint8_t>(since);
   if (f.fault_now) imuFaulted();
-  if (imu_.running() && !imu_was_running_ && imu_.faults() != 0) {
+  // Back after a fault: said at its first fresh sample (a frozen IMU restarts and takes its
+  // settings every second, and is no better for it).
+  if (f.has_sample && said_fault_ != ImuFault::kNone) {
     notes_ |= kNoteImuRunning;
     said_fault_ = ImuFault::kNone;
   }
-  imu_was_running_ = imu_.running();
   if (f.has_sample) {
     const float dt_s = frames_since_sample_ * kFramePeriodS;
     frames_since_sample_ = 0;
@@ -213,18 +218,19 @@ void FlyApp::flyFrame(float dt_s, uint16_t t0_us) {
   const float spool = spoolFraction(since_arm_ms);
   const Attitude& a = estimator_.attitude();
   const Torque torque = controller_.torque(a, settings_.setpoint);
-  flight_.mix_limits =
-      mixer_.mix(flight_.collective_g * spool, torque, flight_.min_g, flight_.max_g, flight_.force_g);
-  output_.write(flight_.force_g, mixer_.motorMask());
+  const ForceQ4 collective = spool >= 1.0f ? flight_.collective : toQ4(gramsOf(flight_.collective) * spool);
+  flight_.mix_limits = mixer_.mix(collective, torque, flight_.min, flight_.max, flight_.force);
+  output_.write(flight_.force, mixer_.motorMask());
 
+  // The read started at the phase: pulses written before the frame's end (at or after the
+  // phase) meet the next rising edge; written after it (before the phase), the one after.
   const uint16_t t1_us = hal::Esc::frameTimeUs();
-  if (t1_us < t0_us || t0_us < stats_.phase_us) {
+  const uint16_t compute_us = static_cast<uint16_t>(t1_us >= t0_us ? t1_us - t0_us : t1_us + kFrameUs - t0_us);
+  if (compute_us > stats_.compute_max_us) stats_.compute_max_us = compute_us;
+  if (t1_us < stats_.phase_us) {
     if (stats_.late != 0xFFFF) ++stats_.late;
-  } else {
-    const uint16_t compute_us = static_cast<uint16_t>(t1_us - t0_us);
-    if (compute_us > stats_.compute_max_us) stats_.compute_max_us = compute_us;
-    const uint16_t margin_us = static_cast<uint16_t>(kFrameUs - t1_us);
-    if (margin_us < stats_.margin_min_us) stats_.margin_min_us = margin_us;
+  } else if (kFrameUs - t1_us < stats_.margin_min_us) {
+    stats_.margin_min_us = static_cast<uint16_t>(kFrameUs - t1_us);
   }
   if (spool >= 1.0f) controller_.integrate(a, settings_.setpoint, dt_s, flight_.mix_limits);
 }
@@ -234,6 +240,8 @@ void FlyApp::slowJob(const ImuFrame& f) {
   switch (fly::slowJob(frame_)) {
     case SlowJob::kBattery:
       motors_.sampleBattery();
+      break;
+    case SlowJob::kBatteryModel:
       if (output_.mode() == OutputMode::kArduPilot) {
         output_.batteryRead(kSlowCycleS);
         if (flight_.armed) updateOutputLimits();  // lift_max follows the voltage
@@ -278,8 +286,11 @@ void FlyApp::imuFaulted() {
 }
 
 void FlyApp::updateOutputLimits() {
-  flight_.collective_g = output_.collectivePerMotorG(settings_.thrust_g, mixer_.motorCount());
-  output_.forceRangeG(mixer_.motorMask(), flight_.min_g, flight_.max_g);
+  flight_.collective = toQ4(output_.collectivePerMotorG(settings_.thrust_g, mixer_.motorCount()));
+  float min_g, max_g;
+  output_.forceRangeG(mixer_.motorMask(), min_g, max_g);
+  flight_.min = toQ4(min_g);
+  flight_.max = toQ4(max_g);
 }
 
 void FlyApp::disarm(DisarmCause cause) {
@@ -287,7 +298,7 @@ void FlyApp::disarm(DisarmCause cause) {
   flight_.armed = false;
   flight_.last_cause = cause;
   if (flight_.disarms != 0xFFFF) ++flight_.disarms;
-  for (float& f : flight_.force_g) f = 0;
+  for (ForceQ4& f : flight_.force) f = 0;
   notes_ |= kNoteDisarmed;
 }
 
@@ -300,8 +311,8 @@ void FlyApp::takeStreamRow(uint32_t now_ms) {
   row_.pitch_sp_cdeg = centi(settings_.setpoint.pitch_rad, 100.0f * kDegPerRad);
   for (uint8_t i = 0; i < 3; ++i) row_.rate_ddps[i] = centi(a.rate_rad_s[i], 10.0f * kDegPerRad);
   for (uint8_t i = 0; i < kMotors; ++i) {
-    const float f = flight_.force_g[i];
-    row_.force_g[i] = f <= 0 ? 0 : static_cast<uint16_t>(f + 0.5f);
+    const int32_t g = roundedGrams(flight_.force[i]);
+    row_.force_g[i] = g <= 0 ? 0 : static_cast<uint16_t>(g);
     row_.pulse_us[i] = output_.pulseUs(i);
   }
   notes_ |= kNoteStream;

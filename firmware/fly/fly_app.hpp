@@ -67,17 +67,17 @@ struct FlightState {
   float cause_deg = 0;  // kCrash: the angle that crossed the limit
   uint16_t disarms = 0;
   uint8_t mix_limits = 0;
-  float force_g[kMotors] = {0, 0, 0, 0};
+  ForceQ4 force[kMotors] = {0, 0, 0, 0};
   // The output's limits, worked out at arming, on a new thrust and at each battery reading.
-  float collective_g = 0;  // per motor, at full spool
-  float min_g = 0, max_g = 0;
+  ForceQ4 collective = 0;  // per motor, at full spool
+  ForceQ4 min = 0, max = 0;
 };
 
 // The loop's timing, as frameTimeUs() sees it (status; thrustcal bench measures it in simavr).
 struct LoopStats {
   uint16_t phase_us = 0;        // where in the frame the read starts
   uint16_t budget_us = 0;       // the computation it leaves room for
-  uint16_t compute_max_us = 0;  // from taking the read to the written pulses
+  uint16_t compute_max_us = 0;  // from the loop seeing the read's end to the written pulses
   uint16_t margin_min_us = 0xFFFF;  // from the written pulses to the next rising edge
   uint16_t late = 0;            // pulses written after the frame they were meant for had ended
 };
@@ -108,8 +108,10 @@ class FlyApp {
   // goes on in the background. True: calibrated.
   bool calibrateGyro();
   // One pass of the main loop: service(), at most one line, then the notes service() left.
-  // Does not sleep: the caller sleeps until the next interrupt afterwards.
+  // Does not sleep: the caller sleeps afterwards, until hasWork() (hal::Clock::sleepUntil).
   void runOnce();
+  // A pass has something to do: a frame to handle, a received byte. Called with interrupts off.
+  static bool hasWork();
 
   // Observers (status, tests).
   bool armed() const { return flight_.armed; }
@@ -172,7 +174,7 @@ class FlyApp {
   void service();
   static void serviceHook();
   static void phaseHook();
-  void frame(const ImuFrame& f);
+  void frame(const ImuFrame& f, uint16_t t0_us);
   void flyFrame(float dt_s, uint16_t t0_us);
   void slowJob(const ImuFrame& f);
   void checkFailsafes(uint32_t now_ms);
@@ -198,7 +200,6 @@ class FlyApp {
   uint32_t frame_ = 0;  // frames since start()
   uint32_t start_ms_ = 0;
   uint8_t frames_since_sample_ = 0;
-  bool imu_was_running_ = false;
   ImuFault said_fault_ = ImuFault::kNone;  // the fault last printed: a retry that fails alike is not news
   bool starting_ = false;  // start() .. calibrateGyro(): they say what the notes would
   bool streaming_ = false;

@@ -18,15 +18,17 @@ static_assert(1000000u % kFrameHz == 0, "a whole number of microseconds per fram
 
 // What runs after the pulses are written: each job once in a cycle of eight frames (50 times a
 // second), on its own frame, so no frame carries two: the battery (four ADC conversions and the
-// median), a stream row, the accelerometer's roll correction, its pitch correction.
-enum class SlowJob : uint8_t { kNone, kBattery, kStreamRow, kRollCorrection, kPitchCorrection };
+// median), the mode's use of it (ardupilot: its voltage filter and lift_max), a stream row, the
+// accelerometer's roll correction, its pitch correction.
+enum class SlowJob : uint8_t { kNone, kBattery, kBatteryModel, kStreamRow, kRollCorrection, kPitchCorrection };
 constexpr uint8_t kSlowCycleFrames = 8;
 inline SlowJob slowJob(uint32_t frame) {
   switch (frame % kSlowCycleFrames) {
     case 0: return SlowJob::kBattery;
-    case 2: return SlowJob::kStreamRow;
-    case 4: return SlowJob::kRollCorrection;
-    case 6: return SlowJob::kPitchCorrection;
+    case 1: return SlowJob::kBatteryModel;
+    case 3: return SlowJob::kStreamRow;
+    case 5: return SlowJob::kRollCorrection;
+    case 7: return SlowJob::kPitchCorrection;
     default: return SlowJob::kNone;
   }
 }
@@ -35,8 +37,8 @@ constexpr float kSlowCycleS = kSlowCycleFrames * kFramePeriodS;
 // When in the frame the IMU read starts (Esc's phase hook): as late as lets the read and the
 // computation end before the frame ends, so the next rising edge carries the result and the
 // time from the end of the read to that edge is the computation's budget, not a whole frame.
-constexpr uint16_t kImuReadUs = 560;      // a 15-byte burst at 400 kHz and its interrupts
-constexpr uint16_t kMinPhaseUs = 200;     // after the rising edge at the earliest
+constexpr uint16_t kImuReadUs = 720;      // a 15-byte burst at 400 kHz, its interrupts, the wake-up
+constexpr uint16_t kMinPhaseUs = 100;     // after the rising edge at the earliest
 inline uint16_t readPhaseUs(uint16_t budget_us) {
   const uint16_t needed = static_cast<uint16_t>(kImuReadUs + budget_us);
   return needed + kMinPhaseUs >= kFrameUs ? kMinPhaseUs : static_cast<uint16_t>(kFrameUs - needed);
@@ -46,10 +48,10 @@ inline uint16_t readPhaseUs(uint16_t budget_us) {
 // then the output stage's own cost (a budget, not a measurement: status shows the measured
 // time, docs/fly.md the figures).
 enum class OutputMode : uint8_t { kForce, kGeneric, kPwm, kArduPilot };
-constexpr uint16_t kControlBudgetUs = 560;          // the sample, estimator, controller, mixer
-constexpr uint16_t kForceApiBudgetUs = 190;         // forces to grams, the v2 frame, the pulses
-constexpr uint16_t kThesisMotorBudgetUs = 220;      // option 2.1 on one motor, EEPROM steps
-constexpr uint16_t kArduPilotMotorBudgetUs = 140;   // one square root and a few products
+constexpr uint16_t kControlBudgetUs = 650;          // taking the sample, estimator, controller, mixer
+constexpr uint16_t kForceApiBudgetUs = 250;         // forces to grams, the v2 frame, the pulses
+constexpr uint16_t kThesisMotorBudgetUs = 190;      // option 2.1 on one motor, EEPROM steps
+constexpr uint16_t kArduPilotMotorBudgetUs = 170;   // one square root and a few products
 constexpr uint16_t kPwmBudgetUs = 100;
 // thesis_motors: the motors that fly a v1 record (force, generic modes); motors: the layout's.
 inline uint16_t computeBudgetUs(OutputMode mode, uint8_t thesis_motors, uint8_t motors) {

@@ -14,23 +14,32 @@ using fw::sayLine;
 
 constexpr float kDegPerRad = 180.0f / 3.14159265f;
 
-// A float with `decimals` decimals (status and replies only: 32-bit printing).
+// Numbers: 16 bits where they fit (printFixed16, no 32-bit division: status runs beside the
+// frames, which only get the CPU back between lines or when the transmit ring is full).
+void sayFixed(int32_t value, uint8_t decimals) {
+  if (value >= -32768 && value <= 32767) {
+    fw::printFixed16(static_cast<int16_t>(value), decimals);
+  } else {
+    fw::printFixed(value, decimals);
+  }
+}
+void sayCount(uint32_t value) { sayFixed(value > 0x7FFFFFFFu ? 0x7FFFFFFF : static_cast<int32_t>(value), 0); }
+// A float with `decimals` decimals, rounded.
 void sayFloat(float v, uint8_t decimals) {
   float scale = 1.0f;
   for (uint8_t i = 0; i < decimals; ++i) scale *= 10.0f;
   const float x = v * scale;
   const float limit = 2.0e9f;
-  fw::printFixed(static_cast<int32_t>(x > limit ? limit : (x < -limit ? -limit : x + (x < 0 ? -0.5f : 0.5f))),
-                 decimals);
+  sayFixed(static_cast<int32_t>(x > limit ? limit : (x < -limit ? -limit : x + (x < 0 ? -0.5f : 0.5f))), decimals);
 }
 void sayDeg(float rad) { sayFloat(rad * kDegPerRad, 1); }
-void sayMilli(float v) { fw::printUint(static_cast<uint32_t>(v * 1000.0f + 0.5f)); }
+void sayMilli(float v) { sayCount(static_cast<uint32_t>(v * 1000.0f + 0.5f)); }
 
 const char* faultText(ImuFault fault) {
   switch (fault) {
     case ImuFault::kNoAnswer: return TC_FLASH_TEXT("no answer at its address (wiring: SDA D20, SCL D21, 3.3 V, pull-ups)");
     case ImuFault::kWrongId: return TC_FLASH_TEXT("WHO_AM_I is not 0x68 (not an MPU-6050?): read 0x");
-    case ImuFault::kBusStuck: return TC_FLASH_TEXT("the bus is stuck (a line held low), TWI status 0x");
+    case ImuFault::kBusStuck: return TC_FLASH_TEXT("the bus is stuck (a line held low)");
     case ImuFault::kBadConfig: return TC_FLASH_TEXT("its settings did not read back");
     case ImuFault::kFrozen: return TC_FLASH_TEXT("frozen data (no new sample in 8 reads)");
     case ImuFault::kNone: break;
@@ -41,7 +50,13 @@ const char* faultText(ImuFault fault) {
 void sayFault(const Mpu6050& imu) {
   say(faultText(imu.fault()));
   if (imu.fault() == ImuFault::kWrongId) fw::printHex2(imu.whoAmI());
-  if (imu.fault() == ImuFault::kBusStuck) fw::printHex2(imu.lastStatus());
+  if (imu.fault() != ImuFault::kBusStuck) return;
+  if (imu.lastStatus() == Mpu6050::kTimedOut) {
+    say(TC_FLASH_TEXT(": a transfer never ended"));
+  } else {
+    say(TC_FLASH_TEXT(", TWI status 0x"));
+    fw::printHex2(imu.lastStatus());
+  }
 }
 
 const char* modeName(OutputMode mode) {
@@ -64,17 +79,17 @@ const char* layoutName(Layout layout) {
 }
 
 void sayMs(uint32_t ms) {
-  fw::printUint(ms);
+  sayCount(ms);
   say(TC_FLASH_TEXT(" ms"));
 }
 
 void sayFrameLayout(const FlyApp& app) {
   say(TC_FLASH_TEXT("IMU read at "));
-  fw::printUint(app.loopStats().phase_us);
+  sayCount(app.loopStats().phase_us);
   say(TC_FLASH_TEXT(" us of each "));
-  fw::printUint(kFrameUs);
+  sayCount(kFrameUs);
   say(TC_FLASH_TEXT(" us frame, computation budget "));
-  fw::printUint(app.loopStats().budget_us);
+  sayCount(app.loopStats().budget_us);
   say(TC_FLASH_TEXT(" us"));
 }
 
@@ -126,7 +141,7 @@ void imuRunningAgain() { sayLine(TC_FLASH_TEXT("imu: running again; measuring th
 
 void calibrating() {
   say(TC_FLASH_TEXT("imu: measuring the gyro bias: keep the vehicle still ("));
-  sayMs(GyroCalibration::kSamples * 1000u / kFrameHz);
+  sayMs(static_cast<uint32_t>(GyroCalibration::kSamples) * 1000u / kFrameHz);  // 32 bits: 400 000
   sayLine(TC_FLASH_TEXT(")"));
 }
 
@@ -134,7 +149,7 @@ void calibrationResult(const FlyApp& app) {
   const GyroCalibration& c = app.gyroCalibration();
   if (!c.done()) {
     say(TC_FLASH_TEXT("imu: gyro not calibrated yet (motion seen "));
-    fw::printUint(c.restarts());
+    sayCount(c.restarts());
     sayLine(TC_FLASH_TEXT(" times): keep it still; arm waits for it"));
     return;
   }
@@ -173,7 +188,7 @@ void armRefused(ArmRefusal why, const FlyApp& app) {
       say(TC_FLASH_TEXT(" pitch "));
       sayFloat(in.pitch_deg, 1);
       say(TC_FLASH_TEXT(" deg (both within "));
-      fw::printUint(static_cast<uint32_t>(kArmLevelDeg));
+      sayCount(static_cast<uint32_t>(kArmLevelDeg));
       say(TC_FLASH_TEXT(")"));
       break;
     case ArmRefusal::kMoving:
@@ -183,7 +198,7 @@ void armRefused(ArmRefusal why, const FlyApp& app) {
         sayFloat(in.rate_dps[i], 1);
       }
       say(TC_FLASH_TEXT(" deg/s (all below "));
-      fw::printUint(static_cast<uint32_t>(kArmStillDps));
+      sayCount(static_cast<uint32_t>(kArmStillDps));
       say(TC_FLASH_TEXT(")"));
       break;
     case ArmRefusal::kMotorNotCalibrated:
@@ -206,7 +221,7 @@ void armed(const FlyApp& app) {
   say(TC_FLASH_TEXT(", layout "));
   say(layoutName(app.mixer().layout()));
   say(TC_FLASH_TEXT(", thrust "));
-  fw::printUint(static_cast<uint32_t>(app.settings().thrust_g));
+  sayCount(static_cast<uint32_t>(app.settings().thrust_g));
   say(TC_FLASH_TEXT(" g; spooling up for "));
   sayMs(kSpoolMs);
   say(TC_FLASH_TEXT("; send a line at least every "));
@@ -222,7 +237,7 @@ void disarmed(const FlyApp& app) {
       say(TC_FLASH_TEXT("crash (attitude "));
       sayFloat(f.cause_deg, 1);
       say(TC_FLASH_TEXT(" deg beyond "));
-      fw::printUint(app.settings().crash_deg);
+      sayCount(app.settings().crash_deg);
       say(TC_FLASH_TEXT(")"));
       break;
     case DisarmCause::kImu:
@@ -252,9 +267,9 @@ void setpoint(const FlyApp& app) {
 
 void thrust(const FlyApp& app) {
   say(TC_FLASH_TEXT("thrust: "));
-  fw::printUint(static_cast<uint32_t>(app.settings().thrust_g));
+  sayCount(static_cast<uint32_t>(app.settings().thrust_g));
   say(TC_FLASH_TEXT(" g over "));
-  fw::printUint(app.mixer().motorCount());
+  sayCount(app.mixer().motorCount());
   say(TC_FLASH_TEXT(" motors"));
   if (app.output().mode() == OutputMode::kPwm) say(TC_FLASH_TEXT(" (mode pwm flies its hover pulse instead)"));
   newline();
@@ -282,7 +297,7 @@ void mode(const FlyApp& app) {
   say(modeName(out.mode()));
   if (out.mode() == OutputMode::kGeneric) {
     say(TC_FLASH_TEXT(" (slot "));
-    fw::printUint(out.genericSlot());
+    sayCount(out.genericSlot());
     say(TC_FLASH_TEXT("'s record for every motor)"));
   }
   say(TC_FLASH_TEXT("; "));
@@ -292,7 +307,7 @@ void mode(const FlyApp& app) {
 
 void genericSlotRefused(uint8_t slot, const fw::Motor& m) {
   say(TC_FLASH_TEXT("error: slot "));
-  fw::printUint(slot);
+  sayCount(slot);
   say(TC_FLASH_TEXT(" is "));
   fw::sayRecordStatus(m);
   sayLine(TC_FLASH_TEXT("; generic mode needs a calibrated slot"));
@@ -304,7 +319,7 @@ void layout(const FlyApp& app) {
   say(TC_FLASH_TEXT(", arm "));
   sayMilli(app.settings().arm_m);
   say(TC_FLASH_TEXT(" mm, yaw arm "));
-  fw::printUint(static_cast<uint32_t>(app.settings().yaw_arm_m * 1.0e6f + 0.5f));
+  sayCount(static_cast<uint32_t>(app.settings().yaw_arm_m * 1.0e6f + 0.5f));
   say(TC_FLASH_TEXT(" um, motors "));
   say(app.mixer().layout() == Layout::kSeesaw ? TC_FLASH_TEXT("0 (left) and 1 (right)") : TC_FLASH_TEXT("0..3"));
   newline();
@@ -313,7 +328,7 @@ void layout(const FlyApp& app) {
 void hover(const FlyApp& app) {
   const PwmModeParams& p = app.output().pwmParams();
   say(TC_FLASH_TEXT("hover: "));
-  fw::printUint(p.hover_us);
+  sayCount(p.hover_us);
   say(TC_FLASH_TEXT(" us, "));
   sayFloat(p.slope_g_per_us, 3);
   sayLine(TC_FLASH_TEXT(" g per us"));
@@ -328,21 +343,21 @@ void arduPilot(const FlyApp& app) {
   say(TC_FLASH_TEXT(" MOT_SPIN_MAX "));
   sayFloat(p.spin_max, 4);
   say(TC_FLASH_TEXT(" MOT_PWM "));
-  fw::printUint(p.pwm_min_us);
+  sayCount(p.pwm_min_us);
   say(TC_FLASH_TEXT(".."));
-  fw::printUint(p.pwm_max_us);
+  sayCount(p.pwm_max_us);
   say(TC_FLASH_TEXT(" MOT_BAT_VOLT "));
   sayFloat(p.bat_volt_max_v, 2);
   say(TC_FLASH_TEXT(".."));
   sayFloat(p.bat_volt_min_v, 2);
   say(TC_FLASH_TEXT(" full thrust "));
-  fw::printUint(static_cast<uint32_t>(p.full_thrust_g));
+  sayCount(static_cast<uint32_t>(p.full_thrust_g));
   sayLine(TC_FLASH_TEXT(" g"));
 }
 
 void crashLimit(const FlyApp& app) {
   say(TC_FLASH_TEXT("crash: disarm beyond "));
-  fw::printUint(app.settings().crash_deg);
+  sayCount(app.settings().crash_deg);
   sayLine(TC_FLASH_TEXT(" deg of roll or pitch"));
 }
 
@@ -351,7 +366,7 @@ namespace {
 void statusState(const FlyApp& app) {
   say(app.flight().armed ? TC_FLASH_TEXT("state: armed") : TC_FLASH_TEXT("state: disarmed"));
   say(TC_FLASH_TEXT(", disarms "));
-  fw::printUint(app.flight().disarms);
+  sayCount(app.flight().disarms);
   say(TC_FLASH_TEXT(", mode "));
   say(modeName(app.output().mode()));
   say(TC_FLASH_TEXT(", layout "));
@@ -369,15 +384,15 @@ void statusImu(const FlyApp& app) {
     say(imu.running() ? TC_FLASH_TEXT("running") : TC_FLASH_TEXT("starting"));
   }
   say(TC_FLASH_TEXT("; reads "));
-  fw::printUint(imu.readsOk());
+  sayCount(imu.readsOk());
   say(TC_FLASH_TEXT(", bad in a row "));
-  fw::printUint(imu.badReads());
+  sayCount(imu.badReads());
   say(TC_FLASH_TEXT(", stale "));
-  fw::printUint(imu.staleReads());
+  sayCount(imu.staleReads());
   say(TC_FLASH_TEXT(", faults "));
-  fw::printUint(imu.faults());
+  sayCount(imu.faults());
   say(TC_FLASH_TEXT(", bus recoveries "));
-  fw::printUint(imu.recoveries());
+  sayCount(imu.recoveries());
   say(app.gyroCalibration().done() ? TC_FLASH_TEXT(", gyro calibrated") : TC_FLASH_TEXT(", gyro not calibrated"));
   newline();
 }
@@ -401,13 +416,13 @@ void statusLoop(const FlyApp& app) {
   say(TC_FLASH_TEXT("loop: "));
   sayFrameLayout(app);
   say(TC_FLASH_TEXT("; armed: computation at most "));
-  fw::printUint(s.compute_max_us);
+  sayCount(s.compute_max_us);
   say(TC_FLASH_TEXT(" us, pulses written at least "));
-  fw::printUint(s.margin_min_us == 0xFFFF ? 0 : s.margin_min_us);
+  sayCount(s.margin_min_us == 0xFFFF ? 0 : s.margin_min_us);
   say(TC_FLASH_TEXT(" us before the edge, late "));
-  fw::printUint(s.late);
+  sayCount(s.late);
   say(TC_FLASH_TEXT(", frames skipped "));
-  fw::printUint(app.imu().skippedFrames());
+  sayCount(app.imu().skippedFrames());
   newline();
 }
 
@@ -416,11 +431,11 @@ void statusMotor(const FlyApp& app, uint8_t i) {
   const fw::Motor& m = app.motors().motor(i);
   fw::sayMotor(i);
   say(TC_FLASH_TEXT(": "));
-  sayFloat(app.flight().force_g[i], 0);
+  sayFixed(roundedGrams(app.flight().force[i]), 0);
   say(TC_FLASH_TEXT(" g, "));
-  fw::printUint(app.output().pulseUs(i));
+  sayCount(app.output().pulseUs(i));
   say(TC_FLASH_TEXT(" us; slot "));
-  fw::printUint(m.source);
+  sayCount(m.source);
   say(TC_FLASH_TEXT(" "));
   if (app.motors().isArmable(i)) {
     say(app.motors().motor(m.source).fliesV2() ? TC_FLASH_TEXT("(model v2)") : TC_FLASH_TEXT("(thesis record)"));
@@ -433,20 +448,30 @@ void statusMotor(const FlyApp& app, uint8_t i) {
 
 }  // namespace
 
+// `yield` (not null) between the lines: the frames run there.
 void status(const FlyApp& app, void (*yield)()) {
   statusState(app);
+  yield();
   statusImu(app);
+  yield();
   statusAttitude(app);
+  yield();
   setpoint(app);
   thrust(app);
+  yield();
   gains(app);
   crashLimit(app);
+  yield();
   statusLoop(app);
-  for (uint8_t i = 0; i < kMotors; ++i) statusMotor(app, i);
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    yield();
+    statusMotor(app, i);
+  }
+  yield();
   say(TC_FLASH_TEXT("battery "));
   fw::sayVolts(app.motors().batteryMv());
   say(TC_FLASH_TEXT(" raw; link failsafe trips "));
-  fw::printUint(app.link().trips);
+  sayCount(app.link().trips);
   newline();
   fw::printHealth(app.console(), yield);  // frames go on during the stack scan
 }
@@ -462,7 +487,7 @@ void streamRow(const StreamRow& row) {
   if (seconds <= 32767u) {
     fw::printFixed16(static_cast<int16_t>(seconds), 0);
   } else {
-    fw::printUint(seconds);
+    sayCount(seconds);
   }
   hal::Uart::write('.');
   const uint16_t ms = static_cast<uint16_t>(row.t_ms - seconds * 1000u);
@@ -491,9 +516,9 @@ void streamRow(const StreamRow& row) {
 
 void helpFooter() {
   say(TC_FLASH_TEXT("arming: a complete arm line, level within "));
-  fw::printUint(static_cast<uint32_t>(kArmLevelDeg));
+  sayCount(static_cast<uint32_t>(kArmLevelDeg));
   say(TC_FLASH_TEXT(" deg, rates below "));
-  fw::printUint(static_cast<uint32_t>(kArmStillDps));
+  sayCount(static_cast<uint32_t>(kArmStillDps));
   sayLine(TC_FLASH_TEXT(" deg/s,"));
   sayLine(TC_FLASH_TEXT("IMU running and calibrated, ESCs armed, the layout's motors flyable"));
   say(TC_FLASH_TEXT("disarms: roll or pitch beyond the crash limit, an IMU fault, "));
@@ -502,7 +527,7 @@ void helpFooter() {
   sayLine(TC_FLASH_TEXT("without a line (an empty line will do; with strict on a checksummed"));
   sayLine(TC_FLASH_TEXT("one, e.g. *00)"));
   say(TC_FLASH_TEXT("lines: CR, LF or CRLF, at most "));
-  fw::printUint(fw::kLineMax);
+  sayCount(fw::kLineMax);
   sayLine(TC_FLASH_TEXT(" characters; optional checksum *HH = XOR"));
   sayLine(TC_FLASH_TEXT("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
 }

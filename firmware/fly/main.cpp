@@ -32,6 +32,8 @@ int main() {
 
   for (;;) {              // every frame: IMU -> attitude -> torque -> forces -> pulses
     app.runOnce();
-    hal::Clock::sleepUntilInterrupt();  // wake on the 1 ms tick, a frame, the TWI or a byte
+    // Asleep until an interrupt brings work (the end of a frame's IMU read, a received byte),
+    // through the 1 ms ticks and the read's own byte interrupts.
+    hal::Clock::sleepUntil(&fly::FlyApp::hasWork);
   }
 }

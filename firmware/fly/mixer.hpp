@@ -13,6 +13,9 @@
 // scaled down only if it alone exceeds the motors' range, and yaw is then dropped), yaw next
 // (scaled so the spread fits), the collective last (shifted to fit). mix() says what it gave
 // up (MixLimit bits), so the controller holds those integrators.
+// Forces are fixed point, 1/16 g in an int32 (ForceQ4): the torques (N m, float) are turned into
+// grams once, and the spreads, clamps and sums that follow are integer (on the AVR a float add
+// or compare costs ~100 cycles, an integer one a few); force and pwm modes never go back to float.
 #pragma once
 #include <stdint.h>
 
@@ -21,6 +24,15 @@
 namespace fly {
 
 enum class Layout : uint8_t { kPlus, kX, kSeesaw };
+
+using ForceQ4 = int32_t;  // grams * 16
+constexpr int32_t kQ4PerGram = 16;
+inline ForceQ4 toQ4(float grams) {  // rounded; |grams| well within +-100,000
+  const float q = grams * kQ4PerGram;
+  return static_cast<ForceQ4>(q < 0 ? q - 0.5f : q + 0.5f);
+}
+inline float gramsOf(ForceQ4 force) { return static_cast<float>(force) * (1.0f / kQ4PerGram); }
+inline int32_t roundedGrams(ForceQ4 force) { return (force + kQ4PerGram / 2) >> 4; }
 
 constexpr float kDefaultArmM = 0.225f;      // the Iqarus and the simulated airframe
 constexpr float kDefaultYawArmM = 0.0149f;  // Q/T of an APC 9x4.7: C_P D / (2 pi C_T)
@@ -34,18 +46,17 @@ class Mixer {
   uint8_t motorCount() const { return layout_ == Layout::kSeesaw ? 2 : 4; }
   bool flies(uint8_t motor) const { return (motorMask() >> motor) & 1u; }
 
-  // The four forces (g) for `collective_per_motor_g` and `torque`, each flown motor's within
-  // [min_g, max_g] (0 for the others); returns MixLimit bits.
-  uint8_t mix(float collective_per_motor_g, const Torque& torque, float min_g, float max_g,
-              float (&force_g)[4]) const;
+  // The four forces for `collective` (per motor) and `torque`, each flown motor's within
+  // [min, max] (0 for the others); returns MixLimit bits.
+  uint8_t mix(ForceQ4 collective, const Torque& torque, ForceQ4 min, ForceQ4 max, ForceQ4 (&force)[4]) const;
 
  private:
-  void rollPitch(float x, float y, float (&rp)[4]) const;
-  uint8_t fit(const float (&rp)[4], float z, float range, float (&e)[4], float& lo, float& hi) const;
+  void rollPitch(ForceQ4 x, ForceQ4 y, ForceQ4 (&rp)[4]) const;
+  uint8_t fit(const ForceQ4 (&rp)[4], ForceQ4 z, ForceQ4 range, ForceQ4 (&e)[4], ForceQ4& lo, ForceQ4& hi) const;
 
   Layout layout_ = Layout::kX;
-  float g_per_nm_xy_ = 0;  // grams on each motor per N m of roll or pitch torque
-  float g_per_nm_z_ = 0;   // per N m of yaw torque
+  float q4_per_nm_xy_ = 0;  // 1/16 g on each motor per N m of roll or pitch torque
+  float q4_per_nm_z_ = 0;   // per N m of yaw torque
 };
 
 }  // namespace fly

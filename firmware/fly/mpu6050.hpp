@@ -88,10 +88,13 @@ class Mpu6050 {
   // Main loop: true once per frame, when that frame's transfer has ended (or timed out, or none
   // was due); `out` says what it brought. Prepares the next frame's transfer.
   bool poll(ImuFrame& out);
+  // Whether poll() has a frame to hand out now (with interrupts off: the sleep's last check).
+  bool frameDue() const;
 
   ImuState state() const { return state_; }
   ImuFault fault() const { return fault_; }
   bool running() const { return state_ == ImuState::kRunning; }
+  static constexpr uint8_t kTimedOut = 0xF8;  // lastStatus() of a transfer that never ended
   uint8_t whoAmI() const { return who_am_i_; }         // what WHO_AM_I read last
   uint8_t lastStatus() const { return last_status_; }  // TWSR code of the last bad transfer
   uint8_t badReads() const { return bad_reads_; }      // in a row

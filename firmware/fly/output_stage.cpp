@@ -7,10 +7,9 @@ namespace fly {
 
 namespace {
 constexpr uint8_t kMotors = fw::ForceActuators::kMotors;
-uint16_t roundGrams(float force_g) {
-  if (force_g <= 0) return 0;
-  if (force_g >= tc::kRecordMaxForceG) return tc::kRecordMaxForceG;
-  return static_cast<uint16_t>(force_g + 0.5f);
+uint16_t grams(ForceQ4 force) {
+  const int32_t g = roundedGrams(force);
+  return g <= 0 ? 0 : (g >= tc::kRecordMaxForceG ? tc::kRecordMaxForceG : static_cast<uint16_t>(g));
 }
 }  // namespace
 
@@ -84,16 +83,16 @@ uint8_t OutputStage::thesisMotors(uint8_t mask) const {
   return n;
 }
 
-uint16_t OutputStage::pwmModePulse(float force_g) const {
-  const float pulse = tc::kThrottleMinUs + force_g * us_per_g_ + 0.5f;
-  if (pulse <= tc::kThrottleMinUs) return tc::kThrottleMinUs;
-  if (pulse >= tc::kThrottleMaxUs) return tc::kThrottleMaxUs;
-  return static_cast<uint16_t>(pulse);
+// 1000 us + F / slope: (Q4 * Q12) >> 16 microseconds, rounded.
+uint16_t OutputStage::pwmModePulse(ForceQ4 force) const {
+  const int32_t above_us = (force * us_per_g_q12_ + (1L << 15)) >> 16;
+  const int32_t range_us = tc::kThrottleMaxUs - tc::kThrottleMinUs;
+  return static_cast<uint16_t>(tc::kThrottleMinUs + (above_us <= 0 ? 0 : (above_us >= range_us ? range_us : above_us)));
 }
 
-void OutputStage::write(const float (&force_g)[4], uint8_t mask) {
+void OutputStage::write(const ForceQ4 (&force)[4], uint8_t mask) {
   if (mode_ == OutputMode::kForce || mode_ == OutputMode::kGeneric) {
-    for (uint8_t i = 0; i < kMotors; ++i) motors_.setForce(i, ((mask >> i) & 1u) ? roundGrams(force_g[i]) : 0);
+    for (uint8_t i = 0; i < kMotors; ++i) motors_.setForce(i, ((mask >> i) & 1u) ? grams(force[i]) : 0);
     motors_.output();
     for (uint8_t i = 0; i < kMotors; ++i) pulse_us_[i] = motors_.motor(i).pwm_us;
     return;
@@ -102,9 +101,9 @@ void OutputStage::write(const float (&force_g)[4], uint8_t mask) {
     if (!((mask >> i) & 1u)) {
       pulse_us_[i] = tc::kStopPwmUs;
     } else if (mode_ == OutputMode::kPwm) {
-      pulse_us_[i] = pwmModePulse(force_g[i]);
+      pulse_us_[i] = pwmModePulse(force[i]);
     } else {
-      pulse_us_[i] = ardupilot_.pulseUs(force_g[i]);
+      pulse_us_[i] = ardupilot_.pulseUs(gramsOf(force[i]));
     }
   }
   hal::Esc::writeAll(pulse_us_);

@@ -16,6 +16,7 @@
 #include "ardupilot_curve.hpp"
 #include "fly_rules.hpp"
 #include "force_actuators.hpp"
+#include "mixer.hpp"
 
 namespace fly {
 
@@ -37,7 +38,7 @@ class OutputStage {
   uint8_t genericSlot() const { return generic_slot_; }
   void setPwmParams(const PwmModeParams& p) {
     pwm_ = p;
-    us_per_g_ = p.slope_g_per_us > 0 ? 1.0f / p.slope_g_per_us : 0.0f;
+    us_per_g_q12_ = p.slope_g_per_us > 0 ? static_cast<int32_t>(4096.0f / p.slope_g_per_us + 0.5f) : 0;
   }
   const PwmModeParams& pwmParams() const { return pwm_; }
   // ArduPilot's parameters; its voltage filter starts from the present battery reading.
@@ -55,8 +56,8 @@ class OutputStage {
   // The motors in v1 (thesis) records among `mask` (the computation budget, fly_rules.hpp).
   uint8_t thesisMotors(uint8_t mask) const;
 
-  // The four pulses for `force_g` (motors outside `mask` at the stop pulse), written at once.
-  void write(const float (&force_g)[4], uint8_t mask);
+  // The four pulses for `force` (motors outside `mask` at the stop pulse), written at once.
+  void write(const ForceQ4 (&force)[4], uint8_t mask);
   // Every ESC to the stop pulse, now.
   void stop();
   // A battery reading came `dt_s` after the last one: the ardupilot mode's voltage filter.
@@ -64,13 +65,15 @@ class OutputStage {
   uint16_t pulseUs(uint8_t motor) const { return pulse_us_[motor]; }
 
  private:
-  uint16_t pwmModePulse(float force_g) const;
+  uint16_t pwmModePulse(ForceQ4 force) const;
 
   fw::ForceActuators& motors_;
   OutputMode mode_ = OutputMode::kForce;
   uint8_t generic_slot_ = 0;
   PwmModeParams pwm_;
-  float us_per_g_ = 0;  // 1 / the slope: no division per motor
+  // 1 / the slope in 1/4096 us per g: no division per motor, and F (Q4, at most 1000 us of
+  // pulse) times it stays within 26 bits whatever the slope.
+  int32_t us_per_g_q12_ = 0;
   ArduPilotCurve ardupilot_;
   uint16_t pulse_us_[4] = {tc::kStopPwmUs, tc::kStopPwmUs, tc::kStopPwmUs, tc::kStopPwmUs};
 };

@@ -174,6 +174,12 @@ void Clock::init() {}
 uint32_t Clock::millis() { return state().now_ms; }
 void Clock::delayMs(uint16_t ms) { waitMs(ms); }
 void Clock::sleepUntilInterrupt() { waitMs(1); }
+void Clock::sleepUnless(bool (*pending)()) {
+  if (pending == nullptr || !pending()) waitMs(1);  // work pending: back at once, no time passes
+}
+void Clock::sleepUntil(bool (*ready)()) {
+  while (!ready()) waitMs(1);  // the time limit ends a wait for what never comes
+}
 
 // ---- Adc ----
 void Adc::init() {}

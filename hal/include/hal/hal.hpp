@@ -19,6 +19,14 @@ struct Clock {
   static void delayMs(uint16_t ms);
   // Sleeps (idle mode) until the next interrupt: at the latest the next 1 ms tick.
   static void sleepUntilInterrupt();
+  // The same, unless `pending()` (called with interrupts off) says there is work already. It
+  // closes the window between a loop's last check and its sleep: news an interrupt brings in
+  // that window would otherwise wait for the next interrupt, up to the 1 ms tick (fly: the end
+  // of an IMU read, which must reach the motors within its frame).
+  static void sleepUnless(bool (*pending)());
+  // Sleeps until `ready()` holds, asking it (interrupts off) after every interrupt: a loop with
+  // frequent interrupts that bring it nothing (fly: 16 per IMU read) stays asleep through them.
+  static void sleepUntil(bool (*ready)());
 };
 
 // 10-bit ADC, AVcc (5 V) reference.

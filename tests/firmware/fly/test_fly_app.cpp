@@ -205,7 +205,7 @@ TEST_F(Fly, ForceModeGivesEachMotorThePulseItsOwnRecordGivesTheForce) {
   armAndSpool(1200);
   uint16_t flown[4];
   for (uint8_t i = 0; i < 4; ++i) {
-    EXPECT_NEAR(app_->flight().force_g[i], 300.0f, 0.01f) << int(i);
+    EXPECT_NEAR(fly::gramsOf(app_->flight().force[i]), 300.0f, 0.01f) << int(i);
     flown[i] = pulse(i);
   }
   EXPECT_NE(flown[0], flown[1]) << "four different motors, four different pulses";
@@ -268,8 +268,8 @@ TEST_F(Fly, TheSeesawFliesMotorsZeroAndOneAndHoldsTheOthersStopped) {
   bootReady();
   command("layout seesaw");
   armAndSpool(600);
-  EXPECT_NEAR(app_->flight().force_g[0], 300.0f, 0.01f);
-  EXPECT_NEAR(app_->flight().force_g[1], 300.0f, 0.01f);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force[0]), 300.0f, 0.01f);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force[1]), 300.0f, 0.01f);
   EXPECT_GT(pulse(0), 1100);
   EXPECT_GT(pulse(1), 1100);
   EXPECT_EQ(pulse(2), tc::kStopPwmUs);
@@ -282,10 +282,10 @@ TEST_F(Fly, TheCollectiveSpoolsUpOverOneSecondAfterArming) {
   command("thrust 1200");
   command("arm");
   runFor(480);  // 20 ms of the command, then these: about half way
-  const float half = app_->flight().force_g[0];
+  const float half = fly::gramsOf(app_->flight().force[0]);
   EXPECT_NEAR(half, 150.0f, 10.0f);
   runFor(600);
-  EXPECT_NEAR(app_->flight().force_g[0], 300.0f, 0.01f);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force[0]), 300.0f, 0.01f);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -335,9 +335,14 @@ TEST_P(FlyImuFailure, DisarmsWithin100MsAndSaysWhy) {
   EXPECT_EQ(app_->imu().fault(), GetParam().fault);
   runFor(20);
   EXPECT_TRUE(contains(fake::output(), std::string("disarmed: IMU fault (") + GetParam().says)) << fake::output();
-  // and nothing spins until a new arm, whatever the IMU does meanwhile
+  // and nothing spins until a new arm, whatever the IMU does meanwhile; its retries every
+  // second fail alike and are not news
   runFor(3000);
   EXPECT_TRUE(allStopped());
+  const std::string out = fake::output();
+  EXPECT_EQ(out.find("imu: fault:"), out.rfind("imu: fault:")) << "said once\n" << out;
+  EXPECT_FALSE(contains(out, "running again")) << out;
+  EXPECT_GE(app_->imu().faults(), 3);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -345,7 +350,7 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(ImuFailure{"Silent", [](FakeImu&) { fake::twiSetNack(true); }, fly::ImuFault::kNoAnswer,
                                  "no answer at its address"},
                       ImuFailure{"StuckBus", [](FakeImu&) { fake::twiHoldSdaLow(0); }, fly::ImuFault::kBusStuck,
-                                 "the bus is stuck"},
+                                 "the bus is stuck (a line held low): a transfer never ended"},
                       ImuFailure{"FrozenData", [](FakeImu& imu) { imu.frozen = true; }, fly::ImuFault::kFrozen,
                                  "frozen data"}),
     [](const ::testing::TestParamInfo<ImuFailure>& info) { return std::string(info.param.name); });

@@ -42,15 +42,16 @@ struct Made {
   double x_nm = 0, y_nm = 0, z_nm = 0, total_g = 0;
 };
 
-Made torqueOf(Layout layout, const float (&force_g)[4], double arm_m, double kq_m) {
+Made torqueOf(Layout layout, const ForceQ4 (&force)[4], double arm_m, double kq_m) {
   Made m;
   const auto ms = mounts(layout, arm_m);
   for (std::size_t i = 0; i < ms.size(); ++i) {
-    const double f_n = force_g[i] * kG0 / 1000.0;
+    const double f_g = force[i] / 16.0;
+    const double f_n = f_g * kG0 / 1000.0;
     m.x_nm += ms[i].y * f_n;
     m.y_nm += -ms[i].x * f_n;
     m.z_nm += -ms[i].spin * kq_m * f_n;
-    m.total_g += force_g[i];
+    m.total_g += f_g;
   }
   return m;
 }
@@ -61,7 +62,7 @@ struct MixCase {
   Torque torque;
 };
 
-TEST(Mixer, UnsaturatedForcesMakeExactlyTheTorqueAndTheCollectiveAskedFor) {
+TEST(Mixer, UnsaturatedForcesMakeTheTorqueAndTheCollectiveAskedForToTheSixteenthOfAGram) {
   const MixCase cases[] = {
       {Layout::kPlus, 300, {0.0f, 0.0f, 0.0f}},   {Layout::kPlus, 300, {0.2f, 0.0f, 0.0f}},
       {Layout::kPlus, 300, {0.0f, -0.3f, 0.0f}},  {Layout::kPlus, 300, {0.1f, 0.1f, 0.02f}},
@@ -72,76 +73,76 @@ TEST(Mixer, UnsaturatedForcesMakeExactlyTheTorqueAndTheCollectiveAskedFor) {
   for (const MixCase& c : cases) {
     Mixer mixer;
     mixer.configure(c.layout, 0.225f, 0.015f);
-    float f[4];
-    const uint8_t limits = mixer.mix(c.collective_g, c.torque, 20.0f, 800.0f, f);
+    ForceQ4 f[4];
+    const uint8_t limits = mixer.mix(toQ4(c.collective_g), c.torque, toQ4(20), toQ4(800), f);
     const Made made = torqueOf(c.layout, f, 0.225, 0.015);
     const int layout = static_cast<int>(c.layout);
     EXPECT_EQ(limits, 0) << layout;
-    EXPECT_NEAR(made.x_nm, c.torque.x_nm, 1e-4) << layout;
+    EXPECT_NEAR(made.x_nm, c.torque.x_nm, 3e-4) << layout;  // forces in 1/16 g
     if (c.layout == Layout::kSeesaw) {
-      EXPECT_EQ(f[2], 0.0f);
-      EXPECT_EQ(f[3], 0.0f);
-      EXPECT_NEAR(made.total_g, 2 * c.collective_g, 1e-3);
+      EXPECT_EQ(f[2], 0);
+      EXPECT_EQ(f[3], 0);
+      EXPECT_NEAR(made.total_g, 2 * c.collective_g, 0.07);
       continue;
     }
-    EXPECT_NEAR(made.y_nm, c.torque.y_nm, 1e-4) << layout;
-    EXPECT_NEAR(made.z_nm, c.torque.z_nm, 1e-4) << layout;
-    EXPECT_NEAR(made.total_g, 4 * c.collective_g, 1e-3) << layout;
+    EXPECT_NEAR(made.y_nm, c.torque.y_nm, 3e-4) << layout;
+    EXPECT_NEAR(made.z_nm, c.torque.z_nm, 3e-5) << layout;
+    EXPECT_NEAR(made.total_g, 4 * c.collective_g, 0.13) << layout;
   }
 }
 
 TEST(Mixer, PlusLayoutRollsOnTheSideMotorsAndPitchesOnFrontAndRear) {
   Mixer mixer;
   mixer.configure(Layout::kPlus, 0.225f, 0.015f);
-  float f[4];
-  mixer.mix(300, {0.1f, 0.0f, 0.0f}, 0, 1000, f);
-  EXPECT_FLOAT_EQ(f[0], 300) << "front: no roll";
-  EXPECT_FLOAT_EQ(f[2], 300) << "rear: no roll";
-  EXPECT_GT(f[1], 300) << "positive roll (right side down) pushes the left motor up";
-  EXPECT_LT(f[3], 300);
-  mixer.mix(300, {0.0f, 0.1f, 0.0f}, 0, 1000, f);
-  EXPECT_GT(f[2], 300) << "positive pitch (nose down) pushes the rear up";
-  EXPECT_LT(f[0], 300);
-  EXPECT_FLOAT_EQ(f[1], 300);
+  ForceQ4 f[4];
+  mixer.mix(toQ4(300), {0.1f, 0.0f, 0.0f}, 0, toQ4(1000), f);
+  EXPECT_EQ(f[0], toQ4(300)) << "front: no roll";
+  EXPECT_EQ(f[2], toQ4(300)) << "rear: no roll";
+  EXPECT_GT(f[1], toQ4(300)) << "positive roll (right side down) pushes the left motor up";
+  EXPECT_LT(f[3], toQ4(300));
+  mixer.mix(toQ4(300), {0.0f, 0.1f, 0.0f}, 0, toQ4(1000), f);
+  EXPECT_GT(f[2], toQ4(300)) << "positive pitch (nose down) pushes the rear up";
+  EXPECT_LT(f[0], toQ4(300));
+  EXPECT_EQ(f[1], toQ4(300));
 }
 
 TEST(Mixer, RollAndPitchBeyondTheRangeAreScaledDownKeepingTheirDirectionAndYawIsDropped) {
   Mixer mixer;
   mixer.configure(Layout::kX, 0.225f, 0.015f);
-  float f[4];
+  ForceQ4 f[4];
   const Torque asked = {3.0f, 1.5f, 0.05f};  // far more than 20..800 g can make
-  const uint8_t limits = mixer.mix(300, asked, 20.0f, 800.0f, f);
+  const uint8_t limits = mixer.mix(toQ4(300), asked, toQ4(20), toQ4(800), f);
   EXPECT_EQ(limits & (kMixRollPitchLimited | kMixYawLimited), kMixRollPitchLimited | kMixYawLimited);
-  for (float v : f) {
-    EXPECT_GE(v, 20.0f - 1e-3f);
-    EXPECT_LE(v, 800.0f + 1e-3f);
+  for (ForceQ4 v : f) {
+    EXPECT_GE(v, toQ4(20) - 1);
+    EXPECT_LE(v, toQ4(800) + 1);
   }
   const Made made = torqueOf(Layout::kX, f, 0.225, 0.015);
-  EXPECT_NEAR(made.x_nm / made.y_nm, 2.0, 1e-3) << "the direction of the roll/pitch torque";
+  EXPECT_NEAR(made.x_nm / made.y_nm, 2.0, 2e-3) << "the direction of the roll/pitch torque";
   EXPECT_NEAR(made.z_nm, 0.0, 1e-4);
-  float lo = f[0], hi = f[0];
-  for (float v : f) {
+  ForceQ4 lo = f[0], hi = f[0];
+  for (ForceQ4 v : f) {
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
-  EXPECT_NEAR(hi - lo, 780.0f, 1e-2) << "the whole range is used";
+  EXPECT_NEAR(hi - lo, toQ4(780), 2) << "the whole range is used";
 }
 
 TEST(Mixer, YawIsScaledToFitWhileRollAndPitchStayWhole) {
   Mixer mixer;
   mixer.configure(Layout::kPlus, 0.225f, 0.015f);
-  float f[4];
+  ForceQ4 f[4];
   const Torque asked = {0.3f, 0.0f, 0.2f};  // the roll fits alone, roll + yaw do not
-  const uint8_t limits = mixer.mix(300, asked, 20.0f, 600.0f, f);
+  const uint8_t limits = mixer.mix(toQ4(300), asked, toQ4(20), toQ4(600), f);
   EXPECT_EQ(limits & kMixYawLimited, kMixYawLimited);
   EXPECT_EQ(limits & kMixRollPitchLimited, 0);
   const Made made = torqueOf(Layout::kPlus, f, 0.225, 0.015);
-  EXPECT_NEAR(made.x_nm, 0.3, 1e-4) << "roll untouched";
+  EXPECT_NEAR(made.x_nm, 0.3, 3e-4) << "roll untouched";
   EXPECT_GT(made.z_nm, 0.0);
   EXPECT_LT(made.z_nm, 0.2);
-  for (float v : f) {
-    EXPECT_GE(v, 20.0f - 1e-3f);
-    EXPECT_LE(v, 600.0f + 1e-3f);
+  for (ForceQ4 v : f) {
+    EXPECT_GE(v, toQ4(20) - 1);
+    EXPECT_LE(v, toQ4(600) + 1);
   }
 }
 
@@ -149,14 +150,14 @@ TEST(Mixer, TheCollectiveGivesWayToTheTorqueAtTheBottomAndTheTop) {
   Mixer mixer;
   mixer.configure(Layout::kX, 0.225f, 0.015f);
   for (float collective : {10.0f, 790.0f}) {
-    float f[4];
-    const uint8_t limits = mixer.mix(collective, {0.2f, 0.0f, 0.0f}, 20.0f, 800.0f, f);
+    ForceQ4 f[4];
+    const uint8_t limits = mixer.mix(toQ4(collective), {0.2f, 0.0f, 0.0f}, toQ4(20), toQ4(800), f);
     EXPECT_EQ(limits, kMixCollectiveLimited) << collective;
     const Made made = torqueOf(Layout::kX, f, 0.225, 0.015);
-    EXPECT_NEAR(made.x_nm, 0.2, 1e-4) << collective;
-    for (float v : f) {
-      EXPECT_GE(v, 20.0f - 1e-3f);
-      EXPECT_LE(v, 800.0f + 1e-3f);
+    EXPECT_NEAR(made.x_nm, 0.2, 3e-4) << collective;
+    for (ForceQ4 v : f) {
+      EXPECT_GE(v, toQ4(20));
+      EXPECT_LE(v, toQ4(800));
     }
   }
 }

@@ -1,6 +1,7 @@
 // Controls and observes the fake HAL backend from host tests. Host only (uses the STL).
 //
-// Time only moves when the code under test waits (Clock::delayMs, sleepUntilInterrupt) or
+// Time only moves when the code under test waits (Clock::delayMs, sleepUntilInterrupt,
+// sleepUnless with nothing pending) or
 // the test calls advanceMs(). Every simulated millisecond: scheduled input whose time has
 // come is delivered to the UART receive buffer, then the tick hook (if any) runs, so a test
 // can model a plant that reacts to the ESC pulses.
