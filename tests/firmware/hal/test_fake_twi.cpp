@@ -2,6 +2,7 @@
 // against the datasheet behaviour the AVR backend (hal/avr/twi.cpp, esc.cpp) has on the chip.
 #include <gtest/gtest.h>
 
+#include <stdexcept>
 #include <vector>
 
 #include "hal/fake.hpp"
@@ -146,6 +147,25 @@ TEST_F(FakeTwi, ThePhaseHookRunsOncePerFrameAt400HzAndFrameTimeWrapsAtTheFramePe
   hal::Esc::setPhaseHook(0, nullptr);
   fake::advanceMs(100);
   EXPECT_EQ(calls, 401) << "no hook, no calls (the frame from 1000 ms had its call at 1001.5 ms)";
+}
+
+TEST(FakeClock, SleepUnlessPassesNoTimeWithWorkPendingAndSleepUntilWaitsForIt) {
+  fake::reset();
+  static bool pending = false;
+  pending = true;
+  hal::Clock::sleepUnless([] { return pending; });
+  EXPECT_EQ(fake::nowMs(), 0u) << "work pending: back at once";
+  pending = false;
+  hal::Clock::sleepUnless([] { return pending; });
+  EXPECT_EQ(fake::nowMs(), 1u) << "nothing pending: one millisecond asleep";
+  fake::setTickHook([](uint32_t now_ms) { pending = now_ms >= 7; });
+  hal::Clock::sleepUntil([] { return pending; });
+  EXPECT_EQ(fake::nowMs(), 7u);
+  fake::setTickHook(nullptr);
+  fake::setTimeLimitMs(20);
+  pending = false;
+  EXPECT_THROW(hal::Clock::sleepUntil([] { return pending; }), std::runtime_error) << "the time limit ends it";
+  fake::reset();
 }
 
 }  // namespace
