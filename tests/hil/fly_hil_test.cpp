@@ -1,8 +1,8 @@
 // fly (firmware/fly) on the virtual airframe: the real image on the simulated ATmega2560 with
-// the chip's TWI, an MPU-6050 and the quad on a 3-DOF gimbal (tools/sim/include/sim/
-// airframe.hpp). It holds level and follows a roll step, and each fault stops every ESC pulse
-// within 100 ms: the IMU silent, its data frozen, a slave holding SDA low, a crash, the link
-// lost; a slave that lets go within nine clocks is recovered without a disarm.
+// the chip's TWI, an MPU-6050 and the quad on a 3-DOF gimbal or the seesaw
+// (tools/sim/include/sim/airframe.hpp). It holds level and follows a roll step on both, and each
+// fault stops every ESC pulse within 100 ms: the IMU silent, its data frozen, a slave holding SDA
+// low, a crash, the link lost; a slave that lets go within nine clocks is recovered in flight.
 // pwm mode (the thesis's controller output around a hover pulse) needs no calibrated slot, so
 // these runs need no gather; the modes' pulses are tested on the fake HAL
 // (tests/firmware/fly). Built only in a tree that has the airframe (tests/hil/CMakeLists.txt).
@@ -24,19 +24,21 @@ constexpr double kStopUs = 1005;  // a pulse at or below this is the stop pulse 
 
 class FlyHil : public ::testing::Test {
  protected:
-  // The gimbal, an MPU-6050 unit (seed 7: its offsets, -1 deg of roll at rest), fly booted,
-  // pwm mode at 1480 us, armed and spooled up (each test first skips without the image).
-  void armedOnTheGimbal(const std::vector<sim::AirFault>& faults = {}) {
+  // The gimbal (or the seesaw), an MPU-6050 unit (seed 7: its offsets, -1 deg of roll at rest),
+  // fly booted, pwm mode at 1480 us, armed and spooled up (each test first skips without the
+  // image).
+  void armedOnARig(sim::AirRig rig = sim::AirRig::kGimbal) {
     sim::AirframeOptions o;
+    o.rig = rig;
     o.imu_params.seed = 7;
     o.log_period_s = 0.0005;
-    o.faults = faults;
     rig_ = std::make_unique<sim::AirframeRig>(hil::imagePath("fly"), o);
     con_ = std::make_unique<sim::Console>(rig_->board(), "fly> ");
     con_->expectText("imu: gyro bias", 5.0);
     con_->waitPrompt(1.0);
     while (rig_->truth().t_s < 2.1) fly(0.1);  // the ESCs' 2 s at the stop pulse
-    for (const char* line : {"mode pwm", "layout x", "hover 1480 1440"}) con_->command(line);
+    con_->command(rig == sim::AirRig::kSeesaw ? "layout seesaw" : "layout x");
+    for (const char* line : {"mode pwm", "hover 1480 1440"}) con_->command(line);
     const auto armed = con_->command("arm");
     ASSERT_FALSE(armed.empty());
     ASSERT_EQ(armed[0].rfind("armed:", 0), 0u) << con_->tail();
@@ -70,7 +72,7 @@ class FlyHil : public ::testing::Test {
 
 TEST_F(FlyHil, HoldsLevelOnTheGimbalAndFollowsARollStep) {
   HIL_REQUIRE_IMAGE("fly");
-  armedOnTheGimbal();
+  armedOnARig();
   fly(1.0);
   EXPECT_LT(std::fabs(rig_->truth().roll_deg), 3.0);
   EXPECT_LT(std::fabs(rig_->truth().pitch_deg), 3.0);
@@ -78,6 +80,15 @@ TEST_F(FlyHil, HoldsLevelOnTheGimbalAndFollowsARollStep) {
   fly(2.0);
   EXPECT_NEAR(rig_->truth().roll_deg, 10.0, 3.0) << "a positive roll setpoint is a positive roll";
   EXPECT_LT(std::fabs(rig_->truth().pitch_deg), 3.0);
+  EXPECT_LT(stoppedFrom(0.0), 0.0) << "never disarmed";
+}
+
+TEST_F(FlyHil, TheSeesawFollowsARollStepOnMotorsZeroAndOne) {
+  HIL_REQUIRE_IMAGE("fly");
+  armedOnARig(sim::AirRig::kSeesaw);
+  con_->command("sp 10 0");
+  fly(2.0);
+  EXPECT_NEAR(rig_->truth().roll_deg, 10.0, 3.0) << "its weight below the pivot pulls it back a little";
   EXPECT_LT(stoppedFrom(0.0), 0.0) << "never disarmed";
 }
 
@@ -90,7 +101,7 @@ class FlyHilImuFault : public FlyHil, public ::testing::WithParamInterface<Fault
 
 TEST_P(FlyHilImuFault, StopsEveryPulseWithin100Ms) {
   HIL_REQUIRE_IMAGE("fly");
-  armedOnTheGimbal();
+  armedOnARig();
   const double at_s = rig_->truth().t_s + 0.2;
   rig_->schedule(sim::parseAirFault(std::string(GetParam().kind) + "@" + std::to_string(at_s)));
   fly(0.7);
@@ -112,7 +123,7 @@ INSTANTIATE_TEST_SUITE_P(Faults, FlyHilImuFault,
 
 TEST_F(FlyHil, ASlaveThatLetsGoWithinNineClocksIsRecoveredInFlight) {
   HIL_REQUIRE_IMAGE("fly");
-  armedOnTheGimbal();
+  armedOnARig();
   rig_->schedule(sim::parseAirFault("sda-low:9@" + std::to_string(rig_->truth().t_s + 0.2)));
   fly(1.0);
   EXPECT_LT(stoppedFrom(0.0), 0.0) << "still flying\n" << con_->tail();
@@ -124,7 +135,7 @@ TEST_F(FlyHil, ASlaveThatLetsGoWithinNineClocksIsRecoveredInFlight) {
 
 TEST_F(FlyHil, ACrashStopsEveryPulseWithin100MsOfTheLimit) {
   HIL_REQUIRE_IMAGE("fly");
-  armedOnTheGimbal();
+  armedOnARig();
   con_->command("crash 20");
   con_->command("sp 25 0");  // beyond the limit: the gimbal turns through it
   const double from_s = rig_->truth().t_s;
@@ -142,7 +153,7 @@ TEST_F(FlyHil, ACrashStopsEveryPulseWithin100MsOfTheLimit) {
 
 TEST_F(FlyHil, TheLinkLostStopsEveryPulseAfterTheFailsafeTime) {
   HIL_REQUIRE_IMAGE("fly");
-  armedOnTheGimbal();
+  armedOnARig();
   rig_->board().sendText("\r");
   rig_->run(0.001);
   const double last_line_s = rig_->truth().t_s;
