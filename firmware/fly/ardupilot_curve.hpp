@@ -20,14 +20,14 @@
 namespace fly {
 
 struct ArduPilotParams {
-  float expo = 0.65f;        // MOT_THST_EXPO
-  float spin_min = 0.15f;    // MOT_SPIN_MIN
-  float spin_max = 0.95f;    // MOT_SPIN_MAX
+  float expo = 0.65f;          // MOT_THST_EXPO
+  float spin_min = 0.15f;      // MOT_SPIN_MIN
+  float spin_max = 0.95f;      // MOT_SPIN_MAX
   uint16_t pwm_min_us = 1000;  // MOT_PWM_MIN
   uint16_t pwm_max_us = 2000;  // MOT_PWM_MAX
-  float bat_volt_max_v = 0;  // MOT_BAT_VOLT_MAX (0: no voltage scaling)
-  float bat_volt_min_v = 0;  // MOT_BAT_VOLT_MIN
-  float full_thrust_g = 0;   // 0: not given (the mode refuses to arm)
+  float bat_volt_max_v = 0;    // MOT_BAT_VOLT_MAX (0: no voltage scaling)
+  float bat_volt_min_v = 0;    // MOT_BAT_VOLT_MIN
+  float full_thrust_g = 0;     // 0: not given (the mode refuses to arm)
 };
 
 class ArduPilotCurve {
@@ -52,10 +52,10 @@ class ArduPilotCurve {
   float ratioFor(float vbat_v) const;
 
   ArduPilotParams p_;
-  float expo_ = 0.65f;       // clamped
-  float inv_vmax_ = 0;       // 1 / MOT_BAT_VOLT_MAX
-  float vmin_v_ = 0;         // MOT_BAT_VOLT_MIN raised to 0.6 MOT_BAT_VOLT_MAX
-  float alpha_dt_s_ = -1;    // the filter's alpha for this dt (one dt in practice: no division)
+  float expo_ = 0.65f;     // clamped
+  float inv_vmax_ = 0;     // 1 / MOT_BAT_VOLT_MAX
+  float vmin_v_ = 0;       // MOT_BAT_VOLT_MIN raised to 0.6 MOT_BAT_VOLT_MAX
+  float alpha_dt_s_ = -1;  // the filter's alpha for this dt (one dt in practice: no division)
   float alpha_ = 0;
   float ratio_filt_ = 1.0f;  // v through the filter
   bool filter_set_ = false;

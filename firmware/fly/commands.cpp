@@ -14,8 +14,8 @@ using fw::sayLine;
 namespace {
 constexpr float kRadPerDeg = 3.14159265f / 180.0f;
 constexpr int8_t kMaxSetpointDeg = 30;
-constexpr uint16_t kMaxGain = 10000;          // mN m per rad (or per rad/s, rad s)
-constexpr uint16_t kMaxThrustG = 4 * 2500;    // four motors of the heaviest class flown
+constexpr uint16_t kMaxGain = 10000;        // mN m per rad (or per rad/s, rad s)
+constexpr uint16_t kMaxThrustG = 4 * 2500;  // four motors of the heaviest class flown
 }  // namespace
 
 // The table's handlers: one call each, from the parsed arguments to the app's command (the
@@ -241,22 +241,23 @@ const char kDeg[] TC_FLASH = "DEG";
 const char kOnOff[] TC_FLASH = "on|off";
 
 const fw::ArgSpec kSetpointArgs[] TC_FLASH = {{kRollDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg},
-                                                {kPitchDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg}};
+                                              {kPitchDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg}};
 const fw::ArgSpec kThrustArgs[] TC_FLASH = {{kThrustG, nullptr, 0, kMaxThrustG}};
 const fw::ArgSpec kGainArgs[] TC_FLASH = {
     {kKp, nullptr, 0, kMaxGain}, {kKi, nullptr, 0, kMaxGain}, {kKd, nullptr, 0, kMaxGain}};
 const fw::ArgSpec kModeArgs[] TC_FLASH = {{kModes, kModes, 0, 0}, {kSlot, nullptr, 0, kMotors - 1}};
 const fw::ArgSpec kLayoutArgs[] TC_FLASH = {{kLayouts, kLayouts, 0, 0}};
-const fw::ArgSpec kAirframeArgs[] TC_FLASH = {{kArmMm, nullptr, 50, 1000}, {kYawArmUm, nullptr, 1000, 100000}};
+const fw::ArgSpec kAirframeArgs[] TC_FLASH = {{kArmMm, nullptr, 50, 1000},
+                                              {kYawArmUm, nullptr, 1000, 100000}};
 const fw::ArgSpec kHoverArgs[] TC_FLASH = {{kHoverUs, nullptr, tc::kThrottleMinUs + 1, tc::kThrottleMaxUs},
-                                             {kSlope, nullptr, 1, 20000}};
+                                           {kSlope, nullptr, 1, 20000}};
 const fw::ArgSpec kApArgs[] TC_FLASH = {{kExpo, nullptr, -10000, 10000},
-                                          {kSpinMin, nullptr, 0, 3000},
-                                          {kSpinMax, nullptr, 9000, 10000},
-                                          {kFullG, nullptr, 1, 20000}};
+                                        {kSpinMin, nullptr, 0, 3000},
+                                        {kSpinMax, nullptr, 9000, 10000},
+                                        {kFullG, nullptr, 1, 20000}};
 const fw::ArgSpec kApVoltArgs[] TC_FLASH = {{kVmax, nullptr, 0, 26000}, {kVmin, nullptr, 0, 26000}};
 const fw::ArgSpec kApPwmArgs[] TC_FLASH = {{kMinUs, nullptr, hal::kPulseClampMinUs, hal::kPulseClampMaxUs},
-                                             {kMaxUs, nullptr, hal::kPulseClampMinUs, hal::kPulseClampMaxUs}};
+                                           {kMaxUs, nullptr, hal::kPulseClampMinUs, hal::kPulseClampMaxUs}};
 const fw::ArgSpec kCrashArgs[] TC_FLASH = {{kDeg, nullptr, kMinCrashDeg, kMaxCrashDeg}};
 const fw::ArgSpec kOnOffArgs[] TC_FLASH = {{kOnOff, kOnOff, 0, 0}};
 
@@ -285,15 +286,20 @@ const char kArmHelp[] TC_FLASH = "start flying: level, still, IMU ready; spools 
 const char kDisarmHelp[] TC_FLASH = "every ESC to the stop pulse, now";
 const char kSpHelp[] TC_FLASH = "roll and pitch setpoint in degrees";
 const char kThrustHelp[] TC_FLASH = "collective force of all motors (not in mode pwm)";
-const char kGainsHelp[] TC_FLASH = "roll/pitch PID, mN m per rad, rad s, rad/s\n(the thesis's Kp 2.2, Kd 0.4: 800 0 146)";
+const char kGainsHelp[] TC_FLASH =
+    "roll/pitch PID, mN m per rad, rad s, rad/s\n(the thesis's Kp 2.2, Kd 0.4: 800 0 146)";
 const char kYawHelp[] TC_FLASH = "yaw rate PI, mN m per rad/s, rad";
 const char kModeHelp[] TC_FLASH =
-    "forces to pulses: each motor's own record | slot N's\nrecord for all | the thesis's PWM around hover |\nArduPilot's curve (motors stopped)";
+    "forces to pulses: each motor's own record | slot N's\n"
+    "record for all | the thesis's PWM around hover |\n"
+    "ArduPilot's curve (motors stopped)";
 const char kLayoutHelp[] TC_FLASH = "motor positions (seesaw: 0 left, 1 right)";
 const char kAirframeHelp[] TC_FLASH = "arm length; propeller torque per thrust (Q/T)";
 const char kHoverHelp[] TC_FLASH = "mode pwm: the hover pulse, the force per us there";
 const char kApHelp[] TC_FLASH =
-    "mode ardupilot: MOT_THST_EXPO, MOT_SPIN_MIN,\nMOT_SPIN_MAX in 1/10000, the full thrust in g\n(thrustcal lab export --to ardupilot)";
+    "mode ardupilot: MOT_THST_EXPO, MOT_SPIN_MIN,\n"
+    "MOT_SPIN_MAX in 1/10000, the full thrust in g\n"
+    "(thrustcal lab export --to ardupilot)";
 const char kApVoltHelp[] TC_FLASH = "MOT_BAT_VOLT_MAX, MOT_BAT_VOLT_MIN (0 0: off)";
 const char kApPwmHelp[] TC_FLASH = "MOT_PWM_MIN, MOT_PWM_MAX";
 const char kCrashHelp[] TC_FLASH = "disarm beyond this roll or pitch";

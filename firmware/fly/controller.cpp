@@ -13,8 +13,10 @@ void AttitudeController::reset() {
 
 Torque AttitudeController::torque(const Attitude& a, const Setpoint& sp) const {
   Torque t;
-  t.x_nm = rp_.kp_nm_per_rad * (sp.roll_rad - a.roll_rad) - rp_.kd_nm_s_per_rad * a.rate_rad_s[0] + integral_nm_[0];
-  t.y_nm = rp_.kp_nm_per_rad * (sp.pitch_rad - a.pitch_rad) - rp_.kd_nm_s_per_rad * a.rate_rad_s[1] + integral_nm_[1];
+  t.x_nm = rp_.kp_nm_per_rad * (sp.roll_rad - a.roll_rad) - rp_.kd_nm_s_per_rad * a.rate_rad_s[0] +
+           integral_nm_[0];
+  t.y_nm = rp_.kp_nm_per_rad * (sp.pitch_rad - a.pitch_rad) - rp_.kd_nm_s_per_rad * a.rate_rad_s[1] +
+           integral_nm_[1];
   t.z_nm = yaw_.kp_nm_s_per_rad * (sp.yaw_rate_rad_s - a.rate_rad_s[2]) + integral_nm_[2];
   return t;
 }
@@ -27,8 +29,8 @@ void AttitudeController::integrate(const Attitude& a, const Setpoint& sp, float 
     integral_nm_[1] = clampSym(integral_nm_[1] + k * (sp.pitch_rad - a.pitch_rad), kIntegralMaxNm);
   }
   if (yaw_.ki_nm_per_rad != 0.0f && !(mix_limits & kMixYawLimited)) {
-    integral_nm_[2] = clampSym(integral_nm_[2] + yaw_.ki_nm_per_rad * dt_s * (sp.yaw_rate_rad_s - a.rate_rad_s[2]),
-                               kIntegralMaxNm);
+    integral_nm_[2] = clampSym(
+        integral_nm_[2] + yaw_.ki_nm_per_rad * dt_s * (sp.yaw_rate_rad_s - a.rate_rad_s[2]), kIntegralMaxNm);
   }
 }
 

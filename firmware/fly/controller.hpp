@@ -19,12 +19,12 @@ namespace fly {
 
 struct AxisGains {
   float kp_nm_per_rad = 0;
-  float ki_nm_per_rad_s = 0;   // per (rad s)
+  float ki_nm_per_rad_s = 0;  // per (rad s)
   float kd_nm_s_per_rad = 0;
 };
 struct YawGains {
-  float kp_nm_s_per_rad = 0;   // per rad/s of rate error
-  float ki_nm_per_rad = 0;     // per rad of integrated rate error
+  float kp_nm_s_per_rad = 0;  // per rad/s of rate error
+  float ki_nm_per_rad = 0;    // per rad of integrated rate error
 };
 
 constexpr AxisGains kThesisGains = {0.800f, 0.0f, 0.146f};

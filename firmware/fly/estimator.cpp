@@ -126,8 +126,8 @@ void AttitudeEstimator::correctPitch(const ImuSample& s, float interval_s) {
     return;
   }
   const float y = s.accel[1], z = s.accel[2];
-  attitude_.pitch_rad =
-      blend(attitude_.pitch_rad, atan2Approx(-static_cast<float>(s.accel[0]), sqrtf(y * y + z * z)), interval_s);
+  attitude_.pitch_rad = blend(attitude_.pitch_rad,
+                              atan2Approx(-static_cast<float>(s.accel[0]), sqrtf(y * y + z * z)), interval_s);
 }
 
 }  // namespace fly

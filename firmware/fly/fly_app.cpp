@@ -124,9 +124,7 @@ void FlyApp::runOnce() {
   printNotes();
 }
 
-bool FlyApp::hasWork() {
-  return active_ != nullptr && (active_->imu_.frameDue() || hal::Uart::available());
-}
+bool FlyApp::hasWork() { return active_ != nullptr && (active_->imu_.frameDue() || hal::Uart::available()); }
 
 void FlyApp::phaseHook() {
   if (active_ != nullptr) active_->imu_.onPhase();
@@ -225,7 +223,8 @@ void FlyApp::flyFrame(float dt_s, uint16_t t0_us) {
   // The read started at the phase: pulses written before the frame's end (at or after the
   // phase) meet the next rising edge; written after it (before the phase), the one after.
   const uint16_t t1_us = hal::Esc::frameTimeUs();
-  const uint16_t compute_us = static_cast<uint16_t>(t1_us >= t0_us ? t1_us - t0_us : t1_us + kFrameUs - t0_us);
+  const uint16_t compute_us =
+      static_cast<uint16_t>(t1_us >= t0_us ? t1_us - t0_us : t1_us + kFrameUs - t0_us);
   if (compute_us > stats_.compute_max_us) stats_.compute_max_us = compute_us;
   if (t1_us < stats_.phase_us) {
     if (stats_.late != 0xFFFF) ++stats_.late;

@@ -75,11 +75,11 @@ struct FlightState {
 
 // The loop's timing, as frameTimeUs() sees it (status; thrustcal bench measures it in simavr).
 struct LoopStats {
-  uint16_t phase_us = 0;        // where in the frame the read starts
-  uint16_t budget_us = 0;       // the computation it leaves room for
-  uint16_t compute_max_us = 0;  // from the loop seeing the read's end to the written pulses
+  uint16_t phase_us = 0;            // where in the frame the read starts
+  uint16_t budget_us = 0;           // the computation it leaves room for
+  uint16_t compute_max_us = 0;      // from the loop seeing the read's end to the written pulses
   uint16_t margin_min_us = 0xFFFF;  // from the written pulses to the next rising edge
-  uint16_t late = 0;            // pulses written after the frame they were meant for had ended
+  uint16_t late = 0;                // pulses written after the frame they were meant for had ended
 };
 
 // One stream row, taken in its frame and printed after it.
@@ -201,7 +201,7 @@ class FlyApp {
   uint32_t start_ms_ = 0;
   uint8_t frames_since_sample_ = 0;
   ImuFault said_fault_ = ImuFault::kNone;  // the fault last printed: a retry that fails alike is not news
-  bool starting_ = false;  // start() .. calibrateGyro(): they say what the notes would
+  bool starting_ = false;                  // start() .. calibrateGyro(): they say what the notes would
   bool streaming_ = false;
   bool in_service_ = false;
   bool hold_prompt_ = false;

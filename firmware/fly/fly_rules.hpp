@@ -20,16 +20,29 @@ static_assert(1000000u % kFrameHz == 0, "a whole number of microseconds per fram
 // second), on its own frame, so no frame carries two: the battery (four ADC conversions and the
 // median), the mode's use of it (ardupilot: its voltage filter and lift_max), a stream row, the
 // accelerometer's roll correction, its pitch correction.
-enum class SlowJob : uint8_t { kNone, kBattery, kBatteryModel, kStreamRow, kRollCorrection, kPitchCorrection };
+enum class SlowJob : uint8_t {
+  kNone,
+  kBattery,
+  kBatteryModel,
+  kStreamRow,
+  kRollCorrection,
+  kPitchCorrection
+};
 constexpr uint8_t kSlowCycleFrames = 8;
 inline SlowJob slowJob(uint32_t frame) {
   switch (frame % kSlowCycleFrames) {
-    case 0: return SlowJob::kBattery;
-    case 1: return SlowJob::kBatteryModel;
-    case 3: return SlowJob::kStreamRow;
-    case 5: return SlowJob::kRollCorrection;
-    case 7: return SlowJob::kPitchCorrection;
-    default: return SlowJob::kNone;
+    case 0:
+      return SlowJob::kBattery;
+    case 1:
+      return SlowJob::kBatteryModel;
+    case 3:
+      return SlowJob::kStreamRow;
+    case 5:
+      return SlowJob::kRollCorrection;
+    case 7:
+      return SlowJob::kPitchCorrection;
+    default:
+      return SlowJob::kNone;
   }
 }
 constexpr float kSlowCycleS = kSlowCycleFrames * kFramePeriodS;
@@ -37,8 +50,8 @@ constexpr float kSlowCycleS = kSlowCycleFrames * kFramePeriodS;
 // When in the frame the IMU read starts (Esc's phase hook): as late as lets the read and the
 // computation end before the frame ends, so the next rising edge carries the result and the
 // time from the end of the read to that edge is the computation's budget, not a whole frame.
-constexpr uint16_t kImuReadUs = 720;      // a 15-byte burst at 400 kHz, its interrupts, the wake-up
-constexpr uint16_t kMinPhaseUs = 100;     // after the rising edge at the earliest
+constexpr uint16_t kImuReadUs = 720;   // a 15-byte burst at 400 kHz, its interrupts, the wake-up
+constexpr uint16_t kMinPhaseUs = 100;  // after the rising edge at the earliest
 inline uint16_t readPhaseUs(uint16_t budget_us) {
   const uint16_t needed = static_cast<uint16_t>(kImuReadUs + budget_us);
   return needed + kMinPhaseUs >= kFrameUs ? kMinPhaseUs : static_cast<uint16_t>(kFrameUs - needed);
@@ -48,10 +61,10 @@ inline uint16_t readPhaseUs(uint16_t budget_us) {
 // then the output stage's own cost (a budget, not a measurement: status shows the measured
 // time, docs/fly.md the figures).
 enum class OutputMode : uint8_t { kForce, kGeneric, kPwm, kArduPilot };
-constexpr uint16_t kControlBudgetUs = 650;          // taking the sample, estimator, controller, mixer
-constexpr uint16_t kForceApiBudgetUs = 250;         // forces to grams, the v2 frame, the pulses
-constexpr uint16_t kThesisMotorBudgetUs = 190;      // option 2.1 on one motor, EEPROM steps
-constexpr uint16_t kArduPilotMotorBudgetUs = 170;   // one square root and a few products
+constexpr uint16_t kControlBudgetUs = 650;         // taking the sample, estimator, controller, mixer
+constexpr uint16_t kForceApiBudgetUs = 250;        // forces to grams, the v2 frame, the pulses
+constexpr uint16_t kThesisMotorBudgetUs = 190;     // option 2.1 on one motor, EEPROM steps
+constexpr uint16_t kArduPilotMotorBudgetUs = 170;  // one square root and a few products
 constexpr uint16_t kPwmBudgetUs = 100;
 // thesis_motors: the motors that fly a v1 record (force, generic modes); motors: the layout's.
 inline uint16_t computeBudgetUs(OutputMode mode, uint8_t thesis_motors, uint8_t motors) {
@@ -61,25 +74,26 @@ inline uint16_t computeBudgetUs(OutputMode mode, uint8_t thesis_motors, uint8_t 
     case OutputMode::kArduPilot:
       return static_cast<uint16_t>(kControlBudgetUs + motors * kArduPilotMotorBudgetUs);
     default:
-      return static_cast<uint16_t>(kControlBudgetUs + kForceApiBudgetUs + thesis_motors * kThesisMotorBudgetUs);
+      return static_cast<uint16_t>(kControlBudgetUs + kForceApiBudgetUs +
+                                   thesis_motors * kThesisMotorBudgetUs);
   }
 }
 
 // ---- arming ----
-constexpr float kArmLevelDeg = 5.0f;   // roll and pitch within this of level
-constexpr float kArmStillDps = 5.0f;   // every body rate below this
-constexpr uint16_t kSpoolMs = 1000;    // the collective ramps up from 0 this long after arming
+constexpr float kArmLevelDeg = 5.0f;  // roll and pitch within this of level
+constexpr float kArmStillDps = 5.0f;  // every body rate below this
+constexpr uint16_t kSpoolMs = 1000;   // the collective ramps up from 0 this long after arming
 
 enum class ArmRefusal : uint8_t {
   kNone,
-  kArmed,              // already
-  kEscsArming,         // the ESCs' 2 s at the stop pulse after power-on are not over
-  kImuFault,           // the IMU failed (or never answered): status says why
-  kImuStarting,        // the IMU is being set up or its gyro calibrated
+  kArmed,        // already
+  kEscsArming,   // the ESCs' 2 s at the stop pulse after power-on are not over
+  kImuFault,     // the IMU failed (or never answered): status says why
+  kImuStarting,  // the IMU is being set up or its gyro calibrated
   kNotLevel,
   kMoving,
-  kMotorNotCalibrated, // a motor the layout flies has no valid record to fly (force, generic)
-  kModeNeedsSettings,  // pwm: no hover pulse; ardupilot: no parameters
+  kMotorNotCalibrated,  // a motor the layout flies has no valid record to fly (force, generic)
+  kModeNeedsSettings,   // pwm: no hover pulse; ardupilot: no parameters
 };
 
 struct ArmInputs {

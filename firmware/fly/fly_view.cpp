@@ -30,19 +30,26 @@ void sayFloat(float v, uint8_t decimals) {
   for (uint8_t i = 0; i < decimals; ++i) scale *= 10.0f;
   const float x = v * scale;
   const float limit = 2.0e9f;
-  sayFixed(static_cast<int32_t>(x > limit ? limit : (x < -limit ? -limit : x + (x < 0 ? -0.5f : 0.5f))), decimals);
+  sayFixed(static_cast<int32_t>(x > limit ? limit : (x < -limit ? -limit : x + (x < 0 ? -0.5f : 0.5f))),
+           decimals);
 }
 void sayDeg(float rad) { sayFloat(rad * kDegPerRad, 1); }
 void sayMilli(float v) { sayCount(static_cast<uint32_t>(v * 1000.0f + 0.5f)); }
 
 const char* faultText(ImuFault fault) {
   switch (fault) {
-    case ImuFault::kNoAnswer: return TC_FLASH_TEXT("no answer at its address (wiring: SDA D20, SCL D21, 3.3 V, pull-ups)");
-    case ImuFault::kWrongId: return TC_FLASH_TEXT("WHO_AM_I is not 0x68 (not an MPU-6050?): read 0x");
-    case ImuFault::kBusStuck: return TC_FLASH_TEXT("the bus is stuck (a line held low)");
-    case ImuFault::kBadConfig: return TC_FLASH_TEXT("its settings did not read back");
-    case ImuFault::kFrozen: return TC_FLASH_TEXT("frozen data (no new sample in 8 reads)");
-    case ImuFault::kNone: break;
+    case ImuFault::kNoAnswer:
+      return TC_FLASH_TEXT("no answer at its address (wiring: SDA D20, SCL D21, 3.3 V, pull-ups)");
+    case ImuFault::kWrongId:
+      return TC_FLASH_TEXT("WHO_AM_I is not 0x68 (not an MPU-6050?): read 0x");
+    case ImuFault::kBusStuck:
+      return TC_FLASH_TEXT("the bus is stuck (a line held low)");
+    case ImuFault::kBadConfig:
+      return TC_FLASH_TEXT("its settings did not read back");
+    case ImuFault::kFrozen:
+      return TC_FLASH_TEXT("frozen data (no new sample in ");
+    case ImuFault::kNone:
+      break;
   }
   return TC_FLASH_TEXT("none");
 }
@@ -50,6 +57,10 @@ const char* faultText(ImuFault fault) {
 void sayFault(const Mpu6050& imu) {
   say(faultText(imu.fault()));
   if (imu.fault() == ImuFault::kWrongId) fw::printHex2(imu.whoAmI());
+  if (imu.fault() == ImuFault::kFrozen) {
+    sayCount(kImuMaxStaleReads);
+    say(TC_FLASH_TEXT(" reads)"));
+  }
   if (imu.fault() != ImuFault::kBusStuck) return;
   if (imu.lastStatus() == Mpu6050::kTimedOut) {
     say(TC_FLASH_TEXT(": a transfer never ended"));
@@ -61,19 +72,26 @@ void sayFault(const Mpu6050& imu) {
 
 const char* modeName(OutputMode mode) {
   switch (mode) {
-    case OutputMode::kGeneric: return TC_FLASH_TEXT("generic");
-    case OutputMode::kPwm: return TC_FLASH_TEXT("pwm");
-    case OutputMode::kArduPilot: return TC_FLASH_TEXT("ardupilot");
-    case OutputMode::kForce: break;
+    case OutputMode::kGeneric:
+      return TC_FLASH_TEXT("generic");
+    case OutputMode::kPwm:
+      return TC_FLASH_TEXT("pwm");
+    case OutputMode::kArduPilot:
+      return TC_FLASH_TEXT("ardupilot");
+    case OutputMode::kForce:
+      break;
   }
   return TC_FLASH_TEXT("force");
 }
 
 const char* layoutName(Layout layout) {
   switch (layout) {
-    case Layout::kPlus: return TC_FLASH_TEXT("plus");
-    case Layout::kSeesaw: return TC_FLASH_TEXT("seesaw");
-    case Layout::kX: break;
+    case Layout::kPlus:
+      return TC_FLASH_TEXT("plus");
+    case Layout::kSeesaw:
+      return TC_FLASH_TEXT("seesaw");
+    case Layout::kX:
+      break;
   }
   return TC_FLASH_TEXT("x");
 }
@@ -137,7 +155,9 @@ void imuFault(const Mpu6050& imu) {
   sayLine(TC_FLASH_TEXT("; it tries again every second"));
 }
 
-void imuRunningAgain() { sayLine(TC_FLASH_TEXT("imu: running again; measuring the gyro bias (keep it still)")); }
+void imuRunningAgain() {
+  sayLine(TC_FLASH_TEXT("imu: running again; measuring the gyro bias (keep it still)"));
+}
 
 void calibrating() {
   say(TC_FLASH_TEXT("imu: measuring the gyro bias: keep the vehicle still ("));
@@ -207,7 +227,8 @@ void armRefused(ArmRefusal why, const FlyApp& app) {
     case ArmRefusal::kModeNeedsSettings:
       say(app.output().mode() == OutputMode::kPwm
               ? TC_FLASH_TEXT("mode pwm needs its hover point: hover US MG_PER_US")
-              : TC_FLASH_TEXT("mode ardupilot needs its parameters: ap EXPO_E4 SPIN_MIN_E4 SPIN_MAX_E4 FULL_G"));
+              : TC_FLASH_TEXT(
+                    "mode ardupilot needs its parameters: ap EXPO_E4 SPIN_MIN_E4 SPIN_MAX_E4 FULL_G"));
       break;
     case ArmRefusal::kNone:
       break;
@@ -271,7 +292,8 @@ void thrust(const FlyApp& app) {
   say(TC_FLASH_TEXT(" g over "));
   sayCount(app.mixer().motorCount());
   say(TC_FLASH_TEXT(" motors"));
-  if (app.output().mode() == OutputMode::kPwm) say(TC_FLASH_TEXT(" (mode pwm flies its hover pulse instead)"));
+  if (app.output().mode() == OutputMode::kPwm)
+    say(TC_FLASH_TEXT(" (mode pwm flies its hover pulse instead)"));
   newline();
 }
 
@@ -321,7 +343,8 @@ void layout(const FlyApp& app) {
   say(TC_FLASH_TEXT(" mm, yaw arm "));
   sayCount(static_cast<uint32_t>(app.settings().yaw_arm_m * 1.0e6f + 0.5f));
   say(TC_FLASH_TEXT(" um, motors "));
-  say(app.mixer().layout() == Layout::kSeesaw ? TC_FLASH_TEXT("0 (left) and 1 (right)") : TC_FLASH_TEXT("0..3"));
+  say(app.mixer().layout() == Layout::kSeesaw ? TC_FLASH_TEXT("0 (left) and 1 (right)")
+                                              : TC_FLASH_TEXT("0..3"));
   newline();
 }
 
@@ -393,7 +416,8 @@ void statusImu(const FlyApp& app) {
   sayCount(imu.faults());
   say(TC_FLASH_TEXT(", bus recoveries "));
   sayCount(imu.recoveries());
-  say(app.gyroCalibration().done() ? TC_FLASH_TEXT(", gyro calibrated") : TC_FLASH_TEXT(", gyro not calibrated"));
+  say(app.gyroCalibration().done() ? TC_FLASH_TEXT(", gyro calibrated")
+                                   : TC_FLASH_TEXT(", gyro not calibrated"));
   newline();
 }
 
@@ -438,7 +462,8 @@ void statusMotor(const FlyApp& app, uint8_t i) {
   sayCount(m.source);
   say(TC_FLASH_TEXT(" "));
   if (app.motors().isArmable(i)) {
-    say(app.motors().motor(m.source).fliesV2() ? TC_FLASH_TEXT("(model v2)") : TC_FLASH_TEXT("(thesis record)"));
+    say(app.motors().motor(m.source).fliesV2() ? TC_FLASH_TEXT("(model v2)")
+                                               : TC_FLASH_TEXT("(thesis record)"));
   } else {
     fw::sayRecordStatus(app.motors().motor(m.source));
   }
@@ -477,8 +502,9 @@ void status(const FlyApp& app, void (*yield)()) {
 }
 
 void streamHeader() {
-  sayLine(TC_FLASH_TEXT("t_s,roll_deg,pitch_deg,roll_sp_deg,pitch_sp_deg,p_dps,q_dps,r_dps,"
-                        "force0_g,force1_g,force2_g,force3_g,pulse0_us,pulse1_us,pulse2_us,pulse3_us"));
+  sayLine(
+      TC_FLASH_TEXT("t_s,roll_deg,pitch_deg,roll_sp_deg,pitch_sp_deg,p_dps,q_dps,r_dps,"
+                    "force0_g,force1_g,force2_g,force3_g,pulse0_us,pulse1_us,pulse2_us,pulse3_us"));
 }
 
 // Every number 16 bits (printFixed16: no 32-bit division); the time as seconds and milliseconds.

@@ -2,9 +2,9 @@
 // All logic lives in fly_app.cpp and its parts, which the host tests run against the fake HAL.
 #include <avr/avr_mcu_section.h>
 
-#include "simavr_mcu_tag.hpp"
 #include "fly_app.hpp"
 #include "hal/hal.hpp"
+#include "simavr_mcu_tag.hpp"
 
 // simavr reads the part, clock and supply voltages from this tag (the virtual airframe).
 AVR_MCU(F_CPU, "atmega2560");
@@ -30,7 +30,7 @@ int main() {
   app.startImu();         // WHO_AM_I, then its settings
   app.calibrateGyro();    // the gyro's bias at rest
 
-  for (;;) {              // every frame: IMU -> attitude -> torque -> forces -> pulses
+  for (;;) {  // every frame: IMU -> attitude -> torque -> forces -> pulses
     app.runOnce();
     // Asleep until an interrupt brings work (the end of a frame's IMU read, a received byte),
     // through the 1 ms ticks and the read's own byte interrupts.

@@ -60,7 +60,8 @@ void Mixer::rollPitch(ForceQ4 x, ForceQ4 y, ForceQ4 (&rp)[4]) const {
   }
 }
 
-uint8_t Mixer::mix(ForceQ4 collective, const Torque& torque, ForceQ4 min, ForceQ4 max, ForceQ4 (&force)[4]) const {
+uint8_t Mixer::mix(ForceQ4 collective, const Torque& torque, ForceQ4 min, ForceQ4 max,
+                   ForceQ4 (&force)[4]) const {
   const uint8_t n = motorCount();
   const ForceQ4 z = layout_ == Layout::kSeesaw ? 0 : rounded(torque.z_nm * q4_per_nm_z_);
   ForceQ4 rp[4];

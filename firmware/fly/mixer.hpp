@@ -52,7 +52,8 @@ class Mixer {
 
  private:
   void rollPitch(ForceQ4 x, ForceQ4 y, ForceQ4 (&rp)[4]) const;
-  uint8_t fit(const ForceQ4 (&rp)[4], ForceQ4 z, ForceQ4 range, ForceQ4 (&e)[4], ForceQ4& lo, ForceQ4& hi) const;
+  uint8_t fit(const ForceQ4 (&rp)[4], ForceQ4 z, ForceQ4 range, ForceQ4 (&e)[4], ForceQ4& lo,
+              ForceQ4& hi) const;
 
   Layout layout_ = Layout::kX;
   float q4_per_nm_xy_ = 0;  // 1/16 g on each motor per N m of roll or pitch torque

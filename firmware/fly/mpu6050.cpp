@@ -20,9 +20,9 @@ struct Setting {
   uint8_t value;
 };
 const Setting kSettings[] TC_FLASH = {
-    {mpu::kPwrMgmt1, mpu::kClockGyroZ},   {mpu::kSmplrtDiv, mpu::kDivider1kHz},
-    {mpu::kConfig, mpu::kDlpf98Hz},       {mpu::kGyroConfig, mpu::kGyro2000Dps},
-    {mpu::kAccelConfig, mpu::kAccel8G},   {mpu::kIntEnable, mpu::kDataRdy},
+    {mpu::kPwrMgmt1, mpu::kClockGyroZ}, {mpu::kSmplrtDiv, mpu::kDivider1kHz},
+    {mpu::kConfig, mpu::kDlpf98Hz},     {mpu::kGyroConfig, mpu::kGyro2000Dps},
+    {mpu::kAccelConfig, mpu::kAccel8G}, {mpu::kIntEnable, mpu::kDataRdy},
 };
 constexpr uint8_t kSettingCount = sizeof kSettings / sizeof kSettings[0];
 constexpr uint8_t kVerifyBytes = 4;  // SMPLRT_DIV, CONFIG, GYRO_CONFIG, ACCEL_CONFIG
@@ -35,7 +35,9 @@ bool settingsReadBack(const uint8_t (&got)[kVerifyBytes]) {
          got[3] == mpu::kAccel8G;
 }
 
-int16_t bigEndian(const uint8_t* p) { return static_cast<int16_t>((static_cast<uint16_t>(p[0]) << 8) | p[1]); }
+int16_t bigEndian(const uint8_t* p) {
+  return static_cast<int16_t>((static_cast<uint16_t>(p[0]) << 8) | p[1]);
+}
 
 bool busTrouble(Result r) { return r == Result::kAborted || r == Result::kLost || r == Result::kBusError; }
 
@@ -111,7 +113,8 @@ bool Mpu6050::poll(ImuFrame& out) {
 bool Mpu6050::frameDue() const {
   const uint8_t phase = phase_;
   if (phase == handled_phase_) return false;
-  return transfer_ != Transfer::kInFlight || phase != started_phase_ || hal::Twi::result() != hal::Twi::Result::kBusy;
+  return transfer_ != Transfer::kInFlight || phase != started_phase_ ||
+         hal::Twi::result() != hal::Twi::Result::kBusy;
 }
 
 void Mpu6050::finish(hal::Twi::Result result, ImuFrame& out) {
@@ -172,7 +175,8 @@ void Mpu6050::takeSample(Result result, ImuFrame& out) {
   if (result != Result::kDone) {
     recoverIfStuck(result);
     if (bad_reads_ != 0xFF) ++bad_reads_;
-    if (imuReadsFailed(bad_reads_)) faulted(result == Result::kNack ? ImuFault::kNoAnswer : ImuFault::kBusStuck);
+    if (imuReadsFailed(bad_reads_))
+      faulted(result == Result::kNack ? ImuFault::kNoAnswer : ImuFault::kBusStuck);
     return;
   }
   bad_reads_ = 0;

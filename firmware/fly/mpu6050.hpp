@@ -34,19 +34,19 @@ constexpr uint8_t kIntStatus = 0x3A;
 constexpr uint8_t kPwrMgmt1 = 0x6B;
 constexpr uint8_t kWhoAmI = 0x75;
 
-constexpr uint8_t kDeviceReset = 0x80;   // PWR_MGMT_1
-constexpr uint8_t kClockGyroZ = 0x03;    // PWR_MGMT_1: awake, PLL on the Z gyro
-constexpr uint8_t kDivider1kHz = 0;      // SMPLRT_DIV: 1 kHz / (1 + 0)
-constexpr uint8_t kDlpf98Hz = 2;         // CONFIG DLPF_CFG
-constexpr uint8_t kGyro2000Dps = 0x18;   // GYRO_CONFIG FS_SEL 3
-constexpr uint8_t kAccel8G = 0x10;       // ACCEL_CONFIG AFS_SEL 2
-constexpr uint8_t kDataRdy = 0x01;       // INT_ENABLE / INT_STATUS
+constexpr uint8_t kDeviceReset = 0x80;  // PWR_MGMT_1
+constexpr uint8_t kClockGyroZ = 0x03;   // PWR_MGMT_1: awake, PLL on the Z gyro
+constexpr uint8_t kDivider1kHz = 0;     // SMPLRT_DIV: 1 kHz / (1 + 0)
+constexpr uint8_t kDlpf98Hz = 2;        // CONFIG DLPF_CFG
+constexpr uint8_t kGyro2000Dps = 0x18;  // GYRO_CONFIG FS_SEL 3
+constexpr uint8_t kAccel8G = 0x10;      // ACCEL_CONFIG AFS_SEL 2
+constexpr uint8_t kDataRdy = 0x01;      // INT_ENABLE / INT_STATUS
 
 constexpr float kGyroLsbPerDps = 16.4f;
 constexpr float kAccelLsbPerG = 4096.0f;
-constexpr uint8_t kSampleBytes = 15;     // INT_STATUS, accel XYZ, TEMP, gyro XYZ
-constexpr uint16_t kResetFrames = 40;    // 100 ms after DEVICE_RESET
-constexpr uint16_t kRetryFrames = 400;   // 1 s after a fault
+constexpr uint8_t kSampleBytes = 15;    // INT_STATUS, accel XYZ, TEMP, gyro XYZ
+constexpr uint16_t kResetFrames = 40;   // 100 ms after DEVICE_RESET
+constexpr uint16_t kRetryFrames = 400;  // 1 s after a fault
 }  // namespace mpu
 
 // One sample in the IMU's axes (x forward, y left, z up, as mounted: docs/fly.md), raw counts.
@@ -72,9 +72,9 @@ enum class ImuFault : uint8_t {
 
 // What one frame brought.
 struct ImuFrame {
-  uint8_t frames = 0;         // frames since the last one handled (1 unless the loop was late)
-  bool has_sample = false;    // a read ended well this frame: `sample` is it
-  bool fault_now = false;     // the driver faulted in this frame
+  uint8_t frames = 0;       // frames since the last one handled (1 unless the loop was late)
+  bool has_sample = false;  // a read ended well this frame: `sample` is it
+  bool fault_now = false;   // the driver faulted in this frame
   ImuSample sample;
 };
 
@@ -94,7 +94,7 @@ class Mpu6050 {
   ImuState state() const { return state_; }
   ImuFault fault() const { return fault_; }
   bool running() const { return state_ == ImuState::kRunning; }
-  static constexpr uint8_t kTimedOut = 0xF8;  // lastStatus() of a transfer that never ended
+  static constexpr uint8_t kTimedOut = 0xF8;           // lastStatus() of a transfer that never ended
   uint8_t whoAmI() const { return who_am_i_; }         // what WHO_AM_I read last
   uint8_t lastStatus() const { return last_status_; }  // TWSR code of the last bad transfer
   uint8_t badReads() const { return bad_reads_; }      // in a row

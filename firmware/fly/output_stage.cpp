@@ -18,7 +18,8 @@ bool OutputStage::setMode(OutputMode mode, uint8_t generic_slot) {
     return false;
   }
   motors_.stopAll();
-  for (uint8_t i = 0; i < kMotors; ++i) motors_.setModelSource(i, mode == OutputMode::kGeneric ? generic_slot : i);
+  for (uint8_t i = 0; i < kMotors; ++i)
+    motors_.setModelSource(i, mode == OutputMode::kGeneric ? generic_slot : i);
   mode_ = mode;
   generic_slot_ = generic_slot;
   if (mode == OutputMode::kArduPilot) batteryRead(0);  // the filter from now, not from 1
@@ -87,7 +88,8 @@ uint8_t OutputStage::thesisMotors(uint8_t mask) const {
 uint16_t OutputStage::pwmModePulse(ForceQ4 force) const {
   const int32_t above_us = (force * us_per_g_q12_ + (1L << 15)) >> 16;
   const int32_t range_us = tc::kThrottleMaxUs - tc::kThrottleMinUs;
-  return static_cast<uint16_t>(tc::kThrottleMinUs + (above_us <= 0 ? 0 : (above_us >= range_us ? range_us : above_us)));
+  return static_cast<uint16_t>(tc::kThrottleMinUs +
+                               (above_us <= 0 ? 0 : (above_us >= range_us ? range_us : above_us)));
 }
 
 void OutputStage::write(const ForceQ4 (&force)[4], uint8_t mask) {

@@ -23,8 +23,8 @@ namespace fly {
 constexpr float kIdleForceG = 20.0f;  // force and generic modes: armed motors never go below
 
 struct PwmModeParams {
-  uint16_t hover_us = 0;           // 0: not given (pwm mode refuses to arm)
-  float slope_g_per_us = 0;        // the motors' force per microsecond around hover
+  uint16_t hover_us = 0;     // 0: not given (pwm mode refuses to arm)
+  float slope_g_per_us = 0;  // the motors' force per microsecond around hover
 };
 
 class OutputStage {

@@ -108,7 +108,8 @@ TEST_P(FlyHilImuFault, StopsEveryPulseWithin100Ms) {
   const double stopped_s = stoppedFrom(at_s);
   ASSERT_GE(stopped_s, at_s) << con_->tail();
   EXPECT_LE(stopped_s - at_s, 0.100) << GetParam().kind;
-  EXPECT_NE(output().find(std::string("disarmed: IMU fault (") + GetParam().says), std::string::npos) << con_->tail();
+  EXPECT_NE(output().find(std::string("disarmed: IMU fault (") + GetParam().says), std::string::npos)
+      << con_->tail();
 }
 
 INSTANTIATE_TEST_SUITE_P(Faults, FlyHilImuFault,
@@ -129,7 +130,8 @@ TEST_F(FlyHil, ASlaveThatLetsGoWithinNineClocksIsRecoveredInFlight) {
   EXPECT_LT(stoppedFrom(0.0), 0.0) << "still flying\n" << con_->tail();
   const auto status = con_->command("status");
   bool recovered = false;
-  for (const std::string& line : status) recovered = recovered || line.find("bus recoveries 1") != std::string::npos;
+  for (const std::string& line : status)
+    recovered = recovered || line.find("bus recoveries 1") != std::string::npos;
   EXPECT_TRUE(recovered) << con_->tail();
 }
 
@@ -142,7 +144,8 @@ TEST_F(FlyHil, ACrashStopsEveryPulseWithin100MsOfTheLimit) {
   fly(1.0);
   double crossed_s = -1;
   for (const sim::AirSample& smp : rig_->samples()) {
-    if (smp.truth.t_s >= from_s && crossed_s < 0 && std::fabs(smp.truth.roll_deg) > 20.0) crossed_s = smp.truth.t_s;
+    if (smp.truth.t_s >= from_s && crossed_s < 0 && std::fabs(smp.truth.roll_deg) > 20.0)
+      crossed_s = smp.truth.t_s;
   }
   ASSERT_GT(crossed_s, 0) << con_->tail();
   const double stopped_s = stoppedFrom(from_s);

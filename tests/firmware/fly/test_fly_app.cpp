@@ -59,7 +59,8 @@ TEST_F(Fly, AWrongWhoAmIIsAFaultThatRefusesArmingAndIsTriedAgainEverySecond) {
   imu_.attach(0x70);
   storeFourV2Motors();
   boot();
-  EXPECT_TRUE(contains(fake::output(), "imu: error: WHO_AM_I is not 0x68 (not an MPU-6050?): read 0x70")) << fake::output();
+  EXPECT_TRUE(contains(fake::output(), "imu: error: WHO_AM_I is not 0x68 (not an MPU-6050?): read 0x70"))
+      << fake::output();
   EXPECT_EQ(app_->imu().fault(), fly::ImuFault::kWrongId);
   runFor(2500);
   EXPECT_TRUE(contains(command("arm"), "error: arm refused: IMU fault: WHO_AM_I is not 0x68"));
@@ -78,7 +79,8 @@ TEST_F(Fly, NoImuOnTheBusSaysWhatToCheck) {
   fake::twiSetNack(true);
   storeFourV2Motors();
   boot();
-  EXPECT_TRUE(contains(fake::output(), "imu: error: no answer at its address (wiring: SDA D20, SCL D21")) << fake::output();
+  EXPECT_TRUE(contains(fake::output(), "imu: error: no answer at its address (wiring: SDA D20, SCL D21"))
+      << fake::output();
   EXPECT_EQ(app_->imu().fault(), fly::ImuFault::kNoAnswer);
   fake::takeOutput();
   runFor(3000);
@@ -101,7 +103,8 @@ TEST_F(Fly, AVehicleMovedDuringTheGyroCalibrationIsCalibratedOnceStill) {
   boot();
   EXPECT_TRUE(contains(fake::output(), "imu: gyro not calibrated yet (motion seen")) << fake::output();
   EXPECT_FALSE(app_->imuReady());
-  EXPECT_TRUE(contains(command("arm"), "error: arm refused: the IMU is starting or its gyro is being calibrated"));
+  EXPECT_TRUE(
+      contains(command("arm"), "error: arm refused: the IMU is starting or its gyro is being calibrated"));
   rocking = false;
   runFor(1200);
   EXPECT_TRUE(app_->imuReady());
@@ -126,7 +129,8 @@ TEST_F(Fly, ArmingIsRefusedWhenNotLevelOrMoving) {
   imu_.rate_dps[0] = 8;  // tilting at 8 deg/s
   runFor(20);
   const std::string moving = command("arm");
-  EXPECT_TRUE(contains(moving, "error: arm refused: moving: rates 8.0 0.0 0.0 deg/s (all below 5)")) << moving;
+  EXPECT_TRUE(contains(moving, "error: arm refused: moving: rates 8.0 0.0 0.0 deg/s (all below 5)"))
+      << moving;
   runFor(1000);  // now at about 8.3 deg
   imu_.rate_dps[0] = 0;
   runFor(20);
@@ -169,8 +173,7 @@ TEST_F(Fly, AMotorWithoutARecordIsNeverFlownInForceModeGenericModeFliesItOnAnoth
   storeV2Motor(2, 15.0, mvFromCounts(kCountsV1));  // slot 3 erased
   bootReady();
   const std::string refused = command("arm");
-  EXPECT_TRUE(contains(refused, "error: arm refused: motor 3 is not calibrated: erased"))
-      << refused;
+  EXPECT_TRUE(contains(refused, "error: arm refused: motor 3 is not calibrated: erased")) << refused;
   EXPECT_TRUE(contains(command("mode generic 3"), "error: slot 3 is not calibrated: erased"));
   EXPECT_TRUE(contains(command("mode generic 1"), "mode: generic (slot 1's record for every motor)"));
   EXPECT_TRUE(contains(command("arm"), "armed:"));
@@ -185,7 +188,8 @@ TEST_F(Fly, PwmAndArduPilotModesNeedTheirSettingsBeforeArming) {
   storeFourV2Motors();
   bootReady();
   command("mode pwm");
-  EXPECT_TRUE(contains(command("arm"), "error: arm refused: mode pwm needs its hover point: hover US MG_PER_US"));
+  EXPECT_TRUE(
+      contains(command("arm"), "error: arm refused: mode pwm needs its hover point: hover US MG_PER_US"));
   command("hover 1500 1440");
   EXPECT_TRUE(contains(command("arm"), "armed:"));
   command("disarm");
@@ -334,7 +338,8 @@ TEST_P(FlyImuFailure, DisarmsWithin100MsAndSaysWhy) {
   EXPECT_EQ(app_->flight().last_cause, fly::DisarmCause::kImu);
   EXPECT_EQ(app_->imu().fault(), GetParam().fault);
   runFor(20);
-  EXPECT_TRUE(contains(fake::output(), std::string("disarmed: IMU fault (") + GetParam().says)) << fake::output();
+  EXPECT_TRUE(contains(fake::output(), std::string("disarmed: IMU fault (") + GetParam().says))
+      << fake::output();
   // and nothing spins until a new arm, whatever the IMU does meanwhile; its retries every
   // second fail alike and are not news
   runFor(3000);
@@ -349,10 +354,11 @@ INSTANTIATE_TEST_SUITE_P(
     Causes, FlyImuFailure,
     ::testing::Values(ImuFailure{"Silent", [](FakeImu&) { fake::twiSetNack(true); }, fly::ImuFault::kNoAnswer,
                                  "no answer at its address"},
-                      ImuFailure{"StuckBus", [](FakeImu&) { fake::twiHoldSdaLow(0); }, fly::ImuFault::kBusStuck,
+                      ImuFailure{"StuckBus", [](FakeImu&) { fake::twiHoldSdaLow(0); },
+                                 fly::ImuFault::kBusStuck,
                                  "the bus is stuck (a line held low): a transfer never ended"},
-                      ImuFailure{"FrozenData", [](FakeImu& imu) { imu.frozen = true; }, fly::ImuFault::kFrozen,
-                                 "frozen data"}),
+                      ImuFailure{"FrozenData", [](FakeImu& imu) { imu.frozen = true; },
+                                 fly::ImuFault::kFrozen, "frozen data"}),
     [](const ::testing::TestParamInfo<ImuFailure>& info) { return std::string(info.param.name); });
 
 TEST_F(Fly, AStuckBusIsRecoveredByNineClocksAndTheImuComesBack) {
@@ -435,13 +441,13 @@ TEST_F(Fly, StatusSaysStateImuAttitudeLoopTimingAndEachMotor) {
   const std::string out = command("status");
   const uint16_t budget_us = fly::computeBudgetUs(fly::OutputMode::kForce, 0, 4);
   const std::string loop = "loop: IMU read at " + std::to_string(fly::readPhaseUs(budget_us)) +
-                           " us of each 2500 us frame, computation budget " + std::to_string(budget_us) + " us";
-  for (const std::string& part : {std::string("state: armed, disarms 0, mode force, layout x"),
-                                  std::string("imu: running; reads "), std::string("attitude: roll 0.0 pitch 0.0 deg"),
-                                  std::string("thrust: 1200 g over 4 motors"),
-                                  std::string("gains: roll/pitch kp 800 ki 0 kd 146, yaw kp 100 ki 0 (mN m)"), loop,
-                                  std::string("motor 0: 300 g, "), std::string(" us; slot 0 (model v2)"),
-                                  std::string("stack: ")}) {
+                           " us of each 2500 us frame, computation budget " + std::to_string(budget_us) +
+                           " us";
+  for (const std::string& part :
+       {std::string("state: armed, disarms 0, mode force, layout x"), std::string("imu: running; reads "),
+        std::string("attitude: roll 0.0 pitch 0.0 deg"), std::string("thrust: 1200 g over 4 motors"),
+        std::string("gains: roll/pitch kp 800 ki 0 kd 146, yaw kp 100 ki 0 (mN m)"), loop,
+        std::string("motor 0: 300 g, "), std::string(" us; slot 0 (model v2)"), std::string("stack: ")}) {
     EXPECT_TRUE(contains(out, part)) << part << "\n" << out;
   }
   EXPECT_EQ(app_->loopStats().late, 0);

@@ -31,9 +31,12 @@ struct Mount {
 std::vector<Mount> mounts(Layout layout, double a) {
   const double c = a / std::sqrt(2.0);
   switch (layout) {
-    case Layout::kPlus: return {{a, 0, 1}, {0, a, -1}, {-a, 0, 1}, {0, -a, -1}};
-    case Layout::kX: return {{c, c, 1}, {-c, c, -1}, {-c, -c, 1}, {c, -c, -1}};
-    case Layout::kSeesaw: return {{0, a, 0}, {0, -a, 0}};
+    case Layout::kPlus:
+      return {{a, 0, 1}, {0, a, -1}, {-a, 0, 1}, {0, -a, -1}};
+    case Layout::kX:
+      return {{c, c, 1}, {-c, c, -1}, {-c, -c, 1}, {c, -c, -1}};
+    case Layout::kSeesaw:
+      return {{0, a, 0}, {0, -a, 0}};
   }
   return {};
 }
@@ -64,10 +67,10 @@ struct MixCase {
 
 TEST(Mixer, UnsaturatedForcesMakeTheTorqueAndTheCollectiveAskedForToTheSixteenthOfAGram) {
   const MixCase cases[] = {
-      {Layout::kPlus, 300, {0.0f, 0.0f, 0.0f}},   {Layout::kPlus, 300, {0.2f, 0.0f, 0.0f}},
-      {Layout::kPlus, 300, {0.0f, -0.3f, 0.0f}},  {Layout::kPlus, 300, {0.1f, 0.1f, 0.02f}},
-      {Layout::kX, 300, {0.2f, 0.0f, 0.0f}},      {Layout::kX, 300, {0.0f, 0.2f, 0.0f}},
-      {Layout::kX, 300, {-0.15f, 0.1f, -0.02f}},  {Layout::kX, 250, {0.0f, 0.0f, 0.03f}},
+      {Layout::kPlus, 300, {0.0f, 0.0f, 0.0f}},    {Layout::kPlus, 300, {0.2f, 0.0f, 0.0f}},
+      {Layout::kPlus, 300, {0.0f, -0.3f, 0.0f}},   {Layout::kPlus, 300, {0.1f, 0.1f, 0.02f}},
+      {Layout::kX, 300, {0.2f, 0.0f, 0.0f}},       {Layout::kX, 300, {0.0f, 0.2f, 0.0f}},
+      {Layout::kX, 300, {-0.15f, 0.1f, -0.02f}},   {Layout::kX, 250, {0.0f, 0.0f, 0.03f}},
       {Layout::kSeesaw, 300, {0.3f, 0.2f, 0.05f}},  // pitch and yaw: not on a seesaw
   };
   for (const MixCase& c : cases) {
@@ -239,7 +242,8 @@ TEST(Estimator, Atan2ApproxIsWithinTwoHundredThousandthsOfARadianEverywhere) {
   for (int i = 0; i < 720; ++i) {
     const double angle = (i - 360) * M_PI / 360.0 + 0.001;
     for (double radius : {0.01, 1.0, 4096.0}) {
-      const float y = static_cast<float>(radius * std::sin(angle)), x = static_cast<float>(radius * std::cos(angle));
+      const float y = static_cast<float>(radius * std::sin(angle)),
+                  x = static_cast<float>(radius * std::cos(angle));
       worst = std::max(worst, std::fabs(static_cast<double>(atan2Approx(y, x)) - std::atan2(y, x)));
     }
   }
@@ -289,9 +293,7 @@ AttitudeEstimator startedAt(double roll_deg, double pitch_deg, const int16_t (&b
 }
 
 TEST(Estimator, AStaticTiltIsTheFirstAttitude) {
-  const struct {
-    double roll, pitch;
-  } tilts[] = {{0, 0}, {10, -5}, {-30, 20}, {60, 0}, {0, -80}};
+  const struct { double roll, pitch; } tilts[] = {{0, 0}, {10, -5}, {-30, 20}, {60, 0}, {0, -80}};
   for (const auto& t : tilts) {
     const AttitudeEstimator e = startedAt(t.roll, t.pitch);
     EXPECT_NEAR(e.attitude().roll_rad / kDeg, t.roll, 0.05) << t.roll << " " << t.pitch;
@@ -379,8 +381,10 @@ TEST(ArduPilotCurve, PulsesAreWhatArduPilotSendsWithinOneMicrosecondAtEveryForce
       curve.setParams(p);
       curve.updateBattery(mv, 0.01f);  // the first reading sets the filter
       for (int f = 0; f <= 1400; f += 10) {
-        const int want = lab::autopilot::ardupilot::pwmForThrust(labParams(p), f / p.full_thrust_g, mv / 1000.0);
-        ASSERT_NEAR(curve.pulseUs(static_cast<float>(f)), want, 1) << "expo " << p.expo << " at " << mv << " mV, " << f << " g";
+        const int want =
+            lab::autopilot::ardupilot::pwmForThrust(labParams(p), f / p.full_thrust_g, mv / 1000.0);
+        ASSERT_NEAR(curve.pulseUs(static_cast<float>(f)), want, 1)
+            << "expo " << p.expo << " at " << mv << " mV, " << f << " g";
         ++compared;
       }
       EXPECT_NEAR(curve.liftMax(), lab::autopilot::ardupilot::liftMax(labParams(p), mv / 1000.0), 1e-5);

@@ -164,7 +164,8 @@ TEST(FakeClock, SleepUnlessPassesNoTimeWithWorkPendingAndSleepUntilWaitsForIt) {
   fake::setTickHook(nullptr);
   fake::setTimeLimitMs(20);
   pending = false;
-  EXPECT_THROW(hal::Clock::sleepUntil([] { return pending; }), std::runtime_error) << "the time limit ends it";
+  EXPECT_THROW(hal::Clock::sleepUntil([] { return pending; }), std::runtime_error)
+      << "the time limit ends it";
   fake::reset();
 }
 
