@@ -7,8 +7,9 @@
 #      record) and uncalibrated (the same PWM on all four);
 #   2b. calibrates the same motors again with gather_store's `store v2` (model v2 fitted on the
 #      board: force in effective motor voltage) and flies the lift-off on those records;
-#   3. runs the model lab on the sweeps it just logged: thesis model vs the measurements,
-#      the diagnosis, and the error ladder as effects are added.
+#   3. runs the model lab on the sweeps it just logged: thesis model vs the measurements, then
+#      `lab walk` on the thesis's bench (one motor, LiPo and current-limited supply): the
+#      diagnosis's advice followed step by step until the error is at the noise floor.
 # Results: build/demo/summary.json, build/demo/*.png, build/demo/lab/report.md, logs.
 set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
@@ -74,23 +75,33 @@ do for [mode in "calibrated v2 uncalibrated"] {
 unset multiplot
 GP
 
-say "4/4 model lab on the logged sweeps (thesis model vs measurements)"
+say "4/4 model lab on the logged sweeps: the thesis model, then the diagnosis's advice followed to the noise floor"
 mapfile -t SWEEPS < <(ls "$OUT"/logs/gather_slot*_curve[12].csv)
 "$TC" lab diagnose "${SWEEPS[@]}" --model thesis | tee "$OUT/lab_diagnose.txt"
 "$TC" lab diagnose "${SWEEPS[@]}" --model thesis --json > "$OUT/lab_diagnose.json"
-"$TC" lab ladder "${SWEEPS[@]}" --model curve --add deadband --add voltage --add sag --add motor \
-  --report "$OUT/lab" | tee "$OUT/lab_ladder.txt"
-"$TC" lab ladder "${SWEEPS[@]}" --model curve --add deadband --add voltage --add sag --add motor \
-  --json > "$OUT/lab_ladder.json"
+# The thesis's bench: one motor, curve 1 on the LiPo, curve 2 on the current-limited 10 V supply.
+# `lab walk` diagnoses, drops the rows it says do not measure the force (--where), adds the
+# effect it advises when that earns its parameters, and again, until the verdict is "at the
+# noise floor" or nothing earns; then prints the ladder it walked and writes the report.
+BENCH=("$OUT"/logs/gather_slot0_curve1.csv "$OUT"/logs/gather_slot0_curve2.csv)
+"$TC" lab walk "${BENCH[@]}" --model curve --report "$OUT/lab" | tee "$OUT/lab_walk.txt"
+"$TC" lab walk "${BENCH[@]}" --model curve --json > "$OUT/lab_walk.json"
+# the same walk on all four motors' sweeps: where the catalogue stops
+"$TC" lab walk "${SWEEPS[@]}" --model curve --json > "$OUT/lab_walk_all.json"
+jq -r '"all four motors: " + (.walk | map("\(.model) \((.rmse_g * 1000 | round) / 1000) g") | join(" -> ")) +
+       "; noise \((.noise_g * 1000 | round) / 1000) g; \(.verdict)"' "$OUT/lab_walk_all.json"
+jq '.ladder' "$OUT/lab_walk.json" > "$OUT/lab_ladder.json"
 
 wall_s=$(( $(date +%s) - t0 ))
 jq -n --slurpfile g "$OUT/gather.json" --slurpfile l "$OUT/liftoff.json" \
       --slurpfile g2 "$OUT/gather_v2.json" --slurpfile l2 "$OUT/liftoff_v2.json" \
-      --slurpfile d "$OUT/lab_diagnose.json" --slurpfile la "$OUT/lab_ladder.json" --argjson wall "$wall_s" '
+      --slurpfile d "$OUT/lab_diagnose.json" --slurpfile la "$OUT/lab_ladder.json" \
+      --slurpfile w "$OUT/lab_walk.json" --slurpfile wa "$OUT/lab_walk_all.json" --argjson wall "$wall_s" '
   {
     calibration: ($g[0].calibration + {v2: $g2[0].calibration.v2}),
     liftoff: ($l[0].liftoff + {v2: $l2[0].liftoff.v2}),
-    lab: {diagnose: $d[0], ladder: $la[0]},
+    lab: {diagnose: $d[0], ladder: $la[0],
+          walk: ($w[0] | del(.ladder)), walk_all_motors: ($wa[0] | del(.ladder))},
     sim: {
       realtime_factor: ([$g[0].sim.realtime_factor, $l[0].sim.realtime_factor,
                          $g2[0].sim.realtime_factor, $l2[0].sim.realtime_factor] | min),
@@ -111,7 +122,8 @@ jq -r '
     "  \($name + "                    " | .[0:20])  \($x.hold_thrust_g | map(r(.) | tostring) | join("  "))   \(r($x.thrust_spread_pct)) %    \(r($x.force_error_rms_pct)) %     \(r($x.max_tilt_deg)) deg"),
   "",
   "lab: thesis model rmse \(r(.lab.diagnose.rmse_g)) g over \(.lab.diagnose.n) samples; first suspect: \(.lab.diagnose.suspects[0].variable // "none") -> \(if ((.lab.diagnose.suspects[0].effects // []) | length) > 0 then (.lab.diagnose.suspects[0].effects | join(", ")) else (.lab.diagnose.suspects[0].advice // "no effect named") end)",
-  "lab ladder: " + (.lab.ladder.steps | map("\(.model) \(r(.rmse_g)) g") | join("  ->  ")),
+  "lab walk (slot 0, the thesis bench): " + (.lab.walk.walk | map("\(.model) \(r(.rmse_g)) g") | join("  ->  ")) +
+    "; noise floor \(r(.lab.walk.noise_g)) g: \(.lab.walk.verdict)",
   "",
   "simulator: \(r(.sim.realtime_factor))x real time; demo took \(.sim.demo_wall_s) s"
 ' "$OUT/summary.json"

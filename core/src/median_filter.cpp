@@ -38,8 +38,7 @@ uint16_t upperBound(const uint16_t* sorted, uint16_t n, uint16_t v) {
 }
 
 // Moves [first + 1, last] to [first, last - 1]. Pointer loops compile to auto-increment
-// loads and stores on avr-gcc: about 15 cycles per element, ~10 % faster than indexed loops
-// (measured with tests/core/avr_cycles.sh).
+// loads and stores on avr-gcc, faster than indexed loops (tests/core/avr_cycles.sh compares).
 void shiftLeft(uint16_t* first, uint16_t* last) {
   while (first < last) {
     *first = first[1];

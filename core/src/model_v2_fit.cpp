@@ -160,8 +160,7 @@ FitV2Report ModelV2FitterBase::fit(ModelV2& out) {
   uint8_t n_est = 0;
   // The low end (F up to 6 % of the largest force, 4F up to 25 %) because that is where a
   // motor is closest to a power law: higher up the winding's IR drop and the propeller's
-  // rising thrust coefficient bend the curve, and the estimate drifts late (measured on the
-  // virtual bench's plant: +17 us from triples up to 50 %, +7 us from these).
+  // rising thrust coefficient bend the curve, and the estimate drifts late (docs/model_v2.md).
   for (uint8_t j = 2; j <= 16; ++j) {
     const int32_t f1 = fmax * j / 256;
     if (f1 < 5) continue;

@@ -18,8 +18,8 @@ constexpr int32_t kNewtonLimit = 1l << 20;  // |e| above: re-seed by division (j
 // Where a force falls between the knots: segment index (0 = between the origin and knot 0)
 // and the fraction inside it (Q16). force_dg must be <= maxForceDg().
 // AVR note: avr-gcc -Os turns 32-bit shifts by a constant that is not a multiple of 8 into
-// loops (~6 cycles per bit), so every shift on the per-frame path is by 8, 16 or 24, or is a
-// 16-bit shift.
+// loops (several cycles per bit), so every shift on the per-frame path is by 8, 16 or 24, or is
+// a 16-bit shift.
 struct KnotPos {
   uint8_t index;
   uint16_t frac_q16;
@@ -28,8 +28,8 @@ struct KnotPos {
 #define TC_INLINE __attribute__((always_inline)) inline
 
 // 16 x 16 -> 32 bits, unsigned. On the AVR this is libgcc's __umulhisi3 without the call,
-// the return and the register shuffling around it (~18 instead of ~40 cycles): the
-// per-frame path does three per motor. Elsewhere a plain multiplication.
+// the return and the register shuffling around it (about half the cycles): the per-frame
+// path does three per motor. Elsewhere a plain multiplication.
 TC_INLINE uint32_t mulU16(uint16_t a, uint16_t b) {
 #if defined(__AVR_HAVE_MUL__)
   uint32_t r;

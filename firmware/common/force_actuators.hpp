@@ -13,19 +13,18 @@
 //   motors.frame();                           // battery, models, four pulses written at once
 //   motors.stopAll();                         // 0 g and the stop pulse on every ESC, now
 // frame() is sampleBattery() then output(): a loop may read the battery less often than it flies
-// (fly reads it every fourth of its 400 Hz frames). setModelSource(i, s) lets motor i fly slot
+// (fly reads it every eighth of its 400 Hz frames). setModelSource(i, s) lets motor i fly slot
 // s's record (fly's generic mode: one motor's record for all four, what an uncalibrated
 // aircraft flies); maxForceG(i) is the most its model makes (a mixer's saturation limit).
 //
 // Safety rules kept here: a motor whose model's record did not load whole and plausible is never
 // armed (held at the stop pulse, every force to it ignored); the per-frame path is integer only.
-// Files: force_actuators.cpp (loading, the frame), slot_model.hpp (the model a slot flies),
-// frame_rules.hpp (the frame's pure decisions).
+// Files: force_actuators.cpp (loading, the frame), frame_rules.hpp (the frame's pure
+// decisions); the model a slot flies is tc::SlotModel (core).
 #pragma once
 #include <stdint.h>
 
 #include "frame_rules.hpp"
-#include "slot_model.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/eeprom_codec.hpp"
@@ -35,6 +34,7 @@
 #include "thrustcal/model_v2_runtime.hpp"
 #include "thrustcal/plausibility.hpp"
 #include "thrustcal/record_v2.hpp"
+#include "thrustcal/slot_model.hpp"
 
 namespace fw {
 
@@ -43,7 +43,7 @@ constexpr uint8_t kNoLane = 0xFF;  // a motor that does not fly v2
 // One motor as the thesis's motor_struct: the model loaded from EEPROM plus the state of the
 // pulse it was last given.
 struct Motor {
-  SlotModel model;                               // v1 ThesisRun or v2 ModelV2Run (a union)
+  tc::SlotModel model;                           // v1 ThesisRun or v2 ModelV2Run (a union)
   tc::SlotLayout layout = tc::SlotLayout::kNone; // what the slot holds
   tc::DecodeStatus record = tc::DecodeStatus::kErased;  // kOk: `model` is loaded and flown
   uint8_t v2_copy = tc::kNoCopy;                 // v2: copy flown (0 = A, 1 = B)

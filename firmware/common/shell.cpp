@@ -59,7 +59,7 @@ bool parseArg(const ArgSpec& arg, const char* token, int32_t& value) {
   return parseInt(token, arg.min, arg.max, value);
 }
 
-// "G must be 0..500, got "900"" or "expected on|off, got "x"".
+// "G must be a whole number 0..5000, got "9000"" or "expected on|off, got "x"".
 void sayArgError(const ArgSpec& arg, const char* token) {
   hal::Uart::printP(TC_FLASH_TEXT("error: "));
   if (arg.words != nullptr) {

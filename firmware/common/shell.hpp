@@ -7,9 +7,11 @@
 // A command name may have several rows with different argument lists (`f G` and `f N G`):
 // the first row whose argument count and values fit runs. Errors, one line each:
 //   error: unknown command "x"; type help for the list
-//   error: usage: f G | f N G                      (no row takes that many arguments)
-//   error: G must be 0..500, got "900"             (the only row with that count refused it)
-//   error: strict mode: "f" needs a checksum, e.g. f 300*hh
+//   error: usage: f G | f N G                       (no row takes that many arguments)
+//   error: G must be a whole number 0..5000, got "9000"  (the only row with that count refused it)
+//   error: expected on|off, got "x"                 (a row of words)
+//   error: strict mode: "f" needs a checksum: end the line with *hh (XOR of its bytes)
+// (tests/firmware/common/test_shell.cpp pins each wording.)
 //
 // Everything in a table lives in flash (TC_FLASH) on the AVR; rows are copied to the
 // stack one at a time (tc::flashCopy), so a table costs no SRAM.

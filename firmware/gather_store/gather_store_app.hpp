@@ -57,7 +57,6 @@
 #include <stdint.h>
 
 #include "console.hpp"
-#include "placement_new.hpp"
 #include "shell.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/board_settings.hpp"
@@ -69,7 +68,9 @@
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/motor_calibration.hpp"
+#include "thrustcal/placement_new.hpp"
 #include "thrustcal/sweep_limits.hpp"
+#include "thrustcal/sweep_rules.hpp"
 
 namespace gs {
 
@@ -80,16 +81,11 @@ struct RefusalFacts;  // gather_store_view.hpp
 
 using tc::kArmMs;       // thrustcal/limits.hpp
 using tc::kStopPwmUs;
-constexpr uint16_t kForceWindow = 201;     // thesis: median of 201 load-cell readings
-// With settle auto (the default sweep) the force is the mean of the middle kForceCentral of
-// those 201 readings (ranks 68..132, in 1/16 count), and so is the tare taken while settle
-// auto is on: as robust to spikes as the median, but not stuck to whole counts (0.75 g each,
-// 0.75 % at 100 g): the noise dithers the readings between two counts and the mean resolves
-// where in between the force is. Steps end, rails and overloads are still judged on the median.
-// Virtual bench, default sweep: stored curves' max error over 100-450 g thesis 1.05 -> 0.71 %,
-// v2 0.98 -> 0.75 % (`thrustcal bench calibration`). `settle MS` (the thesis timing) keeps the
-// thesis's reading too, the median of 201.
-constexpr uint16_t kForceCentral = 65;
+// The sweep's reading and settle auto (thrustcal/sweep_rules.hpp, shared with the bench): with
+// settle auto the force and the tare are the central mean of the 201 readings; steps end,
+// rails and overloads are still judged on the median; `settle MS` keeps the thesis's median.
+using tc::kForceWindow;
+using tc::kForceCentral;
 using tc::kBatteryWindow;
 constexpr uint16_t kMaxSweepSamples = 161; // 1000..1800 us in 5 us steps; default uses 81
 // Samples model v2 keeps per sweep: 8 bytes each in SRAM (1 KB). A sweep with more steps
@@ -101,21 +97,11 @@ constexpr uint8_t kLineEndGraceMs = 3;     // an LF this soon after "sweep" CR i
 
 // The settings' accepted ranges: thrustcal/sweep_limits.hpp.
 
-// settle auto: force medians kSettleProbeMs apart; the step is settled when
-// kSettledAgreements successive pairs differ by at most kSettledCounts ADC counts (0 counts:
-// three equal medians), or when settle_ms (the cap) has passed. One count (0.75 g) was too
-// loose at the low end, where a 10 us step moves the force by only 1-3 counts (simavr plant
-// bench, cap 500 ms: 0.79 % RMS v2 error with 1 count and 2 agreements, 0.48 % with 0 counts;
-// fixed 500 ms 0.36 %). Measured sweep times: tests/hil_power/settle_auto_hil_test.cpp.
-constexpr uint16_t kSettleProbeMs = 20;
-constexpr uint16_t kSettledCounts = 0;
-constexpr uint8_t kSettledAgreements = 2;
+using tc::kSettleProbeMs;  // settle auto: thrustcal/sweep_rules.hpp
+using tc::kSettledCounts;
+using tc::kSettledAgreements;
 
-// The default sweep settles by measurement (settle auto) with a 500 ms cap: the thesis's fixed
-// 200 ms read the rising curve ~2 % late (the motor's time constant plus the load cell's
-// third-order low-pass: stored curves off by up to 3.9 % over 100-450 g on the virtual bench,
-// 0.9 % with the default; `thrustcal bench calibration`). `settle 200` is the thesis timing.
-constexpr uint16_t kDefaultSettleCapMs = 500;
+using tc::kDefaultSettleCapMs;  // settle auto's cap by default (thrustcal/sweep_rules.hpp)
 
 struct SweepSettings {
   uint8_t slot = 0;             // motor slot 0..3 = ESC output and EEPROM record

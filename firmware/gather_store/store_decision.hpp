@@ -1,6 +1,7 @@
 // The store decision of gather_store (thesis "First or second?", fig. 6.8, and model v2's
 // fit-or-refine rule): pure functions over the last sweep and what the slot holds. No console,
-// no EEPROM: the commands (gather_store_store.cpp) read the slot, ask these, write through
+// no EEPROM: the store commands (GatherStoreApp::cmdStore / cmdStoreV2 in gather_store_app.cpp)
+// read the slot, ask these, write through
 // thrustcal/eeprom_store.hpp (which picks the copy to write and keeps the old calibration
 // loadable meanwhile) and hand the outcome to the view (gather_store_view.cpp). The host tests
 // (tests/firmware/gather_store/test_store_decision.cpp) check the rules without a console.

@@ -49,20 +49,12 @@ void GatherStoreApp::printSettle() {
 
 bool GatherStoreApp::settleForce(uint16_t& counts) {
   const uint32_t start = hal::Clock::millis();
-  uint16_t previous = 0;
-  bool have_previous = false;
-  uint8_t agreements = 0;
+  tc::SettleAuto settle;
   for (;;) {
     if (!waitOrAbort(kSettleProbeMs)) return false;
     if (!readForceCounts(counts)) return false;
-    if (have_previous) {
-      const uint16_t change = counts > previous ? counts - previous : previous - counts;
-      agreements = change <= kSettledCounts ? static_cast<uint8_t>(agreements + 1) : 0;
-      if (agreements >= kSettledAgreements) return true;
-    }
-    previous = counts;
-    have_previous = true;
-    if (hal::Clock::millis() - start >= sweep_settings_.settle_ms) return true;  // the cap
+    settle = tc::settleAutoNext(settle, counts);
+    if (tc::settleAutoDone(settle, hal::Clock::millis() - start, sweep_settings_.settle_ms)) return true;
   }
 }
 

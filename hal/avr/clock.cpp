@@ -9,7 +9,7 @@
 
 #include "hal/hal.hpp"
 
-static_assert(F_CPU == 16000000UL, "Timer0 settings assume a 16 MHz clock");
+static_assert(F_CPU == hal::kCpuHz, "Timer0 settings assume the board's 16 MHz clock (hal/board.hpp)");
 
 namespace {
 constexpr uint8_t kTimer0Top = 249;  // 250 counts of 4 us

@@ -16,7 +16,7 @@
 #include "board/serial_port.hpp"
 #include "board/transfer.hpp"
 #include "board_support.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
 
@@ -59,7 +59,7 @@ TEST_F(SimulatedBoard, EepromPutThenGetRoundTripsAPatternWhereEveryAddressIsDist
   start(image("gather_store", ".elf"));
   const std::string dir = board_test::tempDir("roundtrip");
   const std::string file = dir + "/pattern.hex";
-  sim::writeIntelHexFile(file, patternImage());
+  hex::writeIntelHexFile(file, patternImage());
   // when: written through the bootloader (no avrdude verify), verified by the firmware's CRCs
   const board::EepromPutResult put = board::putEeprom(port, file);
   // then
@@ -92,7 +92,7 @@ TEST_F(SimulatedBoard, StockBootloaderEepromReadIsStillWrongSoTheFirmwareReadsIt
   const board::AvrdudeRun run = board::runAvrdude(args, 120);
   // then: avrdude reports success, yet almost every byte is wrong
   EXPECT_EQ(run.exit_code, 0) << run.output;
-  const std::vector<uint8_t> read = sim::readIntelHexFile(dir + "/read.hex", 4096);
+  const std::vector<uint8_t> read = hex::readIntelHexFile(dir + "/read.hex", 4096);
   int wrong = 0;
   for (std::size_t a = 0; a < read.size(); ++a) wrong += read[a] != board_test::patternByte(a);
   EXPECT_GT(wrong, 4000) << "the stock bootloader's EEPROM read returned only " << wrong
@@ -108,7 +108,7 @@ TEST_F(SimulatedBoard, PartialImageIsCompletedWithWhatTheBoardHoldsOnReadRunToo)
   {
     std::vector<uint8_t> slot1(4096, 0xFF);
     for (int a = 1024; a < 2048; ++a) slot1[a] = static_cast<uint8_t>(0x5A ^ a);
-    const std::string full = sim::formatIntelHex(slot1);
+    const std::string full = hex::formatIntelHex(slot1);
     // keep records 0x0400..0x07F0 and the end record only
     std::istringstream in(full);
     for (std::string line; std::getline(in, line);) {
@@ -143,7 +143,7 @@ TEST_F(SimulatedBoard, AVerifyThatFailsNamesTheSlotThatDiffers) {
     }
   };
   const std::string dir = board_test::tempDir("verify");
-  sim::writeIntelHexFile(dir + "/pattern.hex", patternImage());
+  hex::writeIntelHexFile(dir + "/pattern.hex", patternImage());
   // when / then
   try {
     board::putEeprom(port, dir + "/pattern.hex");
@@ -160,7 +160,7 @@ TEST_F(SimulatedBoard, NoPortNoAvrdudeNoFirmwareOrAnImageOverTheBootloaderAreRef
   // given: a board that holds only its bootloader (no firmware answers)
   start("");
   const std::string dir = board_test::tempDir("refuse");
-  sim::writeIntelHexFile(dir + "/pattern.hex", patternImage());
+  hex::writeIntelHexFile(dir + "/pattern.hex", patternImage());
   board::TransferOptions quick;
   quick.boot_timeout_s = 3.0;
   auto message = [](auto&& f) {
@@ -183,7 +183,7 @@ TEST_F(SimulatedBoard, NoPortNoAvrdudeNoFirmwareOrAnImageOverTheBootloaderAreRef
   ::unsetenv("THRUSTCAL_AVRDUDE");
   // an image that reaches into the boot section
   std::vector<uint8_t> big(0x3E010, 0x00);
-  sim::writeIntelHexFile(dir + "/big.hex", big);
+  hex::writeIntelHexFile(dir + "/big.hex", big);
   EXPECT_NE(message([&] { board::flashImage(port, dir + "/big.hex"); }).find("bootloader's section"),
             std::string::npos);
   // no firmware to verify with: nothing is written

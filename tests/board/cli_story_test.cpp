@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "board_support.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "sim/scenarios.hpp"
 
 namespace {
@@ -70,13 +70,13 @@ TEST(BoardStory, FromAStockBoardToACalibratedLiftoffWithThrustcalBoardOnly) {
   // read the EEPROM through gather_store; the slot holds the curve
   r = step({"eeprom", "get", "--port", port, "-o", dir + "/after_cal.hex"}, 120);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::vector<uint8_t> ee = sim::readIntelHexFile(dir + "/after_cal.hex", 4096);
+  std::vector<uint8_t> ee = hex::readIntelHexFile(dir + "/after_cal.hex", 4096);
   tc::MotorCalibration cal;
   ASSERT_EQ(sim::decodeSlot(ee, 0, cal), "ok");
 
   // the calibrated slot in all four slots, written back (one motor's curve on four motors)
   for (int s = 1; s < 4; ++s) sim::copySlot(ee, 0, s);
-  sim::writeIntelHexFile(dir + "/four.hex", ee);
+  hex::writeIntelHexFile(dir + "/four.hex", ee);
   r = step({"eeprom", "put", "--port", port, dir + "/four.hex"}, 240);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("verified through gather_store"), std::string::npos) << r.output;
@@ -103,13 +103,13 @@ TEST(BoardStory, FromAStockBoardToACalibratedLiftoffWithThrustcalBoardOnly) {
   // the EEPROM read through read_run is what was put
   r = step({"eeprom", "get", "--port", port, "-o", dir + "/final.hex"}, 120);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(sim::readIntelHexFile(dir + "/final.hex", 4096), ee);
+  EXPECT_EQ(hex::readIntelHexFile(dir + "/final.hex", 4096), ee);
 
   // the simulated board ends on Ctrl-C and saves its EEPROM
   sim.signal(SIGINT);
   const board_test::ProcessResult end = sim.wait(20);
   EXPECT_EQ(end.exit_code, 0) << end.output;
-  EXPECT_EQ(sim::readIntelHexFile(eeprom_file, 4096), ee);
+  EXPECT_EQ(hex::readIntelHexFile(eeprom_file, 4096), ee);
   EXPECT_NE(end.output.find("plant = the tethered quad"), std::string::npos) << end.output;
 }
 

@@ -40,7 +40,7 @@ struct Fleet {
   void fly(uint16_t mv, uint8_t extra = 0) { frame.fly(mv, extra); }
 };
 
-tc::BusVoltageFilter busAt(uint16_t mv) {
+tc::BusVoltageFilter frameBusAt(uint16_t mv) {
   tc::BusVoltageFilter bus;
   bus.reset(mv);
   return bus;
@@ -52,7 +52,7 @@ TEST(V2Frame, SteadyFrameIsForceToPwmV2ForEveryForce) {
   for (const uint16_t mv : {3000, 6000, 9900, 11100, 12600, 17500, 26000}) {
     for (uint16_t f = 0; f <= fleet.run[3].max_force_dg + 200; f = static_cast<uint16_t>(f + 3)) {
       for (int i = 0; i < 4; ++i) fleet.lane[i].force_dg = static_cast<uint16_t>(f + 37 * i);
-      fleet.frame.bus = busAt(mv);
+      fleet.frame.bus = frameBusAt(mv);
       fleet.frame.sag = tc::BusSagFilter();
       // when: the same commands twice at a steady reading (the second frame predicts nothing)
       fleet.fly(mv);
@@ -109,7 +109,7 @@ TEST(V2Frame, RangeEdgesAreForceToPwmV2ToTheBit) {
                               static_cast<uint16_t>(f % 170), static_cast<uint16_t>((f * 7) % 20300)};
       if (f > 200 && f % 7 != 0) continue;  // every force below 20 g, then every 7th decigram
       for (int i = 0; i < 4; ++i) frame.lane[i].force_dg = fd[i];
-      frame.bus = busAt(mv);
+      frame.bus = frameBusAt(mv);
       frame.sag = tc::BusSagFilter();
       // when: the same commands twice at a steady reading (the second frame predicts nothing)
       frame.fly(mv);
@@ -189,7 +189,7 @@ TEST(V2Frame, CommandStepIsPredictedFromAllMotorsBenchSagOneFrameLate) {
   // given: four motors whose bench saw the monitor sag (0.08 ohm source), at rest, steady
   Fleet fleet(0.08);
   const uint16_t mv = 11800;
-  fleet.frame.bus = busAt(mv);
+  fleet.frame.bus = frameBusAt(mv);
   const tc::BusVoltageFilter& bus = fleet.frame.bus;
   const tc::BusSagFilter& sag = fleet.frame.sag;
   for (int i = 0; i < 4; ++i) fleet.lane[i].force_dg = 0;
@@ -255,7 +255,7 @@ TEST(V2Frame, EdgesBehaveAsForceToPwmV2) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);
-    fleet.frame.bus = c.mv ? busAt(c.mv) : tc::BusVoltageFilter();
+    fleet.frame.bus = c.mv ? frameBusAt(c.mv) : tc::BusVoltageFilter();
     fleet.frame.sag = tc::BusSagFilter();
     fleet.frame.pwm_min_us = c.limits.pwm_min_us;
     fleet.frame.pwm_max_us = c.limits.pwm_max_us;
@@ -271,7 +271,7 @@ TEST(V2Frame, EdgesBehaveAsForceToPwmV2) {
 
 TEST(V2Frame, ExtraFlagsReachEveryLaneAndZeroLanesIsNothing) {
   Fleet fleet;
-  fleet.frame.bus = busAt(11000);
+  fleet.frame.bus = frameBusAt(11000);
   for (int i = 0; i < 4; ++i) fleet.lane[i].force_dg = 2500;
   fleet.fly(11000, tc::kVoltageInvalid);
   for (int i = 0; i < 4; ++i) EXPECT_EQ(fleet.lane[i].flags, tc::kVoltageInvalid);

@@ -53,7 +53,7 @@ std::string describe(const tc::Plausibility& p) {
 
 // The thesis record of a synthetic motor swept 1000..2000 us at 12.4 V (curve 1) and 10.9 V
 // (curve 2), with a realistic sag table.
-tc::MotorCalibration thesisCalibration() { return tc_test::thesisRecord(SyntheticMotor(), 12.4, 10.9); }
+tc::MotorCalibration twoCurveThesisCalibration() { return tc_test::thesisRecord(SyntheticMotor(), 12.4, 10.9); }
 
 tc::ModelV2 fittedModel() {
   SyntheticMotor motor;
@@ -66,7 +66,7 @@ tc::ModelV2 fittedModel() {
 }  // namespace
 
 TEST(Plausibility, MeasuredRecordsOfBothLayoutsCanBeRight) {
-  tc::MotorCalibration cal = thesisCalibration();
+  tc::MotorCalibration cal = twoCurveThesisCalibration();
   const tc::Plausibility v1 = tc::checkCalibration(cal);
   EXPECT_TRUE(v1.ok()) << describe(v1);
   const tc::Plausibility v2 = tc::checkModelV2(fittedModel());
@@ -132,7 +132,7 @@ TEST(Plausibility, EveryV1RuleRefusesItsRecordWithItsReason) {
   for (const V1Case& c : kV1Cases) {
     SCOPED_TRACE(c.name);
     // given: a good thesis record with one impossible value
-    tc::MotorCalibration cal = thesisCalibration();
+    tc::MotorCalibration cal = twoCurveThesisCalibration();
     c.spoil(cal);
     // when
     const tc::Plausibility p = tc::checkCalibration(cal);
@@ -149,7 +149,7 @@ TEST(Plausibility, ImplausibleV1RecordWithAGoodCrcDecodesAsNotCalibratedWithItsR
     SCOPED_TRACE(c.name);
     // given: the record written with its (right) CRC
     RamEeprom::erase();
-    tc::MotorCalibration cal = thesisCalibration();
+    tc::MotorCalibration cal = twoCurveThesisCalibration();
     c.spoil(cal);
     tc::writeRecord<RamEeprom>(1, cal);
     // when

@@ -12,7 +12,7 @@
 
 #include "lab/dataset.hpp"
 #include "lab/model.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "test_records.hpp"
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/eeprom_codec.hpp"
@@ -40,7 +40,7 @@ std::string text(const uint8_t* data, std::size_t size) {
 std::vector<std::string> hexSeeds() {
   std::vector<uint8_t> image(4096, 0xFF);
   for (std::size_t i = 0; i < 300; ++i) image[i * 13 % 4096] = static_cast<uint8_t>(i);
-  return {sim::formatIntelHex(image), ":0100100042AD\n:00000001FF\n",
+  return {hex::formatIntelHex(image), ":0100100042AD\n:00000001FF\n",
           ":020000040000FA\r\n:0100000055AA\r\n:00000001FF\r\n", ":02000004FFFFFC\n:01FFFF0042BF\n:00000001FF\n",
           ":020000021000EC\n:0100000055AA\n:00000001FF\n"};
 }
@@ -51,12 +51,12 @@ void intelHex(const uint8_t* data, std::size_t size) {
   const std::string in = text(data, size);
   std::vector<uint8_t> image;
   try {
-    image = sim::parseIntelHex(in, 4096, "fuzz.hex");
-  } catch (const sim::HexError&) {
+    image = hex::parseIntelHex(in, 4096, "fuzz.hex");
+  } catch (const hex::HexError&) {
     return;  // refused with a message: fine
   }
   if (image.size() != 4096) violation("image size " + std::to_string(image.size()));
-  const std::vector<uint8_t> back = sim::parseIntelHex(sim::formatIntelHex(image), 4096, "roundtrip.hex");
+  const std::vector<uint8_t> back = hex::parseIntelHex(hex::formatIntelHex(image), 4096, "roundtrip.hex");
   if (back != image) violation("an accepted image does not round-trip through formatIntelHex");
 }
 

@@ -1,7 +1,7 @@
 // Fuzz targets for the host parsers: each takes arbitrary bytes, must never crash, hang or hit
 // undefined behaviour, and checks what its parser promises (fuzz::violation() aborts with a
 // message when a promise breaks, which libFuzzer and the replay test both report).
-//   intel_hex       sim::parseIntelHex (EEPROM images for avrdude, `sim`, `lab export`):
+//   intel_hex       hex::parseIntelHex (EEPROM images for avrdude, `sim`, `lab export`):
 //                   accepted images round-trip through formatIntelHex byte for byte
 //   eeprom_image    tc::loadSlot / readRecord / readModelV2 / readSettings on any 4 KiB image:
 //                   whatever loads is plausible (checkCalibration / checkModelV2) and flies

@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "sim/board.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "sim/scenarios.hpp"
 
 namespace hil {
@@ -74,13 +74,13 @@ inline std::vector<uint8_t> fleetEeprom() {
                          ("thrustcal_hil_fleet_" + std::to_string(key) + ".hex");
   if (fs::exists(cache)) {
     try {
-      return sim::readIntelHexFile(cache.string(), sim::kEepromBytes);
-    } catch (const sim::HexError&) {
+      return hex::readIntelHexFile(cache.string(), sim::kEepromBytes);
+    } catch (const hex::HexError&) {
     }
   }
   const sim::GatherResult r = sim::runGather(fleetGatherOptions());
   const fs::path tmp = cache.string() + "." + std::to_string(::getpid());
-  sim::writeIntelHexFile(tmp.string(), r.eeprom);
+  hex::writeIntelHexFile(tmp.string(), r.eeprom);
   fs::rename(tmp, cache);
   return r.eeprom;
 }

@@ -39,12 +39,12 @@ std::string gatherStoreElf() {
       .string();
 }
 
-struct ImageStorage {
+struct SettleImageStorage {
   static const std::vector<uint8_t>* image;
   static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
   static void updateByte(uint16_t, uint8_t) {}
 };
-const std::vector<uint8_t>* ImageStorage::image = nullptr;
+const std::vector<uint8_t>* SettleImageStorage::image = nullptr;
 
 struct SettleRun {
   std::string settle;          // the settle command
@@ -82,10 +82,10 @@ SettleRun calibrate(const std::string& settle_command) {
   for (const auto& l : must("store v2", 10))
     if (l.rfind("stored model v2", 0) == 0) r.store_line = l;
   const std::vector<uint8_t> image = rig.board.eeprom();
-  ImageStorage::image = &image;
+  SettleImageStorage::image = &image;
   tc::ModelV2 model;
-  const bool ok = tc::readModelV2<ImageStorage>(0, model).status == tc::DecodeStatus::kOk;
-  ImageStorage::image = nullptr;
+  const bool ok = tc::readModelV2<SettleImageStorage>(0, model).status == tc::DecodeStatus::kOk;
+  SettleImageStorage::image = nullptr;
   EXPECT_TRUE(ok) << r.store_line;
   if (!ok) return r;
   double sum2 = 0;

@@ -12,7 +12,7 @@
 #include <filesystem>
 
 #include "safety_support.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "sim/rigs.hpp"
 
 extern "C" {
@@ -143,7 +143,7 @@ TEST(WatchdogThroughTheBootloader, KeepsTheMotorsStoppedAndSaysItResetWhileRunni
   if (!std::filesystem::exists(hex)) GTEST_SKIP() << hex << " missing (apt-get install arduino-core-avr)";
   // given: read_run with the bootloader in the boot section, reset vector there (BOOTRST)
   safety::ReadRunBoard rr(safety::calibratedEeprom());
-  const std::vector<uint8_t> flash = sim::readIntelHexFile(hex, 256 * 1024);
+  const std::vector<uint8_t> flash = hex::readIntelHexFile(hex, 256 * 1024);
   const uint32_t boot = 0x3E000;
   rr.board.patchFlash(boot, std::vector<uint8_t>(flash.begin() + boot, flash.end()));
   rr.board.avr()->reset_pc = boot;

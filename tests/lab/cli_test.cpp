@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -109,6 +110,56 @@ TEST(LabCli, LadderJsonListsTheStepsInOrderAndTheReportIsWritten) {
       EXPECT_GT(fs::file_size(p), 1000u) << p;
     }
   }
+}
+
+TEST(LabCli, DiagnoseJsonHasTheNoiseFloorTheVerdictWhereTheResidualIsAndTheEvidence) {
+  // given four run files from a current-limited bench supply
+  auto files = writeRuns("current_limit");
+  std::vector<std::string> args = {"lab", "diagnose"};
+  args.insert(args.end(), files.begin(), files.end());
+  for (const char* a : {"--model", "curve+deadband+voltage", "--json"}) args.push_back(a);
+  std::string out;
+  ASSERT_EQ(run(args, out), 0);
+  const auto j = nlohmann::json::parse(out);
+  // then the fields scripts use stay, and the new ones are there
+  for (const char* k : {"rmse_g", "n", "suspects"}) EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_NEAR(j.at("noise_g").get<double>(), 0.5, 0.1);
+  ASSERT_EQ(j.at("noise_g_ci").size(), 2u);
+  EXPECT_LT(j.at("noise_g_ci")[0].get<double>(), j.at("noise_g").get<double>());
+  EXPECT_GT(j.at("noise_g_ci")[1].get<double>(), j.at("noise_g").get<double>());
+  EXPECT_EQ(j.at("verdict"), "suspects");
+  EXPECT_GT(j.at("unexplained_g").get<double>(), 10.0);
+  ASSERT_FALSE(j.at("regions").empty());
+  EXPECT_GT(j.at("regions")[0].at("pwm_lo_us").get<double>(), 1500);
+  ASSERT_FALSE(j.at("evidence").empty());
+  EXPECT_EQ(j.at("evidence")[0].at("kind"), "current_plateau");
+  EXPECT_NEAR(j.at("evidence")[0].at("level").get<double>(), 6.32, 0.02);
+  EXPECT_EQ(j.at("evidence")[0].at("effects")[0], "current_limit");
+  EXPECT_EQ(j.at("next").at("add"), "current_limit");
+  // current is evidence, never a suspect to model with
+  for (const auto& s : j.at("suspects")) EXPECT_NE(s.at("variable"), "current_a");
+}
+
+TEST(LabCli, LadderAndWalkJsonCarryTheNoiseFloor) {
+  auto files = writeRuns("current_limit");
+  files = {files.front(), files.back()};  // the highest and the lowest set voltage: enough, and quick
+  std::vector<std::string> ladder = {"lab", "ladder"}, walk = {"lab", "walk"};
+  ladder.insert(ladder.end(), files.begin(), files.end());
+  walk.insert(walk.end(), files.begin(), files.end());
+  for (const char* a : {"--model", "curve+deadband+voltage", "--add", "current_limit", "--json"}) ladder.push_back(a);
+  for (const char* a : {"--model", "curve+deadband+voltage", "--json"}) walk.push_back(a);  // the short walk
+  std::string out;
+  ASSERT_EQ(run(ladder, out), 0);
+  auto j = nlohmann::json::parse(out);
+  EXPECT_GT(j.at("noise_g").get<double>(), 0.3);
+  EXPECT_FALSE(j.at("steps")[0].at("at_noise_floor").get<bool>());
+  EXPECT_TRUE(j.at("steps")[1].at("earns").get<bool>());
+  ASSERT_EQ(run(walk, out), 0);
+  j = nlohmann::json::parse(out);
+  EXPECT_EQ(j.at("verdict"), "at_noise_floor");
+  EXPECT_EQ(j.at("walk").back().at("verdict"), "at_noise_floor");
+  EXPECT_NE(std::find(j.at("adds").begin(), j.at("adds").end(), "current_limit"), j.at("adds").end());
+  EXPECT_TRUE(j.at("ladder").at("steps").back().at("at_noise_floor").get<bool>());
 }
 
 TEST(LabCli, BadInputIsAnErrorExitNotACrash) {

@@ -16,7 +16,7 @@
 #include "lab/export.hpp"
 #include "lab/generate.hpp"
 #include "lab/model.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -91,7 +91,7 @@ TEST(LabExport, RecordReadBackFromTheHexFileFliesTheLabModelsForceWithin1Percent
   // given the sag data set from the plant and an EEPROM image with other slots in use
   const std::string csv = tmp("export_sag.csv"), hex = tmp("export_sag.hex");
   const lab::Dataset data = generated("sag", csv);
-  sim::writeIntelHexFile(hex, patterned());
+  hex::writeIntelHexFile(hex, patterned());
 
   // when the fitted model is exported into slot 1
   const CliRun r = thrustcal({"lab", "export", csv, "--model", kSpec, "--slot", "1", "--eeprom", hex});
@@ -99,7 +99,7 @@ TEST(LabExport, RecordReadBackFromTheHexFileFliesTheLabModelsForceWithin1Percent
   EXPECT_NE(r.out.find("wrote slot 1 copy A, sequence 1"), std::string::npos) << r.out;
 
   // then the board's loader finds a v2 record in slot 1
-  g_image = sim::readIntelHexFile(hex, lab::kEepromBytes);
+  g_image = hex::readIntelHexFile(hex, lab::kEepromBytes);
   tc::ModelV2 v2;
   tc::MotorCalibration v1;
   const tc::SlotLoad load = tc::loadSlot<Image>(1, v2, v1);
@@ -178,7 +178,7 @@ TEST(LabExport, SecondExportIsTheNextSequenceInTheOtherCopyAndTheFirstStaysValid
   EXPECT_NE(r.out.find("wrote slot 2 copy B, sequence 2"), std::string::npos) << r.out;
 
   // then the loader takes copy B, sequence 2, and copy A still decodes (the power-fail fallback)
-  g_image = sim::readIntelHexFile(hex, lab::kEepromBytes);
+  g_image = hex::readIntelHexFile(hex, lab::kEepromBytes);
   tc::ModelV2 v2;
   const tc::RecordV2Read read = tc::readModelV2<Image>(2, v2);
   EXPECT_EQ(read.copy, 1u);
@@ -194,7 +194,7 @@ TEST(LabExport, SecondExportIsTheNextSequenceInTheOtherCopyAndTheFirstStaysValid
 TEST(LabExport, EffectsTheFirmwareCannotRunAreRefusedByNameAndTheFileIsUntouched) {
   const std::string csv = tmp("export_refuse.csv"), hex = tmp("export_refuse.hex");
   generated("sag", csv);
-  sim::writeIntelHexFile(hex, patterned());
+  hex::writeIntelHexFile(hex, patterned());
   const std::string before = slurp(hex);
   const struct {
     const char* spec;
@@ -233,7 +233,7 @@ TEST(LabExport, SeveralMotorsAreRefusedUnlessMotorPicksOne) {
   const CliRun one = thrustcal({"lab", "export", csv, "--model", "curve+deadband+voltage+motor", "--motor", "2",
                              "--slot", "0", "--eeprom", hex});
   ASSERT_EQ(one.rc, 0) << one.err;
-  g_image = sim::readIntelHexFile(hex, lab::kEepromBytes);
+  g_image = hex::readIntelHexFile(hex, lab::kEepromBytes);
   tc::ModelV2 v2;
   EXPECT_EQ(tc::readModelV2<Image>(0, v2).status, tc::DecodeStatus::kOk);
 }
@@ -293,7 +293,7 @@ TEST(LabExport, DataOrFitsThatCannotMakeARightRecordAreRefusedNamingTheLimitAndN
     // given data (or a fit) that would make a record that cannot be right, and an image in use
     const std::string csv = editedCsv(std::string("refuse_") + c.name + ".csv", c.edit);
     const std::string hex = tmp("refuse.hex");
-    sim::writeIntelHexFile(hex, patterned());
+    hex::writeIntelHexFile(hex, patterned());
     const std::string before = slurp(hex);
     // when exported
     std::vector<std::string> args = {"lab", "export", csv, "--model", c.model, "--slot", "1", "--eeprom", hex};

@@ -1,6 +1,7 @@
 // The effect registry is complete and consistent: every effect has a name, documentation and
 // parameters with ranges; names are unique; the catalogue, `lab effects` and docs/lab.md list
-// exactly the registry (`lab effects`: cli_test.cpp); a fit's parameters are the ones the registry documents, in its ranges.
+// exactly the registry (`lab effects`: cli_test.cpp); a fit's parameters are the ones the registry documents, in its ranges;
+// what suggests an effect and the advice the diagnosis gives are the registry's, and analysis.cpp names no effect.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,7 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "lab/analysis.hpp"
 #include "lab/effect.hpp"
+#include "lab/generate.hpp"
 #include "lab/model.hpp"
 
 namespace {
@@ -140,6 +143,49 @@ TEST(LabRegistry, AFitHasExactlyTheDocumentedParametersInTheirRanges) {
         }
     }
     EXPECT_GT(own, 0) << e->name << " added no parameter to the fit";
+  }
+}
+
+TEST(LabRegistry, EveryEffectSaysWhatSuggestsItAndItsAdviceNamesIt) {
+  for (const EffectDef* e : lab::effects::registry()) {
+    if (e->role != Role::kEffect) continue;
+    const auto& s = e->suggests;
+    EXPECT_FALSE(s.variables.empty() && s.evidence.empty()) << e->name << ": nothing would ever suggest it";
+    EXPECT_NE(s.advice.find("add `" + e->name + "`"), std::string::npos) << e->name << ": " << s.advice;
+    EXPECT_FALSE(s.still.empty()) << e->name << ": say what is left when it is in the model";
+  }
+}
+
+TEST(LabRegistry, TheDiagnosisTakesItsSuggestionAndAdviceFromTheRegistry) {
+  // given a sagging pack, diagnosed with voltage in the model
+  lab::GenerateOptions o;
+  o.hidden = "sag";
+  o.noise_g = 0.5;
+  lab::Dataset d = lab::generate(o);
+  lab::addDerivedColumns(d);
+  const lab::Diagnosis diag = lab::diagnose(d, lab::parseSpec("curve+deadband+voltage"), lab::Holdout::kNone);
+  // then the suspect's effect is the entry whose variables name vbat_v and whose needs are met,
+  // and its words are that entry's advice
+  const auto* sag = lab::effects::find("sag");
+  ASSERT_NE(sag, nullptr);
+  ASSERT_FALSE(diag.variables.empty());
+  EXPECT_EQ(diag.variables.front().effects.front(), sag->name);
+  EXPECT_NE(diag.variables.front().advice.find(sag->suggests.advice), std::string::npos) << diag.variables.front().advice;
+}
+
+TEST(LabRegistry, AnalysisNamesNoEffect) {
+  // a new effect is its file and its registry line: the diagnosis's source names none of them
+  std::ifstream f(THRUSTCAL_SOURCE_DIR "/tools/lab/src/analysis.cpp");
+  ASSERT_TRUE(f);
+  std::string src((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  // --holdout voltage is a kind of hold-out (runs grouped by voltage), not the effect
+  const auto a = src.find("Holdout parseHoldout("), b = src.find("\n}\n", a);
+  ASSERT_NE(a, std::string::npos);
+  src.erase(a, b - a);
+  for (const EffectDef* e : lab::effects::registry()) {
+    if (e->role == Role::kExpression) continue;
+    EXPECT_EQ(src.find("\"" + e->name + "\""), std::string::npos) << "analysis.cpp names \"" << e->name << "\"";
+    EXPECT_EQ(src.find("`" + e->name + "`"), std::string::npos) << "analysis.cpp names `" << e->name << "`";
   }
 }
 

@@ -9,7 +9,7 @@
 
 #include "sim/board.hpp"
 #include "sim/console.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "sim/pty_bridge.hpp"
 
 #include <fcntl.h>
@@ -110,7 +110,7 @@ TEST_F(ProbeBoard, EepromImageGoesInAndOutThroughIntelHex) {
   // given: an image with a pattern, loaded the way --eeprom FILE does
   std::vector<uint8_t> image(sim::kEepromBytes, 0xFF);
   image[4095] = 0x5A;
-  board->setEeprom(sim::parseIntelHex(sim::formatIntelHex(image), sim::kEepromBytes));
+  board->setEeprom(hex::parseIntelHex(hex::formatIntelHex(image), sim::kEepromBytes));
   // when the firmware reads and writes
   auto r = console->command("er 4095");
   console->command("ee 3 200");

@@ -1,7 +1,7 @@
 // Intel HEX codec for EEPROM images (what avrdude -U eeprom:w:FILE:i reads).
 #include <gtest/gtest.h>
 
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 
 #include <cstdlib>
 #include <fstream>
@@ -14,7 +14,7 @@ TEST(IntelHex, FormatsRecordsWithChecksumsAvrdudeAccepts) {
   // given: 4 bytes (a known record from the Intel HEX specification family)
   std::vector<uint8_t> image = {0x01, 0x02, 0x03, 0x04};
   // when
-  const std::string text = sim::formatIntelHex(image);
+  const std::string text = hex::formatIntelHex(image);
   // then: count 04, address 0000, type 00, data, checksum = -(4+1+2+3+4) = 0xF2
   EXPECT_EQ(text, ":0400000001020304F2\n:00000001FF\n");
 }
@@ -22,12 +22,12 @@ TEST(IntelHex, FormatsRecordsWithChecksumsAvrdudeAccepts) {
 TEST(IntelHex, RoundTripsAFullEepromImage) {
   std::vector<uint8_t> image(4096);
   for (std::size_t i = 0; i < image.size(); ++i) image[i] = static_cast<uint8_t>(i * 37 + 11);
-  const auto back = sim::parseIntelHex(sim::formatIntelHex(image), 4096);
+  const auto back = hex::parseIntelHex(hex::formatIntelHex(image), 4096);
   EXPECT_EQ(back, image);
 }
 
 TEST(IntelHex, FillsBytesTheFileDoesNotMentionWithErasedValue) {
-  const auto image = sim::parseIntelHex(":0100100042AD\n:00000001FF\n", 32);
+  const auto image = hex::parseIntelHex(":0100100042AD\n:00000001FF\n", 32);
   EXPECT_EQ(image[0x10], 0x42);
   EXPECT_EQ(image[0x00], 0xFF);
   EXPECT_EQ(image[0x1F], 0xFF);
@@ -35,7 +35,7 @@ TEST(IntelHex, FillsBytesTheFileDoesNotMentionWithErasedValue) {
 
 TEST(IntelHex, AcceptsCrlfLineEndsAndExtendedLinearAddressZero) {
   const auto image =
-      sim::parseIntelHex(":020000040000FA\r\n:0100000055AA\r\n:00000001FF\r\n", 4);
+      hex::parseIntelHex(":020000040000FA\r\n:0100000055AA\r\n:00000001FF\r\n", 4);
   EXPECT_EQ(image[0], 0x55);
 }
 
@@ -48,7 +48,7 @@ TEST(IntelHex, BinutilsReadsOurImageBackByteForByte) {
   for (std::size_t i = 0; i < image.size(); ++i) image[i] = static_cast<uint8_t>(i ^ (i >> 8));
   const std::string hex = std::string(SIM_TEST_TMP) + "/roundtrip.hex";
   const std::string bin = std::string(SIM_TEST_TMP) + "/roundtrip.bin";
-  sim::writeIntelHexFile(hex, image);
+  hex::writeIntelHexFile(hex, image);
   // when
   const std::string cmd = objcopy + " -I ihex -O binary " + hex + " " + bin;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
@@ -67,9 +67,9 @@ class IntelHexRejects : public ::testing::TestWithParam<BadHex> {};
 
 TEST_P(IntelHexRejects, MalformedInputWithAMessageNamingTheProblem) {
   try {
-    sim::parseIntelHex(GetParam().text, 64, "eeprom.hex");
+    hex::parseIntelHex(GetParam().text, 64, "eeprom.hex");
     FAIL() << "accepted: " << GetParam().text;
-  } catch (const sim::HexError& e) {
+  } catch (const hex::HexError& e) {
     EXPECT_NE(std::string(e.what()).find(GetParam().message_part), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("eeprom.hex"), std::string::npos) << e.what();
   }

@@ -12,7 +12,7 @@
 // "Not calibrated" also covers a first curve without a single gram. The voltage term is
 // rounded to the nearest microsecond (halves away from zero) and is extrapolated linearly
 // outside V1..V2. A second curve shorter than F saturates at its own heaviest gram (flagged
-// kSaturated). Cost on the ATmega2560: about 1800 cycles (one 32-bit division), measured by
+// kSaturated). One 32-bit division per call; its cost on the ATmega2560 is measured by
 // tests/core/avr_cycles.sh.
 #pragma once
 #include <stdint.h>

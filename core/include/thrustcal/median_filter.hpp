@@ -1,7 +1,7 @@
 // Running median over an odd window (1..201 samples), cheap enough to update on every ADC
 // sample on the ATmega2560: push() is one insertion into a sorted array plus one removal,
-// O(window) word moves, no division, no heap. Measured on the ATmega2560 (window 201):
-// about 1500 cycles per push on random data, 3200 at worst (tests/core/avr_cycles.sh).
+// O(window) word moves, no division, no heap. Its cost per push on the ATmega2560 is measured
+// by tests/core/avr_cycles.sh (docs/results.md).
 #pragma once
 #include <stdint.h>
 

@@ -1,61 +1,30 @@
 // Force model v2: thrust follows the effective motor voltage, not the PWM.
 //
-// Why: the thesis's option 2.1 interpolates PWM linearly in battery voltage between two
-// measured curves. Its own table 5.1 shows (PWM - ~1097 us) * V_bus constant within ~1 % at
-// 300 g: a DC motor turning a propeller reaches a steady speed that depends only on the mean
-// voltage across its windings, duty * V_bus. PWM-per-volt is a hyperbola, not a line, so
-// option 2.1 drifts off away from its two calibration voltages. v2 models that directly:
+// Why: a DC motor turning a propeller settles at a speed set by the mean voltage across its
+// windings, duty * V_bus, so PWM-per-volt is a hyperbola and the thesis's option 2.1 (linear in
+// voltage between two curves) drifts away from its two calibration voltages. v2 models that:
 //
 //   drive = (pwm - start) * V_bus        [us*mV; stored in units of 512 us*mV]
 //   force = curve(drive)                 [monotone, one curve for every voltage]
 //
-// Per motor (ModelV2, 123 bytes of SRAM on the AVR; four motors 492 bytes):
-// - start_q4_us: the ESC's start threshold (where force leaves zero), 1/16 us;
-// - a monotone force curve in drive: up to 32 knots placed by FORCE, the origin (0, 0)
-//   implicit, in two evenly spaced runs: 16 fine knots up to a quarter of the largest force,
-//   16 coarse knots (3x the step) above. By force, because the run time goes force -> PWM:
-//   the knot index is a multiplication by a precomputed reciprocal of the step, no search
-//   and no division. Two runs, because drive ~ force^0.5 bends hardest at the low end: with
-//   one even run of fmax / 32 (37 g on a 1.2 kg motor) linear interpolation alone cost up
-//   to 1.2 % of force at 100 g on the virtual bench's plant; fine steps there and coarse
-//   ones where the curve is straight keep every knot's error about equal (plant, two sweeps:
-//   0.32 % RMS / 1.41 % max with one run, 0.19 % / 0.85 % with two). Curves that end below
-//   422 g (fine step under kV2MinStepDg) get one even run; below 211 g its step is under
-//   kV2MinStepDg and the knot position uses a Q16 reciprocal instead (q16_inverse), so motors
-//   down to kRecordMinForceG (5 g) keep up to 32 knots;
-// - the battery sag the monitor saw on the bench at each knot (10 mV units) and the resting
-//   voltage, used to predict the bus voltage at a commanded operating point that differs
-//   from the present one (command steps), see forceToPwmV2(..., force_now_dg).
+// Per motor (ModelV2): the ESC's start threshold (1/16 us); a monotone force curve in drive,
+// up to 32 knots placed by FORCE (the run time goes force -> PWM: the knot index is a multiply
+// by a precomputed reciprocal, no search, no division) in a fine run up to a quarter of the
+// largest force and a coarse run above (drive ~ force^0.5 bends hardest at the low end); the
+// bench sag per knot and the resting voltage, to predict the bus voltage at a commanded
+// operating point that differs from the present one.
 //
-// Run time (forceToPwmV2 here; read_run flies its four motors with one tc::V2Frame::fly call,
-// model_v2_runtime.hpp, the same arithmetic): no float, no division. The bus voltage filter
-// (BusVoltageFilter) keeps the filtered millivolts AND their reciprocal (2^27 / mV), updated
-// by one Newton step (two 16x16 multiplications) in the frames where the filtered value
-// moves; a jump of more than 1/128 re-seeds it with one 32/16 division. Per motor: three
-// 16x16->32 multiplications (knot position, interpolation, drive * reciprocal; inline
-// hardware MULs on the AVR) and only byte-aligned shifts; six more multiplications when a
-// sag prediction is asked for (command steps).
-// Divisions, counted: per frame 0, or 1 after a jump (filter re-seed); per motor 0.
-// headroomDg / forceForPwmDg (status command, not per frame) use one 32/32 division each.
-// Fitting (gather_store, once per sweep) uses 32/32 divisions freely.
-// Measured on the ATmega2560 in simavr (`thrustcal bench compute`, docs/results.md):
-// V2Frame::fly for four motors (filter, sag prediction, flags) 966 cycles mean, 991 max;
-// tests/core_v2/avr_cycles.sh: fit of a 101-sample sweep ~0.5 M cycles (31 ms), refine 0.28 M.
+// Run time (forceToPwmV2; read_run flies its motors with one tc::V2Frame::fly,
+// model_v2_runtime.hpp): no float and no division per frame or per motor; 16x16->32
+// multiplies and byte-aligned shifts only. headroomDg / forceForPwmDg (status, not per frame)
+// divide once each.
 //
-// Fitting on the board (ModelV2Fitter): one sweep of (pwm_us, force_dg, vbat_mv) samples as
-// gather_store records them, integer maths, 8 bytes per sample of work space (128 samples:
-// 1 KB). The start threshold comes from the sweep's shape without assuming an exponent: for
-// any power law F ~ (pwm - s)^a the PWMs at forces F, 2F, 4F satisfy
-// (p2 - s)^2 = (p1 - s)(p3 - s), so s = p1 - (p2 - p1)^2 / (p3 - 2 p2 + p1); the median over
-// 15 such triples with 4F up to a quarter of the sweep's largest force is taken (the low end
-// is closest to a power law; sag-corrected by iteration). A real motor is not a pure power
-// law (friction offset, IR drop, rising thrust coefficient): on the virtual bench's plant the
-// one-sweep start lands ~7 us late, which costs ~0.8 % RMS force error away from the sweep's
-// voltage; refine() removes it.
-// A second sweep at another voltage (refine) measures s directly and exactly, without any
-// power law: for each force both sweeps must give the same drive,
-// (pA - s) VA = (pB - s) VB  =>  s = (pA VA - pB VB) / (VA - VB); the median over the knots
-// replaces s, and both sweeps' drives are averaged into the knots.
+// Fitting on the board (ModelV2Fitter, gather_store, once per sweep; 32/32 divisions allowed):
+// the start threshold from the sweep's shape without assuming an exponent (for any power law
+// the PWMs at F, 2F, 4F give s = p1 - (p2 - p1)^2 / (p3 - 2 p2 + p1); the median over triples
+// at the low end), and a second sweep at another voltage measures it exactly (refine():
+// (pA - s) VA = (pB - s) VB for every force).
+// docs/model_v2.md explains the choices and gives their measured cost and accuracy.
 #pragma once
 #include <stdint.h>
 

@@ -1,7 +1,7 @@
-// The thesis model (record layout v1, option 2.1) as read_run flies it, in 168 bytes of SRAM
-// per motor instead of the 1114 of the decoded record (tc::MotorCalibration): the curves' 499
-// PWM steps per curve stay in the EEPROM and are read on demand; SRAM keeps each curve's PWM
-// every 16 grams (checkpoints), its start voltage and heaviest gram, and the sag table.
+// The thesis model (record layout v1, option 2.1) as read_run flies it, in a fraction of the
+// SRAM of the decoded record (tc::MotorCalibration): the curves' 499 PWM steps per curve stay
+// in the EEPROM and are read on demand; SRAM keeps each curve's PWM every 16 grams
+// (checkpoints), its start voltage and heaviest gram, and the sag table.
 //
 // A lookup adds at most 15 steps read from the EEPROM to a checkpoint: the same sum the decoded
 // curve makes from its own checkpoints every 32 g, so the PWM is the same to the bit for every

@@ -12,7 +12,7 @@
 #include "eeprom_console.hpp"
 #include "hal/fake.hpp"
 #include "hal/hal.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "thrustcal/crc16.hpp"
 
 namespace {
@@ -82,8 +82,8 @@ TEST_F(EepromConsole, DumpIsIntelHexThatParsesBackToEveryByte) {
   std::size_t records = 0;
   for (std::size_t at = out.find(':'); at != std::string::npos; at = out.find(':', at + 1)) ++records;
   EXPECT_EQ(records, 257u);
-  EXPECT_EQ(sim::parseIntelHex(out, 4096, "dump", 0x00), image());
-  EXPECT_EQ(sim::parseIntelHex(out, 4096, "dump", 0xFF), image());  // every byte given
+  EXPECT_EQ(hex::parseIntelHex(out, 4096, "dump", 0x00), image());
+  EXPECT_EQ(hex::parseIntelHex(out, 4096, "dump", 0xFF), image());  // every byte given
 }
 
 TEST_F(EepromConsole, DumpAndCrcOnlyReadTheEeprom) {

@@ -126,7 +126,7 @@ TEST_F(ReadRunV2, StartUpSaysEachV2MotorFliesModelV2WithItsStartAndMaxForce) {
   EXPECT_TRUE(contains(out, "calibrated motors: 4 of 4")) << out;
 }
 
-struct VoltageCase {
+struct V2VoltageCase {
   uint16_t counts;
   const char* what;
 };
@@ -136,12 +136,12 @@ TEST_F(ReadRunV2, V2HoldsTheForceAtVoltagesAwayFromItsCalibrationVoltage) {
   storeFourV2Motors();
   boot();
   command("f 300");
-  const VoltageCase cases[] = {
+  const V2VoltageCase cases[] = {
       {650, "9.9 V, below the sweep"},  {700, "10.7 V"},
       {kCountsV1, "11.3 V, the sweep's voltage"},
       {800, "12.2 V"},                  {822, "12.6 V, full pack"},
   };
-  for (const VoltageCase& c : cases) {
+  for (const V2VoltageCase& c : cases) {
     SCOPED_TRACE(c.what);
     // when
     fake::setAdcCounts(hal::kAdcBattery, c.counts);

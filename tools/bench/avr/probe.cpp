@@ -1,11 +1,9 @@
 // AVR probe for `thrustcal bench compute|footprint`, built with avr-g++ by tools/bench's
-// CMakeLists (same flags as the AVR tree) and run in libsimavr by src/avr_probe.cpp.
-// Same marker approach as tests/core_v2/avr_cycles: the host timestamps GPIOR writes with the
-// simulated cycle counter.
-//   GPIOR1 = label, GPIOR0 = 1 (start) ... GPIOR0 = 2 (end)       a measured section
-//   GPIOR1 = 0x80 + key, GPIOR2 = low byte, GPIOR2 = high byte     a value (sizes, checks)
-//   GPIOR1 = 0xFF                                                  done
-// Every section is a call read_run makes, with read_run's own types and storage:
+// CMakeLists (the AVR tree's flags) and run in simavr by src/avr_probe.cpp with
+// sim::runCycleProbe: each measured call sits between probe::markStart and probe::markEnd, and
+// sizes and checks are reported under keys (sim/cycle_probe_avr.hpp).
+// Every section is a call read_run makes, with the types read_run flies (core's, its slots'
+// tc::SlotModel included):
 //   - tc::V2Frame::fly, the frame read_run calls for its v2 motors (bus filter, sag prediction,
 //     four pulses; the lanes' commands set as read_run's setForce sets them);
 //   - the v1 (thesis) motor as read_run's flyMotor flies it: the sag-compensated reading and
@@ -21,7 +19,7 @@
 #include <string.h>
 
 #include "hal/hal.hpp"
-#include "force_actuators.hpp"  // the public force API: read_run's (and fly's) motor storage
+#include "sim/cycle_probe_avr.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
@@ -29,6 +27,7 @@
 #include "thrustcal/median_filter.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/model_v2_runtime.hpp"
+#include "thrustcal/slot_model.hpp"
 #include "thrustcal/thesis_runtime.hpp"
 
 enum Label : uint8_t {
@@ -47,26 +46,22 @@ enum Key : uint8_t {
   kFrames = 0x84,
   kSizeofModelV2Run = 0x85,
   kSizeofThesisRun = 0x86,
-  kSizeofMotor = 0x87,
+  // 0x87 was sizeof(rr::Motor): read_run's private struct, no longer measured here
   kSizeofV2Frame = 0x88,
   kFrameMismatches = 0x89,
   kFramesChecked = 0x8A,
 };
 
-static inline void markStart(uint8_t label) { GPIOR1 = label; GPIOR0 = 1; }
-static inline void markEnd() { GPIOR0 = 2; }
-static void report(uint8_t key, uint16_t value) {
-  GPIOR1 = key;
-  GPIOR2 = static_cast<uint8_t>(value);
-  GPIOR2 = static_cast<uint8_t>(value >> 8);
-}
+using probe::markEnd;
+using probe::markStart;
+static void report(uint8_t key, uint16_t value) { probe::report16(key, value); }
 // Keeps a value in a register across the markers: inputs are computed before the start.
 template <class T>
 static inline void ready(const T& v) { __asm__ volatile("" ::"r"(v) : "memory"); }
 
 // read_run's storage: four slots and the frame of its v2 motors (the symbols' sizes are what
 // the image holds).
-fw::SlotModel bench_slots[4];
+tc::SlotModel bench_slots[4];
 tc::V2Frame bench_frame;
 static tc::ModelV2 models[4];
 static tc::MotorCalibration decoded;  // one at a time, as read_run's loader
@@ -112,15 +107,18 @@ static bool flyBothSame(uint16_t mv, uint8_t extra) {
   return same;
 }
 
+// The whole measurement, in order: sizes, the thesis slots and frames, the v2 slots and frames,
+// then the assembly against the portable frame.
+// long: AVR code whose measured sections include the code around each call; split into
+// functions, the same calls measured longer (register moves around them), so it stays one run
 int main() {
   markStart(kEmpty);
   markEnd();
   report(kSizeofModelV2, sizeof(tc::ModelV2));
   report(kSizeofMotorCalibration, sizeof(tc::MotorCalibration));
-  report(kSizeofSlotModel, sizeof(fw::SlotModel));
+  report(kSizeofSlotModel, sizeof(tc::SlotModel));
   report(kSizeofModelV2Run, sizeof(tc::ModelV2Run));
   report(kSizeofThesisRun, sizeof(tc::ThesisRun));
-  report(kSizeofMotor, sizeof(fw::Motor));
   report(kSizeofV2Frame, sizeof(tc::V2Frame));
   uint16_t failures = 0;
   const uint16_t kFramesRun = 500;
@@ -294,7 +292,7 @@ int main() {
   report(kFrames, kFramesRun);
   report(kFrameMismatches, mismatches);
   report(kFramesChecked, checked);
-  GPIOR1 = 0xFF;
+  probe::done();
   cli();
   sleep_enable();
   sleep_cpu();

@@ -204,6 +204,92 @@ nlohmann::json AccuracyResult::toJson() const {
   return j;
 }
 
+namespace {
+
+// How far the sweep's readings are from the plant's true thrust (50-600 g, both sweeps).
+void sweepReadingError(const Sweep& high, const Sweep& low, MotorSummary& summary) {
+  double sum = 0, sum_sq = 0;
+  int n = 0;
+  for (const Sweep* sw : {&high, &low})
+    for (const SweepPoint& p : sw->points)
+      if (p.true_thrust_g > 50.0 && p.true_thrust_g < 600.0) {
+        const double e = 100.0 * (p.force_dg / 10.0 - p.true_thrust_g) / p.true_thrust_g;
+        sum += e, sum_sq += e * e, ++n;
+      }
+  summary.sweep_reading_bias_pct = n ? sum / n : 0.0;
+  summary.sweep_reading_error_rms_pct = n ? std::sqrt(sum_sq / n) : 0.0;
+}
+
+// Motor `i` of the config: its two sweeps (LiPo, bench supply) and every model fitted to them.
+std::unique_ptr<MotorModels> calibrateMotor(const AccuracyConfig& config, size_t i,
+                                            const plant::ActuatorParams& nominal, MotorSummary& summary) {
+  const uint64_t seed = config.seeds[i];
+  const plant::ActuatorParams params = plant::makeVaried(nominal, seed, config.variation);
+  const std::string what = fmt::format("motor {} (seed {})", i, seed);
+  SweepSpec spec = config.sweep;
+  spec.noise_seed = seed * 2 + 1;
+  const Sweep high = simulateSweep(params, lipoAt(config.cal_high_v), spec);
+  spec.noise_seed = seed * 2 + 2;
+  const Sweep low = simulateSweep(params, plant::BatteryParams::benchSupply(config.cal_low_v, 6.32), spec);
+  auto m = std::make_unique<MotorModels>(MotorModels{plant::Actuator(params), {}, {}, {}});
+  summary.seed = seed;
+  summary.sweep_high_rest_v = high.rest_v;
+  summary.sweep_low_rest_v = low.rest_v;
+  summary.sweep_samples = static_cast<int>(high.points.size());
+  sweepReadingError(high, low, summary);
+  buildThesisCurve(high, m->cal.first, &m->cal.sag, what + ", first curve");
+  buildThesisCurve(low, m->cal.second, nullptr, what + ", second curve");
+  fitV2(high, low, m->v2, summary, what);
+  std::vector<SweepPoint> both = high.points;
+  both.insert(both.end(), low.points.begin(), low.points.end());
+  m->expo = fitExpo(both);
+  summary.expo = m->expo.expo();
+  summary.expo_spin_min_us = m->expo.spinMin_us();
+  summary.expo_lift_max_g = m->expo.liftMax_g();
+  summary.expo_fit_rms_pct = m->expo.rms_fit_pct;
+  return m;
+}
+
+// One model of the comparison: the pulse it gives a motor for f grams at a monitor reading.
+using PwmFn = std::function<double(const MotorModels&, int, uint16_t)>;
+struct ModelEntry {
+  const char* key;
+  const char* name;
+  PwmFn pwm;
+};
+
+// Flies every motor with the model at every point of the grid (steady state on the plant).
+ModelAccuracy scoreModel(const AccuracyConfig& config, const ModelEntry& e,
+                         const std::vector<std::unique_ptr<MotorModels>>& motors) {
+  const double lo_cal = std::min(config.cal_low_v, config.cal_high_v);
+  const double hi_cal = std::max(config.cal_low_v, config.cal_high_v);
+  const int v_steps = static_cast<int>(std::floor((config.v_max - config.v_min) / config.v_step + 1e-6));
+  Accum all, inside, outside;
+  std::vector<Accum> per_v(static_cast<size_t>(v_steps) + 1);
+  for (const auto& m : motors) {
+    for (int vi = 0; vi <= v_steps; ++vi) {
+      const double v = config.v_min + vi * config.v_step;
+      const uint16_t reading = monitorReading_mv(v);
+      const bool in = v >= lo_cal - 1e-9 && v <= hi_cal + 1e-9;
+      for (int f = config.force_min_g; f <= config.force_max_g; f += config.force_step_g) {
+        const double pwm = e.pwm(*m, f, reading);
+        const double thrust = m->actuator.steadyState(pwm, v).thrust_g;
+        const double err_pct = 100.0 * (thrust - f) / f;
+        all.add(err_pct);
+        (in ? inside : outside).add(err_pct);
+        per_v[static_cast<size_t>(vi)].add(err_pct);
+      }
+    }
+  }
+  ModelAccuracy ma{e.key, e.name, all.stats(), inside.stats(), outside.stats(), {}, 0.0};
+  for (int vi = 0; vi <= v_steps; ++vi)
+    ma.by_voltage.emplace_back(config.v_min + vi * config.v_step, per_v[static_cast<size_t>(vi)].stats());
+  ma.mean_pct = all.n ? all.sum / all.n : 0.0;
+  return ma;
+}
+
+}  // namespace
+
 AccuracyResult runAccuracy(const AccuracyConfig& config) {
   if (config.seeds.empty()) throw std::runtime_error("accuracy: no motor seeds given");
   if (config.v_step <= 0 || config.force_step_g <= 0 || config.v_max < config.v_min ||
@@ -212,64 +298,18 @@ AccuracyResult runAccuracy(const AccuracyConfig& config) {
   AccuracyResult result;
   result.config = config;
   const plant::ActuatorParams nominal = plant::presetParams(config.preset);
-
   std::vector<std::unique_ptr<MotorModels>> motors;
   for (size_t i = 0; i < config.seeds.size(); ++i) {
-    const uint64_t seed = config.seeds[i];
-    const plant::ActuatorParams params = plant::makeVaried(nominal, seed, config.variation);
-    const std::string what = fmt::format("motor {} (seed {})", i, seed);
-    SweepSpec spec = config.sweep;
-    spec.noise_seed = seed * 2 + 1;
-    const Sweep high = simulateSweep(params, lipoAt(config.cal_high_v), spec);
-    spec.noise_seed = seed * 2 + 2;
-    const Sweep low =
-        simulateSweep(params, plant::BatteryParams::benchSupply(config.cal_low_v, 6.32), spec);
-
-    auto m = std::make_unique<MotorModels>(MotorModels{plant::Actuator(params), {}, {}, {}});
     MotorSummary summary;
-    summary.seed = seed;
-    summary.sweep_high_rest_v = high.rest_v;
-    summary.sweep_low_rest_v = low.rest_v;
-    summary.sweep_samples = static_cast<int>(high.points.size());
-    {
-      double sum = 0, sum_sq = 0;
-      int n = 0;
-      for (const Sweep* sw : {&high, &low})
-        for (const SweepPoint& p : sw->points)
-          if (p.true_thrust_g > 50.0 && p.true_thrust_g < 600.0) {
-            const double e = 100.0 * (p.force_dg / 10.0 - p.true_thrust_g) / p.true_thrust_g;
-            sum += e, sum_sq += e * e, ++n;
-          }
-      summary.sweep_reading_bias_pct = n ? sum / n : 0.0;
-      summary.sweep_reading_error_rms_pct = n ? std::sqrt(sum_sq / n) : 0.0;
-    }
-    buildThesisCurve(high, m->cal.first, &m->cal.sag, what + ", first curve");
-    buildThesisCurve(low, m->cal.second, nullptr, what + ", second curve");
-    fitV2(high, low, m->v2, summary, what);
-    std::vector<SweepPoint> both = high.points;
-    both.insert(both.end(), low.points.begin(), low.points.end());
-    m->expo = fitExpo(both);
-    summary.expo = m->expo.expo();
-    summary.expo_spin_min_us = m->expo.spinMin_us();
-    summary.expo_lift_max_g = m->expo.liftMax_g();
-    summary.expo_fit_rms_pct = m->expo.rms_fit_pct;
+    motors.push_back(calibrateMotor(config, i, nominal, summary));
     result.motors.push_back(summary);
-    motors.push_back(std::move(m));
   }
-
   // The uncalibrated map: the nominal motor's steady state at nominal_v, per gram.
   const plant::Actuator nominal_actuator(nominal);
   std::vector<double> generic_pwm(static_cast<size_t>(config.force_max_g) + 1, kPwmMinUs);
   for (int f = config.force_min_g; f <= config.force_max_g; ++f)
     generic_pwm[static_cast<size_t>(f)] = nominal_actuator.pulseForThrust_us(f, config.nominal_v);
-
-  using PwmFn = std::function<double(const MotorModels&, int, uint16_t)>;
-  struct Entry {
-    const char* key;
-    const char* name;
-    PwmFn pwm;
-  };
-  const Entry entries[] = {
+  const ModelEntry entries[] = {
       {"uncalibrated", "same PWM map on all motors (nominal, 11.1 V)",
        [&](const MotorModels&, int f, uint16_t) { return generic_pwm[static_cast<size_t>(f)]; }},
       {"thesis_2_1", "thesis option 2.1 (two curves, sag offsets)",
@@ -279,33 +319,7 @@ AccuracyResult runAccuracy(const AccuracyConfig& config) {
       {"v2", "model v2 (effective voltage, fit + refine)",
        [](const MotorModels& m, int f, uint16_t mv) { return v2Pwm(m.v2, f, mv); }},
   };
-  const double lo_cal = std::min(config.cal_low_v, config.cal_high_v);
-  const double hi_cal = std::max(config.cal_low_v, config.cal_high_v);
-  const int v_steps = static_cast<int>(std::floor((config.v_max - config.v_min) / config.v_step + 1e-6));
-  for (const Entry& e : entries) {
-    Accum all, inside, outside;
-    std::vector<Accum> per_v(static_cast<size_t>(v_steps) + 1);
-    for (const auto& m : motors) {
-      for (int vi = 0; vi <= v_steps; ++vi) {
-        const double v = config.v_min + vi * config.v_step;
-        const uint16_t reading = monitorReading_mv(v);
-        const bool in = v >= lo_cal - 1e-9 && v <= hi_cal + 1e-9;
-        for (int f = config.force_min_g; f <= config.force_max_g; f += config.force_step_g) {
-          const double pwm = e.pwm(*m, f, reading);
-          const double thrust = m->actuator.steadyState(pwm, v).thrust_g;
-          const double err_pct = 100.0 * (thrust - f) / f;
-          all.add(err_pct);
-          (in ? inside : outside).add(err_pct);
-          per_v[static_cast<size_t>(vi)].add(err_pct);
-        }
-      }
-    }
-    ModelAccuracy ma{e.key, e.name, all.stats(), inside.stats(), outside.stats(), {}, 0.0};
-    for (int vi = 0; vi <= v_steps; ++vi)
-      ma.by_voltage.emplace_back(config.v_min + vi * config.v_step, per_v[static_cast<size_t>(vi)].stats());
-    ma.mean_pct = all.n ? all.sum / all.n : 0.0;
-    result.models.push_back(std::move(ma));
-  }
+  for (const ModelEntry& e : entries) result.models.push_back(scoreModel(config, e, motors));
   return result;
 }
 

@@ -4,9 +4,11 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include <fmt/format.h>
 
+#include "bench/report.hpp"
 #include "bench/sections.hpp"
 
 namespace bench {
@@ -22,12 +24,21 @@ struct Options {
 
 void emit(const std::vector<Section>& sections, const Options& o) {
   nlohmann::json j;
+  nlohmann::json tables = nlohmann::json::array();  // every printed table, in order
   for (const Section& s : sections) {
-    for (const Table& t : s.tables) t.print(std::cout);
+    for (const Table& t : s.tables) {
+      t.print(std::cout);
+      tables.push_back(t.toJson());
+    }
     j[s.key] = s.json;
   }
-  if (sections.size() > 1) targetsTable(sections).print(std::cout);
+  if (sections.size() > 1) {
+    const Table targets = targetsTable(sections);
+    targets.print(std::cout);
+    tables.push_back(targets.toJson());
+  }
   j["targets"] = targetsJson(sections);
+  j["tables"] = tables;
   std::cout.flush();
   if (!o.json_path.empty()) {
     std::ofstream f(o.json_path);
@@ -70,6 +81,63 @@ void add(CLI::App& bench, const std::shared_ptr<Options>& o, const std::string& 
   });
 }
 
+std::string readFile(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw std::runtime_error("cannot read " + path + ": check the path");
+  std::ostringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// Writes `text` to `path`, or with `check` compares: true when the file already holds it.
+bool writeOrCheck(const std::string& path, const std::string& text, bool check) {
+  if (check) {
+    if (readFile(path) == text) return true;
+    std::cout << path << " differs from what the bench JSON gives: run tools/results.sh (or thrustcal bench "
+                         "report without --check) and commit both\n";
+    return false;
+  }
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  if (!f || !(f << text)) throw std::runtime_error("cannot write " + path);
+  std::cout << "written: " << path << '\n';
+  return true;
+}
+
+struct ReportArgs {
+  std::string from, results, readme;
+  bool check = false;
+};
+
+void runReport(const ReportArgs& a) {
+  const nlohmann::json bench = nlohmann::json::parse(readFile(a.from));
+  bool same = true;
+  if (!a.results.empty()) same = writeOrCheck(a.results, resultsMarkdown(bench), a.check) && same;
+  if (!a.readme.empty())
+    same = writeOrCheck(a.readme, withMeasuredTable(readFile(a.readme), measuredTable(bench)), a.check) && same;
+  if (!same) throw CLI::RuntimeError(1);
+  if (a.check) std::cout << "the docs hold the figures of " << a.from << '\n';
+}
+
+void addReport(CLI::App& bench) {
+  CLI::App* sub = bench.add_subcommand(
+      "report", "write docs/results.md and README's measured table from `bench all --json` (tools/results.sh)");
+  auto a = std::make_shared<ReportArgs>();
+  sub->add_option("--from", a->from, "the JSON of `thrustcal bench all --json`")->required();
+  sub->add_option("--results", a->results, "write the results page here (docs/results.md)");
+  sub->add_option("--readme", a->readme, "rewrite the measured table between its markers in this README");
+  sub->add_flag("--check", a->check, "write nothing: fail when the files differ from what the JSON gives");
+  sub->callback([a] {
+    try {
+      runReport(*a);
+    } catch (const CLI::RuntimeError&) {
+      throw;
+    } catch (const std::exception& e) {
+      std::cerr << "thrustcal bench report: " << e.what() << '\n';
+      throw CLI::RuntimeError(1);
+    }
+  });
+}
+
 }  // namespace
 
 void registerCommands(CLI::App& app) {
@@ -106,6 +174,7 @@ void registerCommands(CLI::App& app) {
       "issue 8 in simavr: time to stop every ESC pulse after a hang (watchdog), read_run's frame "
       "timing under UART floods",
       [](const Options& o) { return std::vector<Section>{safetySection(o.paths)}; });
+  addReport(*bench);
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
         std::vector<Section> all;

@@ -23,6 +23,13 @@ constexpr uint64_t kStaticSramTarget = 6144;  // 8 KB minus 2 KB for the stack
 constexpr int kLabelV2Frame = 1, kLabelV2Steady = 2, kLabelThesis = 3, kLabelThesisMedian = 4,
               kLabelV2Reading = 5;
 
+// A path as the docs show it: relative to the source tree when inside it (docs/results.md is
+// written from the JSON and must not name the machine it was measured on).
+std::string shown(const std::string& path) {
+  const std::string root = std::string(THRUSTCAL_SOURCE_DIR) + "/";
+  return path.rfind(root, 0) == 0 ? path.substr(root.size()) : path;
+}
+
 std::string probePath(const AvrPaths& paths) {
   return paths.probe_elf.empty() ? builtinProbePath() : paths.probe_elf;
 }
@@ -89,6 +96,46 @@ std::string AvrPaths::elf(const std::string& image) const {
   return tree + "/firmware/" + image + "/" + image + ".elf";
 }
 
+namespace {
+
+// Where the cycles of V2Frame::fly go: the frame's steps, by the labels of its assembly.
+Table breakdownTable(const ProbeResult& r, const std::string& probe, nlohmann::json& json) {
+  Table b("2b. Compute breakdown: V2Frame::fly, cycles per frame by step (mean over the frames above)",
+          {"step", "cycles", "share"});
+  const std::vector<ProfileRange> ranges = {
+      {"call: save registers", "_ZN2tc7V2Frame3flyEjh"},
+      {"reading check, limits, filter constant", "tc_v2fly_check"},
+      {"bus filter: first-order step + Newton reciprocal", "tc_v2fly_filter"},
+      {"sag filter (the commands' bench sag, filtered)", "tc_v2fly_sag"},
+      {"prediction: 1/V at the commands (3 products)", "tc_v2fly_predict"},
+      {"  (rare paths: stop, clamp to the curve)", "tc_v2fly_rare_a"},
+      {"per motor: command, model, fine/coarse run", "tc_v2fly_lane"},
+      {"per motor: knot position (16x16)", "tc_v2fly_knot"},
+      {"per motor: drive between the knots (16x16, rounded)", "tc_v2fly_interp"},
+      {"per motor: bench sag at the command (2 x 8x8)", "tc_v2fly_sagpt"},
+      {"per motor: duty = drive / V + start (16x16)", "tc_v2fly_duty"},
+      {"per motor: limits, store pulse and flags, next", "tc_v2fly_limits"},
+      {"  (rare paths: bus not valid, limits hit)", "tc_v2fly_rare_b"},
+      {"return: total sag, restore registers", "tc_v2fly_out"},
+  };
+  const auto by_range = cyclesByRange(r, probe, ranges, "_ZN2tc7V2Frame3flyEjh");
+  const CycleStat& frame = r.sections.at(kLabelV2Frame);
+  uint64_t total = 0;
+  for (const auto& [name, cycles] : by_range) total += cycles;
+  for (const auto& [name, cycles] : by_range) {
+    const double per_frame = frame.count ? static_cast<double>(cycles) / frame.count : 0.0;
+    b.addRow({name, fixed(per_frame, 1), total ? fmt::format("{:.1f} %", 100.0 * cycles / total) : "-"});
+    json["breakdown"].push_back({{"step", name}, {"cycles_per_frame", per_frame}});
+  }
+  b.addRow({"total (the function alone, without the caller's argument setup)",
+            fixed(frame.count ? static_cast<double>(total) / frame.count : 0.0, 1), "100 %"});
+  b.addNote("cycles attributed to the address of each instruction (simavr, one instruction per step) and "
+            "summed between the assembly's tc_v2fly_* labels; per motor rows are for all four motors");
+  return b;
+}
+
+}  // namespace
+
 Section computeSection(const AvrPaths& paths) {
   Section s;
   s.key = "compute";
@@ -146,7 +193,7 @@ Section computeSection(const AvrPaths& paths) {
   t.addNote(fmt::format("probe: {} (core/ and read_run's slot storage built with avr-g++ -Os as in the AVR "
                         "tree, the thesis steps read through hal/avr's Eeprom), net of {} cycles of marker "
                         "overhead, {} frames each; the calls' argument setup is included",
-                        probe, r.overhead_cycles, th.count));
+                        shown(probe), r.overhead_cycles, th.count));
   t.addNote(fmt::format("V2Frame::fly is assembly on the AVR; on {} frames with insane readings, jumps, rate "
                         "changes, stops and saturation, bus readings from 3.0 to 26.0 V and a 5 g and a 5 kg "
                         "motor, it gave the same state as its portable C++: {}",
@@ -155,43 +202,10 @@ Section computeSection(const AvrPaths& paths) {
             "5's forceToPwmV2Frame (no sag prediction, 1295 cycles max) and includes the prediction");
   s.json["available"] = true;
   s.json["target_max_cycles"] = kCycleTarget;
-  s.json["probe_elf"] = probe;
+  s.json["probe_elf"] = shown(probe);
   s.json["assembly_vs_portable"] = {{"frames", checked}, {"mismatches", mismatches}};
   s.tables.push_back(std::move(t));
-
-  // Where the cycles go: the frame's steps, by the labels of its assembly.
-  Table b("2b. Compute breakdown: V2Frame::fly, cycles per frame by step (mean over the frames above)",
-          {"step", "cycles", "share"});
-  const std::vector<ProfileRange> ranges = {
-      {"call: save registers", "_ZN2tc7V2Frame3flyEjh"},
-      {"reading check, limits, filter constant", "tc_v2fly_check"},
-      {"bus filter: first-order step + Newton reciprocal", "tc_v2fly_filter"},
-      {"sag filter (the commands' bench sag, filtered)", "tc_v2fly_sag"},
-      {"prediction: 1/V at the commands (3 products)", "tc_v2fly_predict"},
-      {"  (rare paths: stop, clamp to the curve)", "tc_v2fly_rare_a"},
-      {"per motor: command, model, fine/coarse run", "tc_v2fly_lane"},
-      {"per motor: knot position (16x16)", "tc_v2fly_knot"},
-      {"per motor: drive between the knots (16x16, rounded)", "tc_v2fly_interp"},
-      {"per motor: bench sag at the command (2 x 8x8)", "tc_v2fly_sagpt"},
-      {"per motor: duty = drive / V + start (16x16)", "tc_v2fly_duty"},
-      {"per motor: limits, store pulse and flags, next", "tc_v2fly_limits"},
-      {"  (rare paths: bus not valid, limits hit)", "tc_v2fly_rare_b"},
-      {"return: total sag, restore registers", "tc_v2fly_out"},
-  };
-  const auto by_range = cyclesByRange(r, probe, ranges, "_ZN2tc7V2Frame3flyEjh");
-  const CycleStat& frame = r.sections.at(kLabelV2Frame);
-  uint64_t total = 0;
-  for (const auto& [name, cycles] : by_range) total += cycles;
-  for (const auto& [name, cycles] : by_range) {
-    const double per_frame = frame.count ? static_cast<double>(cycles) / frame.count : 0.0;
-    b.addRow({name, fixed(per_frame, 1), total ? fmt::format("{:.1f} %", 100.0 * cycles / total) : "-"});
-    s.json["breakdown"].push_back({{"step", name}, {"cycles_per_frame", per_frame}});
-  }
-  b.addRow({"total (the function alone, without the caller's argument setup)",
-            fixed(frame.count ? static_cast<double>(total) / frame.count : 0.0, 1), "100 %"});
-  b.addNote("cycles attributed to the address of each instruction (simavr, one instruction per step) and "
-            "summed between the assembly's tc_v2fly_* labels; per motor rows are for all four motors");
-  s.tables.push_back(std::move(b));
+  s.tables.push_back(breakdownTable(r, probe, s.json));
   return s;
 }
 
@@ -207,7 +221,7 @@ Section footprintSection(const AvrPaths& paths) {
       t.addRow({std::string(image) + ".elf", "missing", "", "-", "-"});
       t.addNote(fmt::format("{} not found: build the AVR tree (cmake -DCMAKE_TOOLCHAIN_FILE="
                             "toolchain-avr.cmake; --target {}) or pass --avr-build DIR", elf, image));
-      s.json["images"][image] = {{"available", false}, {"elf", elf}};
+      s.json["images"][image] = {{"available", false}, {"elf", shown(elf)}};
       continue;
     }
     const SizeInfo z = avrSize(elf);
@@ -215,7 +229,7 @@ Section footprintSection(const AvrPaths& paths) {
     t.addRow({fmt::format("{} flash (.text + .data)", image), std::to_string(z.flash()), "262144", "-", "-"});
     t.addRow({fmt::format("{} static SRAM (.data + .bss)", image), std::to_string(z.sram()), "8192",
               fmt::format("<= {} (2 KB stack)", kStaticSramTarget), verdict(sram_met)});
-    s.json["images"][image] = {{"available", true}, {"elf", elf}, {"flash_bytes", z.flash()},
+    s.json["images"][image] = {{"available", true}, {"elf", shown(elf)}, {"flash_bytes", z.flash()},
                                {"sram_static_bytes", z.sram()}, {"text", z.text}, {"data", z.data},
                                {"bss", z.bss}, {"sram_static_target_bytes", kStaticSramTarget}};
     s.targets.push_back({fmt::format("3. static SRAM of {} (>= 2 KB left for the stack)", image),
@@ -234,24 +248,22 @@ Section footprintSection(const AvrPaths& paths) {
   if (!probe.empty() && std::filesystem::exists(probe)) {
     const ProbeResult r = runProbe(probe);
     const uint64_t v2 = r.values.at(0x80), v1 = r.values.at(0x81), slot = r.values.at(0x82);
-    const uint64_t v2run = r.values.at(0x85), v1run = r.values.at(0x86), motor = r.values.at(0x87),
-                   frame = r.values.at(0x88);
+    const uint64_t v2run = r.values.at(0x85), v1run = r.values.at(0x86), frame = r.values.at(0x88);
     const bool slots_met = 4 * slot <= kModelsSramTarget;
-    t.addRow({fmt::format("read_run's four slots, v1 or v2 (4 x sizeof(fw::SlotModel) = 4 x {})", slot),
+    t.addRow({fmt::format("read_run's four slots, v1 or v2 (4 x sizeof(tc::SlotModel) = 4 x {})", slot),
               std::to_string(4 * slot), "", "<= 1024", verdict(slots_met)});
     t.addRow({fmt::format("  four v2 models as flown (4 x sizeof(tc::ModelV2Run) = 4 x {})", v2run),
               std::to_string(4 * v2run), "", "-", "-"});
     t.addRow({fmt::format("  four thesis models as flown (4 x sizeof(tc::ThesisRun) = 4 x {})", v1run),
               std::to_string(4 * v1run), "", "-", "-"});
-    t.addRow({fmt::format("read_run's per-motor state (4 x fw::Motor of {} + tc::V2Frame of {})", motor, frame),
-              std::to_string(4 * motor + frame), "", "-", "-"});
+    t.addRow({"read_run's frame of its v2 motors (tc::V2Frame)", std::to_string(frame), "", "-", "-"});
     t.addRow({fmt::format("decoded records at start-up, on the stack (tc::MotorCalibration {} + tc::ModelV2 {})", v1, v2),
               std::to_string(v1 + v2), "", "-", "-"});
     t.addNote("read_run keeps the thesis curves' steps in the EEPROM (read on demand, PWM checkpoints every "
               "16 g in SRAM) and model v2 in the form its frame reads: a slot is a union of the two");
     s.json["models_sram"] = {{"sizeof_model_v2", v2}, {"sizeof_motor_calibration", v1},
                              {"sizeof_slot_model", slot}, {"sizeof_model_v2_run", v2run},
-                             {"sizeof_thesis_run", v1run}, {"sizeof_motor", motor}, {"sizeof_v2_frame", frame},
+                             {"sizeof_thesis_run", v1run}, {"sizeof_v2_frame", frame},
                              {"read_run_four_slots_bytes", 4 * slot}, {"four_v2_bytes", 4 * v2run},
                              {"four_v1_bytes", 4 * v1run}, {"target_bytes", kModelsSramTarget}};
     s.targets.push_back({"3. SRAM of read_run's four slots (v1 or v2 each)", fmt::format("{} bytes", 4 * slot),

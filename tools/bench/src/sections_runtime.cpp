@@ -260,13 +260,92 @@ struct FlightFigures {
   double simulated_s = 0;
 };
 
+// The main loop's periods: from one entry of runOnce() to the next; quiet: nothing printed.
+struct LoopPeriods {
+  uint64_t last = 0, max = 0, max_quiet = 0, sum = 0, count = 0;
+  size_t output_at_last = 0;
+  void enter(uint64_t cycle, size_t output_size) {
+    if (last) {
+      const uint64_t period = cycle - last;
+      max = std::max(max, period);
+      if (output_size == output_at_last) max_quiet = std::max(max_quiet, period);
+      sum += period;
+      ++count;
+    }
+    last = cycle;
+    output_at_last = output_size;
+  }
+};
+
+// Everything timed while read_run flies.
+struct FlightTimers {
+  CallTimer frame, fly;  // rr::ReadRunApp::frame, tc::V2Frame::fly
+  bool has_fly = false;  // the image has V2Frame::fly
+  uint32_t run_once = 0; // rr::ReadRunApp::runOnce's entry
+  LoopPeriods loop;
+  uint64_t awake = 0;    // cycles the CPU did not sleep
+};
+
+// Runs one instruction with every timer around it.
+void stepTimed(avr_t* avr, const std::string& output, FlightTimers& t) {
+  const uint64_t before = avr->cycle, slept_before = g_slept;
+  if (avr->state != cpu_Sleeping && avr->pc == t.run_once) t.loop.enter(before, output.size());
+  t.frame.before(avr);
+  if (t.has_fly) t.fly.before(avr);
+  const int state = avr_run(avr);
+  if (state == cpu_Done || state == cpu_Crashed)
+    throw std::runtime_error(fmt::format("read_run stopped at pc 0x{:05X} during the runtime bench", avr->pc));
+  const uint64_t awake_now = avr->cycle - before - (g_slept - slept_before);
+  t.awake += awake_now;
+  t.frame.after(avr, awake_now);
+  if (t.has_fly) t.fly.after(avr, awake_now);
+}
+
+// True once read_run has printed the end of its lift-off (done, aborted or stopped) near or
+// after `seen`.
+bool liftoffEnded(const std::string& out, size_t seen) {
+  const size_t from = seen > 64 ? seen - 64 : 0;
+  return out.find("# liftoff done", from) != std::string::npos ||
+         out.find("# liftoff aborted", from) != std::string::npos ||
+         out.find("# liftoff stopped", from) != std::string::npos;
+}
+
+// The figures of a flight of `total` cycles from its timers.
+void fillFigures(FlightFigures& f, uint64_t total, const FlightTimers& t) {
+  f.simulated_s = sim::cyclesToSeconds(total);
+  f.cpu_load_pct = total ? 100.0 * static_cast<double>(t.awake) / static_cast<double>(total) : 0.0;
+  f.frames = t.frame.calls;
+  f.frame_mean = t.frame.calls ? t.frame.sum / t.frame.calls : 0;
+  f.frame_max = t.frame.max;
+  f.frame_max_quiet = t.frame.quiet_max;
+  f.frame_load_pct = total ? 100.0 * static_cast<double>(t.frame.sum) / static_cast<double>(total) : 0.0;
+  f.fly_calls = t.fly.calls;
+  f.fly_mean = t.fly.calls ? t.fly.sum / t.fly.calls : 0;
+  f.fly_max = t.fly.max;
+  f.fly_max_clean = t.fly.clean_max;
+  f.loop_period_max_ms = 1000.0 * sim::cyclesToSeconds(t.loop.max);
+  f.loop_period_max_quiet_ms = 1000.0 * sim::cyclesToSeconds(t.loop.max_quiet);
+  f.loop_period_mean_ms = t.loop.count ? 1000.0 * sim::cyclesToSeconds(t.loop.sum / t.loop.count) : 0.0;
+}
+
+// The timers on read_run's frame(), V2Frame::fly and runOnce().
+FlightTimers timersFor(const std::string& elf, const std::string& output) {
+  const auto syms = symbols(elf);
+  FlightTimers t;
+  t.frame.output = t.fly.output = &output;
+  t.frame.entry = need(syms, "_ZN2rr10ReadRunApp5frameEm", elf);
+  t.has_fly = syms.count("_ZN2tc7V2Frame3flyEjh") != 0;
+  t.fly.entry = t.has_fly ? syms.at("_ZN2tc7V2Frame3flyEjh").addr : 0xFFFFFFFF;
+  t.run_once = need(syms, "_ZN2rr10ReadRunApp7runOnceEv", elf);
+  return t;
+}
+
 // read_run through a lift-off on the tethered quad, stepped one instruction at a time.
 FlightFigures flyReadRun(const std::string& elf, const std::vector<uint8_t>& eeprom, const std::string& records,
                          int hz) {
   FlightFigures f;
   f.hz = hz;
   f.records = records;
-  const auto syms = symbols(elf);
   plant::QuadFrameParams qp;
   qp.power = plant::BatteryParams::lipo3s(0.5);
   std::array<plant::ActuatorParams, 4> motors;
@@ -282,78 +361,31 @@ FlightFigures flyReadRun(const std::string& elf, const std::vector<uint8_t>& eep
     for (const std::string& l : lines)
       if (l.rfind("error:", 0) == 0) throw std::runtime_error("read_run refused the rate: " + l);
   }
-  CallTimer frame, fly;
-  frame.output = fly.output = &rig.board.output();
-  frame.entry = need(syms, "_ZN2rr10ReadRunApp5frameEm", elf);
-  const bool has_fly = syms.count("_ZN2tc7V2Frame3flyEjh") != 0;
-  fly.entry = has_fly ? syms.at("_ZN2tc7V2Frame3flyEjh").addr : 0xFFFFFFFF;
-  const uint32_t run_once = need(syms, "_ZN2rr10ReadRunApp7runOnceEv", elf);
-
+  FlightTimers timers = timersFor(elf, rig.board.output());
   con.send("liftoff 300 1000 3000");
   avr_t* avr = rig.board.avr();
   const uint64_t start = avr->cycle;
-  uint64_t awake = 0, last_loop = 0, loop_max = 0, loop_max_quiet = 0, loop_sum = 0, loops = 0;
-  size_t output_at_loop = 0;
   size_t seen = rig.board.output().size();
-  const uint64_t budget = sim::secondsToCycles(8.0);
   bool done = false;
   uint64_t instructions = 0;
   // read_run's lift-off stops without a line end for 500 ms: an empty line every 200 ms, as
   // board liftoff sends them
   const uint64_t keepalive = sim::secondsToCycles(0.2);
   uint64_t next_keepalive = start + keepalive;
-  while (!done && avr->cycle - start < budget) {
-    const uint64_t before = avr->cycle, slept_before = g_slept;
-    if (before >= next_keepalive) {
+  while (!done && avr->cycle - start < sim::secondsToCycles(8.0)) {
+    if (avr->cycle >= next_keepalive) {
       con.send("");
       next_keepalive += keepalive;
     }
-    if (avr->state != cpu_Sleeping && avr->pc == run_once) {
-      if (last_loop) {
-        const uint64_t period = before - last_loop;
-        loop_max = std::max(loop_max, period);
-        if (rig.board.output().size() == output_at_loop) loop_max_quiet = std::max(loop_max_quiet, period);
-        loop_sum += period;
-        ++loops;
-      }
-      last_loop = before;
-      output_at_loop = rig.board.output().size();
-    }
-    frame.before(avr);
-    if (has_fly) fly.before(avr);
-    const int state = avr_run(avr);
-    if (state == cpu_Done || state == cpu_Crashed)
-      throw std::runtime_error(fmt::format("read_run stopped at pc 0x{:05X} during the runtime bench", avr->pc));
-    const uint64_t slept = g_slept - slept_before;
-    const uint64_t awake_now = avr->cycle - before - slept;
-    awake += awake_now;
-    frame.after(avr, awake_now);
-    if (has_fly) fly.after(avr, awake_now);
+    stepTimed(avr, rig.board.output(), timers);
     if ((++instructions & 0x3FFF) == 0 && rig.board.output().size() != seen) {
-      const std::string& out = rig.board.output();
-      done = out.find("# liftoff done", seen > 64 ? seen - 64 : 0) != std::string::npos ||
-             out.find("# liftoff aborted", seen > 64 ? seen - 64 : 0) != std::string::npos ||
-             out.find("# liftoff stopped", seen > 64 ? seen - 64 : 0) != std::string::npos;
-      seen = out.size();
+      done = liftoffEnded(rig.board.output(), seen);
+      seen = rig.board.output().size();
     }
   }
   if (!done || rig.board.output().find("# liftoff done") == std::string::npos)
     throw std::runtime_error("read_run did not finish the lift-off in the runtime bench:\n" + con.tail());
-  const uint64_t total = avr->cycle - start;
-  f.simulated_s = sim::cyclesToSeconds(total);
-  f.cpu_load_pct = total ? 100.0 * static_cast<double>(awake) / static_cast<double>(total) : 0.0;
-  f.frames = frame.calls;
-  f.frame_mean = frame.calls ? frame.sum / frame.calls : 0;
-  f.frame_max = frame.max;
-  f.frame_max_quiet = frame.quiet_max;
-  f.frame_load_pct = total ? 100.0 * static_cast<double>(frame.sum) / static_cast<double>(total) : 0.0;
-  f.fly_calls = fly.calls;
-  f.fly_mean = fly.calls ? fly.sum / fly.calls : 0;
-  f.fly_max = fly.max;
-  f.fly_max_clean = fly.clean_max;
-  f.loop_period_max_ms = 1000.0 * sim::cyclesToSeconds(loop_max);
-  f.loop_period_max_quiet_ms = 1000.0 * sim::cyclesToSeconds(loop_max_quiet);
-  f.loop_period_mean_ms = loops ? 1000.0 * sim::cyclesToSeconds(loop_sum / loops) : 0.0;
+  fillFigures(f, avr->cycle - start, timers);
   con.waitPrompt(2.0);
   f.stack_bytes = stackHighWater(rig.board, heap_start);
   return f;

@@ -19,8 +19,6 @@
 #include "bench/sections.hpp"
 
 #ifdef THRUSTCAL_BENCH_HAVE_SIM
-#include <regex>
-
 #include "plant/bench.hpp"
 #include "sim/board.hpp"
 #include "sim/console.hpp"
@@ -28,6 +26,7 @@
 #include "sim/faults.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
+#include "sim/stack_scenario.hpp"
 #endif
 
 namespace bench {
@@ -194,13 +193,9 @@ std::string repeat(const std::string& s, std::size_t bytes) {
   return out;
 }
 
-}  // namespace
-
-Section safetySection(const AvrPaths& paths) {
-  Section s;
-  s.key = "safety";
-  const std::string rr = paths.elf("read_run"), gs = paths.elf("gather_store");
-
+// Table 6a: a hang in each image (main loop or sweep, interrupts on or off) and the time until
+// every ESC pulse wider than 1050 us has stopped.
+Table hangTable(const std::string& rr, const std::string& gs, Section& s) {
   Table stop("6a. Safety: a hang stops every ESC pulse wider than 1050 us (watchdog, simavr "
              "cycles; hang injected by patching the image's flash)",
              {"hang", "last pulse > 1050 us ends", "watchdog reset", "after the reset", "target",
@@ -242,7 +237,12 @@ Section safetySection(const AvrPaths& paths) {
   stop.addNote("a pulse in progress at the reset ends there: the chip releases every pin");
   s.targets.push_back({"6. time to stop every ESC pulse > 1050 us after a hang (worst of 4)",
                        ms(worst_stop), "<= 100 ms (required 150 ms)", all_ok});
+  return stop;
+}
 
+// Table 6b: read_run's frames, service() and loop passes under four kinds of input, at 50 and
+// 400 Hz.
+Table floodTable(const std::string& rr, Section& s) {
   Table loop("6b. Safety: read_run's loop under floods, four motors at 200 g (simavr; 2 s each)",
              {"input", "rate", "frames", "frame interval min..max", "jitter", "service() max gap",
               "runOnce() max gap", "target", "met?"});
@@ -294,6 +294,17 @@ Section safetySection(const AvrPaths& paths) {
   s.targets.push_back({"6. frames under a flood (4 inputs, 50 and 400 Hz)",
                        fmt::format("jitter {:.2f} ms at most", worst_jitter * 1000),
                        "at most 1 ms after their 1 ms tick", loop_ok});
+  return loop;
+}
+
+}  // namespace
+
+Section safetySection(const AvrPaths& paths) {
+  Section s;
+  s.key = "safety";
+  const std::string rr = paths.elf("read_run"), gs = paths.elf("gather_store");
+  Table stop = hangTable(rr, gs, s);
+  Table loop = floodTable(rr, s);
   s.json["available"] = true;
   s.tables.push_back(std::move(stop));
   s.tables.push_back(std::move(loop));
@@ -302,64 +313,13 @@ Section safetySection(const AvrPaths& paths) {
 
 // --- stack headroom (benchmark 3) ------------------------------------------------------------
 
-namespace {
-
-int untouchedFromStatus(const std::vector<std::string>& lines, int& size) {
-  static const std::regex re(R"(stack: (\d+) of (\d+) bytes never used)");
-  for (const auto& l : lines) {
-    std::smatch m;
-    if (std::regex_search(l, m, re)) {
-      size = std::stoi(m[2]);
-      return std::stoi(m[1]);
-    }
-  }
-  return -1;
-}
-
-}  // namespace
-
 void addStackHeadroom(const AvrPaths& paths, Table& t, nlohmann::json& j,
                       std::vector<TargetCheck>& targets) {
-  // gather_store: calibrate on the plant bench, sweep, store v2 (the fit), show, store 1,
-  // help under a flood, status.
-  int gs_size = 0, rr_size = 0, gs_free = -1, rr_free = -1;
-  {
-    plant::BenchParams params = plant::BenchParams::thesis("kv1100_9x4.7");
-    params.actuator = sim::motorForSeed("kv1100_9x4.7", 13, 0.03);
-    sim::BenchRig rig(paths.elf("gather_store"), params, 0);
-    sim::Console con(rig.board, "gs> ");
-    con.waitPrompt(10.0);
-    con.command(fmt::format("cal {}", static_cast<int>(std::lround(params.actuator.mountWeight_g()))), 10);
-    con.command("range 1040 1800");
-    con.command("settle 60");
-    con.command("sweep", 120);
-    con.command("store v2", 10);
-    con.command("show", 10);
-    con.command("store 1", 10);
-    rig.board.sendText("help\r" + repeat("a\b", 3000));
-    sim::drainConsole(con);
-    gs_free = untouchedFromStatus(con.command("status", 10), gs_size);
-  }
-  // read_run: boot with two v2 slots (both copies decoded), a lift-off, help under a flood
-  // with the motors running, status.
-  {
-    sim::Board board(paths.elf("read_run"));
-    board.setAdcSource([](int ch) { return ch == 1 ? sim::batteryPinMv() : 0.0; });
-    board.setEeprom(sim::calibratedTestEeprom());
-    sim::Console con(board, "rr> ");
-    con.waitPrompt(10.0);
-    con.send("liftoff 250 300 500");
-    for (int i = 0; i < 6; ++i) {
-      board.runFor(0.2);
-      con.send("");
-    }
-    con.command("f 200");
-    board.sendText("help\r" + repeat("a\b", 2000));
-    sim::drainConsole(con);
-    rr_free = untouchedFromStatus(con.command("status"), rr_size);
-  }
-  for (const auto& [name, free, size] : {std::tuple<const char*, int, int>{"gather_store", gs_free, gs_size},
-                                         std::tuple<const char*, int, int>{"read_run", rr_free, rr_size}}) {
+  const sim::StackHeadroom gs = sim::gatherStoreDeepestPaths(paths.elf("gather_store"));
+  const sim::StackHeadroom rr = sim::readRunDeepestPaths(paths.elf("read_run"));
+  for (const auto& [name, h] : {std::pair<const char*, const sim::StackHeadroom&>{"gather_store", gs},
+                                std::pair<const char*, const sim::StackHeadroom&>{"read_run", rr}}) {
+    const int free = h.untouched_bytes, size = std::max(h.stack_bytes, 0);
     const bool ok = free >= kStackTargetBytes;
     t.addRow({fmt::format("{} stack never used after its deepest paths (status)", name),
               free < 0 ? "no status" : std::to_string(free), std::to_string(size), ">= 512",
@@ -370,7 +330,7 @@ void addStackHeadroom(const AvrPaths& paths, Table& t, nlohmann::json& j,
   }
   t.addNote("stack: the boot code paints the SRAM above the static data; gather_store ran cal, "
             "sweep, store v2, show, store 1 and help under a flood, read_run a lift-off and help "
-            "under a flood with all motors running (docs/safety.md)");
+            "under a flood with all motors running (sim/stack_scenario.hpp, docs/safety.md)");
 }
 
 #endif

@@ -28,6 +28,7 @@
 #include <fmt/format.h>
 
 #include "bench/sections.hpp"
+#include "thrustcal/sweep_rules.hpp"
 
 #ifdef THRUSTCAL_BENCH_HAVE_SIM
 #include "plant/bench.hpp"
@@ -52,8 +53,8 @@ constexpr int kFlightLoG = 100;  // benchmark 1's commands: 100-450 g (the targe
 constexpr int kV2StepUs = 15;
 constexpr int kV2SettleMs = 500;
 // settle auto (gather_store's default): steps on once the force stops changing, at most this
-// long (gs::kDefaultSettleCapMs).
-constexpr int kAutoSettleCapMs = 500;
+// long.
+constexpr int kAutoSettleCapMs = tc::kDefaultSettleCapMs;
 
 Table notAvailable(const std::string& title, const std::string& why) {
   Table t(title, {"item", "figure", "target", "met?"});
@@ -392,11 +393,15 @@ Section calibrationSection(const AvrPaths& paths) {
   t.addNote("v2 rows: the model gather_store fitted on the board (store v2) from the LiPo sweep, refined by a "
             "second sweep on a 10 V bench supply, written to EEPROM and decoded from the image (the check is at "
             "the LiPo's conditions)");
-  t.addNote("default sweep: gather_store's defaults (settle auto: next step once three force medians 20 ms apart "
-            "agree, at most 500 ms per step); the thesis timing (settle 200) is kept for comparison; lift-off "
-            "(benchmark 5) flies the 200 ms thesis records and the 500 ms v2 records, as before issue 11");
-  t.addNote("settle auto rows: gather_store reads the force and the tare as the mean of the middle 65 of its "
-            "201 load-cell readings (1/16 count; issue 11); fixed settle rows: their median, as the thesis");
+  t.addNote(fmt::format("default sweep: gather_store's defaults (settle auto: next step once {} force medians {} ms "
+                        "apart agree, at most {} ms per step); the thesis timing (settle 200) is kept for "
+                        "comparison; lift-off (benchmark 5) flies the 200 ms thesis records and the {} ms v2 "
+                        "records, as before issue 11",
+                        tc::kSettledAgreements + 1, tc::kSettleProbeMs, kAutoSettleCapMs, kV2SettleMs));
+  t.addNote(fmt::format("settle auto rows: gather_store reads the force and the tare as the mean of the middle {} "
+                        "of its {} load-cell readings (1/16 count; issue 11); fixed settle rows: their median, as "
+                        "the thesis",
+                        tc::kForceCentral, tc::kForceWindow));
   s.json["available"] = true;
   s.json["targets"] = {{"sweep_s_max", kSweepTargetS}, {"curve_error_max_pct", kCurveErrorTargetPct}};
   s.json["band_g"] = {kBandLoG, kBandHiG};

@@ -6,15 +6,17 @@
 #include "plant/bench.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/load_cell.hpp"
+#include "thrustcal/limits.hpp"
 #include "thrustcal/median_filter.hpp"
+#include "thrustcal/sweep_rules.hpp"
 
 namespace bench {
 
 namespace {
 
-constexpr int kForceReadings = 201;    // gather_store: median of 201
-constexpr int kBatteryReadings = 101;  // gather_store: median of 101
-constexpr uint16_t kForceCentral = 65;  // gather_store's kForceCentral (fine_force)
+// The time gather_store's 201 force readings take (201 conversions of 104 us): the sweep's
+// clock runs on by this much after each force median.
+constexpr uint32_t kForceReadingMs = 21;
 
 uint16_t medianCounts(plant::Bench& bench, int channel, int n) {
   std::vector<int> v(static_cast<size_t>(n));
@@ -26,12 +28,28 @@ uint16_t medianCounts(plant::Bench& bench, int channel, int n) {
 // 201 load-cell readings: their median, and in `q4` the reading the sweep converts (fine: the
 // mean of the middle 65 in 1/16 count, as gather_store since issue 11; else the median * 16).
 uint16_t forceCounts(plant::Bench& bench, bool fine, uint16_t& q4) {
-  static tc::MedianFilter<kForceReadings> window;
+  static tc::MedianFilter<tc::kForceWindow> window;
   window.reset();
-  for (int i = 0; i < kForceReadings; ++i) window.push(static_cast<uint16_t>(bench.readCounts(0)));
+  for (int i = 0; i < tc::kForceWindow; ++i) window.push(static_cast<uint16_t>(bench.readCounts(0)));
   const uint16_t median = window.median();
-  q4 = fine ? window.centralMeanQ4(kForceCentral) : static_cast<uint16_t>(median * 16u);
+  q4 = fine ? window.centralMeanQ4(tc::kForceCentral) : static_cast<uint16_t>(median * 16u);
   return median;
+}
+
+// gather_store's settle auto (tc::settleAutoNext / settleAutoDone): force medians until the
+// rule says the step has settled or the cap has passed. Returns the last median's counts.
+uint16_t settleByMeasurement(plant::Bench& bench, const SweepSpec& spec, uint16_t& q4) {
+  tc::SettleAuto settle;
+  uint32_t waited_ms = 0;
+  uint16_t counts = 0;
+  do {
+    bench.run(tc::kSettleProbeMs / 1000.0);
+    counts = forceCounts(bench, spec.fine_force, q4);
+    bench.run(kForceReadingMs / 1000.0);
+    waited_ms += tc::kSettleProbeMs + kForceReadingMs;
+    settle = tc::settleAutoNext(settle, counts);
+  } while (!tc::settleAutoDone(settle, waited_ms, static_cast<uint16_t>(spec.settle_ms)));
+  return counts;
 }
 
 }  // namespace
@@ -65,25 +83,8 @@ Sweep simulateSweep(const plant::ActuatorParams& motor, const plant::BatteryPara
   const double settle_s = spec.settle_ms / 1000.0;
   for (int pwm = spec.pwm_min_us; pwm <= spec.pwm_max_us; pwm += spec.step_us) {
     bench.actuator().holdPulse(pwm);
-    uint16_t force_counts = 0;
     if (spec.settle_auto) {
-      // gather_store's settleForce: a median every kProbe; stop when two successive pairs agree
-      // (within 0 counts) or the cap has passed.
-      constexpr double kProbeS = 0.020, kMedianS = 0.021;  // 201 conversions of 104 us
-      double waited = 0;
-      int previous = -1, agreements = 0;
-      for (;;) {
-        bench.run(kProbeS);
-        force_counts = forceCounts(bench, spec.fine_force, q4);
-        bench.run(kMedianS);
-        waited += kProbeS + kMedianS;
-        if (previous >= 0) {
-          agreements = force_counts == previous ? agreements + 1 : 0;
-          if (agreements >= 2) break;
-        }
-        previous = force_counts;
-        if (waited >= settle_s) break;
-      }
+      settleByMeasurement(bench, spec, q4);
     } else {
       bench.run(settle_s);
       forceCounts(bench, spec.fine_force, q4);
@@ -93,7 +94,7 @@ Sweep simulateSweep(const plant::ActuatorParams& motor, const plant::BatteryPara
     const int32_t mg = cell.forceMilligramsQ4(q4);
     pt.force_dg = static_cast<int16_t>(std::clamp<int32_t>(
         static_cast<int32_t>(std::lround(mg / 100.0)), INT16_MIN, INT16_MAX));
-    pt.vbat_mv = monitor.millivoltsFromCounts(medianCounts(bench, 1, kBatteryReadings));
+    pt.vbat_mv = monitor.millivoltsFromCounts(medianCounts(bench, 1, tc::kBatteryWindow));
     pt.true_thrust_g = bench.actuator().thrust_g();
     pt.true_bus_v = bench.busVoltage_v();
     sweep.points.push_back(pt);

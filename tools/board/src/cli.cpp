@@ -2,6 +2,7 @@
 #include "board/cli.hpp"
 #include "hal/board.hpp"
 #include "thrustcal/record_limits.hpp"
+#include "thrustcal/sweep_rules.hpp"
 
 #include <unistd.h>
 
@@ -22,7 +23,7 @@
 #include "lab/analysis.hpp"
 #include "lab/dataset.hpp"
 #include "lab/model.hpp"
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 
 namespace board {
 namespace {
@@ -164,13 +165,15 @@ nlohmann::json diagnoseSweeps(const std::vector<std::string>& csvs, const std::s
                 fmt::format("{}", fmt::join(s.effects, ", ")).c_str(), s.advice.c_str());
     suspects.push_back({{"variable", s.variable}, {"score", s.score}, {"effects", s.effects}});
   }
-  if (k == 0)
-    std::printf("  no variable explains a significant part of what the model misses (noise)\n");
+  if (k == 0) std::printf("  no logged variable explains a significant part of what the model misses\n");
+  std::printf("  verdict: %s\n", d.verdict_text.c_str());
   std::string files;
   for (const auto& c : csvs) files += c + " ";
   std::printf("more: thrustcal lab ladder %s--model curve --add deadband --add voltage\n",
               files.c_str());
   j["suspects"] = suspects;
+  j["noise_g"] = d.noise.known() ? nlohmann::json(d.noise.sigma_g) : nlohmann::json(nullptr);
+  j["verdict"] = lab::verdictName(d.verdict);
   return j;
 }
 
@@ -260,7 +263,7 @@ void addEeprom(CLI::App& board) {
         TransferOptions to;
         to.progress = info;
         const EepromGetResult r = getEeprom(*port, to);
-        sim::writeIntelHexFile(*out, r.bytes);
+        hex::writeIntelHexFile(*out, r.bytes);
         std::printf("read the EEPROM on %s through %s into %s (%.1f s): %s\n", port->c_str(),
                     imageName(r.image), out->c_str(), r.wall_s, r.crcs.text().c_str());
       });
@@ -268,26 +271,20 @@ void addEeprom(CLI::App& board) {
   }
 }
 
-void addCalibrate(CLI::App& board) {
-  auto* cmd = board.add_subcommand(
-      "calibrate",
-      "Calibrate one motor on the load-cell bench with gather_store (thesis fig. 6.8): motor K,\n"
-      "plate, range, step, settle, cal W (tares), sweep -> store 1 (v1) or store v2; with\n"
-      "--second-sweep you change the supply, then tare, sweep -> store 2 / store v2; show. Each\n"
-      "sweep is streamed to a CSV with a progress bar; asks before a propeller spins (--yes\n"
-      "skips); Ctrl-C and a time-out send the abort key; a lost port is opened again if it comes\n"
-      "back within 3 s (the open resets the board) and the abort key sent. Ends with the model\n"
-      "lab's diagnosis of the captured sweeps.");
-  auto port = std::make_shared<std::string>();
-  auto o = std::make_shared<CalibrateOptions>();
-  auto range = std::make_shared<std::vector<int>>();
-  auto settle = std::make_shared<std::string>("500");
-  auto out_dir = std::make_shared<std::string>(".");
-  auto yes = std::make_shared<bool>(false);
-  auto no_strict = std::make_shared<bool>(false);
-  auto lab_model = std::make_shared<std::string>();
-  auto json = std::make_shared<std::string>();
-  cmd->add_option("--port,-P", *port, "serial port")->required();
+// What `board calibrate` reads from its command line.
+struct CalibrateArgs {
+  std::string port;
+  CalibrateOptions o;
+  std::vector<int> range;
+  std::string settle = std::to_string(tc::kDefaultSettleCapMs);
+  std::string out_dir = ".";
+  bool yes = false, no_strict = false;
+  std::string lab_model, json;
+};
+
+void declareCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
+  CalibrateOptions* o = &a.o;
+  cmd->add_option("--port,-P", a.port, "serial port")->required();
   cmd->add_option("--slot", o->slot, "motor slot: ESC output and EEPROM record (0..3)")
       ->required()
       ->check(CLI::Range(0, 3));
@@ -300,86 +297,123 @@ void addCalibrate(CLI::App& board) {
   cmd->add_flag("--second-sweep", o->second_sweep,
                 "a second sweep at another supply voltage (you change the supply in between)");
   cmd->add_option("--plate-g", o->plate_g, "the load cell's plate weight, g")->capture_default_str();
-  cmd->add_option("--range", *range,
+  cmd->add_option("--range", a.range,
                   fmt::format("sweep PWM MIN MAX in us (default {} {}: the 13 sag bins then span "
                               "where motors fly)",
                               o->pwm_min_us, o->pwm_max_us))
       ->expected(2);
   cmd->add_option("--step", o->step_us, "sweep step, us")->capture_default_str();
-  cmd->add_option("--settle", *settle,
-                  "per step: MS, or auto (next step once the force stops changing, 500 ms cap); "
-                  "the thesis's 200 ms leaves the load cell's low-pass ~1 % behind")
+  cmd->add_option("--settle", a.settle,
+                  fmt::format("per step: MS, or auto (next step once the force stops changing, {} ms "
+                              "cap); the thesis's 200 ms leaves the load cell's low-pass ~1 % behind",
+                              tc::kDefaultSettleCapMs))
       ->capture_default_str();
-  cmd->add_option("--out-dir", *out_dir, "where calibrate_slotK_sweepN.csv go")->capture_default_str();
-  cmd->add_flag("--yes,-y", *yes, "do not ask before spinning the propeller");
-  cmd->add_flag("--no-strict", *no_strict, "plain console lines even if the firmware offers checksums");
-  cmd->add_option("--lab-model", *lab_model,
+  cmd->add_option("--out-dir", a.out_dir, "where calibrate_slotK_sweepN.csv go")->capture_default_str();
+  cmd->add_flag("--yes,-y", a.yes, "do not ask before spinning the propeller");
+  cmd->add_flag("--no-strict", a.no_strict, "plain console lines even if the firmware offers checksums");
+  cmd->add_option("--lab-model", a.lab_model,
                   "model the lab diagnoses the sweeps with (default: thesis for v1, "
                   "curve+deadband+voltage for v2)");
-  cmd->add_option("--json", *json, "the run as JSON (sweeps, store, show, lab)");
-  cmd->callback([=] {
-    guarded([&] {
-      installInterruptHandler();
-      CalibrateOptions opt = *o;
-      if (range->size() == 2) {
-        opt.pwm_min_us = (*range)[0];
-        opt.pwm_max_us = (*range)[1];
-      }
-      if (*settle == "auto") {
-        opt.settle_auto = true;
-      } else {
-        try {
-          opt.settle_ms = std::stoi(*settle);
-        } catch (...) {
-          throw std::invalid_argument(fmt::format("--settle {}: a number of ms or auto", *settle));
-        }
-      }
-      opt.strict = !*no_strict;
-      std::unique_ptr<SerialPort> sp;
-      std::vector<std::string> boot;
-      auto con = openConsole(*port, sp, &boot);
-      TerminalOperator op(*yes);
-      const CalibrateResult r = calibrate(*con, opt, op);
-      std::vector<std::string> csvs;
-      nlohmann::json sweeps = nlohmann::json::array();
-      for (std::size_t i = 0; i < r.sweeps.size(); ++i) {
-        const std::string path =
-            (fs::path(*out_dir) / fmt::format("calibrate_slot{}_sweep{}.csv", opt.slot, i + 1)).string();
-        writeFile(path, r.sweeps[i].csv(fmt::format("thrustcal board calibrate: {} motor {} sweep {}",
-                                                    *port, opt.slot, i + 1)));
-        csvs.push_back(path);
-        sweeps.push_back({{"csv", path},
-                          {"rows", r.sweeps[i].rows.size()},
-                          {"max_force_g", r.sweeps[i].max_force_g},
-                          {"wall_s", r.sweeps[i].wall_s}});
-      }
-      std::printf("calibrated motor %d on %s (%s, %zu sweep%s, %.1f s%s):\n", opt.slot,
-                  port->c_str(), opt.model.c_str(), r.sweeps.size(), r.sweeps.size() == 1 ? "" : "s",
-                  r.wall_s, r.checksums ? ", checksummed lines" : "");
-      for (const auto& l : r.store) std::printf("  %s\n", l.c_str());
-      for (const auto& l : r.show) std::printf("  %s\n", l.c_str());
-      for (const auto& c : csvs) std::printf("  sweep log: %s\n", c.c_str());
-      std::fflush(stdout);
-      nlohmann::json lab_json;
-      const std::string spec = !lab_model->empty() ? *lab_model
-                               : opt.model == "v2"  ? "curve+deadband+voltage"
-                                                    : "thesis";
-      try {
-        lab_json = diagnoseSweeps(csvs, spec);
-      } catch (const std::exception& e) {
-        std::printf("lab: no diagnosis: %s\n", e.what());
-        lab_json = {{"error", e.what()}};
-      }
-      if (!json->empty()) {
-        const nlohmann::json j = {{"port", *port},       {"slot", opt.slot},
-                                  {"model", opt.model},  {"checksums", r.checksums},
-                                  {"sweeps", sweeps},    {"store", r.store},
-                                  {"show", r.show},      {"cal", r.cal},
-                                  {"wall_s", r.wall_s},  {"lab", lab_json}};
-        writeFile(*json, j.dump(2) + "\n");
-      }
-    });
-  });
+  cmd->add_option("--json", a.json, "the run as JSON (sweeps, store, show, lab)");
+}
+
+CalibrateOptions calibrateOptionsFrom(const CalibrateArgs& a) {
+  CalibrateOptions opt = a.o;
+  if (a.range.size() == 2) {
+    opt.pwm_min_us = a.range[0];
+    opt.pwm_max_us = a.range[1];
+  }
+  if (a.settle == "auto") {
+    opt.settle_auto = true;
+  } else {
+    try {
+      opt.settle_ms = std::stoi(a.settle);
+    } catch (...) {
+      throw std::invalid_argument(fmt::format("--settle {}: a number of ms or auto", a.settle));
+    }
+  }
+  opt.strict = !a.no_strict;
+  return opt;
+}
+
+// Each sweep as a CSV in --out-dir; returns their paths, and their summary in `sweeps`.
+std::vector<std::string> writeSweepLogs(const CalibrateArgs& a, int slot, const CalibrateResult& r,
+                                        nlohmann::json& sweeps) {
+  std::vector<std::string> csvs;
+  sweeps = nlohmann::json::array();
+  for (std::size_t i = 0; i < r.sweeps.size(); ++i) {
+    const std::string path =
+        (fs::path(a.out_dir) / fmt::format("calibrate_slot{}_sweep{}.csv", slot, i + 1)).string();
+    writeFile(path, r.sweeps[i].csv(fmt::format("thrustcal board calibrate: {} motor {} sweep {}",
+                                                a.port, slot, i + 1)));
+    csvs.push_back(path);
+    sweeps.push_back({{"csv", path},
+                      {"rows", r.sweeps[i].rows.size()},
+                      {"max_force_g", r.sweeps[i].max_force_g},
+                      {"wall_s", r.sweeps[i].wall_s}});
+  }
+  return csvs;
+}
+
+void printCalibration(const CalibrateArgs& a, const CalibrateOptions& opt, const CalibrateResult& r,
+                      const std::vector<std::string>& csvs) {
+  std::printf("calibrated motor %d on %s (%s, %zu sweep%s, %.1f s%s):\n", opt.slot, a.port.c_str(),
+              opt.model.c_str(), r.sweeps.size(), r.sweeps.size() == 1 ? "" : "s", r.wall_s,
+              r.checksums ? ", checksummed lines" : "");
+  for (const auto& l : r.store) std::printf("  %s\n", l.c_str());
+  for (const auto& l : r.show) std::printf("  %s\n", l.c_str());
+  for (const auto& c : csvs) std::printf("  sweep log: %s\n", c.c_str());
+  std::fflush(stdout);
+}
+
+// The model lab's diagnosis of the captured sweeps (an error is reported, not thrown).
+nlohmann::json diagnoseCalibration(const CalibrateArgs& a, const CalibrateOptions& opt,
+                                   const std::vector<std::string>& csvs) {
+  const std::string spec = !a.lab_model.empty() ? a.lab_model
+                           : opt.model == "v2"  ? "curve+deadband+voltage"
+                                                : "thesis";
+  try {
+    return diagnoseSweeps(csvs, spec);
+  } catch (const std::exception& e) {
+    std::printf("lab: no diagnosis: %s\n", e.what());
+    return {{"error", e.what()}};
+  }
+}
+
+void runCalibrateCommand(const CalibrateArgs& a) {
+  installInterruptHandler();
+  const CalibrateOptions opt = calibrateOptionsFrom(a);
+  std::unique_ptr<SerialPort> sp;
+  std::vector<std::string> boot;
+  auto con = openConsole(a.port, sp, &boot);
+  TerminalOperator op(a.yes);
+  const CalibrateResult r = calibrate(*con, opt, op);
+  nlohmann::json sweeps;
+  const std::vector<std::string> csvs = writeSweepLogs(a, opt.slot, r, sweeps);
+  printCalibration(a, opt, r, csvs);
+  const nlohmann::json lab_json = diagnoseCalibration(a, opt, csvs);
+  if (a.json.empty()) return;
+  const nlohmann::json j = {{"port", a.port},        {"slot", opt.slot},
+                            {"model", opt.model},    {"checksums", r.checksums},
+                            {"sweeps", sweeps},      {"store", r.store},
+                            {"show", r.show},        {"cal", r.cal},
+                            {"wall_s", r.wall_s},    {"lab", lab_json}};
+  writeFile(a.json, j.dump(2) + "\n");
+}
+
+void addCalibrate(CLI::App& board) {
+  auto* cmd = board.add_subcommand(
+      "calibrate",
+      "Calibrate one motor on the load-cell bench with gather_store (thesis fig. 6.8): motor K,\n"
+      "plate, range, step, settle, cal W (tares), sweep -> store 1 (v1) or store v2; with\n"
+      "--second-sweep you change the supply, then tare, sweep -> store 2 / store v2; show. Each\n"
+      "sweep is streamed to a CSV with a progress bar; asks before a propeller spins (--yes\n"
+      "skips); Ctrl-C and a time-out send the abort key; a lost port is opened again if it comes\n"
+      "back within 3 s (the open resets the board) and the abort key sent. Ends with the model\n"
+      "lab's diagnosis of the captured sweeps.");
+  auto a = std::make_shared<CalibrateArgs>();
+  declareCalibrateOptions(cmd, *a);
+  cmd->callback([a] { guarded([&] { runCalibrateCommand(*a); }); });
 }
 
 void addLiftoff(CLI::App& board) {

@@ -11,7 +11,7 @@
 
 #include <fmt/format.h>
 
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 #include "thrustcal/crc16.hpp"
 
 namespace board {
@@ -35,8 +35,8 @@ std::string readText(const std::string& path, const char* what) {
 // Parses Intel HEX twice with different fills: a byte the text gives reads the same both times.
 std::vector<bool> givenBytes(const std::string& text, std::size_t size, const std::string& origin,
                              std::vector<uint8_t>& bytes) {
-  bytes = sim::parseIntelHex(text, size, origin, 0xFF);
-  const std::vector<uint8_t> zero = sim::parseIntelHex(text, size, origin, 0x00);
+  bytes = hex::parseIntelHex(text, size, origin, 0xFF);
+  const std::vector<uint8_t> zero = hex::parseIntelHex(text, size, origin, 0x00);
   std::vector<bool> given(size);
   for (std::size_t i = 0; i < size; ++i) given[i] = bytes[i] == zero[i];
   return given;
@@ -265,14 +265,14 @@ EepromPutResult putEeprom(const std::string& port, const std::string& hex_path,
     std::string path;
     ~Remove() { std::remove(path.c_str()); }
   } remove{tmp};
-  sim::writeIntelHexFile(tmp, image);
+  hex::writeIntelHexFile(tmp, image);
   auto args = avrdudeArgs(port);
   args.push_back("-V");
   args.push_back("-U");
   args.push_back("eeprom:w:" + tmp + ":i");
-  say(progress, fmt::format("writing 4096 EEPROM bytes through the bootloader on {} (a real "
+  say(progress, fmt::format("writing {} EEPROM bytes through the bootloader on {} (a real "
                             "board takes ~3.3 ms per byte: ~14 s)",
-                            port));
+                            hal::kEepromBytes, port));
   r.avrdude = runAvrdude(args, timeout_s);
   if (r.avrdude.exit_code != 0 || r.avrdude.timed_out)
     throw AvrdudeError(fmt::format("{}: {}; the EEPROM may be partly written: run `thrustcal "
@@ -308,8 +308,9 @@ EepromGetResult getEeprom(const std::string& port, const TransferOptions& o) {
   r.dump_wall_s = since(td);
   r.crcs = EepromCrcs::of(r.bytes);
   r.wall_s = since(t0);
-  say(progress, fmt::format("read 4096 bytes through {} in {:.1f} s (dump {:.1f} s): {}",
-                            imageName(r.image), r.wall_s, r.dump_wall_s, r.crcs.text()));
+  say(progress, fmt::format("read {} bytes through {} in {:.1f} s (dump {:.1f} s): {}",
+                            hal::kEepromBytes, imageName(r.image), r.wall_s, r.dump_wall_s,
+                            r.crcs.text()));
   return r;
 }
 

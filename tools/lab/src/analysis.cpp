@@ -10,6 +10,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "lab/effect.hpp"
+#include "lab/evidence.hpp"
 #include "lab/stats.hpp"
 
 namespace lab {
@@ -26,10 +28,6 @@ std::string lowerCopy(std::string s) {
   return s;
 }
 
-bool isVoltageName(const std::string& v) {
-  return v == "vbat_v" || startsWith(v, "vbat") || startsWith(v, "voltage") || v == "v_v" || v == "v";
-}
-
 // Parameters of `effect` that the fit left at a bound, in words ("gamma at its bound 0").
 std::vector<std::string> boundsOf(const FitResult& fit, const std::string& effect) {
   std::vector<std::string> out;
@@ -38,128 +36,110 @@ std::vector<std::string> boundsOf(const FitResult& fit, const std::string& effec
   return out;
 }
 
+// What the registry says about a variable or a finding, given what the model already has.
 struct Advice {
-  std::vector<std::string> trials;  // effects to refit with, best guess first
-  std::string suggest;              // the effect the words name (empty: none to add)
-  std::string words;
+  std::vector<std::string> trials;           // effects to refit with, in registry order (the data pick)
+  std::map<std::string, std::string> words_for;  // each trial's advice, if the data pick it
+  std::string generic;                       // a factor to probe when no effect applies ("": none)
+  std::string words;                         // the advice before the data pick
 };
 
-// Why the residual can still follow a variable whose effect is in the model.
-std::string stillFollows(const std::string& var, const std::vector<std::string>& effects, const FitResult& fit,
-                         const char* other_reason) {
-  std::vector<std::string> bounds;
-  for (const auto& e : effects)
-    for (const auto& b : boundsOf(fit, e)) bounds.push_back(b);
-  std::string in;
-  for (const auto& e : effects) in += (in.empty() ? "`" : ", `") + e + "`";
+// A column name against an entry's patterns: exact, or a prefix ending in '*'; any case.
+bool matches(const std::string& name, const std::vector<std::string>& patterns) {
+  const std::string v = lowerCopy(name);
+  for (const auto& p : patterns) {
+    if (!p.empty() && p.back() == '*' ? startsWith(v, p.substr(0, p.size() - 1).c_str()) : v == p) return true;
+  }
+  return false;
+}
+
+// The SPEC's base (the default one when it names none).
+const effects::EffectDef* baseOf(const ModelSpec& spec) {
+  for (const auto& e : spec.effects)
+    if (const auto* d = effects::find(e); d && d->role == effects::Role::kBase) return d;
+  for (const auto* d : effects::registry())
+    if (d->role == effects::Role::kBase) return d;
+  return nullptr;
+}
+
+bool inModel(const effects::EffectDef& d, const ModelSpec& spec) { return spec.has(d.name) || baseOf(spec) == &d; }
+
+// An effect the model can add: not in it, what it needs is there, and it fits this base.
+bool addable(const effects::EffectDef& d, const ModelSpec& spec) {
+  if (d.role != effects::Role::kEffect || inModel(d, spec)) return false;
+  if (!d.needs.empty() && !spec.has(d.needs)) return false;
+  return !(d.shapes_curve && baseOf(spec) != baseOf(ModelSpec()));
+}
+
+std::string quoted(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "`" : ", `") + n + "`";
+  return s;
+}
+
+// Why the residual can still follow a variable whose effects are in the model: a parameter
+// pulled to a bound, else what each of them says it cannot do.
+std::string stillFollows(const std::string& var, const std::vector<const effects::EffectDef*>& in, const FitResult& fit) {
+  std::vector<std::string> names, bounds, reasons;
+  for (const auto* d : in) {
+    names.push_back(d->name);
+    for (const auto& b : boundsOf(fit, d->name)) bounds.push_back(b);
+    if (!d->suggests.still.empty()) reasons.push_back(d->suggests.still);
+  }
+  const char* verb = in.size() > 1 ? "are" : "is";
   if (!bounds.empty())
     return fmt::format("residual still follows {} although {} {} in the model: {} (the data pull it past its "
                        "range; check the column and the physics before trusting it)",
-                       var, in, effects.size() > 1 ? "are" : "is", fmt::join(bounds, ", "));
-  return fmt::format("residual still follows {} although {} {} in the model: {}", var, in,
-                     effects.size() > 1 ? "are" : "is", other_reason);
+                       var, quoted(names), verb, fmt::join(bounds, ", "));
+  return fmt::format("residual still follows {} although {} {} in the model: {}", var, quoted(names), verb,
+                     fmt::join(reasons, "; "));
 }
 
-// What the catalogue says about a cause, given what the model already has. Never suggests an
-// effect that is in the model.
-Advice adviceFor(const std::string& var, double mean, const ModelSpec& spec, const FitResult& fit, bool have_rho) {
-  const std::string v = lowerCopy(var);
-  const bool thesis = spec.has("thesis");
+// The advice of the entries that `kind` (a variable's name, or an evidence kind when
+// `evidence`) points at. Never suggests an effect that is in the model.
+Advice adviceFor(const std::string& var, const std::string& lead, const ModelSpec& spec, const FitResult& fit,
+                 bool evidence) {
   Advice a;
-  auto fresh = [&](const char* e) { return !spec.has(e); };
-  if (v == "pwm_us") {
-    if (fresh("deadband") && !thesis) {
-      a.trials = {"deadband"};
-      a.suggest = "deadband";
-      a.words = "residual follows pwm_us: the curve's shape near the ESC start threshold is off; add `deadband`";
-    } else {
-      a.words = "residual follows pwm_us: the curve cannot follow the data's shape (an effect that bends the curve "
-                "is missing, the force collapses at the top, or the PWM logged is not the PWM the ESC saw)";
+  std::vector<const effects::EffectDef*> in, other_base;
+  for (const auto* d : effects::registry()) {
+    if (!matches(var, evidence ? d->suggests.evidence : d->suggests.variables)) continue;
+    if (inModel(*d, spec)) {
+      in.push_back(d);
+    } else if (addable(*d, spec)) {
+      a.trials.push_back(d->name);
+      const std::string although = d->needs.empty() ? "" : fmt::format(" although `{}` is in the model", d->needs);
+      a.words_for[d->name] = lead + although + ": " + d->suggests.advice;
+    } else if (d->shapes_curve && d->role == effects::Role::kEffect) {
+      other_base.push_back(d);
     }
-  } else if (isVoltageName(v)) {
-    if (thesis) {
-      a.words = "residual follows " + var + ": the thesis model interpolates between two voltages only";
-    } else if (fresh("voltage")) {
-      a.trials = {"voltage"};
-      a.suggest = "voltage";
-      a.words = "residual follows " + var + ": the force follows the motor voltage duty*V, not the PWM alone; add `voltage`";
-    } else if (fresh("sag")) {
-      a.trials = {"sag"};
-      a.suggest = "sag";
-      a.words = "residual follows " + var + " although `voltage` is in the model: the motor sees less than the logged "
-                "voltage under load (the battery and its wiring sag); add `sag` (it uses current_a when logged)";
-    } else {
-      a.words = stillFollows(var, {"voltage", "sag"}, fit,
-                             "the sag is not linear in the current, or the voltage logged is not the one at the ESC");
-    }
-  } else if (v == "t_s" || startsWith(v, "time")) {
-    for (const char* e : {"drift", "lag"})
-      if (fresh(e)) a.trials.push_back(e);
-    if (!a.trials.empty()) {
-      a.suggest = a.trials.front();
-      a.words = "residual changes with time (" + var + "): something drifts (load-cell creep, a warming rig) or the "
-                "force trails the command; add `$E`";
-    } else {
-      a.words = stillFollows(var, {"drift", "lag"}, fit, "the change is not linear in time (warming, a draining pack?)");
-    }
-  } else if (v == "temp_c" || startsWith(v, "temp")) {
-    // thermal uses the temperature itself; density uses it through rho_kg_m3 (ranked there)
-    if (fresh("thermal")) {
-      a.trials.push_back("thermal");
-      a.suggest = "thermal";
-      a.words = "residual follows " + var + ": the motor's temperature (copper and magnets) or the air density "
-                "changes the force; add `thermal`" +
-                std::string(fresh("density") ? ", or `density` if a pressure column is logged" : "");
-    } else if (fresh("density")) {
-      a.words = stillFollows(var, {"thermal"}, fit, "the air density may change with it: log a pressure column "
-                                                    "and add `density`");
-    } else {
-      a.words = stillFollows(var, {"thermal", "density"}, fit, "the temperature logged is not the motor's");
-    }
-  } else if ((startsWith(v, "pressure") || startsWith(v, "baro")) && have_rho) {
-    a.words = var + " acts through the air density: see rho_kg_m3";
-  } else if (startsWith(v, "pressure") || startsWith(v, "baro")) {
-    const std::string expr = fmt::format("mul: 1 + a*({} - {:.4g})", var, mean);
-    a.suggest = expr;
-    a.words = "residual follows " + var + ": the air density changes the force; log the air temperature (temp_c) "
-              "too so `density` can use rho = p/(R T), or try `" + expr + "`";
-  } else if (v == "rho_kg_m3") {
-    if (fresh("density")) {
-      a.trials = {"density"};
-      a.suggest = "density";
-      a.words = "residual follows the air density (" + var + "): thrust is proportional to rho = p/(R T); add `density`";
-    } else {
-      a.words = stillFollows(var, {"density"}, fit, "the exponent changes differently with the drive");
-    }
-  } else if (v == "motor") {
-    if (fresh("motor")) {
-      a.trials = {"motor"};
-      a.suggest = "motor";
-      a.words = "motors differ from each other (motor and propeller variation); add `motor`";
-    } else {
-      a.words = stillFollows(var, {"motor"}, fit, "motors differ in the curve's shape, not only in gain and Kv");
-    }
-  } else if (v == "run") {
-    a.words = "runs differ from each other: a per-run condition (motor, voltage, time) is not modelled; look at the "
-              "causes above";
-  } else if (v == "dpwm_us" || v == "dir") {
-    if (fresh("lag")) {
-      a.trials = {"lag"};
-      a.suggest = "lag";
-      a.words = v == "dir" ? "up and down sweeps differ: the force trails the command (motor inertia, a slow load "
-                             "cell); add `lag`"
-                           : "residual follows the last PWM step (dpwm_us): the force lags the command (motor "
-                             "inertia, a slow load cell); add `lag`";
-    } else {
-      a.words = stillFollows(var, {"lag"}, fit, "up and down differ by more than a first-order lag (hysteresis, "
-                                                 "a load cell that creeps)");
-    }
-  } else {
-    const std::string expr = fmt::format("mul: 1 + a*({} - {:.4g})", var, mean);
-    a.suggest = expr;
-    a.words = "residual follows " + var + ", which no catalogue effect covers; try `" + expr + "`";
+  }
+  if (!a.trials.empty()) {
+    a.words = a.words_for[a.trials.front()];
+  } else if (!in.empty() && !evidence) {
+    a.words = stillFollows(var, in, fit);
+  } else if (!other_base.empty()) {
+    std::vector<std::string> names;
+    for (const auto* d : other_base) names.push_back(d->name);
+    a.words = fmt::format("{}: {} shape the `{}` base, which this model (`{}`) does not use; compare with a model on "
+                          "that base",
+                          lead, quoted(names), baseOf(ModelSpec())->name, baseOf(spec)->name);
   }
   return a;
+}
+
+// A variable no entry covers: a generic factor in it is what can be tried.
+void genericAdvice(Advice& a, const std::string& var, double mean, bool categorical) {
+  const effects::EffectDef* mul = nullptr;
+  for (const auto* d : effects::registry())
+    if (d->role == effects::Role::kExpression && d->multiplicative) mul = d;
+  if (var == "run") {
+    a.words = "runs differ from each other: a per-run condition (motor, voltage, time) is not modelled; look at the "
+              "causes above";
+    return;  // the catch-all: probed, never an effect to add
+  }
+  a.generic = categorical ? std::string() : fmt::format("{} 1 + a*({} - {:.4g})", mul ? mul->prefix : "mul:", var, mean);
+  a.words = categorical ? fmt::format("residual follows {}, which no catalogue effect covers: its levels differ", var)
+                        : fmt::format("residual follows {}, which no catalogue effect covers; try `{}`", var, a.generic);
 }
 
 // |Pearson correlation| of two columns.
@@ -206,7 +186,234 @@ Dataset evenlySpaced(const Dataset& data, std::size_t max_rows) {
   return data.subset(keep);
 }
 
+// A candidate column as the ranking sees it: NaN when it is constant or not logged on every row.
+struct Profile {
+  bool usable = false;
+  bool categorical = false;
+  double mean = 0;
+};
+Profile profileOf(const std::vector<double>& z) {
+  std::set<double> distinct;
+  bool integral = true, complete = true;
+  double sum = 0;
+  for (double v : z) {
+    if (!std::isfinite(v)) { complete = false; continue; }
+    if (distinct.size() <= 17) distinct.insert(v);
+    integral = integral && v == std::round(v);
+    sum += v;
+  }
+  Profile p;
+  p.usable = distinct.size() >= 2 && complete;
+  p.categorical = (integral && distinct.size() <= 16) || distinct.size() <= 3;
+  p.mean = sum / static_cast<double>(z.size());
+  return p;
+}
+
+// The refits that ask how much of the residual a variable explains: the model with each effect
+// the variable points to, or, when no catalogue effect covers it, a generic factor in it.
+std::vector<std::pair<std::string, ModelSpec>> trialsFor(const Suspect& s, const Advice& a, const ModelSpec& spec) {
+  std::vector<std::pair<std::string, ModelSpec>> trials;
+  for (const auto& t : a.trials) {
+    try {
+      trials.emplace_back(t, combine(spec, parseSpec(t)));
+    } catch (const std::invalid_argument&) {
+    }
+  }
+  if (a.trials.empty() && s.variable != "pwm_us") {
+    ModelSpec p = spec;
+    p.probes.push_back({s.variable, s.categorical});
+    trials.emplace_back(a.generic, p);
+  }
+  return trials;
+}
+
+// The added-variable fit: each trial refitted from the model's optimum; the best trial's score
+// and p-value count. Returns the trials that could be fitted with their scores, best first.
+std::vector<std::pair<double, std::string>> scoreTrials(Suspect& s,
+                                                        const std::vector<std::pair<std::string, ModelSpec>>& trials,
+                                                        const Dataset& work, const FitResult& fit, bool quick = true) {
+  const double n = static_cast<double>(work.rows());
+  std::vector<std::pair<double, std::string>> scored;
+  for (const auto& [label, t] : trials) {
+    try {
+      const FitResult r = fitModel(work, t, &fit.params, /*warm_only=*/quick, /*uncertainties=*/false, fit.rss);
+      if (!std::isfinite(r.rss)) continue;
+      const double dk = std::max(1, r.k - fit.k);
+      const double score =
+          fit.rss > 0 ? std::max(0.0, 1.0 - (r.rss / fit.rss) * std::exp(dk * std::log(n) / n)) : 0.0;
+      double p = 1.0;
+      const double dof = n - r.k;
+      if (r.rss > 0 && dof > 0 && fit.rss > r.rss)
+        p = fSurvival(((fit.rss - r.rss) / dk) / (r.rss / dof), dk, dof);
+      else
+        p = fit.rss > r.rss ? 0.0 : 1.0;
+      if (!s.tested || score > s.score) {
+        s.score = score;
+        s.p_value = p;
+      }
+      s.tested = true;
+      scored.emplace_back(score, label);
+    } catch (const std::exception&) {
+      // this effect cannot be built on these data (a missing column): try the next
+    }
+  }
+  std::stable_sort(scored.begin(), scored.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  return scored;
+}
+
+// One candidate cause: its advice, and its score from the refits.
+Suspect rankCause(Suspect s, const Profile& pr, const std::vector<double>& z, const std::vector<double>& pwm,
+                  const Dataset& data, const Dataset& work, const FitResult& fit, const ModelSpec& spec) {
+  const std::string& name = s.variable;
+  const std::string lname = lowerCopy(name);
+  if ((startsWith(lname, "pressure") || startsWith(lname, "baro")) && data.has("rho_kg_m3")) {
+    s.advice = name + " acts through the air density: see rho_kg_m3";
+    return s;
+  }
+  if (name == "t_s" || startsWith(lname, "time")) {
+    const double r2 = explainedByDrive(z, pwm);
+    if (r2 > 0.9) {
+      s.advice = fmt::format("{} moves with the drive in these data (the PWM explains {:.0f} % of it: a ramp), so a "
+                             "change with time cannot be told from the curve's shape here; to test it, repeat a sweep "
+                             "or hold a PWM for a while",
+                             name, 100 * r2);
+      return s;
+    }
+  }
+  Advice a = adviceFor(name, "residual follows " + name, spec, fit, false);
+  if (a.trials.empty() && a.words.empty()) genericAdvice(a, name, pr.mean, s.categorical);
+  s.advice = a.words;
+  const auto scored = scoreTrials(s, trialsFor(s, a, spec), work, fit);
+  for (const auto& sc : scored)
+    if (!sc.second.empty()) s.effects.push_back(sc.second);
+  // the effect the data prefer among the candidates
+  if (!s.effects.empty() && a.words_for.count(s.effects.front())) s.advice = a.words_for[s.effects.front()];
+  return s;
+}
+
+// The significance level of one test among `tested` (Bonferroni).
+double alphaFor(std::size_t tested) { return 1e-3 / static_cast<double>(std::max<std::size_t>(tested, 1)); }
+
+// Significance against a Bonferroni level over the tested variables, then the order: causes
+// first, tested ones by score; `run` (which file or sweep) is a catch-all after them; then the
+// variables not tested.
+void orderSuspects(std::vector<Suspect>& out) {
+  std::size_t tested = 0;
+  for (const auto& s : out) tested += s.tested ? 1 : 0;
+  const double alpha = alphaFor(tested);
+  for (auto& s : out) s.significant = s.tested && s.p_value < alpha && s.score >= 0.01;
+  std::stable_sort(out.begin(), out.end(), [](const Suspect& a, const Suspect& b) {
+    if (a.significant != b.significant) return a.significant;
+    const bool ar = a.variable == "run", br = b.variable == "run";
+    if (ar != br) return br;
+    if (a.tested != b.tested) return a.tested;
+    return a.score > b.score;
+  });
+}
+
+// The rows the refits of a ranking run on: all of them, or on big data evenly spaced ones with
+// the model refitted there from its optimum.
+struct RefitRows {
+  Dataset sampled;
+  FitResult sampled_fit;
+  bool big;
+  const Dataset& data;
+  const FitResult& fit;
+  RefitRows(const Dataset& d, const FitResult& f, const ModelSpec& spec)
+      : big(d.rows() > kMaxRankRows),
+        data(big ? (sampled = evenlySpaced(d, kMaxRankRows)) : d),
+        fit(big ? (sampled_fit = fitModel(sampled, spec, &f.params, /*warm_only=*/true, /*uncertainties=*/false)) : f) {}
+};
+
+// The advice to follow: rows that do not measure the force first, else the effect that explains
+// most of the residual among the suspects' and the findings'.
+Next nextAdvice(const std::vector<Suspect>& vars, const std::vector<Evidence>& ev) {
+  Next next;
+  for (const auto& e : ev)
+    if (!e.where.empty()) return {e.where, "", e.cause, 0, {}};
+  struct Option {
+    bool significant;
+    double score;
+    std::string effect, why;
+  };
+  std::vector<Option> options;
+  for (const auto& s : vars)
+    if (s.tested && s.role == Role::kCause && !s.effects.empty())
+      options.push_back({s.significant, s.score, s.effects.front(), s.advice});
+  for (const auto& e : ev)
+    if (!e.effects.empty()) options.push_back({e.significant, e.score, e.effects.front(), e.advice});
+  std::stable_sort(options.begin(), options.end(), [](const Option& a, const Option& b) {
+    return a.significant != b.significant ? a.significant : a.score > b.score;
+  });
+  for (const auto& o : options) {
+    if (std::find(next.candidates.begin(), next.candidates.end(), o.effect) == next.candidates.end())
+      next.candidates.push_back(o.effect);
+    if (next.add.empty() && o.significant) next.add = o.effect, next.why = o.why, next.score = o.score;
+  }
+  return next;
+}
+
+// The verdict against the noise floor, in words with where to look.
+void judge(Assessment& d, const Dataset& data, const FitResult& fit, const std::vector<Suspect>& variables) {
+  const double rmse = fit.rmse_g;
+  const NoiseEstimate& n = d.noise;
+  d.unexplained_g = n.known() ? std::sqrt(std::max(0.0, rmse * rmse - n.sigma_g * n.sigma_g)) : rmse;
+  bool explained = !d.next.where.empty();
+  for (const auto& s : variables) explained = explained || (s.significant && s.role == Role::kCause);
+  for (const auto& e : d.evidence) explained = explained || e.significant;
+  if (n.known() && rmse <= n.hi_g) {
+    d.verdict = Verdict::kAtNoiseFloor;
+    d.verdict_text = fmt::format("at the noise floor: RMSE {:.3g} g is within the measurement noise, {}", rmse,
+                                 describe(n));
+    return;
+  }
+  const std::string above = n.known() ? fmt::format("above the noise floor of {}", describe(n))
+                                      : "(the noise floor is " + describe(n) + ")";
+  d.regions = residualRegions(data, fit, n);
+  if (explained) {
+    d.verdict = Verdict::kSuspects;
+    d.verdict_text = fmt::format("{:.3g} g unexplained {}; the suspects and findings above explain part of it",
+                                 d.unexplained_g, above);
+    return;
+  }
+  d.verdict = Verdict::kUnexplained;
+  d.verdict_text = fmt::format("{:.3g} g unexplained {}: no logged variable explains it; look where it is, at a "
+                               "condition not logged (a temperature, the voltage at the ESC, the rig's mount, the "
+                               "load cell's tare), or at an effect not in the catalogue (`mul: EXPR`, `add: EXPR`)",
+                               d.unexplained_g, above);
+}
+
 }  // namespace
+
+const char* verdictName(Verdict v) {
+  switch (v) {
+    case Verdict::kAtNoiseFloor: return "at_noise_floor";
+    case Verdict::kSuspects: return "suspects";
+    case Verdict::kUnexplained: return "unexplained";
+  }
+  return "unexplained";
+}
+
+void scoreEvidence(const Dataset& data_in, const FitResult& fit_in, const ModelSpec& spec,
+                   std::vector<Evidence>& evidence, std::size_t tested) {
+  const RefitRows rows(data_in, fit_in, spec);
+  const double alpha = alphaFor(tested + evidence.size());
+  for (auto& e : evidence) {
+    Advice a = adviceFor(e.kind, e.cause, spec, rows.fit, true);
+    e.advice = a.words;
+    if (a.trials.empty()) continue;
+    Suspect s;
+    s.variable = e.kind;
+    std::vector<std::pair<std::string, ModelSpec>> trials;
+    for (const auto& t : a.trials) trials.emplace_back(t, combine(spec, parseSpec(t)));
+    // a finding's effects are few: each gets the full search (a cold start too), as the ladder
+    for (const auto& sc : scoreTrials(s, trials, rows.data, rows.fit, /*quick=*/false)) e.effects.push_back(sc.second);
+    e.score = s.score;
+    e.p_value = s.p_value;
+    e.significant = s.tested && s.p_value < alpha && s.score >= 0.01;
+    if (!e.effects.empty()) e.advice = a.words_for[e.effects.front()];
+  }
+}
 
 Role roleOf(const std::string& name) {
   const std::string v = lowerCopy(name);
@@ -221,15 +428,9 @@ Role roleOf(const std::string& name) {
 
 std::vector<Suspect> rankVariables(const Dataset& data_in, const FitResult& fit_in, const ModelSpec& spec) {
   // Big data: the refits run on evenly spaced rows, against the model refitted there.
-  Dataset sampled;
-  FitResult sampled_fit;
-  const bool big = data_in.rows() > kMaxRankRows;
-  if (big) {
-    sampled = evenlySpaced(data_in, kMaxRankRows);
-    sampled_fit = fitModel(sampled, spec, &fit_in.params, /*warm_only=*/true, /*uncertainties=*/false);
-  }
-  const Dataset& data = big ? sampled : data_in;
-  const FitResult& fit = big ? sampled_fit : fit_in;
+  const RefitRows rows(data_in, fit_in, spec);
+  const Dataset& data = rows.data;
+  const FitResult& fit = rows.fit;
 
   std::vector<std::pair<std::string, const std::vector<double>*>> candidates;
   for (std::size_t c = 0; c < data.names.size(); ++c)
@@ -245,117 +446,28 @@ std::vector<Suspect> rankVariables(const Dataset& data_in, const FitResult& fit_
     candidates.emplace_back("run", &run_column);
   }
   const auto& pwm = data.col("pwm_us");
-  const double n = static_cast<double>(data.rows());
   std::vector<Suspect> out;
   for (const auto& [name, zp] : candidates) {
-    const auto& z = *zp;
-    std::set<double> distinct;
-    bool integral = true, complete = true;
-    double sum = 0;
-    for (double v : z) {
-      if (!std::isfinite(v)) { complete = false; continue; }
-      if (distinct.size() <= 17) distinct.insert(v);
-      integral = integral && v == std::round(v);
-      sum += v;
-    }
-    if (distinct.size() < 2 || !complete) continue;
+    const Profile pr = profileOf(*zp);
+    if (!pr.usable) continue;
     Suspect s;
     s.variable = name;
-    s.categorical = (integral && distinct.size() <= 16) || distinct.size() <= 3;
+    s.categorical = pr.categorical;
     s.role = name == "pwm_us" ? Role::kCause : roleOf(name);
     if (s.role == Role::kCause && name != "pwm_us" && name != "t_s" && !s.categorical &&
-        correlation(z, pwm) > 0.999)
+        correlation(*zp, pwm) > 0.999)
       s.role = Role::kDriveCopy;
-    if (s.role == Role::kResponse) {
+    if (s.role == Role::kResponse)
       s.advice = name + " is a response of the motor (it follows the drive): it shows the residual, it does not "
                         "cause it; not a suspect";
-      out.push_back(s);
-      continue;
-    }
-    if (s.role == Role::kDriveCopy) {
+    else if (s.role == Role::kDriveCopy)
       s.advice = name + " is a copy of the drive (it moves with pwm_us): a factor in it would only reshape the curve; "
                         "not a suspect (map one drive column with --map)";
-      out.push_back(s);
-      continue;
-    }
-    const Advice a = adviceFor(name, sum / static_cast<double>(z.size()), spec, fit, data.has("rho_kg_m3"));
-    s.advice = a.words;
-    if ((name == "t_s" || startsWith(lowerCopy(name), "time"))) {
-      const double r2 = explainedByDrive(z, pwm);
-      if (r2 > 0.9) {
-        s.advice = fmt::format("{} moves with the drive in these data (the PWM explains {:.0f} % of it: a ramp), so "
-                               "drift cannot be told from the curve's shape here; to test drift, repeat a sweep or "
-                               "hold a PWM for a while",
-                               name, 100 * r2);
-        out.push_back(s);
-        continue;
-      }
-    }
-    // The added-variable fit: refit the model with each effect the variable points to (or, when
-    // no catalogue effect covers it, a generic factor in it) and see how much of the residual
-    // goes away. The best trial counts.
-    std::vector<std::pair<std::string, ModelSpec>> trials;
-    for (const auto& t : a.trials) {
-      try {
-        trials.emplace_back(t, combine(spec, parseSpec(t)));
-      } catch (const std::invalid_argument&) {
-      }
-    }
-    const bool probe = a.trials.empty() && name != "pwm_us" &&
-                       !((startsWith(lowerCopy(name), "pressure") || startsWith(lowerCopy(name), "baro")) &&
-                         data.has("rho_kg_m3"));
-    if (probe) {
-      ModelSpec p = spec;
-      p.probes.push_back({name, s.categorical});
-      trials.emplace_back(a.suggest, p);
-    }
-    std::vector<std::pair<double, std::string>> scored;
-    for (const auto& [label, t] : trials) {
-      try {
-        const FitResult r = fitModel(*work, t, &fit.params, /*warm_only=*/true, /*uncertainties=*/false, fit.rss);
-        if (!std::isfinite(r.rss)) continue;
-        const double dk = std::max(1, r.k - fit.k);
-        const double score =
-            fit.rss > 0 ? std::max(0.0, 1.0 - (r.rss / fit.rss) * std::exp(dk * std::log(n) / n)) : 0.0;
-        double p = 1.0;
-        const double dof = n - r.k;
-        if (r.rss > 0 && dof > 0 && fit.rss > r.rss)
-          p = fSurvival(((fit.rss - r.rss) / dk) / (r.rss / dof), dk, dof);
-        else
-          p = fit.rss > r.rss ? 0.0 : 1.0;
-        if (!s.tested || score > s.score) {
-          s.score = score;
-          s.p_value = p;
-        }
-        s.tested = true;
-        scored.emplace_back(score, label);
-      } catch (const std::exception&) {
-        // this effect cannot be built on these data (a missing column): try the next
-      }
-    }
-    std::stable_sort(scored.begin(), scored.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-    if (!a.suggest.empty()) {
-      for (const auto& sc : scored) s.effects.push_back(sc.second);
-      if (s.effects.empty()) s.effects.push_back(a.suggest);
-    }
-    // the effect the data prefer among the candidates
-    const auto at = s.advice.find("$E");
-    if (at != std::string::npos) s.advice.replace(at, 2, s.effects.empty() ? a.suggest : s.effects.front());
+    else
+      s = rankCause(s, pr, *zp, pwm, data, *work, fit, spec);
     out.push_back(s);
   }
-  std::size_t tested = 0;
-  for (const auto& s : out) tested += s.tested ? 1 : 0;
-  const double alpha = 1e-3 / static_cast<double>(std::max<std::size_t>(tested, 1));
-  for (auto& s : out) s.significant = s.tested && s.p_value < alpha && s.score >= 0.01;
-  // Causes first, tested ones by score; `run` (which file or sweep) is a catch-all after them;
-  // then the variables not tested.
-  std::stable_sort(out.begin(), out.end(), [](const Suspect& a, const Suspect& b) {
-    if (a.significant != b.significant) return a.significant;
-    const bool ar = a.variable == "run", br = b.variable == "run";
-    if (ar != br) return br;
-    if (a.tested != b.tested) return a.tested;
-    return a.score > b.score;
-  });
+  orderSuspects(out);
   return out;
 }
 
@@ -434,50 +546,71 @@ double holdoutRmse(const Dataset& data, const ModelSpec& spec, Holdout kind, int
   return std::sqrt(sse / static_cast<double>(count));
 }
 
+Assessment assess(const Dataset& data, const ModelSpec& spec, const FitResult& fit,
+                  const std::vector<Suspect>& variables, const NoiseEstimate* noise) {
+  Assessment a;
+  a.noise = noise ? *noise : estimateNoise(data);
+  std::size_t tested = 0;
+  for (const auto& s : variables) tested += s.tested ? 1 : 0;
+  a.evidence = gatherEvidence(data);
+  scoreEvidence(data, fit, spec, a.evidence, tested);
+  a.next = nextAdvice(variables, a.evidence);
+  judge(a, data, fit, variables);
+  return a;
+}
+
 Diagnosis diagnose(const Dataset& data, const ModelSpec& spec, Holdout holdout) {
   Diagnosis d;
   d.fit = fitModel(data, spec);
   d.variables = rankVariables(data, d.fit, spec);
+  static_cast<Assessment&>(d) = assess(data, spec, d.fit, d.variables);
   d.holdout_rmse_g = holdoutRmse(data, spec, holdout, &d.holdout_groups);
   return d;
+}
+
+LadderStep addStep(const Dataset& data, const LadderStep& prev, const std::string& add, Holdout holdout) {
+  LadderStep step;
+  step.added = add;
+  const ModelSpec added = parseSpec(add);
+  step.spec = combine(prev.spec, added);
+  step.fit = fitModel(data, step.spec, &prev.fit.params, false, true, prev.fit.rss);
+  step.holdout_rmse_g = holdoutRmse(data, step.spec, holdout);
+  step.delta_bic = step.fit.bic - prev.fit.bic;
+  step.delta_aic = step.fit.aic - prev.fit.aic;
+  std::vector<std::string> names = added.effects;
+  for (const auto& u : added.user) names.push_back((u.multiplicative ? "mul: " : "add: ") + u.expression);
+  for (const auto& e : names)
+    for (const auto& b : boundsOf(step.fit, e)) step.at_bound.push_back(b);
+  const bool falls = step.delta_bic < -2.0;
+  step.earns = falls && step.at_bound.empty();
+  if (step.earns)
+    step.verdict = "earns its parameters";
+  else if (!step.at_bound.empty())
+    step.verdict = fmt::format("no credit: {}", fmt::join(step.at_bound, ", "));
+  else
+    step.verdict = "does NOT earn its parameters";
+  return step;
 }
 
 std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,
                                const std::vector<std::string>& adds, Holdout holdout) {
   std::vector<LadderStep> steps;
-  ModelSpec spec = base;
+  const NoiseEstimate noise = estimateNoise(data);
   for (std::size_t s = 0; s <= adds.size(); ++s) {
     LadderStep step;
-    ModelSpec added;
-    if (s > 0) {
-      step.added = adds[s - 1];
-      added = parseSpec(adds[s - 1]);
-      spec = combine(spec, added);
-    }
-    step.spec = spec;
-    step.fit = steps.empty() ? fitModel(data, spec)
-                             : fitModel(data, spec, &steps.back().fit.params, false, true, steps.back().fit.rss);
-    // the diagnosis of the first and the last step (the report and the text use those)
-    if (s == 0 || s == adds.size()) step.variables = rankVariables(data, step.fit, spec);
-    step.holdout_rmse_g = holdoutRmse(data, spec, holdout);
-    if (steps.empty()) {
+    if (s == 0) {
+      step.spec = base;
+      step.fit = fitModel(data, base);
+      step.holdout_rmse_g = holdoutRmse(data, base, holdout);
       step.verdict = "start";
     } else {
-      step.delta_bic = step.fit.bic - steps.back().fit.bic;
-      step.delta_aic = step.fit.aic - steps.back().fit.aic;
-      std::vector<std::string> names = added.effects;
-      for (const auto& u : added.user) names.push_back((u.multiplicative ? "mul: " : "add: ") + u.expression);
-      for (const auto& e : names)
-        for (const auto& b : boundsOf(step.fit, e)) step.at_bound.push_back(b);
-      const bool falls = step.delta_bic < -2.0;
-      step.earns = falls && step.at_bound.empty();
-      if (step.earns)
-        step.verdict = "earns its parameters";
-      else if (!step.at_bound.empty())
-        step.verdict = fmt::format("no credit: {}", fmt::join(step.at_bound, ", "));
-      else
-        step.verdict = "does NOT earn its parameters";
+      step = addStep(data, steps.back(), adds[s - 1], holdout);
     }
+    // the diagnosis of the first and the last step (the report and the text use those)
+    if (s == 0 || s == adds.size()) step.variables = rankVariables(data, step.fit, step.spec);
+    step.at_noise_floor = noise.known() && step.fit.rmse_g <= noise.hi_g;
+    step.assessment.noise = noise;
+    if (s == adds.size()) step.assessment = assess(data, step.spec, step.fit, step.variables, &noise);
     steps.push_back(std::move(step));
   }
   return steps;
@@ -486,40 +619,10 @@ std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,
 std::vector<ForceCollapse> findForceCollapse(const Dataset& data) {
   std::vector<ForceCollapse> out;
   if (!data.has("pwm_us") || !data.has("force_g")) return out;
-  const auto& pwm = data.col("pwm_us");
-  const auto& force = data.col("force_g");
-  std::vector<std::vector<std::size_t>> rows(data.runs());
-  for (std::size_t i = 0; i < data.rows(); ++i) rows[static_cast<std::size_t>(data.run[i])].push_back(i);
+  const auto rows = rowsOfRuns(data);
   for (std::size_t r = 0; r < rows.size(); ++r) {
-    const auto& idx = rows[r];
-    if (idx.size() < 8) continue;
-    double lo = pwm[idx[0]], hi = lo;
-    std::set<double> levels;
-    for (std::size_t i : idx) {
-      lo = std::min(lo, pwm[i]), hi = std::max(hi, pwm[i]);
-      if (levels.size() <= 200) levels.insert(pwm[i]);
-    }
-    if (!(hi > lo)) continue;
-    // bins: the PWM levels of a step sweep, or 40 equal bins of a ramp
-    std::vector<double> edges;
-    if (levels.size() <= 200) {
-      edges.assign(levels.begin(), levels.end());
-    } else {
-      for (int k = 0; k < 40; ++k) edges.push_back(lo + (hi - lo) * k / 40.0);
-    }
-    std::vector<std::vector<double>> bin(edges.size());
-    for (std::size_t i : idx) {
-      const auto it = std::upper_bound(edges.begin(), edges.end(), pwm[i]);
-      bin[static_cast<std::size_t>(std::max<long>(0, (it - edges.begin()) - 1))].push_back(force[i]);
-    }
-    std::vector<std::pair<double, double>> med;  // pwm, median force
-    for (std::size_t k = 0; k < bin.size(); ++k) {
-      auto& b = bin[k];
-      if (b.empty()) continue;
-      std::nth_element(b.begin(), b.begin() + static_cast<long>(b.size() / 2), b.end());
-      const double center = levels.size() <= 200 ? edges[k] : edges[k] + (hi - lo) / 80.0;
-      med.emplace_back(center, b[b.size() / 2]);
-    }
+    if (rows[r].size() < 8) continue;
+    const auto med = binnedMedians(data.col("pwm_us"), data.col("force_g"), rows[r]);  // pwm, median force
     if (med.size() < 4) continue;
     std::size_t peak = 0;
     for (std::size_t k = 1; k < med.size(); ++k)
@@ -537,8 +640,9 @@ std::vector<ForceCollapse> findForceCollapse(const Dataset& data) {
 
 std::string describe(const ForceCollapse& c) {
   return fmt::format("{}: the force falls while the drive rises, from {:.4g} g at {:.0f} us to {:.4g} g at {:.0f} us "
-                     "(an ESC or current limit?); a monotone curve cannot follow it: fit below it with --where "
-                     "'pwm_us < {:.0f}'",
+                     "(a current limit, a saturated ESC or a stall: `thrustcal lab diagnose` tells which from the "
+                     "current and the speed); a curve that only rises cannot follow it: model the limit, or fit below "
+                     "it with --where 'pwm_us < {:.0f}'",
                      c.run, c.peak_force_g, c.peak_pwm_us, c.top_force_g, c.top_pwm_us, c.peak_pwm_us);
 }
 

@@ -283,6 +283,76 @@ Px4Fit fitPx4(const std::vector<Row>& rows, const FitSetup& setup, bool bat_scal
 
 // ---- Betaflight ------------------------------------------------------------------------------
 
+namespace {
+
+// Betaflight's search: the error of a parameter set at its best scale, and the best motor_idle
+// for the rest fixed.
+struct BetaflightSearch {
+  const std::vector<Row>& rows;
+
+  double rss(const BetaflightParams& q) const {
+    return bestScale(rows, [&](const Row& r) { return betaflight::thrustFraction(q, r.pwm_us, r.vbat_v); }).rss;
+  }
+  // motor_idle for the rest fixed: every 100 (10 us), then a pattern search down to 1
+  int bestIdle(BetaflightParams q, double* rss_out) const {
+    const int best = argminInt(0, 2000, 100, [&](int v) {
+      q.motor_idle = v;
+      return rss(q);
+    });
+    q.motor_idle = best;
+    if (rss_out) *rss_out = rss(q);
+    return best;
+  }
+  // coordinate passes over the output limit, sag compensation, thrust_linear and idle
+  void refine(BetaflightParams& p, bool volts, double& best_rss) const {
+    for (int pass = 0; pass < 3; ++pass) {
+      const BetaflightParams before = p;
+      p.motor_output_limit = argminInt(50, 100, 2, [&](int v) {
+        BetaflightParams q = p;
+        q.motor_output_limit = v;
+        return rss(q);
+      });
+      if (volts)
+        p.vbat_sag_compensation = argminInt(0, 150, 5, [&](int v) {
+          BetaflightParams q = p;
+          q.vbat_sag_compensation = v;
+          return rss(q);
+        });
+      p.thrust_linear = argminInt(std::max(0, p.thrust_linear - 8), std::min(betaflight::kMonotoneThrustLinearMax,
+                                                                             p.thrust_linear + 8), 4, [&](int v) {
+        BetaflightParams q = p;
+        q.thrust_linear = v;
+        double r;
+        q.motor_idle = bestIdle(q, &r);
+        return r;
+      });
+      p.motor_idle = bestIdle(p, &best_rss);
+      if (before.motor_output_limit == p.motor_output_limit && before.vbat_sag_compensation == p.vbat_sag_compensation &&
+          before.thrust_linear == p.thrust_linear && before.motor_idle == p.motor_idle)
+        break;
+    }
+  }
+};
+
+std::vector<std::string> betaflightNotes(const BetaflightParams& p) {
+  std::vector<std::string> notes;
+  if (p.thrust_linear >= betaflight::kMonotoneThrustLinearMax)
+    notes.push_back(fmt::format("thrust_linear stopped at {}: above it Betaflight's curve falls while the "
+                                "demand rises (its slope 5/6 - e^2/2 turns negative)",
+                                betaflight::kMonotoneThrustLinearMax));
+  if (p.motor_idle >= 2000)
+    notes.push_back("motor_idle reached its limit 2000 (20 %): thrust starts above it; check the ESC range");
+  else if (p.motor_idle > 1000)
+    notes.push_back(fmt::format(
+        "motor_idle {} ({:.1f} %) is far above the default 550: Betaflight's curve bends less than the propeller's "
+        "(thrust_linear <= {}) and the fit moves the start of thrust up instead; the motors would idle at {:.0f} us",
+        p.motor_idle, p.motor_idle / 100.0, betaflight::kMonotoneThrustLinearMax,
+        betaflight::toPulseUs(p, betaflight::endpoints(p).low)));
+  return notes;
+}
+
+}  // namespace
+
 BetaflightFit fitBetaflight(const std::vector<Row>& rows, const FitSetup& setup) {
   checkRows(rows, "Betaflight");
   BetaflightParams p;
@@ -295,80 +365,31 @@ BetaflightFit fitBetaflight(const std::vector<Row>& rows, const FitSetup& setup)
   p.vbat_sag_compensation = 0;
   p.motor_output_limit = 100;
 
-  auto rssOf = [&](const BetaflightParams& q) {
-    return bestScale(rows, [&](const Row& r) { return betaflight::thrustFraction(q, r.pwm_us, r.vbat_v); }).rss;
-  };
-  // motor_idle for the rest fixed: every 100 (10 us), then a pattern search down to 1
-  auto bestIdle = [&](BetaflightParams q, double* rss) {
-    const int best = argminInt(0, 2000, 100, [&](int v) {
-      q.motor_idle = v;
-      return rssOf(q);
-    });
-    q.motor_idle = best;
-    if (rss) *rss = rssOf(q);
-    return best;
-  };
+  const BetaflightSearch search{rows};
   double best_rss = kInf;
   p.thrust_linear = argminInt(0, betaflight::kMonotoneThrustLinearMax, 4, [&](int tl) {
     BetaflightParams q = p;
     q.thrust_linear = tl;
     double r;
-    bestIdle(q, &r);
+    search.bestIdle(q, &r);
     return r;
   });
-  p.motor_idle = bestIdle(p, &best_rss);
-  // coordinate passes over the output limit, sag compensation, thrust_linear and idle
-  for (int pass = 0; pass < 3; ++pass) {
-    const BetaflightParams before = p;
-    p.motor_output_limit = argminInt(50, 100, 2, [&](int v) {
-      BetaflightParams q = p;
-      q.motor_output_limit = v;
-      return rssOf(q);
-    });
-    if (volts)
-      p.vbat_sag_compensation = argminInt(0, 150, 5, [&](int v) {
-        BetaflightParams q = p;
-        q.vbat_sag_compensation = v;
-        return rssOf(q);
-      });
-    p.thrust_linear = argminInt(std::max(0, p.thrust_linear - 8), std::min(betaflight::kMonotoneThrustLinearMax,
-                                                                           p.thrust_linear + 8), 4, [&](int v) {
-      BetaflightParams q = p;
-      q.thrust_linear = v;
-      double r;
-      q.motor_idle = bestIdle(q, &r);
-      return r;
-    });
-    p.motor_idle = bestIdle(p, &best_rss);
-    if (before.motor_output_limit == p.motor_output_limit && before.vbat_sag_compensation == p.vbat_sag_compensation &&
-        before.thrust_linear == p.thrust_linear && before.motor_idle == p.motor_idle)
-      break;
-  }
+  p.motor_idle = search.bestIdle(p, &best_rss);
+  search.refine(p, volts, best_rss);
   // ties go to the defaults
   for (auto [field, value] : {std::pair<int BetaflightParams::*, int>{&BetaflightParams::motor_output_limit, 100},
                               {&BetaflightParams::vbat_sag_compensation, 0}}) {
     BetaflightParams q = p;
     q.*field = value;
     double r;
-    q.motor_idle = bestIdle(q, &r);
+    q.motor_idle = search.bestIdle(q, &r);
     if (r <= best_rss * (1 + kTieTolerance) + 1e-9) p = q, best_rss = r;
   }
 
   BetaflightFit fit;
   fit.params = p;
   fit.scale = bestScale(rows, [&](const Row& r) { return betaflight::thrustFraction(p, r.pwm_us, r.vbat_v); });
-  if (p.thrust_linear >= betaflight::kMonotoneThrustLinearMax)
-    fit.notes.push_back(fmt::format("thrust_linear stopped at {}: above it Betaflight's curve falls while the "
-                                    "demand rises (its slope 5/6 - e^2/2 turns negative)",
-                                    betaflight::kMonotoneThrustLinearMax));
-  if (p.motor_idle >= 2000)
-    fit.notes.push_back("motor_idle reached its limit 2000 (20 %): thrust starts above it; check the ESC range");
-  else if (p.motor_idle > 1000)
-    fit.notes.push_back(fmt::format(
-        "motor_idle {} ({:.1f} %) is far above the default 550: Betaflight's curve bends less than the propeller's "
-        "(thrust_linear <= {}) and the fit moves the start of thrust up instead; the motors would idle at {:.0f} us",
-        p.motor_idle, p.motor_idle / 100.0, betaflight::kMonotoneThrustLinearMax,
-        betaflight::toPulseUs(p, betaflight::endpoints(p).low)));
+  fit.notes = betaflightNotes(p);
   return fit;
 }
 

@@ -293,261 +293,283 @@ std::string fmtLines(const std::vector<std::size_t>& lines, std::size_t total) {
   return s;
 }
 
-// The whole reader: one pass over the lines.
-Dataset parseStream(std::istream& in, const std::string& file, const ReadOptions& options) {
-  LineReader reader(in);
-  std::string line;
-  bool terminated = true;
-  std::size_t line_no = 0;
-  bool first = true;
+// The whole reader: one pass over the lines, then the columns, in seven phases. Each phase is a
+// member of this one-shot parser; the state they share is its members.
+class StreamParser {
+ public:
+  StreamParser(std::istream& in, const std::string& file, const ReadOptions& options)
+      : reader_(in), file_(file), options_(options) {}
 
+  Dataset parse() {
+    readHeader();
+    headerColumns();
+    readRows();
+    numericColumns();
+    standColumns();
+    userMaps();
+    notFiniteCells();
+    dropRowsWithoutDriveOrForce();
+    labelRuns();
+    return std::move(out_);
+  }
+
+ private:
   // 1. The header: the first line naming columns (outside comments; failing that, a comment
   //    line naming pwm_us before the data, as a log may print "# pwm_us,force_g,...").
-  std::string header, comment_header;
-  std::size_t header_line = 0, comment_header_line = 0, first_nonempty = 0;
-  std::vector<Field> fields;
-  bool have_pending_data = false;  // a data line read while looking for the header
-  std::string pending;
-  bool pending_terminated = true;
-  std::size_t pending_line = 0;
-  while (reader.next(line, terminated)) {
-    ++line_no;
-    if (first) {
-      first = false;
-      if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 byte order mark
-    }
-    const std::string_view t = trimView(line);
-    if (t.empty()) continue;
-    if (!first_nonempty) first_nonempty = line_no;
-    if (isComment(t)) {
-      const std::string_view body = trimView(t.substr(1));
-      if (comment_header.empty() && body.find("pwm_us") != std::string_view::npos &&
-          looksLikeHeader(body, delimiterOf(body))) {
-        comment_header = std::string(body);
-        comment_header_line = line_no;
+  void readHeader() {
+    std::string comment_header;
+    std::size_t comment_header_line = 0, first_nonempty = 0;
+    bool first = true;
+    while (reader_.next(line_, terminated_)) {
+      ++line_no_;
+      if (first) {
+        first = false;
+        if (line_.rfind("\xEF\xBB\xBF", 0) == 0) line_.erase(0, 3);  // UTF-8 byte order mark
       }
-      continue;
-    }
-    const char d = delimiterOf(t);
-    if (looksLikeHeader(t, d)) {
-      header = std::string(t);
-      header_line = line_no;
-      break;
-    }
-    splitFields(t, d, fields);
-    if (t.find(d) != std::string_view::npos && !fields.empty() && looksNumeric(fields[0].text)) {
-      if (!comment_header.empty()) {  // data after a commented header
-        have_pending_data = true;
-        pending = line;
-        pending_terminated = terminated;
-        pending_line = line_no;
+      const std::string_view t = trimView(line_);
+      if (t.empty()) continue;
+      if (!first_nonempty) first_nonempty = line_no_;
+      if (isComment(t)) {
+        const std::string_view body = trimView(t.substr(1));
+        if (comment_header.empty() && body.find("pwm_us") != std::string_view::npos &&
+            looksLikeHeader(body, delimiterOf(body))) {
+          comment_header = std::string(body);
+          comment_header_line = line_no_;
+        }
+        continue;
       }
-      break;  // data before any header
+      const char d = delimiterOf(t);
+      if (looksLikeHeader(t, d)) {
+        header_ = std::string(t);
+        header_line_ = line_no_;
+        break;
+      }
+      splitFields(t, d, fields_);
+      if (t.find(d) != std::string_view::npos && !fields_.empty() && looksNumeric(fields_[0].text)) {
+        if (!comment_header.empty()) {  // data after a commented header
+          have_pending_data_ = true;
+          pending_ = line_;
+          pending_terminated_ = terminated_;
+          pending_line_ = line_no_;
+        }
+        break;  // data before any header
+      }
     }
+    if (header_.empty() && !comment_header.empty()) {
+      header_ = comment_header;
+      header_line_ = comment_header_line;
+    }
+    if (header_.empty())
+      throw InputError(file_, first_nonempty ? first_nonempty : 1, 1,
+                       "expected a header line naming the columns (e.g. pwm_us,force_g,vbat_v) "
+                       "before the data; add one, or check the file is a CSV");
   }
-  if (header.empty() && !comment_header.empty()) {
-    header = comment_header;
-    header_line = comment_header_line;
+
+  // The header's fields: one raw column each; empty names at the end mean every line ends with
+  // the delimiter.
+  void headerColumns() {
+    delim_ = delimiterOf(header_);
+    decimal_comma_ = delim_ == ';';
+    std::vector<Field> hf;
+    splitFields(header_, delim_, hf);
+    while (!hf.empty() && unquote(hf.back().text).empty()) {
+      hf.pop_back();
+      ++trailing_;
+    }
+    for (const auto& f : hf) {
+      RawColumn c;
+      c.header = std::string(unquote(f.text));
+      for (std::size_t k = 0; k < raw_.size(); ++k)
+        if (raw_[k].header == c.header)
+          throw InputError(file_, header_line_, f.column,
+                           fmt::format("column '{}' appears twice in the header (columns {} and {}); "
+                                       "rename one so each variable has one name",
+                                       c.header, k + 1, raw_.size() + 1));
+      raw_.push_back(std::move(c));
+    }
+    width_ = raw_.size();
   }
-  if (header.empty())
-    throw InputError(file, first_nonempty ? first_nonempty : 1, 1,
-                     "expected a header line naming the columns (e.g. pwm_us,force_g,vbat_v) "
-                     "before the data; add one, or check the file is a CSV");
-  const char delim = delimiterOf(header);
-  const bool decimal_comma = delim == ';';
-  std::vector<RawColumn> raw;
-  std::vector<Field> hf;
-  splitFields(header, delim, hf);
-  std::size_t trailing = 0;  // empty names at the end: every line ends with the delimiter
-  while (!hf.empty() && unquote(hf.back().text).empty()) {
-    hf.pop_back();
-    ++trailing;
-  }
-  for (const auto& f : hf) {
-    RawColumn c;
-    c.header = std::string(unquote(f.text));
-    for (std::size_t k = 0; k < raw.size(); ++k)
-      if (raw[k].header == c.header)
-        throw InputError(file, header_line, f.column,
-                         fmt::format("column '{}' appears twice in the header (columns {} and {}); "
-                                     "rename one so each variable has one name",
-                                     c.header, k + 1, raw.size() + 1));
-    raw.push_back(std::move(c));
-  }
-  const std::size_t width = raw.size();
 
   // 2. Rows. A line whose first field is a number is data; a line equal to the header starts a
   //    new segment; anything else (console prompts, progress) is skipped. The last line of a
   //    file cut short (no line break, fields missing) is dropped with a note.
-  std::vector<int> segment_of_row;
-  std::vector<std::size_t> line_of_row;
-  int segment = 0;
-  std::size_t skipped = 0;
-  std::string truncated_note;
-  auto handle = [&](const std::string& l, bool term, std::size_t no) {
+  void readRows() {
+    if (have_pending_data_) handleLine(pending_, pending_terminated_, pending_line_);
+    while (reader_.next(line_, terminated_)) handleLine(line_, terminated_, ++line_no_);
+    if (segment_of_row_.empty())
+      throw InputError(file_, header_line_, 1, "expected data rows after the header, found none");
+  }
+
+  void handleLine(const std::string& l, bool term, std::size_t no) {
     const std::string_view t = trimView(l);
     if (t.empty() || isComment(t)) return;
-    if (t == header) {
-      ++segment;
+    if (t == header_) {
+      ++segment_;
       return;
     }
-    splitFields(l, delim, fields);
+    splitFields(l, delim_, fields_);
     double first_value;
-    if (parseCell(fields[0].text, decimal_comma, first_value) != Cell::kNumber) {
-      ++skipped;
+    if (parseCell(fields_[0].text, decimal_comma_, first_value) != Cell::kNumber) {
+      ++skipped_;
       return;
     }
-    std::size_t n = fields.size();
+    std::size_t n = fields_.size();
     // the trailing delimiter(s): extra fields that are empty
-    while (n > width && unquote(fields[n - 1].text).empty()) --n;
-    const bool cut = !term && (n < width || (trailing > 0 && fields.size() < width + trailing));
+    while (n > width_ && unquote(fields_[n - 1].text).empty()) --n;
+    const bool cut = !term && (n < width_ || (trailing_ > 0 && fields_.size() < width_ + trailing_));
     if (cut) {
-      truncated_note = fmt::format("{}: line {} (the last) is cut short ({} of {} fields, no line break): "
-                                   "dropped", file, no, n, width);
+      truncated_note_ = fmt::format("{}: line {} (the last) is cut short ({} of {} fields, no line break): "
+                                    "dropped", file_, no, n, width_);
       return;
     }
-    if (n != width) {
-      const std::size_t col = n > width ? fields[width].column : l.size() + 1;
-      throw InputError(file, no, col,
-                       fmt::format("expected {} fields like the header on line {}, found {}", width,
-                                   header_line, n));
+    if (n != width_) {
+      const std::size_t col = n > width_ ? fields_[width_].column : l.size() + 1;
+      throw InputError(file_, no, col,
+                       fmt::format("expected {} fields like the header on line {}, found {}", width_,
+                                   header_line_, n));
     }
-    for (std::size_t c = 0; c < width; ++c) {
-      RawColumn& rc = raw[c];
-      if (rc.kind == RawColumn::Kind::kText) continue;
-      double v;
-      switch (parseCell(fields[c].text, decimal_comma, v)) {
-        case Cell::kNumber:
-          rc.kind = RawColumn::Kind::kNumeric;
-          break;
-        case Cell::kMissing:
-          if (!rc.first_missing_line) rc.first_missing_line = no, rc.first_missing_column = fields[c].column;
-          break;
-        case Cell::kNotFinite:
-          // refused if the column is used as the drive or the force, else read as not logged
-          if (!rc.not_finite++) {
-            rc.not_finite_line = no;
-            rc.not_finite_column = fields[c].column;
-            rc.not_finite_text = std::string(trimView(fields[c].text));
-          }
-          v = kNaN;
-          break;
-        case Cell::kText:
-          if (rc.kind == RawColumn::Kind::kNumeric)
-            throw InputError(file, no, fields[c].column,
-                             fmt::format("expected a number in column '{}', found '{}'", rc.header,
-                                         unquote(fields[c].text)));
-          // a text column (a message, a date): kept aside, ignored unless used
-          rc.kind = RawColumn::Kind::kText;
-          rc.first_text = std::string(unquote(fields[c].text));
-          rc.first_text_line = no;
-          rc.values.clear();
-          rc.values.shrink_to_fit();
-          continue;
-      }
-      rc.values.push_back(v);
+    for (std::size_t c = 0; c < width_; ++c) cell(raw_[c], fields_[c], no);
+    segment_of_row_.push_back(segment_);
+    line_of_row_.push_back(no);
+  }
+
+  // One cell of a data line into its raw column.
+  void cell(RawColumn& rc, const Field& field, std::size_t no) {
+    if (rc.kind == RawColumn::Kind::kText) return;
+    double v;
+    switch (parseCell(field.text, decimal_comma_, v)) {
+      case Cell::kNumber:
+        rc.kind = RawColumn::Kind::kNumeric;
+        break;
+      case Cell::kMissing:
+        if (!rc.first_missing_line) rc.first_missing_line = no, rc.first_missing_column = field.column;
+        break;
+      case Cell::kNotFinite:
+        // refused if the column is used as the drive or the force, else read as not logged
+        if (!rc.not_finite++) {
+          rc.not_finite_line = no;
+          rc.not_finite_column = field.column;
+          rc.not_finite_text = std::string(trimView(field.text));
+        }
+        v = kNaN;
+        break;
+      case Cell::kText:
+        if (rc.kind == RawColumn::Kind::kNumeric)
+          throw InputError(file_, no, field.column,
+                           fmt::format("expected a number in column '{}', found '{}'", rc.header,
+                                       unquote(field.text)));
+        // a text column (a message, a date): kept aside, ignored unless used
+        rc.kind = RawColumn::Kind::kText;
+        rc.first_text = std::string(unquote(field.text));
+        rc.first_text_line = no;
+        rc.values.clear();
+        rc.values.shrink_to_fit();
+        return;
     }
-    segment_of_row.push_back(segment);
-    line_of_row.push_back(no);
-  };
-  if (have_pending_data) handle(pending, pending_terminated, pending_line);
-  while (reader.next(line, terminated)) handle(line, terminated, ++line_no);
-  if (segment_of_row.empty())
-    throw InputError(file, header_line, 1, "expected data rows after the header, found none");
+    rc.values.push_back(v);
+  }
 
   // 3. Columns: numeric ones are kept under their identifier; text and empty columns are
   //    set aside with a note.
-  Dataset out;
-  std::vector<std::string> origin;  // header text of each out column
-  std::vector<const RawColumn*> source_of;  // and its raw column
-  std::vector<std::string> empty;
-  for (auto& rc : raw) {
-    if (rc.kind == RawColumn::Kind::kText) {
-      out.notes.push_back(fmt::format("{}: column '{}' holds text ('{}' on line {}); ignored", file,
-                                      rc.header, rc.first_text, rc.first_text_line));
-      continue;
-    }
-    if (rc.kind == RawColumn::Kind::kUndecided) {
+  void numericColumns() {
+    std::vector<std::string> empty;
+    for (auto& rc : raw_) {
+      if (rc.kind == RawColumn::Kind::kText) {
+        out_.notes.push_back(fmt::format("{}: column '{}' holds text ('{}' on line {}); ignored", file_,
+                                         rc.header, rc.first_text, rc.first_text_line));
+        continue;
+      }
+      if (rc.kind == RawColumn::Kind::kUndecided) {
+        const std::string name = sanitizeName(rc.header);
+        if (name == "pwm_us" || name == "force_g")
+          throw InputError(file_, rc.first_missing_line, rc.first_missing_column,
+                           fmt::format("expected a number for {}, the cell is empty on every data line", name));
+        empty.push_back("'" + rc.header + "'");
+        continue;
+      }
       const std::string name = sanitizeName(rc.header);
-      if (name == "pwm_us" || name == "force_g")
-        throw InputError(file, rc.first_missing_line, rc.first_missing_column,
-                         fmt::format("expected a number for {}, the cell is empty on every data line", name));
-      empty.push_back("'" + rc.header + "'");
-      continue;
+      const int clash = out_.find(name);
+      if (clash >= 0)
+        throw InputError(file_, header_line_, 1,
+                         fmt::format("columns '{}' and '{}' both read as {}; rename one so each "
+                                     "variable has one name",
+                                     origin_[static_cast<std::size_t>(clash)], rc.header, name));
+      out_.names.push_back(name);
+      out_.columns.push_back(std::move(rc.values));
+      origin_.push_back(rc.header);
+      source_of_.push_back(&rc);
     }
-    const std::string name = sanitizeName(rc.header);
-    const int clash = out.find(name);
-    if (clash >= 0)
-      throw InputError(file, header_line, 1,
-                       fmt::format("columns '{}' and '{}' both read as {}; rename one so each "
-                                   "variable has one name",
-                                   origin[static_cast<std::size_t>(clash)], rc.header, name));
-    out.names.push_back(name);
-    out.columns.push_back(std::move(rc.values));
-    origin.push_back(rc.header);
-    source_of.push_back(&rc);
+    if (!empty.empty())
+      out_.notes.push_back(fmt::format("{}: {} {} empty; ignored", file_, fmt::join(empty, ", "),
+                                       empty.size() == 1 ? "is" : "are"));
+    out_.run.assign(segment_of_row_.begin(), segment_of_row_.end());
+    if (skipped_ > 0)
+      out_.notes.push_back(fmt::format("{}: skipped {} line(s) that are neither data nor comments "
+                                       "(console text)", file_, skipped_));
+    if (!truncated_note_.empty()) out_.notes.push_back(truncated_note_);
   }
-  if (!empty.empty())
-    out.notes.push_back(fmt::format("{}: {} {} empty; ignored", file, fmt::join(empty, ", "),
-                                    empty.size() == 1 ? "is" : "are"));
-  out.run.assign(segment_of_row.begin(), segment_of_row.end());
-  if (skipped > 0)
-    out.notes.push_back(fmt::format("{}: skipped {} line(s) that are neither data nor comments "
-                                    "(console text)", file, skipped));
-  if (!truncated_note.empty()) out.notes.push_back(truncated_note);
-
-  std::set<std::string> mapped_targets;
-  for (const auto& m : options.maps) mapped_targets.insert(m.target);
 
   // 4. Thrust-stand exports (RCbenchmark / Tyto): each known column becomes the lab's name in
   //    the lab's unit, replacing the raw one (one variable, one name); the file's name and unit
   //    stay as the axis label. A --map onto the same name takes over.
-  for (std::size_t c = 0; c < out.names.size(); ++c) {
-    const auto [base, unit] = splitUnit(origin[c]);
-    const std::string key = lower(base);
-    for (const auto& kc : knownColumns()) {
-      if (key != kc.base) continue;
-      if (mapped_targets.count(kc.target)) break;
-      const std::string uk = unitKey(unit);
-      double scale = kNaN;
-      for (const auto& us : kc.units)
-        if (us.unit == uk) scale = us.scale;
-      if (!std::isfinite(scale) && kc.any_unit && uk.find('%') == std::string::npos) scale = 1.0;
-      if (!std::isfinite(scale)) {
-        out.notes.push_back(fmt::format("{}: column '{}': unit '{}' is not one the lab converts; kept as {} "
-                                        "(map it yourself: --map {}=...)",
-                                        file, origin[c], unit, out.names[c], kc.target));
+  void standColumns() {
+    std::set<std::string> mapped_targets;
+    for (const auto& m : options_.maps) mapped_targets.insert(m.target);
+    for (std::size_t c = 0; c < out_.names.size(); ++c) {
+      const auto [base, unit] = splitUnit(origin_[c]);
+      const std::string key = lower(base);
+      for (const auto& kc : knownColumns()) {
+        if (key != kc.base) continue;
+        if (mapped_targets.count(kc.target)) break;
+        standColumn(c, kc, base, unit);
         break;
       }
-      const int other = out.find(kc.target);
-      if (other >= 0 && static_cast<std::size_t>(other) != c)
-        throw InputError(file, header_line, 1,
-                         fmt::format("columns '{}' and '{}' are both {}; keep one: --map {}='{}'",
-                                     origin[static_cast<std::size_t>(other)], origin[c], kc.target,
-                                     kc.target, origin[c]));
-      auto& v = out.columns[c];
-      if (scale != 1.0)
-        for (auto& x : v) x *= scale;
-      std::string label = fmt::format("{} ({})", base, kc.unit_label);
-      if (scale != 1.0) label += fmt::format(", logged in {}", unit);
-      if (std::string(kc.target) == "force_g") {
-        // Sign as logged: a stand mounted the other way logs thrust negative. Judged by the
-        // larger-magnitude end; said, and said how to do it by hand.
-        double lo = 0, hi = 0;
-        for (double x : v)
-          if (std::isfinite(x)) lo = std::min(lo, x), hi = std::max(hi, x);
-        if (-lo > hi) {
-          for (auto& x : v) x = -x;
-          out.notes.push_back(fmt::format(
-              "{}: thrust logged negative (the stand pulls the other way): sign flipped, as "
-              "--map 'force_g=-{}{}' would do",
-              file, origin[c],
-              scale != 1.0 ? fmt::format("*{:.6g}", scale) : std::string()));
-        }
-      }
-      out.names[c] = kc.target;
-      out.labels[kc.target] = label;
-      break;
+    }
+  }
+
+  // Column c is the stand's `kc`, logged in `unit`: converted and renamed, or left with a note.
+  void standColumn(std::size_t c, const KnownColumn& kc, const std::string& base, const std::string& unit) {
+    const std::string uk = unitKey(unit);
+    double scale = kNaN;
+    for (const auto& us : kc.units)
+      if (us.unit == uk) scale = us.scale;
+    if (!std::isfinite(scale) && kc.any_unit && uk.find('%') == std::string::npos) scale = 1.0;
+    if (!std::isfinite(scale)) {
+      out_.notes.push_back(fmt::format("{}: column '{}': unit '{}' is not one the lab converts; kept as {} "
+                                       "(map it yourself: --map {}=...)",
+                                       file_, origin_[c], unit, out_.names[c], kc.target));
+      return;
+    }
+    const int other = out_.find(kc.target);
+    if (other >= 0 && static_cast<std::size_t>(other) != c)
+      throw InputError(file_, header_line_, 1,
+                       fmt::format("columns '{}' and '{}' are both {}; keep one: --map {}='{}'",
+                                   origin_[static_cast<std::size_t>(other)], origin_[c], kc.target,
+                                   kc.target, origin_[c]));
+    auto& v = out_.columns[c];
+    if (scale != 1.0)
+      for (auto& x : v) x *= scale;
+    std::string label = fmt::format("{} ({})", base, kc.unit_label);
+    if (scale != 1.0) label += fmt::format(", logged in {}", unit);
+    if (std::string(kc.target) == "force_g") standThrustSign(c, scale);
+    out_.names[c] = kc.target;
+    out_.labels[kc.target] = label;
+  }
+
+  // Sign as logged: a stand mounted the other way logs thrust negative. Judged by the
+  // larger-magnitude end; said, and said how to do it by hand.
+  void standThrustSign(std::size_t c, double scale) {
+    auto& v = out_.columns[c];
+    double lo = 0, hi = 0;
+    for (double x : v)
+      if (std::isfinite(x)) lo = std::min(lo, x), hi = std::max(hi, x);
+    if (-lo > hi) {
+      for (auto& x : v) x = -x;
+      out_.notes.push_back(fmt::format(
+          "{}: thrust logged negative (the stand pulls the other way): sign flipped, as "
+          "--map 'force_g=-{}{}' would do",
+          file_, origin_[c],
+          scale != 1.0 ? fmt::format("*{:.6g}", scale) : std::string()));
     }
   }
 
@@ -557,25 +579,39 @@ Dataset parseStream(std::istream& in, const std::string& file, const ReadOptions
     std::vector<double> values;
     int source;
   };
-  std::vector<Mapped> mapped;
-  for (const auto& m : options.maps) {
-    int src = -1;
-    for (std::size_t c = 0; c < origin.size() && src < 0; ++c)
-      if (origin[c] == m.source || sanitizeName(origin[c]) == m.source) src = static_cast<int>(c);
-    if (src < 0) src = out.find(m.source);
-    if (src < 0) {
-      for (const auto& rc : raw)
-        if (rc.header == m.source && rc.kind == RawColumn::Kind::kText)
-          throw InputError(file, header_line, 1,
-                           fmt::format("--map {}={}: column '{}' holds text ('{}' on line {}), not numbers",
-                                       m.target, m.text, m.source, rc.first_text, rc.first_text_line));
-      std::vector<std::string> headers;
-      for (const auto& rc : raw) headers.push_back(rc.header);
-      throw InputError(file, header_line, 1,
-                       fmt::format("--map {}=...: no column '{}' in this file; columns are: {}", m.target,
-                                   m.source, joinHeaders(headers)));
+
+  void userMaps() {
+    std::vector<Mapped> mapped;
+    for (const auto& m : options_.maps) {
+      const int src = mapSource(m);
+      mapped.push_back({&m, mappedValues(m, src), src});
     }
-    std::vector<double> v = out.columns[static_cast<std::size_t>(src)];
+    std::vector<std::string> drop;
+    for (auto& mp : mapped) applyMap(mp, drop);
+    for (const auto& name : drop) dropRenamed(name);
+  }
+
+  // The column a mapping reads; throws naming the columns when there is none.
+  int mapSource(const ColumnMap& m) const {
+    int src = -1;
+    for (std::size_t c = 0; c < origin_.size() && src < 0; ++c)
+      if (origin_[c] == m.source || sanitizeName(origin_[c]) == m.source) src = static_cast<int>(c);
+    if (src < 0) src = out_.find(m.source);
+    if (src >= 0) return src;
+    for (const auto& rc : raw_)
+      if (rc.header == m.source && rc.kind == RawColumn::Kind::kText)
+        throw InputError(file_, header_line_, 1,
+                         fmt::format("--map {}={}: column '{}' holds text ('{}' on line {}), not numbers",
+                                     m.target, m.text, m.source, rc.first_text, rc.first_text_line));
+    std::vector<std::string> headers;
+    for (const auto& rc : raw_) headers.push_back(rc.header);
+    throw InputError(file_, header_line_, 1,
+                     fmt::format("--map {}=...: no column '{}' in this file; columns are: {}", m.target,
+                                 m.source, joinHeaders(headers)));
+  }
+
+  std::vector<double> mappedValues(const ColumnMap& m, int src) const {
+    std::vector<double> v = out_.columns[static_cast<std::size_t>(src)];
     for (std::size_t i = 0; i < v.size(); ++i) {
       double& x = v[i];
       if (m.negate) x = -x;
@@ -588,139 +624,179 @@ Dataset parseStream(std::istream& in, const std::string& file, const ReadOptions
         }
       }
       if (std::isinf(x))
-        throw InputError(file, line_of_row[i], 1,
+        throw InputError(file_, line_of_row_[i], 1,
                          fmt::format("--map {}={} gives a value that is not finite on this line", m.target, m.text));
     }
-    mapped.push_back({&m, std::move(v), src});
+    return v;
   }
-  std::vector<std::string> drop;
-  for (auto& mp : mapped) {
+
+  void applyMap(Mapped& mp, std::vector<std::string>& drop) {
     const ColumnMap& m = *mp.map;
-    const std::string src_name = out.names[static_cast<std::size_t>(mp.source)];
+    const std::string src_name = out_.names[static_cast<std::size_t>(mp.source)];
     if (m.target == "force_g") {
       double lo = 0, hi = 0;
       for (double x : mp.values)
         if (std::isfinite(x)) lo = std::min(lo, x), hi = std::max(hi, x);
       if (-lo > hi)
-        throw InputError(file, header_line, 1,
+        throw InputError(file_, header_line_, 1,
                          fmt::format("--map force_g={} gives a thrust that is negative at its larger end "
                                      "({:.4g} g against {:.4g} g): the force must grow with the drive. If "
                                      "the stand logs thrust negative, say so: --map 'force_g={}'",
                                      m.text, lo, hi,
                                      m.negate ? m.text.substr(m.text.find('-') + 1) : "-" + m.text));
     }
-    const int existing = out.find(m.target);
-    out.set(m.target, std::move(mp.values));
-    if (existing < 0) source_of.push_back(source_of[static_cast<std::size_t>(mp.source)]);
-    else source_of[static_cast<std::size_t>(existing)] = source_of[static_cast<std::size_t>(mp.source)];
-    out.labels[m.target] = m.text;
+    const int existing = out_.find(m.target);
+    out_.set(m.target, std::move(mp.values));
+    if (existing < 0) source_of_.push_back(source_of_[static_cast<std::size_t>(mp.source)]);
+    else source_of_[static_cast<std::size_t>(existing)] = source_of_[static_cast<std::size_t>(mp.source)];
+    out_.labels[m.target] = m.text;
     // A mapping to a known column is a renaming: the source must not reappear as a candidate
     // variable (the measured force above all).
     if (isKnownName(m.target) && src_name != m.target) drop.push_back(src_name);
   }
-  for (const auto& name : drop) {
-    const int c = out.find(name);
-    if (c < 0) continue;
+
+  void dropRenamed(const std::string& name) {
+    const int c = out_.find(name);
+    if (c < 0) return;
     bool target = false;
-    for (const auto& m : options.maps) target = target || m.target == name;
-    if (target) continue;
-    out.notes.push_back(fmt::format("{}: column '{}' became {}", file, name, [&] {
-      for (const auto& m : options.maps)
+    for (const auto& m : options_.maps) target = target || m.target == name;
+    if (target) return;
+    out_.notes.push_back(fmt::format("{}: column '{}' became {}", file_, name, [&] {
+      for (const auto& m : options_.maps)
         if (m.source == name || sanitizeName(m.source) == name) return m.target;
       return std::string("a mapped column");
     }()));
-    out.labels.erase(name);
-    source_of.erase(source_of.begin() + c);
-    out.names.erase(out.names.begin() + c);
-    out.columns.erase(out.columns.begin() + c);
+    out_.labels.erase(name);
+    source_of_.erase(source_of_.begin() + c);
+    out_.names.erase(out_.names.begin() + c);
+    out_.columns.erase(out_.columns.begin() + c);
   }
 
   // Numbers that are not finite (inf, 1e400): an error in the drive or the force, else that
   // cell is not logged, with a note.
-  std::set<const RawColumn*> noted;
-  for (std::size_t c = 0; c < out.names.size(); ++c) {
-    const RawColumn* rc = c < source_of.size() ? source_of[c] : nullptr;
-    if (!rc || !rc->not_finite) continue;
-    if (out.names[c] == "pwm_us" || out.names[c] == "force_g")
-      throw InputError(file, rc->not_finite_line, rc->not_finite_column,
-                       fmt::format("'{}' in column '{}' is not a finite number; fix the cell or delete the row",
-                                   rc->not_finite_text, rc->header));
-    if (!noted.insert(rc).second) continue;
-    out.notes.push_back(fmt::format("{}: column '{}' has {} cell(s) that are not finite numbers ('{}' on line {}); "
-                                    "read as not logged there",
-                                    file, rc->header, rc->not_finite, rc->not_finite_text, rc->not_finite_line));
+  void notFiniteCells() {
+    std::set<const RawColumn*> noted;
+    for (std::size_t c = 0; c < out_.names.size(); ++c) {
+      const RawColumn* rc = c < source_of_.size() ? source_of_[c] : nullptr;
+      if (!rc || !rc->not_finite) continue;
+      if (out_.names[c] == "pwm_us" || out_.names[c] == "force_g")
+        throw InputError(file_, rc->not_finite_line, rc->not_finite_column,
+                         fmt::format("'{}' in column '{}' is not a finite number; fix the cell or delete the row",
+                                     rc->not_finite_text, rc->header));
+      if (!noted.insert(rc).second) continue;
+      out_.notes.push_back(fmt::format("{}: column '{}' has {} cell(s) that are not finite numbers ('{}' on line {}); "
+                                       "read as not logged there",
+                                       file_, rc->header, rc->not_finite, rc->not_finite_text, rc->not_finite_line));
+    }
   }
 
   // 6. Rows without a drive or a force: dropped with a note saying which; a file without any is
   //    an error at the first.
-  const int pc = out.find("pwm_us"), fc = out.find("force_g");
-  if (pc >= 0 || fc >= 0) {
-    std::vector<bool> keep(out.rows(), true);
+  void dropRowsWithoutDriveOrForce() {
+    const int pc = out_.find("pwm_us"), fc = out_.find("force_g");
+    if (pc < 0 && fc < 0) return;
+    std::vector<bool> keep(out_.rows(), true);
     std::vector<std::size_t> lines;
     std::size_t dropped = 0;
-    for (std::size_t i = 0; i < out.rows(); ++i) {
-      const bool bad = (pc >= 0 && !std::isfinite(out.columns[static_cast<std::size_t>(pc)][i])) ||
-                       (fc >= 0 && !std::isfinite(out.columns[static_cast<std::size_t>(fc)][i]));
+    for (std::size_t i = 0; i < out_.rows(); ++i) {
+      const bool bad = (pc >= 0 && !std::isfinite(out_.columns[static_cast<std::size_t>(pc)][i])) ||
+                       (fc >= 0 && !std::isfinite(out_.columns[static_cast<std::size_t>(fc)][i]));
       if (!bad) continue;
       keep[i] = false;
       ++dropped;
-      if (lines.size() < 5) lines.push_back(line_of_row[i]);
+      if (lines.size() < 5) lines.push_back(line_of_row_[i]);
     }
-    if (dropped == out.rows()) {
-      const bool pwm = pc >= 0 && !std::isfinite(out.columns[static_cast<std::size_t>(pc)][0]);
+    if (dropped == out_.rows()) {
+      const bool pwm = pc >= 0 && !std::isfinite(out_.columns[static_cast<std::size_t>(pc)][0]);
       const int c = pwm ? pc : fc;
-      const RawColumn* rc = static_cast<std::size_t>(c) < source_of.size() ? source_of[static_cast<std::size_t>(c)] : nullptr;
-      throw InputError(file, rc && rc->first_missing_line ? rc->first_missing_line : line_of_row[0],
+      const RawColumn* rc =
+          static_cast<std::size_t>(c) < source_of_.size() ? source_of_[static_cast<std::size_t>(c)] : nullptr;
+      throw InputError(file_, rc && rc->first_missing_line ? rc->first_missing_line : line_of_row_[0],
                        rc && rc->first_missing_line ? rc->first_missing_column : 1,
                        fmt::format("expected a number for {}, the cell is empty on every data line",
                                    pwm ? "pwm_us" : "force_g"));
     }
-    if (dropped > 0) {
-      out.notes.push_back(fmt::format("{}: dropped {} row(s) with no number for pwm_us or force_g (line {})",
-                                      file, dropped, fmtLines(lines, dropped)));
-      // (runs are not labelled yet: filter the columns, the segments and the line numbers)
-      auto filter = [&](auto& v) {
-        std::size_t k = 0;
-        for (std::size_t i = 0; i < keep.size(); ++i)
-          if (keep[i]) v[k++] = v[i];
-        v.resize(k);
-      };
-      for (auto& c : out.columns) filter(c);
-      filter(out.run);
-      filter(line_of_row);
-    }
+    if (dropped == 0) return;
+    out_.notes.push_back(fmt::format("{}: dropped {} row(s) with no number for pwm_us or force_g (line {})",
+                                     file_, dropped, fmtLines(lines, dropped)));
+    // (runs are not labelled yet: filter the columns, the segments and the line numbers)
+    auto filter = [&](auto& v) {
+      std::size_t k = 0;
+      for (std::size_t i = 0; i < keep.size(); ++i)
+        if (keep[i]) v[k++] = v[i];
+      v.resize(k);
+    };
+    for (auto& c : out_.columns) filter(c);
+    filter(out_.run);
+    filter(line_of_row_);
   }
 
   // 7. Runs: header segment x `run` column x motor.
-  std::map<std::pair<long, long>, int> run_ids;
-  const int motor_col = options.split_by_motor ? out.find("motor") : -1;
-  const int run_col = out.find("run");
-  std::vector<int> runs(out.rows());
-  for (std::size_t i = 0; i < out.rows(); ++i) {
-    long motor = 0;
-    if (motor_col >= 0) {
-      const double m = out.columns[static_cast<std::size_t>(motor_col)][i];
-      motor = std::isfinite(m) ? std::lround(m) : -1;
+  void labelRuns() {
+    std::map<std::pair<long, long>, int> run_ids;
+    const int motor_col = options_.split_by_motor ? out_.find("motor") : -1;
+    const int run_col = out_.find("run");
+    std::vector<int> runs(out_.rows());
+    for (std::size_t i = 0; i < out_.rows(); ++i) {
+      long motor = 0;
+      if (motor_col >= 0) {
+        const double m = out_.columns[static_cast<std::size_t>(motor_col)][i];
+        motor = std::isfinite(m) ? std::lround(m) : -1;
+      }
+      long run_value = 0;
+      if (run_col >= 0) {
+        const double rv = out_.columns[static_cast<std::size_t>(run_col)][i];
+        run_value = std::isfinite(rv) ? std::lround(rv) : -1;
+      }
+      const auto key = std::make_pair(static_cast<long>(out_.run[i]) * 100000 + run_value % 100000, motor);
+      auto it = run_ids.find(key);
+      if (it == run_ids.end()) {
+        it = run_ids.emplace(key, static_cast<int>(run_ids.size())).first;
+        std::string label = file_;
+        if (segment_ > 0) label += fmt::format(" sweep {}", out_.run[i] + 1);
+        if (run_col >= 0) label += fmt::format(" run {}", run_value);
+        if (motor_col >= 0) label += fmt::format(" motor {}", motor);
+        out_.run_labels.push_back(label);
+      }
+      runs[i] = it->second;
     }
-    long run_value = 0;
-    if (run_col >= 0) {
-      const double rv = out.columns[static_cast<std::size_t>(run_col)][i];
-      run_value = std::isfinite(rv) ? std::lround(rv) : -1;
-    }
-    const auto key = std::make_pair(static_cast<long>(out.run[i]) * 100000 + run_value % 100000, motor);
-    auto it = run_ids.find(key);
-    if (it == run_ids.end()) {
-      it = run_ids.emplace(key, static_cast<int>(run_ids.size())).first;
-      std::string label = file;
-      if (segment > 0) label += fmt::format(" sweep {}", out.run[i] + 1);
-      if (run_col >= 0) label += fmt::format(" run {}", run_value);
-      if (motor_col >= 0) label += fmt::format(" motor {}", motor);
-      out.run_labels.push_back(label);
-    }
-    runs[i] = it->second;
+    out_.run = std::move(runs);
   }
-  out.run = std::move(runs);
-  return out;
+
+  LineReader reader_;
+  const std::string& file_;
+  const ReadOptions& options_;
+  // the lines
+  std::string line_;
+  bool terminated_ = true;
+  std::size_t line_no_ = 0;
+  std::vector<Field> fields_;
+  // the header
+  std::string header_;
+  std::size_t header_line_ = 0;
+  bool have_pending_data_ = false;  // a data line read while looking for the header
+  std::string pending_;
+  bool pending_terminated_ = true;
+  std::size_t pending_line_ = 0;
+  char delim_ = ',';
+  bool decimal_comma_ = false;
+  std::vector<RawColumn> raw_;
+  std::size_t trailing_ = 0;  // empty names at the end: every line ends with the delimiter
+  std::size_t width_ = 0;
+  // the rows
+  std::vector<int> segment_of_row_;
+  std::vector<std::size_t> line_of_row_;
+  int segment_ = 0;
+  std::size_t skipped_ = 0;
+  std::string truncated_note_;
+  // the columns
+  Dataset out_;
+  std::vector<std::string> origin_;            // header text of each out column
+  std::vector<const RawColumn*> source_of_;    // and its raw column
+};
+
+Dataset parseStream(std::istream& in, const std::string& file, const ReadOptions& options) {
+  return StreamParser(in, file, options).parse();
 }
 
 }  // namespace

@@ -128,8 +128,12 @@ Dataset selectMotor(const Dataset& data, long motor_id) {
   return data.subset(keep);
 }
 
-ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t slot,
-                         std::vector<uint8_t>& eeprom, double max_error_pct) {
+namespace {
+
+// The arguments and data an export starts from; returns the SPEC fitted (without `motor`:
+// the data hold one motor).
+ModelSpec checkExportInputs(const Dataset& data, const ModelSpec& spec_in, uint8_t slot,
+                            const std::vector<uint8_t>& eeprom) {
   if (slot >= kEepromSlots)
     throw std::invalid_argument(fmt::format("--slot {}: the EEPROM holds slots 0..{}", slot, kEepromSlots - 1));
   if (eeprom.size() != kEepromBytes)
@@ -151,29 +155,29 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
   for (double v : data.col("vbat_v"))
     if (!std::isfinite(v)) throw std::invalid_argument("export needs vbat_v on every row; some rows have none");
   checkExportData(data);
-  const RecordLimitsForExport lim = recordLimits();
   const auto collapses = findForceCollapse(data);
   if (!collapses.empty()) refuse(describe(collapses.front()));
+  return spec;
+}
 
-  ExportResult r;
-  Model model(spec, data);
-  r.fit = model.fit();
-  // A fit that cannot be right on its own data: not finite, or far from it.
+// A fit that cannot be right on its own data: not finite, or far from it.
+void checkFit(const ExportResult& r, double max_error_pct, double top_force) {
   for (const auto& p : r.fit.params)
     if (!std::isfinite(p.value))
       refuse(fmt::format("the fit's {} is not a number; the data cannot carry this model", p.name));
   if (!std::isfinite(r.fit.rmse_g)) refuse("the fit's error is not a number; check the data (thrustcal lab diagnose)");
-  const double top_force = [&] {
-    double m = 0;
-    for (double f : data.col("force_g")) m = std::max(m, f);
-    return m;
-  }();
   if (r.fit.rmse_g > max_error_pct / 100.0 * top_force)
     refuse(fmt::format("the fit misses its own data by {:.3g} g RMS, {:.2f} % of the largest force {:.4g} g (limit "
                        "--max-error-pct {:.3g} %): the model lacks something the data show or the data hold "
                        "something a record should not (run `thrustcal lab diagnose` on them; cut bad rows with "
                        "--where)",
                        r.fit.rmse_g, 100.0 * r.fit.rmse_g / top_force, top_force, max_error_pct));
+}
+
+// The start threshold, the voltage exponent and the resting voltage the record takes from the
+// fit, with their notes and refusals. Returns the data's top PWM.
+double startAndVoltage(ExportResult& r, const Model& model, const ModelSpec& spec, const Dataset& data,
+                       const RecordLimitsForExport& lim) {
   r.start_us = model.startUs();
   r.gamma = spec.has("voltage") ? param(r.fit, "gamma", 1.0) : 1.0;
   const auto& vb = data.col("vbat_v");
@@ -209,8 +213,40 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
     refuse(fmt::format("the resting voltage {:.2f} V is outside the pack range {:.1f}..{:.1f} V (limit from {}): "
                        "check the voltage column's unit (--map vbat_v=...) and the pack",
                        r.rest_v, lim.rest_min_v, lim.rest_max_v, lim.source));
+  return pmax;
+}
 
-  // The curve: a PWM sweep at the resting voltage, nothing else on the battery.
+// The curve a record holds: drive (pwm - start) * V_motor, force, and the battery sag (mV) the
+// monitor sees at each point.
+struct RecordCurve {
+  std::vector<double> drive, force, sag;
+  double fmax = 0;
+  double r_sag = NAN;  // the fit's source resistance (NaN: no `sag`)
+};
+
+// This motor's current ~ c * force^1.5 (the intercept is the rest of the frame), for the sag at
+// each point of the curve; 0 when it cannot be estimated.
+double ampsPerG15(const Dataset& data, double r_sag) {
+  double amps_per_g15 = 0;
+  if (std::isfinite(r_sag) && data.has("current_a")) {
+    const auto& cur = data.col("current_a");
+    const auto& f = data.col("force_g");
+    double s1 = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (std::size_t i = 0; i < data.rows(); ++i) {
+      const double x = std::pow(std::max(f[i], 0.0), 1.5);
+      s1 += 1, sx += x, sy += cur[i], sxx += x * x, sxy += x * cur[i];
+    }
+    const double det = s1 * sxx - sx * sx;
+    if (det > 0) amps_per_g15 = std::max(0.0, (s1 * sxy - sx * sy) / det);
+  }
+  return amps_per_g15;
+}
+
+// The curve: a PWM sweep at the resting voltage, nothing else on the battery. It covers the
+// forces the data reached (`lab_pred`): above them the lab curve is extrapolated (the firmware
+// reports saturation there instead).
+RecordCurve recordCurve(const Model& model, const ModelSpec& spec, const Dataset& data, const ExportResult& r,
+                        double pmax, const std::vector<double>& lab_pred) {
   const std::size_t n = 256;
   Dataset sweep;
   std::vector<double> p(n), zero(n, 0.0), v(n, r.rest_v);
@@ -226,75 +262,69 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
   const std::vector<double> f_lab = model.predict(sweep);
   const std::vector<double> v_motor = model.motorVoltage(sweep);
 
-  // The battery sag the monitor sees at each point of the curve (for command steps).
-  const double r_sag = spec.has("sag") ? param(r.fit, "r_sag_ohm", NAN) : NAN;
-  double amps_per_g15 = 0;  // this motor's current ~ c * force^1.5, intercept = the rest of the frame
-  if (std::isfinite(r_sag) && data.has("current_a")) {
-    const auto& cur = data.col("current_a");
-    const auto& f = data.col("force_g");
-    double s1 = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (std::size_t i = 0; i < data.rows(); ++i) {
-      const double x = std::pow(std::max(f[i], 0.0), 1.5);
-      s1 += 1, sx += x, sy += cur[i], sxx += x * x, sxy += x * cur[i];
-    }
-    const double det = s1 * sxx - sx * sx;
-    if (det > 0) amps_per_g15 = std::max(0.0, (s1 * sxy - sx * sy) / det);
-  }
-
-  // The record covers the forces the data reached: above them the lab curve is extrapolated
-  // (the firmware reports saturation there instead).
-  const std::vector<double> lab_pred = model.predict(data);
+  RecordCurve c;
+  c.r_sag = spec.has("sag") ? param(r.fit, "r_sag_ohm", NAN) : NAN;
+  const double amps_per_g15 = ampsPerG15(data, c.r_sag);
   double reached = 0;
   for (double f : lab_pred)
     if (std::isfinite(f)) reached = std::max(reached, f);
-  std::vector<double> drive, force, sag;
-  double fmax = 0;
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(f_lab[i]) || !std::isfinite(v_motor[i])) continue;
     if (f_lab[i] > reached) {
       // close the curve exactly at the largest force reached
-      if (!drive.empty() && force.back() < reached) {
-        const double t = (reached - force.back()) / (f_lab[i] - force.back());
-        const double d = drive.back() + t * ((p[i] - r.start_us) * v_motor[i] - drive.back());
-        const double s = sag.back();
-        drive.push_back(d);
-        force.push_back(reached);
-        sag.push_back(s);
+      if (!c.drive.empty() && c.force.back() < reached) {
+        const double t = (reached - c.force.back()) / (f_lab[i] - c.force.back());
+        const double d = c.drive.back() + t * ((p[i] - r.start_us) * v_motor[i] - c.drive.back());
+        const double s = c.sag.back();
+        c.drive.push_back(d);
+        c.force.push_back(reached);
+        c.sag.push_back(s);
       }
       break;
     }
-    fmax = std::max(fmax, std::max(f_lab[i], 0.0));  // monotone, as the record needs
-    drive.push_back((p[i] - r.start_us) * v_motor[i]);
-    force.push_back(fmax);
-    if (std::isfinite(r_sag))
-      sag.push_back(1000.0 * r_sag * amps_per_g15 * std::pow(fmax, 1.5));
+    c.fmax = std::max(c.fmax, std::max(f_lab[i], 0.0));  // monotone, as the record needs
+    c.drive.push_back((p[i] - r.start_us) * v_motor[i]);
+    c.force.push_back(c.fmax);
+    if (std::isfinite(c.r_sag))
+      c.sag.push_back(1000.0 * c.r_sag * amps_per_g15 * std::pow(c.fmax, 1.5));
     else
-      sag.push_back(1000.0 * (r.rest_v - v_motor[i]));
+      c.sag.push_back(1000.0 * (r.rest_v - v_motor[i]));
   }
+  return c;
+}
+
+// The curve as core's record: refused outside the record's limits.
+tc::ModelV2 recordOf(const RecordCurve& c, const ExportResult& r, const RecordLimitsForExport& lim) {
+  const double fmax = c.fmax;
   if (fmax < lim.force_min_g || fmax > lim.force_max_g)
     refuse(fmt::format("the largest force {:.4g} g is outside {:.4g}..{:.4g} g (limit from {}): {}", fmax,
                        lim.force_min_g, lim.force_max_g, lim.source,
                        fmax < lim.force_min_g ? "the motor barely pushed; check the load cell's tare and unit "
                                                 "(--map force_g=...) and measure to full throttle"
                                               : "check the force column's unit (N or kgf logged as grams?)"));
-  for (std::size_t i = 0; i < sag.size(); ++i)
-    if (sag[i] > lim.max_sag_pct / 100.0 * 1000.0 * r.rest_v)
+  for (std::size_t i = 0; i < c.sag.size(); ++i)
+    if (c.sag[i] > lim.max_sag_pct / 100.0 * 1000.0 * r.rest_v)
       refuse(fmt::format("the battery sag at {:.4g} g is {:.2f} V, more than {:.0f} % of the resting {:.2f} V (limit "
                          "from {}): a wiring or supply fault, or a sag fit gone wrong (r_sag_ohm {:.3g})",
-                         force[i], sag[i] / 1000.0, lim.max_sag_pct, r.rest_v, lim.source, r_sag));
+                         c.force[i], c.sag[i] / 1000.0, lim.max_sag_pct, r.rest_v, lim.source, c.r_sag));
   tc::ModelV2 m;
-  if (drive.size() < 2 ||
-      !tc::modelV2FromCurve(m, r.start_us, drive.data(), force.data(), static_cast<uint16_t>(drive.size()),
-                            1000.0 * r.rest_v, sag.data()))
+  if (c.drive.size() < 2 ||
+      !tc::modelV2FromCurve(m, r.start_us, c.drive.data(), c.force.data(), static_cast<uint16_t>(c.drive.size()),
+                            1000.0 * r.rest_v, c.sag.data()))
     refuse(fmt::format("core's modelV2FromCurve refused the curve (start {:.1f} us, resting voltage {:.2f} V, largest "
                        "force {:.4g} g, {} points): a limit of the record not checked above; please report it with "
                        "the data",
-                       r.start_us, r.rest_v, fmax, drive.size()));
-  r.model = m;
+                       r.start_us, r.rest_v, fmax, c.drive.size()));
+  return m;
+}
 
-  // Faithful? Fly the record at every row's PWM and the voltage the monitor reads there.
+// Faithful? Fly the record at every row's PWM and the voltage the monitor reads there.
+void flyRecord(ExportResult& r, const Model& model, const Dataset& data, const std::vector<double>& lab_pred,
+               double max_error_pct, double top_force, double fmax) {
+  const tc::ModelV2& m = r.model;
   const std::vector<double> vrow = model.motorVoltage(data);
   const auto& meas = data.col("force_g");
+  const auto& pw = data.col("pwm_us");
   std::vector<double> e_meas(data.rows()), e_lab(data.rows());
   r.v2_force_g.resize(data.rows());
   for (std::size_t i = 0; i < data.rows(); ++i) {
@@ -324,10 +354,32 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
         "the record departs from the lab model by {:.1f} g RMS ({:.1f} % of {:.0f} g): the fit needs what "
         "the firmware does not do (gamma far from 1?); fit curve+deadband+voltage+sag and check gamma",
         r.v2_vs_lab_rmse_g, 100.0 * r.v2_vs_lab_rmse_g / fmax, fmax));
+}
+
+}  // namespace
+
+ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t slot,
+                         std::vector<uint8_t>& eeprom, double max_error_pct) {
+  const ModelSpec spec = checkExportInputs(data, spec_in, slot, eeprom);
+  const RecordLimitsForExport lim = recordLimits();
+  ExportResult r;
+  Model model(spec, data);
+  r.fit = model.fit();
+  const double top_force = [&] {
+    double m = 0;
+    for (double f : data.col("force_g")) m = std::max(m, f);
+    return m;
+  }();
+  checkFit(r, max_error_pct, top_force);
+  const double pmax = startAndVoltage(r, model, spec, data, lim);
+  const std::vector<double> lab_pred = model.predict(data);
+  const RecordCurve curve = recordCurve(model, spec, data, r, pmax, lab_pred);
+  r.model = recordOf(curve, r, lim);
+  flyRecord(r, model, data, lab_pred, max_error_pct, top_force, curve.fmax);
 
   std::vector<uint8_t> work = eeprom;
   g_image = &work;
-  r.write = tc::writeModelV2<ImageStorage>(slot, m);
+  r.write = tc::writeModelV2<ImageStorage>(slot, r.model);
   g_image = nullptr;
   if (r.write.status != tc::WriteV2Status::kWritten && r.write.status != tc::WriteV2Status::kUnchanged)
     throw std::runtime_error(fmt::format("writing the v2 record into slot {} failed: {}", slot,

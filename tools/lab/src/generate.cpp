@@ -39,6 +39,11 @@ const std::vector<HiddenEffectInfo> kHidden = {
      "the motor warms up through long sweeps (2 s per point) and cools between runs; temp_c is "
      "a thermocouple on the motor (winding resistance +0.39 %/K, magnets -0.1 %/K)",
      "curve+deadband+voltage", "thermal", "temp_c"},
+    {"current_limit",
+     "a bench supply current-limited at 6.32 A (the thesis's: two 3.16 A outputs in parallel) at four set "
+     "voltages (10.0 to 12.4 V): above the limit it folds its voltage back and the force falls while the drive "
+     "rises; vbat_v is the supply's set voltage (read at the supply, not at the ESC), current_a its current",
+     "curve+deadband+voltage", "current_limit", "current_a (a response: evidence, not a suspect)"},
     {"plate",
      "a deflector plate under the propeller at a height varied per point (plate_height_m): "
      "ground effect, force x 1/(1 - (R/4z)^2); not in the catalogue",
@@ -123,39 +128,42 @@ struct Row {
   int run;
 };
 
-}  // namespace
-
-Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
-  const HiddenEffectInfo* info = nullptr;
+const HiddenEffectInfo& hiddenInfo(const std::string& name) {
   for (const auto& h : kHidden)
-    if (h.name == o.hidden) info = &h;
-  if (!info) {
-    std::string names;
-    for (const auto& h : kHidden) names += (names.empty() ? "" : ", ") + h.name;
-    throw std::invalid_argument("unknown hidden effect '" + o.hidden + "'; known: " + names);
-  }
-  if (!(o.noise_g >= 0)) throw std::invalid_argument("--noise-g must be >= 0");
-  const std::string& h = o.hidden;
-  const plant::ActuatorParams base = plant::presetParams(o.preset);
-  plant::Rng rng(o.seed * 7919 + 13);
+    if (h.name == name) return h;
+  std::string names;
+  for (const auto& h : kHidden) names += (names.empty() ? "" : ", ") + h.name;
+  throw std::invalid_argument("unknown hidden effect '" + name + "'; known: " + names);
+}
 
+plant::BatteryParams benchAt(double v) {
+  plant::BatteryParams b = plant::BatteryParams::benchSupply(v, 80.0);
+  b.wiring_r_ohm = 0.03;
+  return b;
+}
+
+// The runs of a session with hidden effect `h`: motors, power sources, air.
+std::vector<RunSetup> runSetups(const std::string& h, const plant::ActuatorParams& base, uint64_t seed) {
   std::vector<RunSetup> runs;
-  auto bench = [](double v) {
-    plant::BatteryParams b = plant::BatteryParams::benchSupply(v, 80.0);
-    b.wiring_r_ohm = 0.03;
-    return b;
-  };
   const double volts[] = {10.2, 11.1, 12.0, 12.6};
   if (h == "motor") {
     for (int m = 0; m < 4; ++m) {
-      const plant::ActuatorParams p = plant::makeVaried(base, o.seed * 100 + static_cast<uint64_t>(m), 0.03);
+      const plant::ActuatorParams p = plant::makeVaried(base, seed * 100 + static_cast<uint64_t>(m), 0.03);
       for (double v : {10.8, 12.4}) {
         RunSetup r;
         r.motor = m;
         r.params = p;
-        r.battery = bench(v);
+        r.battery = benchAt(v);
         runs.push_back(r);
       }
+    }
+  } else if (h == "current_limit") {
+    for (double v : {12.4, 11.6, 10.8, 10.0}) {
+      RunSetup r;
+      r.params = base;
+      r.battery = plant::BatteryParams::benchSupply(v, 6.32);
+      r.battery.wiring_r_ohm = 0.03;
+      runs.push_back(r);
     }
   } else if (h == "sag") {
     for (double v : {12.6, 11.8, 11.0, 10.2}) {
@@ -174,7 +182,7 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
       RunSetup r;
       r.params = base;
       // density runs share one voltage: sites and days differ, the bench supply does not
-      r.battery = bench(h == "density" ? 11.1 : volts[k]);
+      r.battery = benchAt(h == "density" ? 11.1 : volts[k]);
       if (h == "density") {
         r.temp_c = temps[k];
         r.pressure_pa = press[k];
@@ -184,16 +192,25 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
       runs.push_back(r);
     }
   }
-  if (!(o.settle_s >= 0) || !(o.log_hz >= 0) || o.log_hz > 1.0 / 0.002)
-    throw std::invalid_argument("--settle-s must be >= 0 and --log-hz within 0..500 (the plant steps at 500 Hz)");
-  const double settle_s = o.settle_s > 0 ? o.settle_s : h == "drift" || h == "thermal" ? 2.0 : 0.5;
-  const double dt = 0.002;
-  const double creep_g_per_min = h == "drift" ? 1.2 : 0.0;
+  return runs;
+}
 
-  std::vector<Row> rows;
-  double clock = 0.0;
-  for (std::size_t run_index = 0; run_index < runs.size(); ++run_index) {
-    const RunSetup& run = runs[run_index];
+// One session on the plant: each run sweeps up and down in 25 us steps, settling `settle_s` per
+// point; a row at the end of each point's settling, or at `log_hz` while it settles.
+class Session {
+ public:
+  Session(const GenerateOptions& o, double settle_s, plant::Rng& rng)
+      : o_(o), h_(o.hidden), settle_s_(settle_s), rng_(rng), creep_g_per_min_(h_ == "drift" ? 1.2 : 0.0) {}
+
+  std::vector<Row> run(const std::vector<RunSetup>& runs) {
+    for (std::size_t run_index = 0; run_index < runs.size(); ++run_index) sweep(runs[run_index], run_index);
+    return std::move(rows_);
+  }
+
+ private:
+  static constexpr double kDt = 0.002;  // the plant's step
+
+  void sweep(const RunSetup& run, std::size_t run_index) {
     plant::Environment env;
     env.temp_c = run.temp_c;
     env.pressure_pa = run.pressure_pa;
@@ -202,58 +219,75 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
     std::vector<std::pair<double, double>> points;  // pulse, dir
     for (double p = 1000; p <= 1900.0 + 1e-9; p += 25) points.emplace_back(p, 1.0);
     for (double p = 1900; p >= 1000.0 - 1e-9; p -= 25) points.emplace_back(p, -1.0);
-    clock += run.pause_before_s;
-    const double run_start = clock;
+    clock_ += run.pause_before_s;
+    const double run_start = clock_;
     for (const auto& [pulse, dir] : points) {
       act.holdPulse(pulse);
       // sag: the pack also feeds the frame's other motors, 0..8 A that change point by point
-      const double other_a = h == "sag" ? 8.0 * rng.uniform() : 0.0;
+      const double other_a = h_ == "sag" ? 8.0 * rng_.uniform() : 0.0;
+      const double plate = 0.08 + 0.42 * rng_.uniform();
       double bus_current = 0, bus_v = 0;
-      // one row: the bench's reading now
-      const double plate = 0.08 + 0.42 * rng.uniform();
-      auto record = [&](double now) {
-        Row r{};
-        r.t_s = now;
-        r.motor = run.motor;
-        r.pwm_us = pulse;
-        double force = act.thrust_g();
-        if (h == "plate") {
-          const double ratio = run.params.prop.diameter_m / 2 / (4 * plate);
-          force /= 1 - ratio * ratio;
-        }
-        force += creep_g_per_min * now / 60.0;
-        r.force_g = force + (o.noise_g > 0 ? rng.normal(o.noise_g, 4.0) : 0.0);
-        r.vbat_v = h == "sag" ? ps.restingVoltage_v() : bus_v;
-        r.current_a = bus_current + other_a;
-        r.rpm = act.rpm();
-        r.temp_c = h == "thermal" ? act.windingTemp_c() : env.temp_c;
-        r.pressure_hpa = env.pressure_pa / 100.0;
-        r.dir = dir;
-        r.plate_m = plate;
-        r.torque_nm = act.torque_nm();
-        r.run = static_cast<int>(run_index);
-        rows.push_back(r);
-      };
-      const int steps = static_cast<int>(std::lround(settle_s / dt));
-      const int every = o.log_hz > 0 ? std::max(1, static_cast<int>(std::lround(1.0 / (o.log_hz * dt)))) : steps;
+      const int steps = static_cast<int>(std::lround(settle_s_ / kDt));
+      const int every = o_.log_hz > 0 ? std::max(1, static_cast<int>(std::lround(1.0 / (o_.log_hz * kDt)))) : steps;
       for (int k = 0; k < steps; ++k) {
-        const double now = clock + k * dt;
+        const double now = clock_ + k * kDt;
         if (run.temp_swing_k != 0) {
           env.temp_c = run.temp_c + run.temp_swing_k * std::sin(2 * M_PI * (now - run_start) / 23.0);
           act.setEnvironment(env);
         }
-        if (h != "thermal") act.setWindingTemp_c(25.0);  // thermal effect off: winding at 25 C
+        if (h_ != "thermal") act.setWindingTemp_c(25.0);  // thermal effect off: winding at 25 C
         plant::BusLoad load = act.busLoad();
         load.offset_a += other_a;
         bus_v = ps.solveBusVoltage(load);
-        bus_current = act.step(dt, bus_v);
-        ps.step(dt, bus_current + other_a);
-        if ((k + 1) % every == 0) record(now + dt);
+        bus_current = act.step(kDt, bus_v);
+        ps.step(kDt, bus_current + other_a);
+        if ((k + 1) % every == 0)
+          record(now + kDt, run, run_index, act, ps, env, {pulse, dir, other_a, plate, bus_current, bus_v});
       }
-      clock += settle_s;
+      clock_ += settle_s_;
     }
   }
 
+  struct Point {
+    double pulse, dir, other_a, plate, bus_current, bus_v;
+  };
+
+  // One row: the bench's reading now.
+  void record(double now, const RunSetup& run, std::size_t run_index, const plant::Actuator& act,
+              const plant::PowerSource& ps, const plant::Environment& env, const Point& pt) {
+    Row r{};
+    r.t_s = now;
+    r.motor = run.motor;
+    r.pwm_us = pt.pulse;
+    double force = act.thrust_g();
+    if (h_ == "plate") {
+      const double ratio = run.params.prop.diameter_m / 2 / (4 * pt.plate);
+      force /= 1 - ratio * ratio;
+    }
+    force += creep_g_per_min_ * now / 60.0;
+    r.force_g = force + (o_.noise_g > 0 ? rng_.normal(o_.noise_g, 4.0) : 0.0);
+    r.vbat_v = h_ == "sag" || h_ == "current_limit" ? ps.restingVoltage_v() : pt.bus_v;
+    r.current_a = pt.bus_current + pt.other_a;
+    r.rpm = act.rpm();
+    r.temp_c = h_ == "thermal" ? act.windingTemp_c() : env.temp_c;
+    r.pressure_hpa = env.pressure_pa / 100.0;
+    r.dir = pt.dir;
+    r.plate_m = pt.plate;
+    r.torque_nm = act.torque_nm();
+    r.run = static_cast<int>(run_index);
+    rows_.push_back(r);
+  }
+
+  const GenerateOptions& o_;
+  const std::string& h_;
+  double settle_s_;
+  plant::Rng& rng_;
+  double creep_g_per_min_;
+  double clock_ = 0.0;
+  std::vector<Row> rows_;
+};
+
+Dataset toDataset(const std::vector<Row>& rows, const std::vector<RunSetup>& runs, const std::string& h) {
   Dataset d;
   auto column = [&](const char* name, std::function<double(const Row&)> get) {
     std::vector<double> v;
@@ -278,18 +312,38 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
   for (std::size_t ri = 0; ri < runs.size(); ++ri)
     d.run_labels.push_back(fmt::format("generated run {} motor {}", ri, runs[ri].motor));
   for (const auto& r : rows) d.run.push_back(r.run);
-  if (comments) {
-    comments->push_back(fmt::format("thrustcal lab generate --hidden {} --noise-g {} --seed {} (plant preset {}){}",
-                                    h, o.noise_g, o.seed, o.preset,
-                                    o.log_hz > 0 ? fmt::format(", logged at {} Hz, {} s per point", o.log_hz, settle_s)
-                                                 : std::string()));
-    comments->push_back("hidden effect: " + info->description);
-    if (!info->right_effect.empty())
-      comments->push_back(fmt::format("a model without it: {}; the effect that explains it: {}; "
-                                      "the variable to blame: {}",
-                                      info->start_model, info->right_effect, info->responsible));
-    comments->push_back(fmt::format("load-cell noise: {} g (one standard deviation)", o.noise_g));
-  }
+  return d;
+}
+
+void describe(const GenerateOptions& o, const HiddenEffectInfo& info, double settle_s,
+              std::vector<std::string>& comments) {
+  comments.push_back(fmt::format("thrustcal lab generate --hidden {} --noise-g {} --seed {} (plant preset {}){}",
+                                 o.hidden, o.noise_g, o.seed, o.preset,
+                                 o.log_hz > 0 ? fmt::format(", logged at {} Hz, {} s per point", o.log_hz, settle_s)
+                                              : std::string()));
+  comments.push_back("hidden effect: " + info.description);
+  if (!info.right_effect.empty())
+    comments.push_back(fmt::format("a model without it: {}; the effect that explains it: {}; "
+                                   "the variable to blame: {}",
+                                   info.start_model, info.right_effect, info.responsible));
+  comments.push_back(fmt::format("load-cell noise: {} g (one standard deviation)", o.noise_g));
+}
+
+}  // namespace
+
+Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
+  const HiddenEffectInfo& info = hiddenInfo(o.hidden);
+  if (!(o.noise_g >= 0)) throw std::invalid_argument("--noise-g must be >= 0");
+  const std::string& h = o.hidden;
+  const plant::ActuatorParams base = plant::presetParams(o.preset);
+  plant::Rng rng(o.seed * 7919 + 13);
+  const std::vector<RunSetup> runs = runSetups(h, base, o.seed);
+  if (!(o.settle_s >= 0) || !(o.log_hz >= 0) || o.log_hz > 1.0 / 0.002)
+    throw std::invalid_argument("--settle-s must be >= 0 and --log-hz within 0..500 (the plant steps at 500 Hz)");
+  const double settle_s = o.settle_s > 0 ? o.settle_s : h == "drift" || h == "thermal" ? 2.0 : 0.5;
+  const std::vector<Row> rows = Session(o, settle_s, rng).run(runs);
+  Dataset d = toDataset(rows, runs, h);
+  if (comments) describe(o, info, settle_s, *comments);
   return d;
 }
 

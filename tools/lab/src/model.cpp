@@ -195,6 +195,7 @@ struct Model::Impl {
   std::string linear_effect;
   const Term* own = nullptr;                 // a base with a force of its own (thesis)
   bool own_base = false;                     // own != nullptr: no linear solve
+  bool capped = false;                       // a term caps the force (no normal-equation RSS)
   std::vector<long> motor_ids;               // training motors, index 0 = reference
   double pmin = 0, span = 1, vref = 1, xtop = 1;
   Eigen::VectorXd theta;  // fitted nonlinear parameters
@@ -284,6 +285,7 @@ struct Model::Impl {
     xtop = linear ? linear->driveTop() : 1.0;
 
     train_bound = bind(train);
+    capped = !capsOf(train_bound, initialTheta()).empty();
     y = Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
     if (train.rows() > kMaxFitRows) {
       const std::size_t stride = (train.rows() + kMaxFitRows - 1) / kMaxFitRows;
@@ -326,10 +328,16 @@ struct Model::Impl {
       }
     }
     for (const Term* t : terms) t->check(d);
+    for (const Term* t : terms) {
+      std::vector<double> v = t->perRow(d);
+      if (!v.empty()) b.derived[t] = std::move(v);
+    }
     return b;
   }
 
-  Frame frame(const Rows& b, const Eigen::VectorXd& th) const { return Frame{b, th, defs, terms, vref, xtop}; }
+  Frame frame(const Rows& b, const Eigen::VectorXd& th) const {
+    return Frame{b, th, defs, terms, vref, xtop, pmin, span};
+  }
 
   Eigen::VectorXd initialTheta() const {
     Eigen::VectorXd t(static_cast<Eigen::Index>(defs.size()));
@@ -342,12 +350,7 @@ struct Model::Impl {
   }
 
   // Where the drive counts from: a term's origin (deadband), else the smallest training PWM.
-  double origin(const Frame& f) const {
-    double start = pmin;
-    for (const Term* t : terms)
-      if (t->origin(f, start)) break;
-    return start;
-  }
+  double origin(const Frame& f) const { return f.startUs(); }
 
   // A drive for a base of its own (the effects that depend on it): PWM over the span.
   std::vector<double> plainDrive(const Rows& b) const {
@@ -376,6 +379,16 @@ struct Model::Impl {
     for (const Term* t : terms) t->factors(f, x, mul, add);
   }
 
+  // The largest force per row the terms allow (current_limit); empty when no term caps.
+  std::vector<double> capsOf(const Rows& b, const Eigen::VectorXd& th) const {
+    std::vector<double> cap(b.n, std::numeric_limits<double>::infinity());
+    const Frame f = frame(b, th);
+    bool any = false;
+    for (const Term* t : terms) any = t->caps(f, cap) || any;
+    if (!any) cap.clear();
+    return cap;
+  }
+
   int basisSize() const { return linear ? linear->linearSize() : 0; }  // incl. the constant
 
   // Row i of the design matrix of the linear parameters: 1 (the offset), then mul * S_j(x).
@@ -398,7 +411,8 @@ struct Model::Impl {
   // not kept unless `keep` asks for it, row-major). False when a row is not finite.
   bool normalEquations(const Rows& b, const std::vector<double>& x, const Eigen::VectorXd& mul,
                        const Eigen::VectorXd& add, const Eigen::VectorXd& target, Eigen::MatrixXd& G,
-                       Eigen::VectorXd& h, double& rr, std::vector<double>* keep) const {
+                       Eigen::VectorXd& h, double& rr, std::vector<double>* keep,
+                       const std::vector<char>* skip = nullptr) const {
     const int nb = basisSize();
     constexpr Eigen::Index kBlock = 512;
     G = Eigen::MatrixXd::Zero(nb, nb);
@@ -416,6 +430,7 @@ struct Model::Impl {
       k = 0;
     };
     for (std::size_t i = 0; i < b.n; ++i) {
+      if (skip && (*skip)[i]) continue;
       const auto r = static_cast<Eigen::Index>(i);
       const double rhs = target[r] - add[r];
       double* row = blk.row(k).data();
@@ -444,7 +459,13 @@ struct Model::Impl {
     Eigen::VectorXd mul, add;
     const std::vector<double> x = own_base ? plainDrive(b) : drive(b, th);
     factors(b, th, x, mul, add);
-    if (own_base) return mul.cwiseProduct(ownBase(b, th)) + add;
+    const std::vector<double> cap = capsOf(b, th);
+    if (own_base) {
+      Eigen::VectorXd out = mul.cwiseProduct(ownBase(b, th)) + add;
+      if (!cap.empty()) applyCap(b, th, cap, out);
+      return out;
+    }
+    if (!cap.empty()) return predictCapped(b, th, x, mul, add, cap, c, solve, target);
     const int nb = basisSize();
     // the rows of the design matrix are kept between the two passes when they are few
     thread_local std::vector<double> cache;
@@ -475,11 +496,83 @@ struct Model::Impl {
     return out;
   }
 
+  // The curve's prediction on every row (no cap), from the coefficients c.
+  Eigen::VectorXd uncapped(const Rows& b, const std::vector<double>& x, const Eigen::VectorXd& mul,
+                           const Eigen::VectorXd& add, const Eigen::VectorXd& c) const {
+    const int nb = basisSize();
+    Eigen::VectorXd out(static_cast<Eigen::Index>(b.n));
+    double row[64];
+    for (std::size_t i = 0; i < b.n; ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      basisRow(x[i], mul[r], row);
+      double v = add[r];
+      for (int a = 0; a < nb; ++a) v += row[a] * c[a];
+      out[r] = v;
+    }
+    return out;
+  }
+
+  // min(curve, cap) per row. Solving: the rows at the cap do not depend on the curve, so its
+  // coefficients are solved on the rows below it, and the rows at the cap found again from the
+  // new curve until they stay the same (a few passes).
+  Eigen::VectorXd predictCapped(const Rows& b, const Eigen::VectorXd& th, const std::vector<double>& x,
+                                const Eigen::VectorXd& mul, const Eigen::VectorXd& add, const std::vector<double>& cap,
+                                Eigen::VectorXd& c, bool solve, const Eigen::VectorXd* target) const {
+    const int nb = basisSize();
+    Eigen::VectorXd free_force;
+    if (!solve) {
+      free_force = uncapped(b, x, mul, add, c);
+    } else {
+      std::vector<char> at_cap(b.n, 0);
+      for (int pass = 0; pass < 8; ++pass) {
+        Eigen::MatrixXd G;
+        Eigen::VectorXd h;
+        double rr;
+        if (!normalEquations(b, x, mul, add, *target, G, h, rr, nullptr, &at_cap)) {
+          c = Eigen::VectorXd::Zero(nb);
+          return Eigen::VectorXd::Constant(static_cast<Eigen::Index>(b.n), kNaN);
+        }
+        c = solveCurve(G, h);
+        free_force = uncapped(b, x, mul, add, c);
+        bool same = true;
+        for (std::size_t i = 0; i < b.n; ++i) {
+          const char now = free_force[static_cast<Eigen::Index>(i)] > cap[i];
+          same = same && now == at_cap[i];
+          at_cap[i] = now;
+        }
+        if (same) break;
+      }
+    }
+    applyCap(b, th, cap, free_force);
+    return free_force;
+  }
+
+  // force = min(force, cap), or what a term says the force under its cap is.
+  void applyCap(const Rows& b, const Eigen::VectorXd& th, const std::vector<double>& cap, Eigen::VectorXd& force) const {
+    const Frame f = frame(b, th);
+    for (const Term* t : terms)
+      if (t->underCap(f, cap, force)) return;
+    for (std::size_t i = 0; i < b.n; ++i) force[static_cast<Eigen::Index>(i)] = std::min(force[static_cast<Eigen::Index>(i)], cap[i]);
+  }
+
+  // The rows where the curve's force is above the cap (they do not depend on the curve).
+  std::vector<char> atCap(const Rows& b, const Eigen::VectorXd& th, const Eigen::VectorXd& c) const {
+    const std::vector<double> cap = capsOf(b, th);
+    std::vector<char> at(b.n, 0);
+    if (cap.empty() || own_base) return at;
+    Eigen::VectorXd mul, add;
+    const std::vector<double> x = drive(b, th);
+    factors(b, th, x, mul, add);
+    const Eigen::VectorXd free_force = uncapped(b, x, mul, add, c);
+    for (std::size_t i = 0; i < b.n; ++i) at[i] = free_force[static_cast<Eigen::Index>(i)] > cap[i];
+    return at;
+  }
+
   double rssAt(const Rows& b, const Eigen::VectorXd& target, const Eigen::VectorXd& th,
                Eigen::VectorXd* coef_out = nullptr) const {
     Eigen::VectorXd c;
     double rss;
-    if (!own_base && b.n > kMaxFitRows) {
+    if (!own_base && b.n > kMaxFitRows && !capped) {
       // Many rows: RSS = r'r - 2 c'h + c'Gc from the normal equations, one pass over the rows.
       Eigen::VectorXd mul, add;
       const std::vector<double> x = drive(b, th);
@@ -600,121 +693,114 @@ struct Model::Impl {
     return start;
   }
 
-  // `warm_rss`: the smaller model's RSS on these rows (its curve coefficients are in `warm`),
-  // so its optimum need not be evaluated again; NaN: evaluate it.
-  FitResult fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties, double warm_rss) {
-    FitResult r;
-    r.model = spec.text();
-    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+  // A parameter with a scan (deadband's start threshold) has local minima (the curve can bend
+  // to mimic a later start): when it is new (not in `known`), scan it from its scan_from value
+  // to its first guess with the linear solve alone and start LM at the best.
+  Eigen::VectorXd scanStart(Eigen::VectorXd th, const std::vector<Param>* known) const {
     const double inf = std::numeric_limits<double>::infinity();
-    theta = initialTheta();
-    double best_rss = inf;
-    if (np > 0) {
-      const bool have_warm = warm && !warm->empty();
-      std::vector<Eigen::VectorXd> searched;  // LM results
-      // A parameter with a scan (deadband's start threshold) has local minima (the curve can bend
-      // to mimic a later start): when it is new, scan it from its scan_from value to its first
-      // guess with the linear solve alone and start LM at the best.
-      auto scanStart = [&](Eigen::VectorXd th, const std::vector<Param>* known) {
-        for (std::size_t j = 0; j < defs.size(); ++j) {
-          const auto i = static_cast<Eigen::Index>(j);
-          const double lo = defs[j].scan_from;
-          bool is_new = std::isfinite(lo);
-          if (known)
-            for (const auto& w : *known) is_new = is_new && w.name != defs[j].name;
-          if (!is_new) continue;
-          const double hi = initialTheta()[i];
-          double best = inf, best_start = hi;
-          for (int k = 0; k <= 16; ++k) {
-            th[i] = lo + (hi - lo) * k / 16.0;
-            const double rss = rssAt(fit_bound, y_fit, th);
-            if (rss < best) best = rss, best_start = th[i];
-          }
-          th[i] = best_start;
-        }
-        return th;
-      };
-      bool cold = !have_warm;
-      Eigen::VectorXd neutral;
-      if (have_warm) {
-        // Warm start from a smaller model's optimum: with the new effects switched off it is
-        // itself a candidate, so a model with an added effect never fits worse than the model
-        // without it; LM starts from it with the new effects switched on.
-        neutral = warmStart(*warm);
-        Eigen::VectorXd start = warmStart(*warm, /*neutral=*/false);
-        start = scanStart(start, warm);
-        // A generic probe asks whether anything is left in a variable: the model's own
-        // parameters stay where they are, only the probe's move (cheap, and it cannot borrow
-        // from the effects already fitted).
-        std::vector<bool> fixed;
-        if (warm_only && !spec.probes.empty()) {
-          fixed.assign(defs.size(), false);
-          for (std::size_t i = 0; i < defs.size(); ++i) fixed[i] = defs[i].effect != "probe";
-        }
-        searched.push_back(runLm(start, r, warm_only, fixed.empty() ? nullptr : &fixed));
-        // and from a cold start too (multi-start): the start threshold and the voltage exponent
-        // have local minima the continuation can end in
-        cold = !warm_only;
+    for (std::size_t j = 0; j < defs.size(); ++j) {
+      const auto i = static_cast<Eigen::Index>(j);
+      const double lo = defs[j].scan_from;
+      bool is_new = std::isfinite(lo);
+      if (known)
+        for (const auto& w : *known) is_new = is_new && w.name != defs[j].name;
+      if (!is_new) continue;
+      const double hi = initialTheta()[i];
+      double best = inf, best_start = hi;
+      for (int k = 0; k <= 16; ++k) {
+        th[i] = lo + (hi - lo) * k / 16.0;
+        const double rss = rssAt(fit_bound, y_fit, th);
+        if (rss < best) best = rss, best_start = th[i];
       }
-      if (cold) searched.push_back(runLm(scanStart(initialTheta(), nullptr), r));
-      // the best search result on the fit rows, then on every row against the smaller model
-      double best_fit_rows = inf;
-      theta = searched.front();
-      for (const auto& th : searched) {
-        Eigen::VectorXd c;
-        const double rss = rssAt(fit_bound, y_fit, th, &c);
-        if (rss < best_fit_rows) {
-          best_fit_rows = rss;
-          theta = th;
-          coef = c;
-        }
-      }
-      best_rss = fit_data ? rssAt(train_bound, y, theta, &coef) : best_fit_rows;
-      if (have_warm) {
-        Eigen::VectorXd c;
-        double rss = inf;
-        if (std::isfinite(warm_rss) && !own_base && warmCurve(*warm, c)) rss = warm_rss;
-        else rss = rssAt(train_bound, y, neutral, &c);
-        if (rss < best_rss || !std::isfinite(best_rss)) {
-          best_rss = rss;
-          theta = neutral;
-          coef = c;
-        }
-      }
-    } else {
-      best_rss = rssAt(train_bound, y, theta, &coef);
+      th[i] = best_start;
     }
-    fitted = true;
-    if (!uncertainties && fit_data && !own_base) {
-      // A quick fit on many rows (continuation, ranking): the parameters and the error, not
-      // every row's prediction.
-      r.n = static_cast<std::size_t>(y.size());
-      r.k = static_cast<int>(coef.size() + np);
-      r.rss = best_rss;
-      const double n = static_cast<double>(r.n);
-      r.rmse_g = std::sqrt(r.rss / n);
-      r.max_g = r.max_pct = kNaN;
-      r.rmse_pct = 100 * r.rmse_g / std::max(y.cwiseAbs().maxCoeff(), 1e-9);
-      const double ll = n * std::log(std::max(r.rss / n, 1e-300));
-      r.aic = ll + 2.0 * r.k;
-      r.bic = ll + std::log(n) * r.k;
-      for (Eigen::Index j = 0; j < coef.size(); ++j)
-        r.params.push_back({linear->linearName(static_cast<int>(j)), "g", linear_effect, coef[j], kNaN});
-      for (Eigen::Index j = 0; j < np; ++j) {
-        const auto& d = defs[static_cast<std::size_t>(j)];
-        r.params.push_back({d.name, d.unit, d.effect, theta[j], kNaN});
-      }
-      return r;
-    }
-    Eigen::VectorXd pred_c = coef;
-    const Eigen::VectorXd pred = predictWith(train_bound, theta, pred_c, own_base, &y);
+    return th;
+  }
 
+  // The nonlinear search: LM from the smaller model's optimum (`warm`) and cold, the best on
+  // the fit rows, then on every row against the smaller model itself. Sets theta and coef;
+  // returns the RSS on every row.
+  double search(const std::vector<Param>* warm, bool warm_only, double warm_rss, FitResult& r) {
+    const double inf = std::numeric_limits<double>::infinity();
+    const bool have_warm = warm && !warm->empty();
+    std::vector<Eigen::VectorXd> searched;  // LM results
+    bool cold = !have_warm;
+    Eigen::VectorXd neutral;
+    if (have_warm) {
+      // Warm start from a smaller model's optimum: with the new effects switched off it is
+      // itself a candidate, so a model with an added effect never fits worse than the model
+      // without it; LM starts from it with the new effects switched on.
+      neutral = warmStart(*warm);
+      Eigen::VectorXd start = warmStart(*warm, /*neutral=*/false);
+      start = scanStart(start, warm);
+      // A generic probe asks whether anything is left in a variable: the model's own
+      // parameters stay where they are, only the probe's move (cheap, and it cannot borrow
+      // from the effects already fitted).
+      std::vector<bool> fixed;
+      if (warm_only && !spec.probes.empty()) {
+        fixed.assign(defs.size(), false);
+        for (std::size_t i = 0; i < defs.size(); ++i) fixed[i] = defs[i].effect != "probe";
+      }
+      searched.push_back(runLm(start, r, warm_only, fixed.empty() ? nullptr : &fixed));
+      // and from a cold start too (multi-start): the start threshold and the voltage exponent
+      // have local minima the continuation can end in
+      cold = !warm_only;
+    }
+    if (cold) searched.push_back(runLm(scanStart(initialTheta(), nullptr), r));
+    // the best search result on the fit rows, then on every row against the smaller model
+    double best_fit_rows = inf;
+    theta = searched.front();
+    for (const auto& th : searched) {
+      Eigen::VectorXd c;
+      const double rss = rssAt(fit_bound, y_fit, th, &c);
+      if (rss < best_fit_rows) {
+        best_fit_rows = rss;
+        theta = th;
+        coef = c;
+      }
+    }
+    double best_rss = fit_data ? rssAt(train_bound, y, theta, &coef) : best_fit_rows;
+    if (have_warm) {
+      Eigen::VectorXd c;
+      double rss = inf;
+      if (std::isfinite(warm_rss) && !own_base && warmCurve(*warm, c)) rss = warm_rss;
+      else rss = rssAt(train_bound, y, neutral, &c);
+      if (rss < best_rss || !std::isfinite(best_rss)) {
+        best_rss = rss;
+        theta = neutral;
+        coef = c;
+      }
+    }
+    return best_rss;
+  }
+
+  // A quick fit on many rows (continuation, ranking): the parameters and the error, not
+  // every row's prediction.
+  FitResult quickResult(FitResult& r, double best_rss) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
     r.n = static_cast<std::size_t>(y.size());
-    const Eigen::Index nl = own_base ? 0 : coef.size();
-    std::vector<Eigen::Index> active;
-    for (Eigen::Index j = 0; j < nl; ++j)
-      if (j == 0 || coef[j] > 0) active.push_back(j);
-    const Eigen::Index ncol = static_cast<Eigen::Index>(active.size()) + np;
+    r.k = static_cast<int>(coef.size() + np);
+    r.rss = best_rss;
+    const double n = static_cast<double>(r.n);
+    r.rmse_g = std::sqrt(r.rss / n);
+    r.max_g = r.max_pct = kNaN;
+    r.rmse_pct = 100 * r.rmse_g / std::max(y.cwiseAbs().maxCoeff(), 1e-9);
+    const double ll = n * std::log(std::max(r.rss / n, 1e-300));
+    r.aic = ll + 2.0 * r.k;
+    r.bic = ll + std::log(n) * r.k;
+    for (Eigen::Index j = 0; j < coef.size(); ++j)
+      r.params.push_back({linear->linearName(static_cast<int>(j)), "g", linear_effect, coef[j], kNaN});
+    for (Eigen::Index j = 0; j < np; ++j) {
+      const auto& d = defs[static_cast<std::size_t>(j)];
+      r.params.push_back({d.name, d.unit, d.effect, theta[j], kNaN});
+    }
+    return r;
+  }
+
+  // The errors and criteria of the fit on every row, and the warnings about it.
+  void errorsOf(FitResult& r, const Eigen::VectorXd& pred, Eigen::Index nl) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    r.n = static_cast<std::size_t>(y.size());
     r.k = static_cast<int>(nl + np) + (own ? own->countedParams() : 0);
     const Eigen::VectorXd res = y - pred;
     r.rss = res.squaredNorm();
@@ -734,50 +820,63 @@ struct Model::Impl {
       r.warnings.push_back(fmt::format("{} samples for {} parameters: the fit interpolates, its error says "
                                        "nothing; log more samples or use fewer effects", r.n, r.k));
     for (const Term* t : terms) t->warn(y, r.warnings);
+  }
 
-    // Uncertainties: J = d pred / d (linear, nonlinear) at the optimum, J^T J summed row by row.
+  // Uncertainties: J = d pred / d (linear, nonlinear) at the optimum, J^T J summed row by row;
+  // one standard uncertainty per active linear and every nonlinear parameter (NaN when not
+  // determined).
+  Eigen::VectorXd sigmas(FitResult& r, const Eigen::VectorXd& pred, const std::vector<Eigen::Index>& active,
+                         Eigen::Index nl) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    const Eigen::Index ncol = static_cast<Eigen::Index>(active.size()) + np;
     Eigen::VectorXd sig = Eigen::VectorXd::Constant(ncol, kNaN);
-    if (uncertainties && ncol > 0 && res.allFinite()) {
-      std::vector<Eigen::VectorXd> dcol(static_cast<std::size_t>(np));
-      for (Eigen::Index j = 0; j < np; ++j) {
-        Eigen::VectorXd tp = theta;
-        const double h = 1e-3 * defs[static_cast<std::size_t>(j)].scale;
-        tp[j] += h;
-        Eigen::VectorXd c = coef;
-        dcol[static_cast<std::size_t>(j)] = (predictWith(train_bound, tp, c, false, nullptr) - pred) / h;
-      }
-      Eigen::VectorXd mul, add;
-      std::vector<double> x;
-      if (nl > 0) {
-        x = drive(train_bound, theta);
-        factors(train_bound, theta, x, mul, add);
-      }
-      Eigen::MatrixXd JtJ = Eigen::MatrixXd::Zero(ncol, ncol);
-      Eigen::VectorXd jrow(ncol);
-      double row[64];
-      bool finite = true;
-      for (std::size_t i = 0; i < r.n && finite; ++i) {
-        const auto ri = static_cast<Eigen::Index>(i);
-        if (nl > 0) basisRow(x[i], mul[ri], row);
-        for (std::size_t k = 0; k < active.size(); ++k) jrow[static_cast<Eigen::Index>(k)] = row[active[k]];
-        for (Eigen::Index j = 0; j < np; ++j)
-          jrow[static_cast<Eigen::Index>(active.size()) + j] = dcol[static_cast<std::size_t>(j)][ri];
-        finite = jrow.allFinite();
-        for (Eigen::Index a = 0; a < ncol; ++a)
-          for (Eigen::Index b = 0; b <= a; ++b) JtJ(a, b) += jrow[a] * jrow[b];
-      }
-      if (finite) {
-        JtJ = JtJ.selfadjointView<Eigen::Lower>();
-        const double dof = std::max(n - static_cast<double>(ncol), 1.0);
-        const double s2 = r.rss / dof;
-        Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(JtJ);
-        const Eigen::MatrixXd cov = cod.pseudoInverse() * s2;
-        for (Eigen::Index j = 0; j < ncol; ++j) sig[j] = std::sqrt(std::max(cov(j, j), 0.0));
-        if (cod.rank() < ncol)
-          r.warnings.push_back(fmt::format("{} parameter combination(s) are not determined by the data "
-                                           "(their uncertainties are not meaningful)", ncol - cod.rank()));
-      }
+    std::vector<Eigen::VectorXd> dcol(static_cast<std::size_t>(np));
+    for (Eigen::Index j = 0; j < np; ++j) {
+      Eigen::VectorXd tp = theta;
+      const double h = 1e-3 * defs[static_cast<std::size_t>(j)].scale;
+      tp[j] += h;
+      Eigen::VectorXd c = coef;
+      dcol[static_cast<std::size_t>(j)] = (predictWith(train_bound, tp, c, false, nullptr) - pred) / h;
     }
+    Eigen::VectorXd mul, add;
+    std::vector<double> x;
+    if (nl > 0) {
+      x = drive(train_bound, theta);
+      factors(train_bound, theta, x, mul, add);
+    }
+    const std::vector<char> at_cap = atCap(train_bound, theta, coef);  // the curve does not move these rows
+    Eigen::MatrixXd JtJ = Eigen::MatrixXd::Zero(ncol, ncol);
+    Eigen::VectorXd jrow(ncol);
+    double row[64];
+    bool finite = true;
+    for (std::size_t i = 0; i < r.n && finite; ++i) {
+      const auto ri = static_cast<Eigen::Index>(i);
+      if (nl > 0) basisRow(x[i], mul[ri], row);
+      for (std::size_t k = 0; k < active.size(); ++k) jrow[static_cast<Eigen::Index>(k)] = at_cap[i] ? 0.0 : row[active[k]];
+      for (Eigen::Index j = 0; j < np; ++j)
+        jrow[static_cast<Eigen::Index>(active.size()) + j] = dcol[static_cast<std::size_t>(j)][ri];
+      finite = jrow.allFinite();
+      for (Eigen::Index a = 0; a < ncol; ++a)
+        for (Eigen::Index b = 0; b <= a; ++b) JtJ(a, b) += jrow[a] * jrow[b];
+    }
+    if (!finite) return sig;
+    JtJ = JtJ.selfadjointView<Eigen::Lower>();
+    const double dof = std::max(static_cast<double>(r.n) - static_cast<double>(ncol), 1.0);
+    const double s2 = r.rss / dof;
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(JtJ);
+    const Eigen::MatrixXd cov = cod.pseudoInverse() * s2;
+    for (Eigen::Index j = 0; j < ncol; ++j) sig[j] = std::sqrt(std::max(cov(j, j), 0.0));
+    if (cod.rank() < ncol)
+      r.warnings.push_back(fmt::format("{} parameter combination(s) are not determined by the data "
+                                       "(their uncertainties are not meaningful)", ncol - cod.rank()));
+    return sig;
+  }
+
+  // Every parameter with its uncertainty and, for the nonlinear ones, whether it stopped at a
+  // bound of its range.
+  void paramsOf(FitResult& r, const Eigen::VectorXd& sig, const std::vector<Eigen::Index>& active, Eigen::Index nl,
+                bool uncertainties) const {
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
     for (Eigen::Index j = 0; j < nl; ++j) {
       Param pr;
       pr.name = linear->linearName(static_cast<int>(j));
@@ -805,6 +904,31 @@ struct Model::Impl {
       }
       r.params.push_back(pr);
     }
+  }
+
+  // `warm_rss`: the smaller model's RSS on these rows (its curve coefficients are in `warm`),
+  // so its optimum need not be evaluated again; NaN: evaluate it.
+  FitResult fit(const std::vector<Param>* warm, bool warm_only, bool uncertainties, double warm_rss) {
+    FitResult r;
+    r.model = spec.text();
+    const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
+    theta = initialTheta();
+    double best_rss;
+    if (np > 0) best_rss = search(warm, warm_only, warm_rss, r);
+    else best_rss = rssAt(train_bound, y, theta, &coef);
+    fitted = true;
+    if (!uncertainties && fit_data && !own_base) return quickResult(r, best_rss);
+    Eigen::VectorXd pred_c = coef;
+    const Eigen::VectorXd pred = predictWith(train_bound, theta, pred_c, own_base, &y);
+    const Eigen::Index nl = own_base ? 0 : coef.size();
+    std::vector<Eigen::Index> active;
+    for (Eigen::Index j = 0; j < nl; ++j)
+      if (j == 0 || coef[j] > 0) active.push_back(j);
+    const Eigen::Index ncol = static_cast<Eigen::Index>(active.size()) + np;
+    errorsOf(r, pred, nl);
+    Eigen::VectorXd sig = Eigen::VectorXd::Constant(ncol, kNaN);
+    if (uncertainties && ncol > 0 && (y - pred).allFinite()) sig = sigmas(r, pred, active, nl);
+    paramsOf(r, sig, active, nl, uncertainties);
     return r;
   }
 

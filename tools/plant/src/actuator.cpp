@@ -75,6 +75,14 @@ void Actuator::holdPulse(double pulse_us) {
   last_pulse_t_s_ = time_s_;
 }
 
+void Actuator::damagePropeller(double share) {
+  const double keep = std::clamp(1.0 - share, 0.0, 1.0);
+  p_.prop.ct_low *= keep;
+  p_.prop.ct_high *= keep;
+  p_.prop.cp_low *= keep;
+  p_.prop.cp_high *= keep;
+}
+
 // ------------------------------------------------------------------------------ propeller laws
 
 double Actuator::ctAt(double rpm) const {

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "plant/plant.hpp"
+#include "plant/rig_cli.hpp"
 
 namespace plant {
 
@@ -228,6 +229,7 @@ void registerCommands(CLI::App& app) {
       "plant", "The physical model behind the virtual bench: ESC + motor + propeller, power, sensors");
   plant->require_subcommand(1);
 
+  addRigCommands(plant);
   CLI::App* pre = plant->add_subcommand("presets", "List the actuator presets");
   pre->add_flag("--json", opts->json, "print JSON");
   pre->callback(guarded([opts] { cmdPresets(*opts); }));

@@ -12,7 +12,8 @@
 #include <sstream>
 #include <sys/stat.h>
 
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
+#include "sim/twi.hpp"
 
 extern "C" {
 #include <simavr/avr_adc.h>
@@ -76,8 +77,8 @@ HexFlash readHexFlash(const std::string& path, const char* what) {
   HexFlash h;
   try {
     // Parsed twice with different fills: a byte the file covers reads the same both times.
-    h.bytes = parseIntelHex(text.str(), kFlashBytes, path, 0xFF);
-    const std::vector<uint8_t> zero_fill = parseIntelHex(text.str(), kFlashBytes, path, 0x00);
+    h.bytes = hex::parseIntelHex(text.str(), kFlashBytes, path, 0xFF);
+    const std::vector<uint8_t> zero_fill = hex::parseIntelHex(text.str(), kFlashBytes, path, 0x00);
     bool any = false;
     for (uint32_t a = 0; a < kFlashBytes; ++a) {
       if (h.bytes[a] != zero_fill[a]) continue;
@@ -85,7 +86,7 @@ HexFlash readHexFlash(const std::string& path, const char* what) {
       any = true;
       h.hi = a + 1;
     }
-  } catch (const HexError& e) {
+  } catch (const hex::HexError& e) {
     throw BoardError(fmt::format("the {} is not a usable Intel HEX flash image: {}", what, e.what()));
   }
   return h;
@@ -101,6 +102,89 @@ struct ElfFirmware {
   }
 };
 
+// The application image, an AVR ELF (its MCU and F_CPU checked) or Intel HEX, and where it
+// ends. An empty path: no application (a bare bootloader).
+struct AppImage {
+  std::unique_ptr<ElfFirmware> elf;
+  HexFlash hex;
+  uint32_t end = 0;  // first byte past the application
+};
+
+AppImage readApplication(const std::string& app) {
+  AppImage a;
+  if (app.empty()) return a;
+  struct stat st {};
+  if (::stat(app.c_str(), &st) != 0)
+    throw BoardError(fmt::format("{}: no such firmware image; build it first (cmake --build "
+                                 "build/avr) or pass the right --elf path",
+                                 app));
+  if (!isElfFile(app)) {
+    a.hex = readHexFlash(app, "application");
+    a.end = a.hex.hi;
+    return a;
+  }
+  a.elf = std::make_unique<ElfFirmware>();
+  elf_firmware_t* fw = a.elf->fw;
+  if (elf_read_firmware(app.c_str(), fw) != 0)
+    throw BoardError(fmt::format("{}: not a readable AVR ELF file (is it the .elf, not the .hex?)",
+                                 app));
+  if (fw->mmcu[0] == '\0') std::strcpy(fw->mmcu, "atmega2560");
+  if (std::strcmp(fw->mmcu, "atmega2560") != 0)
+    throw BoardError(fmt::format("{}: built for {}, but the virtual board is an atmega2560 "
+                                 "(rebuild with the AVR toolchain file)",
+                                 app, fw->mmcu));
+  if (fw->frequency == 0) fw->frequency = kCpuHz;
+  a.end = fw->flashbase + fw->flashsize;
+  return a;
+}
+
+// The bootloader (Intel HEX, empty path: none), checked to lie above the application `app`,
+// which ends at app_end.
+HexFlash readBootloader(const std::string& path, const std::string& app, uint32_t app_end) {
+  HexFlash boot;
+  if (path.empty()) return boot;
+  boot = readHexFlash(path, "bootloader");
+  if (boot.hi == boot.lo) throw BoardError(fmt::format("{}: the bootloader file holds no data", path));
+  if (boot.lo == 0)
+    throw BoardError(fmt::format("{}: this \"bootloader\" starts at address 0; pass it as the "
+                                 "application (--hex) instead",
+                                 path));
+  if (app_end > boot.lo)
+    throw BoardError(fmt::format(
+        "{}: the application reaches byte 0x{:05X}, into the boot section at 0x{:05X} ({}); "
+        "it cannot be flashed behind this bootloader",
+        app, app_end - 1, boot.lo, path));
+  return boot;
+}
+
+void eraseEeprom(avr_t* avr) {
+  std::vector<uint8_t> erased(kEepromBytes, 0xFF);
+  avr_eeprom_desc_t d{erased.data(), 0, static_cast<uint32_t>(erased.size())};
+  avr_ioctl(avr, AVR_IOCTL_EEPROM_SET, &d);
+}
+
+// Puts the application and the bootloader into the core's flash; with a bootloader every
+// reset enters it (BOOTRST). Returns the CPU frequency to run at (the ELF's F_CPU).
+uint32_t loadImages(avr_t* avr, AppImage& app, HexFlash& boot, const std::string& app_path) {
+  uint32_t frequency = kCpuHz;
+  if (app.elf) {
+    avr_load_firmware(avr, app.elf->fw);
+    frequency = app.elf->fw->frequency;
+    if (frequency != kCpuHz)
+      fmt::print(stderr, "warning: {} says F_CPU = {} Hz; the plant assumes {} Hz timing\n", app_path,
+                 frequency, kCpuHz);
+  } else if (app.hex.hi > 0) {
+    avr_loadcode(avr, app.hex.bytes.data(), app.hex.hi, 0);
+  }
+  if (boot.hi > boot.lo) {
+    avr_loadcode(avr, boot.bytes.data() + boot.lo, boot.hi - boot.lo, boot.lo);
+    avr->reset_pc = boot.lo;  // BOOTRST: every reset enters the bootloader
+    avr->pc = boot.lo;
+    avr->codeend = avr->flashend + 1;
+  }
+  return frequency;
+}
+
 }  // namespace
 
 Board::Board(const std::string& elf_path) : Board(FlashImages{"", elf_path}) {}
@@ -112,49 +196,9 @@ Board::Board(const FlashImages& images) {
 
 void Board::load(const FlashImages& images) {
   avr_global_logger_set(quietLogger);
-  const std::string& app = images.application;
-  struct stat st {};
-  if (!app.empty() && ::stat(app.c_str(), &st) != 0)
-    throw BoardError(fmt::format("{}: no such firmware image; build it first (cmake --build "
-                                 "build/avr) or pass the right --elf path",
-                                 app));
-  std::unique_ptr<ElfFirmware> elf;
-  HexFlash app_hex;
-  uint32_t app_end = 0;  // first byte past the application
-  if (!app.empty() && isElfFile(app)) {
-    elf = std::make_unique<ElfFirmware>();
-    elf_firmware_t* fw = elf->fw;
-    if (elf_read_firmware(app.c_str(), fw) != 0)
-      throw BoardError(fmt::format("{}: not a readable AVR ELF file (is it the .elf, not the .hex?)",
-                                   app));
-    if (fw->mmcu[0] == '\0') std::strcpy(fw->mmcu, "atmega2560");
-    if (std::strcmp(fw->mmcu, "atmega2560") != 0)
-      throw BoardError(fmt::format("{}: built for {}, but the virtual board is an atmega2560 "
-                                   "(rebuild with the AVR toolchain file)",
-                                   app, fw->mmcu));
-    if (fw->frequency == 0) fw->frequency = kCpuHz;
-    app_end = fw->flashbase + fw->flashsize;
-  } else if (!app.empty()) {
-    app_hex = readHexFlash(app, "application");
-    app_end = app_hex.hi;
-  }
-  HexFlash boot;
-  if (!images.bootloader_hex.empty()) {
-    boot = readHexFlash(images.bootloader_hex, "bootloader");
-    if (boot.hi == boot.lo)
-      throw BoardError(fmt::format("{}: the bootloader file holds no data", images.bootloader_hex));
-    if (boot.lo == 0)
-      throw BoardError(fmt::format("{}: this \"bootloader\" starts at address 0; pass it as the "
-                                   "application (--hex) instead",
-                                   images.bootloader_hex));
-    if (app_end > boot.lo)
-      throw BoardError(fmt::format(
-          "{}: the application reaches byte 0x{:05X}, into the boot section at 0x{:05X} ({}); "
-          "it cannot be flashed behind this bootloader",
-          app, app_end - 1, boot.lo, images.bootloader_hex));
-  }
-
-  avr_ = avr_make_mcu_by_name(elf ? elf->fw->mmcu : "atmega2560");
+  AppImage app = readApplication(images.application);
+  HexFlash boot = readBootloader(images.bootloader_hex, images.application, app.end);
+  avr_ = avr_make_mcu_by_name(app.elf ? app.elf->fw->mmcu : "atmega2560");
   if (!avr_)
     throw BoardError("libsimavr does not know the atmega2560; reinstall libsimavr-dev/simavr");
   avr_init(avr_);
@@ -165,35 +209,16 @@ void Board::load(const FlashImages& images) {
   core_reset_ = avr_->reset;
   avr_->reset = &Board::onCoreReset;
   avr_->sleep = noSleep;  // idle sleep skips ahead instead of waiting on the wall clock
-  {
-    std::vector<uint8_t> erased(kEepromBytes, 0xFF);
-    avr_eeprom_desc_t d{erased.data(), 0, static_cast<uint32_t>(erased.size())};
-    avr_ioctl(avr_, AVR_IOCTL_EEPROM_SET, &d);
-  }
-  uint32_t frequency = kCpuHz;
-  if (elf) {
-    avr_load_firmware(avr_, elf->fw);
-    frequency = elf->fw->frequency;
-    if (frequency != kCpuHz)
-      fmt::print(stderr, "warning: {} says F_CPU = {} Hz; the plant assumes {} Hz timing\n", app,
-                 frequency, kCpuHz);
-  } else if (app_hex.hi > 0) {
-    avr_loadcode(avr_, app_hex.bytes.data(), app_hex.hi, 0);
-  }
-  if (boot.hi > boot.lo) {
-    avr_loadcode(avr_, boot.bytes.data() + boot.lo, boot.hi - boot.lo, boot.lo);
-    boot_address_ = boot.lo;
-    avr_->reset_pc = boot.lo;  // BOOTRST: every reset enters the bootloader
-    avr_->pc = boot.lo;
-    avr_->codeend = avr_->flashend + 1;
-  }
-  avr_->frequency = frequency;
+  eraseEeprom(avr_);
+  avr_->frequency = loadImages(avr_, app, boot, images.application);
+  if (boot.hi > boot.lo) boot_address_ = boot.lo;
   if (avr_->vcc == 0) avr_->vcc = 5000;
   if (avr_->avcc == 0) avr_->avcc = 5000;
   if (avr_->aref == 0) avr_->aref = 5000;
 }
 
 void Board::wire() {
+  twi_ = std::make_unique<Twi>(avr_);
   for (int ch = 0; ch < kEscChannels; ++ch) {
     edge_params_[ch] = EdgeParam{this, ch};
     avr_irq_t* irq =
@@ -216,6 +241,7 @@ void Board::wire() {
 }
 
 Board::~Board() {
+  twi_.reset();  // its IRQs live in the core's pool: before avr_terminate
   if (avr_) {
     avr_terminate(avr_);
     std::free(avr_);
@@ -277,6 +303,7 @@ void Board::afterReset() {
   rx_armed_ = false;
   xoff_ = false;
   armRx();
+  if (twi_) twi_->afterReset();
   for (auto& listener : reset_listeners_) listener(avr_->cycle);
 }
 

@@ -427,16 +427,10 @@ void writeSweepCsv(const std::string& path, const board::SweepLog& log,
   }
 }
 
-// gather_store as a user's cable reaches it: the board boots from the Mega2560's bootloader
-// behind a pty, and `thrustcal board calibrate`'s client code drives the whole workflow.
-void gatherOverPty(const GatherOptions& o, const plant::BenchParams& params,
-                   const ProgressFn& progress, GatherMotorResult& mr,
-                   std::optional<plant::Bench>& truth1, std::optional<plant::Bench>& truth2,
-                   std::vector<uint8_t>& eeprom, double& sim_s, double& wall_s) {
-  auto rig = std::make_unique<BenchRig>(FlashImages{o.bootloader_hex, o.elf_path}, params, mr.slot);
-  rig->board.setEeprom(eeprom);
-  InstrumentTap tap;
-  rig->board.addOutputListener([&tap, r = rig.get()](uint8_t byte) {
+// Records the plant's instruments (bus current, rpm, winding temperature) at the moment the
+// board prints each CSV row of a sweep, into `tap`.
+void tapInstruments(BenchRig& rig, InstrumentTap& tap) {
+  rig.board.addOutputListener([&tap, r = &rig](uint8_t byte) {
     if (byte != '\n') {
       if (byte != '\r' && tap.line.size() < 200) tap.line.push_back(static_cast<char>(byte));
       return;
@@ -449,14 +443,11 @@ void gatherOverPty(const GatherOptions& o, const plant::BenchParams& params,
     }
     tap.line.clear();
   });
-  PtyOptions po;
-  po.reset_on_open = true;
-  PtyBridge link(rig->board, po);
-  link.start(Pacing{1.0, 0.0});
-  progress(fmt::format("slot {}: motor seed {} ({}), board on {}: reset, bootloader, gather_store",
-                       mr.slot, mr.seed, o.preset, link.path()));
-  std::array<std::optional<plant::Bench>, 2> truth;
-  BenchOperator op(link, *rig, tap, o, progress, mr, truth);
+}
+
+// The workflow `thrustcal board calibrate` runs, with this scenario's settings.
+board::CalibrateOptions calibrateOptionsFor(const GatherOptions& o, const plant::BenchParams& params,
+                                            const GatherMotorResult& mr) {
   board::CalibrateOptions co;
   co.slot = mr.slot;
   co.mount_g = static_cast<int>(mr.mount_weight_g);
@@ -468,6 +459,49 @@ void gatherOverPty(const GatherOptions& o, const plant::BenchParams& params,
   co.step_us = o.step_us;
   co.settle_ms = o.settle_ms;
   co.settle_auto = o.settle_auto;
+  return co;
+}
+
+// The two sweeps the client captured: their sample counts and maximum forces into mr, and
+// with a log folder their CSV files (the plant's instruments added).
+void keepSweeps(const GatherOptions& o, const board::CalibrateResult& cr, const BenchOperator& op,
+                GatherMotorResult& mr) {
+  for (int i = 0; i < 2; ++i) {
+    CurveCheck& c = i == 0 ? mr.curve1 : mr.curve2;
+    const board::SweepLog& log = cr.sweeps.at(i);
+    c.samples = static_cast<int>(log.rows.size());
+    c.sweep_max_g = log.max_force_g;
+    if (c.sweep_max_g <= 0)
+      throw std::runtime_error(fmt::format("sweep {} on slot {} did not report its max force",
+                                           i + 1, mr.slot));
+    if (!o.log_dir.empty()) {
+      c.csv_path = (std::filesystem::path(o.log_dir) /
+                    fmt::format("gather_slot{}_curve{}.csv", mr.slot, i + 1))
+                       .string();
+      writeSweepCsv(c.csv_path, log, op.rows(i + 1), mr.slot, i + 1);
+    }
+  }
+}
+
+// gather_store as a user's cable reaches it: the board boots from the Mega2560's bootloader
+// behind a pty, and `thrustcal board calibrate`'s client code drives the whole workflow.
+void gatherOverPty(const GatherOptions& o, const plant::BenchParams& params,
+                   const ProgressFn& progress, GatherMotorResult& mr,
+                   std::optional<plant::Bench>& truth1, std::optional<plant::Bench>& truth2,
+                   std::vector<uint8_t>& eeprom, double& sim_s, double& wall_s) {
+  auto rig = std::make_unique<BenchRig>(FlashImages{o.bootloader_hex, o.elf_path}, params, mr.slot);
+  rig->board.setEeprom(eeprom);
+  InstrumentTap tap;
+  tapInstruments(*rig, tap);
+  PtyOptions po;
+  po.reset_on_open = true;
+  PtyBridge link(rig->board, po);
+  link.start(Pacing{1.0, 0.0});
+  progress(fmt::format("slot {}: motor seed {} ({}), board on {}: reset, bootloader, gather_store",
+                       mr.slot, mr.seed, o.preset, link.path()));
+  std::array<std::optional<plant::Bench>, 2> truth;
+  BenchOperator op(link, *rig, tap, o, progress, mr, truth);
+  const board::CalibrateOptions co = calibrateOptionsFor(o, params, mr);
   board::CalibrateResult cr;
   try {
     board::SerialPort port(link.path());
@@ -492,21 +526,7 @@ void gatherOverPty(const GatherOptions& o, const plant::BenchParams& params,
                                          mr.slot));
   mr.store = cr.store;
   mr.show = cr.show;
-  for (int i = 0; i < 2; ++i) {
-    CurveCheck& c = i == 0 ? mr.curve1 : mr.curve2;
-    const board::SweepLog& log = cr.sweeps.at(i);
-    c.samples = static_cast<int>(log.rows.size());
-    c.sweep_max_g = log.max_force_g;
-    if (c.sweep_max_g <= 0)
-      throw std::runtime_error(fmt::format("sweep {} on slot {} did not report its max force",
-                                           i + 1, mr.slot));
-    if (!o.log_dir.empty()) {
-      c.csv_path = (std::filesystem::path(o.log_dir) /
-                    fmt::format("gather_slot{}_curve{}.csv", mr.slot, i + 1))
-                       .string();
-      writeSweepCsv(c.csv_path, log, op.rows(i + 1), mr.slot, i + 1);
-    }
-  }
+  keepSweeps(o, cr, op, mr);
   truth1 = truth[0];
   truth2 = truth[1];
   sim_s = rig->board.simulatedSeconds();

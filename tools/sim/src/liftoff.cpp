@@ -194,43 +194,29 @@ Flight flyOverPty(const LiftoffOptions& o, const plant::QuadFrameParams& qp,
   return f;
 }
 
-}  // namespace
-
-LiftoffResult runLiftoff(const LiftoffOptions& o) {
-  const ProgressFn progress = o.progress ? o.progress : ProgressFn(stderrProgress);
-  LiftoffResult r;
-  r.mode = !o.label.empty() ? o.label : o.uncalibrated ? "uncalibrated" : "calibrated";
-  r.force_g = o.force_g;
+// The EEPROM read_run boots with: the image as given (calibrated), or the reference slot's
+// record copied into all four slots (uncalibrated: one generic curve for every motor).
+std::vector<uint8_t> eepromToFly(const LiftoffOptions& o) {
   std::vector<uint8_t> eeprom = o.eeprom;
   if (eeprom.size() != kEepromBytes)
     throw std::invalid_argument(fmt::format("liftoff needs a {}-byte EEPROM image, got {} bytes",
                                             kEepromBytes, eeprom.size()));
-  if (o.uncalibrated) {
-    tc::MotorCalibration ref;
-    tc::ModelV2 ref_v2;
-    const std::string status = decodeSlot(eeprom, o.reference_slot, ref);
-    if (status != "ok" && decodeSlotV2(eeprom, o.reference_slot, ref_v2) != "ok")
-      throw std::invalid_argument(fmt::format(
-          "uncalibrated mode copies slot {}'s record to all four, but it is '{}'; calibrate it "
-          "first (thrustcal sim gather)",
-          o.reference_slot, status));
-    for (int s = 0; s < 4; ++s) copySlot(eeprom, o.reference_slot, s);
-  }
+  if (!o.uncalibrated) return eeprom;
+  tc::MotorCalibration ref;
+  tc::ModelV2 ref_v2;
+  const std::string status = decodeSlot(eeprom, o.reference_slot, ref);
+  if (status != "ok" && decodeSlotV2(eeprom, o.reference_slot, ref_v2) != "ok")
+    throw std::invalid_argument(fmt::format(
+        "uncalibrated mode copies slot {}'s record to all four, but it is '{}'; calibrate it "
+        "first (thrustcal sim gather)",
+        o.reference_slot, status));
+  for (int s = 0; s < 4; ++s) copySlot(eeprom, o.reference_slot, s);
+  return eeprom;
+}
 
-  plant::QuadFrameParams qp;
-  qp.power = plant::BatteryParams::lipo3s(o.lipo_soc);
-  std::array<plant::ActuatorParams, 4> motors;
-  for (int i = 0; i < 4; ++i) motors[i] = motorForSeed(o.preset, o.seeds[i], o.variation);
-  const auto session0 = std::chrono::steady_clock::now();
-  r.link = o.link;
-  Flight f = o.link == GatherLink::kPty ? flyOverPty(o, qp, motors, eeprom, r.mode, progress)
-                                        : flyInProcess(o, qp, motors, eeprom, r.mode, progress);
-  r.session_wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - session0).count();
-  auto& rig = f.rig;
-  const double t_cmd = f.t_cmd, t_done = f.t_done;
-  double t_hold = f.t_hold;
-  for (const auto& line : f.boot) {
+// read_run's start-up report: the calibration lines, and which model each slot flies.
+void readBootReport(const std::vector<std::string>& boot, LiftoffResult& r) {
+  for (const auto& line : boot) {
     if (line.rfind("motor ", 0) == 0 || line.rfind("calibrated motors", 0) == 0)
       r.calibration_report.push_back(line);
     int slot = -1;  // "motor K: ok, ... model v1 (...)" / "motor K: ok, model v2 (...)"
@@ -238,16 +224,15 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
       for (const char* model : {"v1", "v2"})
         if (line.find(std::string("model ") + model) != std::string::npos) r.models[slot] = model;
   }
-  if (t_done < 0)
-    throw std::runtime_error(fmt::format("read_run did not finish the lift-off; last lines:\n{}",
-                                         f.tail));
-  if (t_hold < 0) t_hold = t_cmd + o.ramp_ms / 1000.0;
+}
 
-  // Hold-phase summary.
-  const double from = t_hold + o.settle_s, to = t_done - 0.02;
+// The hold phase from..to (simulated s): mean thrust and pulse per motor, their spread and
+// error against the command, tilt, moments and bus voltage; the largest tilt of the whole run.
+void summarizeHold(const LiftoffOptions& o, const std::vector<LiftoffSample>& samples, double from,
+                   double to, LiftoffResult& r) {
   int n = 0;
   double tilt_sum = 0, roll_m = 0, pitch_m = 0, bus = 0;
-  for (const auto& s : rig->samples) {
+  for (const auto& s : samples) {
     r.max_tilt_deg = std::max(r.max_tilt_deg, s.tilt_deg);
     if (s.t_s < from || s.t_s > to) continue;
     for (int i = 0; i < 4; ++i) {
@@ -279,31 +264,64 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
   r.hold_roll_moment_nm = roll_m / n;
   r.hold_pitch_moment_nm = pitch_m / n;
   r.hold_bus_v = bus / n;
+}
+
+// The 10 ms time series, t_s from the command.
+void writeLiftoffCsv(const LiftoffOptions& o, const LiftoffResult& r, double t_cmd, double t_hold) {
+  std::ofstream out(o.csv_path, std::ios::trunc);
+  if (!out)
+    throw std::runtime_error(fmt::format("{}: cannot write the time series; check the path",
+                                         o.csv_path));
+  out << fmt::format(
+      "# thrustcal sim liftoff ({}): read_run, liftoff {} g ramp {} ms hold {} ms; t_s from "
+      "the command; hold from {:.3f} s\n",
+      r.mode, o.force_g, o.ramp_ms, o.hold_ms, t_hold - t_cmd);
+  out << "t_s,thrust0_g,thrust1_g,thrust2_g,thrust3_g,pwm0_us,pwm1_us,pwm2_us,pwm3_us,roll_deg,"
+         "pitch_deg,tilt_deg,height_m,roll_moment_nm,pitch_moment_nm,bus_v\n";
+  for (const auto& s : r.samples) {
+    out << fmt::format("{:.3f}", s.t_s - t_cmd);
+    for (double v : s.thrust_g) out << fmt::format(",{:.2f}", v);
+    for (double v : s.pwm_us) out << fmt::format(",{:.1f}", v);
+    out << fmt::format(",{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.3f}\n", s.roll_deg,
+                       s.pitch_deg, s.tilt_deg, s.height_m, s.roll_moment_nm, s.pitch_moment_nm,
+                       s.bus_v);
+  }
+}
+
+}  // namespace
+
+LiftoffResult runLiftoff(const LiftoffOptions& o) {
+  const ProgressFn progress = o.progress ? o.progress : ProgressFn(stderrProgress);
+  LiftoffResult r;
+  r.mode = !o.label.empty() ? o.label : o.uncalibrated ? "uncalibrated" : "calibrated";
+  r.force_g = o.force_g;
+  const std::vector<uint8_t> eeprom = eepromToFly(o);
+  plant::QuadFrameParams qp;
+  qp.power = plant::BatteryParams::lipo3s(o.lipo_soc);
+  std::array<plant::ActuatorParams, 4> motors;
+  for (int i = 0; i < 4; ++i) motors[i] = motorForSeed(o.preset, o.seeds[i], o.variation);
+  const auto session0 = std::chrono::steady_clock::now();
+  r.link = o.link;
+  Flight f = o.link == GatherLink::kPty ? flyOverPty(o, qp, motors, eeprom, r.mode, progress)
+                                        : flyInProcess(o, qp, motors, eeprom, r.mode, progress);
+  r.session_wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - session0).count();
+  auto& rig = f.rig;
+  const double t_cmd = f.t_cmd, t_done = f.t_done;
+  double t_hold = f.t_hold;
+  readBootReport(f.boot, r);
+  if (t_done < 0)
+    throw std::runtime_error(fmt::format("read_run did not finish the lift-off; last lines:\n{}",
+                                         f.tail));
+  if (t_hold < 0) t_hold = t_cmd + o.ramp_ms / 1000.0;
+  summarizeHold(o, rig->samples, t_hold + o.settle_s, t_done - 0.02, r);
   r.samples = std::move(rig->samples);
   r.simulated_s = rig->board.simulatedSeconds();
   r.wall_s = rig->board.wallSeconds();
   r.realtime_factor = rig->board.realtimeFactor();
-
   if (!o.csv_path.empty()) {
     r.csv_path = o.csv_path;
-    std::ofstream out(o.csv_path, std::ios::trunc);
-    if (!out)
-      throw std::runtime_error(fmt::format("{}: cannot write the time series; check the path",
-                                           o.csv_path));
-    out << fmt::format(
-        "# thrustcal sim liftoff ({}): read_run, liftoff {} g ramp {} ms hold {} ms; t_s from "
-        "the command; hold from {:.3f} s\n",
-        r.mode, o.force_g, o.ramp_ms, o.hold_ms, t_hold - t_cmd);
-    out << "t_s,thrust0_g,thrust1_g,thrust2_g,thrust3_g,pwm0_us,pwm1_us,pwm2_us,pwm3_us,roll_deg,"
-           "pitch_deg,tilt_deg,height_m,roll_moment_nm,pitch_moment_nm,bus_v\n";
-    for (const auto& s : r.samples) {
-      out << fmt::format("{:.3f}", s.t_s - t_cmd);
-      for (double v : s.thrust_g) out << fmt::format(",{:.2f}", v);
-      for (double v : s.pwm_us) out << fmt::format(",{:.1f}", v);
-      out << fmt::format(",{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{:.4f},{:.3f}\n", s.roll_deg,
-                         s.pitch_deg, s.tilt_deg, s.height_m, s.roll_moment_nm, s.pitch_moment_nm,
-                         s.bus_v);
-    }
+    writeLiftoffCsv(o, r, t_cmd, t_hold);
   }
   progress(fmt::format(
       "liftoff ({}): hold thrust {:.1f} {:.1f} {:.1f} {:.1f} g (command {:.0f} g): spread "

@@ -33,9 +33,9 @@ struct AccuracyConfig {
   double cal_high_v = 12.4;  // first sweep: LiPo resting at this voltage
   double cal_low_v = 10.5;   // second sweep: bench supply (6.32 A limit) at this voltage
   double nominal_v = 11.1;   // the uncalibrated map's voltage
-  // 600 ms per step: the readings settle (motor ~0.08 s + the load cell's 3 x 30 ms filter)
-  // to within 0.3 %; the thesis's 200 ms lag by most of a step (see benchmark 4 and the
-  // accuracy table's "200 ms sweeps" rows).
+  // 600 ms per step: long enough for the motor's time constant and the load cell's 3 x 30 ms
+  // filter to settle; the thesis's 200 ms are not (benchmark 4 and the accuracy table's
+  // "200 ms sweeps" rows).
   SweepSpec sweep = SweepSpec{1000, 1800, 10, 600, 1};
 };
 

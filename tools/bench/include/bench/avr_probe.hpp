@@ -1,6 +1,6 @@
-// Runs an AVR probe image in libsimavr (ATmega2560, 16 MHz) and collects what it reports
-// through the GPIOR registers (protocol in tools/bench/avr/probe.cpp): cycle counts of
-// labelled sections, net of the empty bracket's overhead, and 16-bit values.
+// Runs the bench's AVR probe (tools/bench/avr/probe.cpp) with sim::runCycleProbe (the marker
+// protocol: sim/cycle_probe.hpp) and collects what it reports: cycle counts of labelled
+// sections, net of the empty bracket's overhead, and 16-bit values.
 #pragma once
 #include <cstdint>
 #include <map>
@@ -8,11 +8,11 @@
 #include <utility>
 #include <vector>
 
+#include "sim/cycle_probe.hpp"
+
 namespace bench {
 
-struct CycleStat {
-  uint64_t count = 0, mean = 0, min = 0, max = 0;
-};
+using CycleStat = sim::CycleStat;
 
 struct ProbeResult {
   std::map<int, CycleStat> sections;  // by label

@@ -19,11 +19,11 @@ struct SweepSpec {
   int step_us = 10;
   int settle_ms = 200;      // per step; with settle_auto the cap
   uint64_t noise_seed = 1;  // load cell and battery monitor noise
-  // gather_store's `settle auto` (its default sweep): force medians 20 ms apart (each over the
-  // 21 ms of its 201 readings) until three in a row are equal, or settle_ms has passed.
+  // gather_store's `settle auto` (its default sweep), the rule of thrustcal/sweep_rules.hpp:
+  // force medians until it says the step has settled, settle_ms the cap.
   bool settle_auto = false;
-  // gather_store's force reading since issue 11: the mean of the middle 65 of the 201 readings
-  // in 1/16 count (tare too), instead of their median (the thesis, and these rows before).
+  // gather_store's force reading with settle auto: the central mean (tc::kForceCentral of the
+  // 201 readings, 1/16 count; tare too) instead of their median (the thesis's reading).
   bool fine_force = false;
 };
 

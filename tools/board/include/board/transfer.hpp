@@ -49,7 +49,7 @@ struct EepromFile {
   std::vector<bool> given;
   std::size_t givenCount() const;
 };
-// Throws std::runtime_error (sim::HexError) naming the file and line for a bad file.
+// Throws std::runtime_error (hex::HexError) naming the file and line for a bad file.
 EepromFile readEepromFile(const std::string& path);
 
 // --- through the running firmware (a ConsoleClient after waitForBoot) ---

@@ -10,11 +10,17 @@
 //   force   = offset + M * curve(x) + A, or M * base(pwm) + A with a base that has its own curve
 //           (thesis); M and A from every term's factors() (motor, drift, thermal, density,
 //           then the diagnosis's probes, then the user's mul:/add: expressions)
+//   cap     force = min(force, cap) with every term's caps() (current_limit: what the source
+//           lets the motor make), or a term's underCap() (the force settling to the cap); the
+//           curve's coefficients are solved on the rows below the cap
+//   perRow  what a term derives from a data set once, when the model binds it (which runs a
+//           limit holds), in Rows::derived
 #pragma once
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -56,6 +62,8 @@ struct FitParam {
   double scan_from = std::numeric_limits<double>::quiet_NaN();
 };
 
+class Term;
+
 // The columns of one data set, looked up once.
 struct Rows {
   std::size_t n = 0;
@@ -69,9 +77,8 @@ struct Rows {
   const std::vector<int>* run = nullptr;
   std::vector<int> motor_index;  // per row: index into the model's motors, -1: not a training motor
   const std::vector<double>* sample_index = nullptr;  // row numbers (a subsample's lag by samples)
+  std::map<const Term*, std::vector<double>> derived;  // each term's perRow() of these data
 };
-
-class Term;
 
 // What a term's formula sees: the rows, the parameters (clamped to their ranges) and the model's
 // normalisation.
@@ -82,6 +89,7 @@ struct Frame {
   const std::vector<const Term*>& terms;
   double vref = 1;  // the highest voltage of the training data
   double xtop = 1;  // the base's drive range (1.1 for the curve: room above the data)
+  double pmin = 0, span = 1;  // the training data's lowest PWM and PWM range
   double p(int i) const {
     const auto& d = defs[static_cast<std::size_t>(i)];
     return std::clamp(th[i], d.lo, d.hi);
@@ -91,6 +99,8 @@ struct Frame {
   double alongDrive(int i, double x) const { return p(i) + p(i + 1) * std::clamp(x / xtop, 0.0, 1.0); }
   // The voltage the motor sees at row i and drive `duty`: vbat after every term's sag().
   double volts(std::size_t i, double duty) const;
+  // Where the drive counts from: a term's origin() (deadband), else pmin.
+  double startUs() const;
 };
 
 // One effect in one model, set up on the training data. Every hook is optional.
@@ -106,6 +116,16 @@ class Term {
                        Eigen::VectorXd& add) const {
     (void)x, (void)mul, (void)add;
   }
+  // The largest force the source lets the motor make, per row (cap_g starts at +inf); false
+  // when the term caps nothing.
+  virtual bool caps(const Frame&, std::vector<double>& /*cap_g*/) const { return false; }
+  // The force where the cap binds, from the force without it (force_g in; the model's default
+  // is min(force, cap)); false to leave it to the default.
+  virtual bool underCap(const Frame&, const std::vector<double>& /*cap_g*/, Eigen::VectorXd& /*force_g*/) const {
+    return false;
+  }
+  // Values derived once from a data set the model binds (Rows::derived[this]); empty: none.
+  virtual std::vector<double> perRow(const Dataset&) const { return {}; }
   // Throws std::invalid_argument when `data` lacks what the term needs to predict it.
   virtual void check(const Dataset&) const {}
 
@@ -144,6 +164,15 @@ class Setup {
   int add(std::size_t k) { return add(param(k)); }
 };
 
+// What points the diagnosis at an effect, and what it says then (analysis.cpp reads only this:
+// it names no effect itself).
+struct Suggests {
+  std::vector<std::string> variables{};  // columns whose residual suggests it ("vbat*": a prefix; any case)
+  std::vector<std::string> evidence{};   // findings in the responses that suggest it (evidence.hpp's kinds)
+  std::string advice{};  // the physics in a phrase, ending with what to add: "...; add `voltage`"
+  std::string still{};   // when it is in the model and the residual still follows the variable: why
+};
+
 enum class Role { kBase, kEffect, kExpression };
 enum class Export { kInRecord, kOneMotor, kRefused };
 
@@ -157,6 +186,7 @@ struct EffectDef {
   std::string export_note{};  // why a record cannot hold it, and what to do
   bool shapes_curve = false;  // only with the `curve` base (not with a base of its own curve)
   std::string needs{}, needs_why{};  // another effect it needs before it, and why
+  Suggests suggests{};             // what points the diagnosis at it
   std::string prefix{};            // kExpression: the spec prefix ("mul:")
   bool multiplicative = false;   // kExpression: a factor (else grams added)
   std::unique_ptr<Term> (*make)(Setup&) = nullptr;  // nullptr: expressions, made from the spec

@@ -118,6 +118,9 @@ const EffectDef kCurve = {
     .params = {{.name = "offset_g", .unit = "g", .meaning = "force at zero drive (linear)"},
                {.name = "c1..c10", .unit = "g", .meaning = "curve steps (linear; up to 10: 6 knots at quantiles and one at the start)", .lo = 0}},
     .exports = Export::kInRecord,
+    .suggests = {.variables = {"pwm_us"},
+                 .still = "the curve cannot follow the data's shape (an effect that bends it is missing, the force "
+                          "collapses at the top, or the PWM logged is not the PWM the ESC saw)"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Curve>(s); },
 };
 

@@ -48,6 +48,9 @@ const EffectDef kDeadband = {
                 .from_data = "range from the data: lowest PWM - 5 % of the span .. highest PWM"}},
     .exports = Export::kInRecord,
     .shapes_curve = true,
+    .suggests = {.variables = {"pwm_us"},
+                 .advice = "the curve's shape near the ESC's start threshold is off; add `deadband`",
+                 .still = "the start is not one sharp threshold (the ESC's startup, a motor that cogs)"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Deadband>(s); },
 };
 

@@ -52,6 +52,9 @@ const EffectDef kDensity = {
                {.name = "beta_drive", .unit = "1", .meaning = "its change up to full drive", .scale = 0.2, .lo = -5.0, .hi = 5.0}},
     .export_note = "the board has no air-density input and the record holds no density term; fit without "
                    "it, on data taken in the air you fly in",
+    .suggests = {.variables = {"rho_kg_m3"},
+                 .advice = "thrust is proportional to the air density rho = p/(R T); add `density`",
+                 .still = "the exponent changes differently with the drive"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Density>(s); },
 };
 

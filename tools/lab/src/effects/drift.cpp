@@ -40,6 +40,9 @@ const EffectDef kDrift = {
                 .from_data = "unbounded; step 1 % of the largest force"}},
     .export_note = "read_run has no clock-dependent term (the record holds no time); fit without it, or "
                    "re-zero the load cell and measure again",
+    .suggests = {.variables = {"t_s", "time*"},
+                 .advice = "something drifts with time (load-cell creep, a warming rig); add `drift`",
+                 .still = "the change is not linear in time (warming, a draining pack?)"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Drift>(s); },
 };
 

@@ -72,6 +72,10 @@ const EffectDef kLag = {
                 .neutral = 1e-3}},
     .export_note = "read_run sets the steady-state PWM for a force and the record holds no time constant; "
                    "fit without it (the steady-state curve is what the board needs)",
+    .suggests = {.variables = {"t_s", "time*", "dpwm_us", "dir"},
+                 .advice = "the force trails the command (motor inertia, a slow load cell): up and down sweeps "
+                           "differ; add `lag`",
+                 .still = "up and down differ by more than a first-order lag (hysteresis, a load cell that creeps)"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Lag>(s); },
 };
 

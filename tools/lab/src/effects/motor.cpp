@@ -67,6 +67,9 @@ const EffectDef kMotor = {
     .exports = Export::kOneMotor,
     .export_note = "a record holds one motor; pick one motor's rows with --motor N and export each motor "
                    "into its own slot",
+    .suggests = {.variables = {"motor"},
+                 .advice = "motors differ from each other (motor and propeller variation); add `motor`",
+                 .still = "motors differ in the curve's shape, not only in gain and Kv"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Motor>(s); },
 };
 

@@ -10,7 +10,7 @@
 namespace lab::effects {
 
 extern const EffectDef kCurve, kDeadband, kVoltage, kSag, kMotor, kDrift, kLag, kThermal, kDensity,
-    kThesis, kMul, kAdd;
+    kCurrentLimit, kThesis, kMul, kAdd;
 
 const std::vector<const EffectDef*>& registry() {
   static const std::vector<const EffectDef*> all = {
@@ -23,6 +23,7 @@ const std::vector<const EffectDef*>& registry() {
       &kLag,      // lag.cpp: first-order low-pass of the drive
       &kThermal,  // thermal.cpp: temperature factor
       &kDensity,  // density.cpp: air-density factor
+      &kCurrentLimit,  // current_limit.cpp: the force a capped bus current allows
       &kThesis,   // thesis.cpp: base, the firmware's option 2.1 through core/
       &kMul,      // expression.cpp: mul: EXPR
       &kAdd,      // expression.cpp: add: EXPR
@@ -47,6 +48,13 @@ double Frame::volts(std::size_t i, double duty) const {
   double v = (*rows.vbat)[i];
   for (const Term* t : terms) v = t->sag(*this, i, duty, v);
   return std::max(v, 1e-3 * vref);
+}
+
+double Frame::startUs() const {
+  double start = pmin;
+  for (const Term* t : terms)
+    if (t->origin(*this, start)) break;
+  return start;
 }
 
 bool Setup::usable(const Dataset& d, const char* column) {

@@ -51,6 +51,10 @@ const EffectDef kSag = {
     .shapes_curve = true,
     .needs = "voltage",
     .needs_why = "corrects the voltage the motor sees",
+    .suggests = {.variables = {"vbat*", "voltage*", "v_v", "v"},
+                 .advice = "the motor sees less than the logged voltage under load (the battery and its wiring "
+                           "sag); add `sag` (it uses current_a when logged)",
+                 .still = "the sag is not linear in the current"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Sag>(s); },
 };
 

@@ -41,6 +41,10 @@ const EffectDef kThermal = {
                {.name = "thermal_drive_pct_per_k", .unit = "%/K", .meaning = "its change up to full drive", .scale = 0.1}},
     .export_note = "the board reads no motor temperature and the record holds no temperature term; fit "
                    "without it, on data taken at the temperature you fly at",
+    .suggests = {.variables = {"temp*"},
+                 .advice = "the motor's temperature (copper and magnets) changes the force; add `thermal`",
+                 .still = "the temperature logged is not the motor's, or the air's density moves with it (log a "
+                          "pressure column for rho_kg_m3)"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Thermal>(s); },
 };
 

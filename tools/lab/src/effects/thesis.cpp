@@ -52,10 +52,85 @@ class Thesis : public Term {
   std::vector<tc::MotorCalibration> cals_;
   int k_ = 0;  // the distinct PWMs in the curves
 
-  void build() {
-    // per motor: runs with their start voltage
+  // A run of one motor as gather_store saw it: its start voltage and its sag table.
+  struct RunInfo {
+    int run;
+    uint16_t start_mv;
+    tc::SagTable sag;
+    bool sag_ok;
+  };
+
+  bool inRun(std::size_t i, int run, long motor, bool has_m) const {
+    return train_.run[i] == run && (!has_m || std::lround(train_.col("motor")[i]) == motor);
+  }
+
+  RunInfo runInfo(int r, long m, bool has_v, bool has_m) const {
+    const auto& pwm = train_.col("pwm_us");
+    tc::SagBuilder sb;
+    sb.reset(1000);
+    double vsum = 0;
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < train_.rows(); ++i) {
+      if (!inRun(i, r, m, has_m)) continue;
+      if (has_v) {
+        const double mv = std::clamp(train_.col("vbat_v")[i] * 1000.0, 0.0, 65535.0);
+        sb.add(static_cast<uint16_t>(std::clamp(pwm[i], 0.0, 65535.0)), static_cast<uint16_t>(mv));
+        vsum += mv;
+      }
+      ++k;
+    }
+    RunInfo info{r, 0, tc::SagTable(), false};
+    uint16_t start = 0;
+    if (has_v && sb.build(info.sag, start)) {
+      info.start_mv = start;
+      info.sag_ok = true;
+    } else if (has_v && k > 0) {
+      info.start_mv = static_cast<uint16_t>(vsum / static_cast<double>(k));
+    } else {
+      info.start_mv = 12000;  // no voltage logged: a single curve, voltage term unused
+    }
+    return info;
+  }
+
+  // The run's curve through core's curve builder (forces merged per PWM); false when it
+  // refuses.
+  bool curve(const RunInfo& info, long m, bool has_m, tc::ThesisCurve& out) {
     const auto& pwm = train_.col("pwm_us");
     const auto& f = train_.col("force_g");
+    std::map<long, std::pair<double, int>> merged;  // pwm -> force sum, count
+    for (std::size_t i = 0; i < train_.rows(); ++i) {
+      if (!inRun(i, info.run, m, has_m)) continue;
+      auto& e = merged[std::lround(pwm[i])];
+      e.first += f[i];
+      e.second += 1;
+    }
+    auto cb = std::make_unique<tc::CurveBuilder<1024>>();
+    std::size_t step = merged.size() / 1024 + 1, idx = 0;
+    for (const auto& [p, e] : merged) {
+      if (idx++ % step) continue;
+      const double dg = std::clamp(10.0 * e.first / e.second, -32768.0, 32767.0);
+      cb->add(static_cast<uint16_t>(std::clamp<long>(p, 0, 65535)), static_cast<int16_t>(std::lround(dg)));
+    }
+    const tc::BuildReport rep = cb->build(out);
+    if (rep.status != tc::BuildStatus::kOk) return false;
+    out.start_mv = info.start_mv ? info.start_mv : 1;
+    k_ += rep.samples_used;
+    return true;
+  }
+
+  // The second curve: the run whose start voltage differs most from the first (100 mV or more).
+  static const RunInfo* secondRun(const std::vector<RunInfo>& infos) {
+    const RunInfo* second = nullptr;
+    for (const auto& info : infos)
+      if (std::abs(int(info.start_mv) - int(infos[0].start_mv)) >= 100 &&
+          (!second || std::abs(int(info.start_mv) - int(infos[0].start_mv)) >
+                          std::abs(int(second->start_mv) - int(infos[0].start_mv))))
+        second = &info;
+    return second;
+  }
+
+  void build() {
+    // per motor: runs with their start voltage
     const bool has_v = Setup::usable(train_, "vbat_v");
     const bool has_m = Setup::usable(train_, "motor");
     std::map<long, std::vector<int>> runs_of_motor;
@@ -65,82 +140,20 @@ class Thesis : public Term {
       if (std::find(v.begin(), v.end(), train_.run[i]) == v.end()) v.push_back(train_.run[i]);
     }
     for (auto& [m, runs] : runs_of_motor) {
-      struct RunInfo {
-        int run;
-        uint16_t start_mv;
-        tc::SagTable sag;
-        bool sag_ok;
-      };
       std::vector<RunInfo> infos;
-      for (int r : runs) {
-        tc::SagBuilder sb;
-        sb.reset(1000);
-        double vsum = 0;
-        std::size_t k = 0;
-        for (std::size_t i = 0; i < train_.rows(); ++i) {
-          if (train_.run[i] != r || (has_m && std::lround(train_.col("motor")[i]) != m)) continue;
-          if (has_v) {
-            const double mv = std::clamp(train_.col("vbat_v")[i] * 1000.0, 0.0, 65535.0);
-            sb.add(static_cast<uint16_t>(std::clamp(pwm[i], 0.0, 65535.0)), static_cast<uint16_t>(mv));
-            vsum += mv;
-          }
-          ++k;
-        }
-        RunInfo info{r, 0, tc::SagTable(), false};
-        uint16_t start = 0;
-        if (has_v && sb.build(info.sag, start)) {
-          info.start_mv = start;
-          info.sag_ok = true;
-        } else if (has_v && k > 0) {
-          info.start_mv = static_cast<uint16_t>(vsum / static_cast<double>(k));
-        } else {
-          info.start_mv = 12000;  // no voltage logged: a single curve, voltage term unused
-        }
-        infos.push_back(info);
-      }
+      for (int r : runs) infos.push_back(runInfo(r, m, has_v, has_m));
       std::sort(infos.begin(), infos.end(),
                 [](const RunInfo& a, const RunInfo& b) { return a.start_mv > b.start_mv; });
       tc::MotorCalibration cal;
       cal.clear();
-      auto curve = [&](const RunInfo& info, tc::ThesisCurve& out) {
-        std::map<long, std::pair<double, int>> merged;  // pwm -> force sum, count
-        for (std::size_t i = 0; i < train_.rows(); ++i) {
-          if (train_.run[i] != info.run || (has_m && std::lround(train_.col("motor")[i]) != m)) continue;
-          auto& e = merged[std::lround(pwm[i])];
-          e.first += f[i];
-          e.second += 1;
-        }
-        auto cb = std::make_unique<tc::CurveBuilder<1024>>();
-        std::size_t step = merged.size() / 1024 + 1, idx = 0;
-        for (const auto& [p, e] : merged) {
-          if (idx++ % step) continue;
-          const double dg = std::clamp(10.0 * e.first / e.second, -32768.0, 32767.0);
-          cb->add(static_cast<uint16_t>(std::clamp<long>(p, 0, 65535)), static_cast<int16_t>(std::lround(dg)));
-        }
-        const tc::BuildReport rep = cb->build(out);
-        if (rep.status == tc::BuildStatus::kOk) {
-          out.start_mv = info.start_mv ? info.start_mv : 1;
-          k_ += rep.samples_used;
-          return true;
-        }
-        return false;
-      };
-      if (infos.empty() || !curve(infos[0], cal.first))
+      if (infos.empty() || !curve(infos[0], m, has_m, cal.first))
         throw std::invalid_argument(fmt::format(
             "thesis model: could not build a force curve for motor {} from its highest-voltage "
             "run (the core curve builder needs at least 2 PWMs and a force of 1 g or more)", m));
       cal.sag = infos[0].sag;
       if (!infos[0].sag_ok) cal.sag = tc::SagTable();
-      // the second curve: the run whose start voltage differs most from the first
-      if (infos.size() > 1) {
-        const RunInfo* second = nullptr;
-        for (const auto& info : infos)
-          if (std::abs(int(info.start_mv) - int(infos[0].start_mv)) >= 100 &&
-              (!second || std::abs(int(info.start_mv) - int(infos[0].start_mv)) >
-                              std::abs(int(second->start_mv) - int(infos[0].start_mv))))
-            second = &info;
-        if (second) curve(*second, cal.second);
-      }
+      if (infos.size() > 1)
+        if (const RunInfo* second = secondRun(infos)) curve(*second, m, has_m, cal.second);
       motors_.push_back(m);
       cals_.push_back(cal);
     }
@@ -186,6 +199,9 @@ const EffectDef kThesis = {
     .params = {},
     .export_note = "the thesis model is the v1 record, which gather_store writes on the board; export a "
                    "curve model, e.g. curve+deadband+voltage+sag",
+    .suggests = {.variables = {"pwm_us", "vbat*", "voltage*", "v_v", "v"},
+                 .still = "the thesis model is two measured curves interpolated linearly between their two voltages "
+                          "(option 2.1): it cannot follow other voltages or shapes; compare with a curve model"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Thesis>(s); },
 };
 

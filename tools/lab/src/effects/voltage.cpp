@@ -36,6 +36,9 @@ const EffectDef kVoltage = {
                 .hi = 5.0}},
     .exports = Export::kInRecord,
     .shapes_curve = true,
+    .suggests = {.variables = {"vbat*", "voltage*", "v_v", "v"},
+                 .advice = "the force follows the motor voltage duty*V, not the PWM alone; add `voltage`",
+                 .still = "the voltage logged is not the one at the ESC"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Voltage>(s); },
 };
 

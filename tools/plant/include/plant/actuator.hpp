@@ -5,7 +5,8 @@
 // Mechanical: J dw/dt = Kt (I - I0) - Q_prop(w), J = rotor + propeller inertia,
 //   integrated linearly-implicitly (stable for any dt up to ~10 ms).
 // Speed time constant (small step around hover, 300 g, 11 V, kv1100_9x4.7):
-//   tau = J / (Kt Ke / R + dQ/dw) ~= 0.08 s (measured by the fidelity test; spec 0.05..0.12 s).
+//   tau = J / (Kt Ke / R + dQ/dw), which the fidelity test holds to the spec's 0.05..0.12 s
+//   (`thrustcal plant step` measures it).
 //   Spin-down is slower (no active braking: only propeller drag).
 // Thermal: winding temperature first-order, see MotorParams.
 //
@@ -83,6 +84,11 @@ class Actuator {
   // Thrust of the steady state, and its inverse: the pulse that gives thrust_g at bus_v
   // (bisection; returns esc.full_us if thrust_g is out of reach, esc.start_us if <= 0).
   double pulseForThrust_us(double thrust_g, double bus_v) const;
+
+  // --- damage (fault injection) --------------------------------------------------------------
+  // The propeller loses `share` (0..1) of its thrust from now on, e.g. a blade tip gone: C_T and
+  // C_P both scale by (1 - share), so the motor also spins up against less drag.
+  void damagePropeller(double share);
 
   // --- parameters --------------------------------------------------------------------------
   const ActuatorParams& params() const { return p_; }

@@ -15,6 +15,8 @@
 //             bootloader (Intel HEX, e.g. Debian's STK500v2 for the Mega2560 at byte 0x3E000):
 //             then every reset() starts at the bootloader, as a board whose BOOTRST fuse is
 //             programmed (simavr ignores the fuses, so the harness sets the reset vector).
+//   TWI       the chip's TWI (sim/twi.hpp: status codes, TWINT, timing from TWBR/TWPS, its
+//             interrupt), not simavr 1.6's; I2C parts (sim/mpu6050.hpp) connect to twi().irq().
 // A periodic tick (default 1 ms simulated) lets a plant model advance in step with the CPU.
 //
 // Time is simulated cycles only: the firmware's idle sleep skips ahead (the sleep callback is
@@ -36,6 +38,8 @@ struct avr_t;
 struct avr_irq_t;
 
 namespace sim {
+
+class Twi;
 
 // The board's facts come from the table the firmware is built from (hal/board.hpp).
 using hal::kCpuHz;
@@ -116,6 +120,9 @@ class Board {
     tick_hook_ = nullptr;
     pulse_listeners_.clear();
   }
+
+  // --- TWI (I2C master) ---
+  Twi& twi() { return *twi_; }
 
   // --- ESC pins ---
   const EscPin& escPin(int channel) const { return esc_.at(channel); }
@@ -238,6 +245,7 @@ class Board {
   double simulated_s_ = 0;
   std::vector<avr_irq_t*> irqs_;
   uint32_t boot_address_ = 0;  // 0: no bootloader
+  std::unique_ptr<Twi> twi_;
 };
 
 }  // namespace sim

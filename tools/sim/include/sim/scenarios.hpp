@@ -62,9 +62,9 @@ struct GatherOptions {
   // so that gather_store's 13 sag bins of 40 us span 1040..1560 us, the band the motors fly
   // in; everything above 1520 us lands in the last bin. Started at 1000 us the last bin
   // (1480 us and up) averages the sag of the whole top of the sweep, and a motor flying near
-  // 1480 us limit-cycles between two offsets ~0.4 V apart (measured: lift-off spread 3 % instead
-  // of 0.7-1 %). Settle 500 ms: the bench's 3rd-order low-pass is then within 0.01 % of each
-  // step; the thesis's 200 ms leaves ~1 % (stored curves ~7 g off instead of ~3 g).
+  // 1480 us limit-cycles between two offsets far apart (the lift-off's spread several times
+  // larger). Settle 500 ms: the bench's 3rd-order low-pass has then settled at each step; the
+  // thesis's 200 ms reads each step before it has (docs/results.md, benchmark 4).
   int pwm_min_us = 1040, pwm_max_us = 1800, step_us = 10, settle_ms = 500;
   bool settle_auto = false;             // `settle auto` after `settle settle_ms` (then the cap)
   SecondCurveSource second = SecondCurveSource::kBenchSupply;

@@ -1,20 +1,22 @@
 // The force model one motor slot flies, in one piece of SRAM: either the thesis model (layout v1,
-// tc::ThesisRun: option 2.1 with the curves' PWM steps read from the EEPROM on demand) or model
-// v2 (tc::ModelV2Run, the model as the frame reads it). A slot holds one or the other, never
-// both, so the two share their storage (a union): four slots stay small whatever mix of layouts
-// the EEPROM holds, where four decoded thesis records would not fit the SRAM at all.
+// tc::ThesisRun: option 2.1 with the curves' PWM steps read from the EEPROM on demand) or
+// model v2 (tc::ModelV2Run, the model as the frame reads it). A slot holds one or the other,
+// never both, so the two share their storage (a union): four slots stay under 1 KB whatever
+// mix of layouts the EEPROM holds, where four decoded thesis records would not fit the SRAM.
+// fw::ForceActuators keeps one per motor; `thrustcal bench footprint` measures its size on the AVR
+// (docs/results.md). In core, so the bench's AVR probe can use it too.
 //
 // Which member is alive is explicit: holdsV2(). v1() and v2() may only be called for the
-// member that is alive (callers check holdsV2() first; Motor::fliesV2() does).
+// member that is alive (callers check holdsV2() first; fw::Motor::fliesV2() does).
 #pragma once
 #include <stddef.h>
 #include <stdint.h>
 
-#include "placement_new.hpp"
+#include "thrustcal/placement_new.hpp"
 #include "thrustcal/model_v2_runtime.hpp"
 #include "thrustcal/thesis_runtime.hpp"
 
-namespace fw {
+namespace tc {
 
 class SlotModel {
  public:
@@ -55,4 +57,4 @@ class SlotModel {
   bool holds_v2_ = false;
 };
 
-}  // namespace fw
+}  // namespace tc

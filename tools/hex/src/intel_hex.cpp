@@ -1,11 +1,11 @@
-#include "sim/intel_hex.hpp"
+#include "hex/intel_hex.hpp"
 
 #include <fmt/format.h>
 
 #include <fstream>
 #include <sstream>
 
-namespace sim {
+namespace hex {
 namespace {
 
 int hexDigit(char c) {
@@ -137,4 +137,4 @@ void writeIntelHexFile(const std::string& path, const std::vector<uint8_t>& imag
   if (!out.flush()) throw HexError(fmt::format("{}: write failed (disk full?)", path));
 }
 
-}  // namespace sim
+}  // namespace hex

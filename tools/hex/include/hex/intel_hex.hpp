@@ -1,14 +1,16 @@
-// Intel HEX reading and writing for EEPROM images, in the dialect avrdude reads and writes
-// (`avrdude -U eeprom:w:FILE:i` / `-U eeprom:r:FILE:i`): 16 data bytes per record (type 00),
-// an extended linear address record (type 04) only when an image passes 64 KiB, and the
-// end-of-file record (type 01). Every record carries its two's-complement checksum.
+// Intel HEX reading and writing for AVR images (EEPROM, and the flash images the simulator
+// loads), in the dialect avrdude reads and writes (`avrdude -U eeprom:w:FILE:i` /
+// `-U eeprom:r:FILE:i`): 16 data bytes per record (type 00), an extended linear address record
+// (type 04) only when an image passes 64 KiB, and the end-of-file record (type 01). Every
+// record carries its two's-complement checksum. Its own library (thrustcal_hex) so that the
+// simulator, the board client and the lab share it without depending on each other.
 #pragma once
 #include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-namespace sim {
+namespace hex {
 
 // Thrown for unreadable or malformed HEX input; what() names the file and line and says what
 // was wrong and what to do.
@@ -35,4 +37,4 @@ std::vector<uint8_t> readIntelHexFile(const std::string& path, std::size_t size_
                                       uint8_t fill = 0xFF);
 void writeIntelHexFile(const std::string& path, const std::vector<uint8_t>& image);
 
-}  // namespace sim
+}  // namespace hex

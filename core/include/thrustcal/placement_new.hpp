@@ -1,4 +1,5 @@
-// Placement new (construct an object at an address: the firmware's unions of work space).
+// Placement new (construct an object at an address: the unions of work space in core and the
+// firmware).
 // avr-libc ships no <new>; this is the standard form.
 #pragma once
 #include <stddef.h>

@@ -1,0 +1,3 @@
+// fixture: a includes b
+#pragma once
+#include "b/b.hpp"

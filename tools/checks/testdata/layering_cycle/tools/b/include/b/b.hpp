@@ -1,0 +1,2 @@
+// fixture: b includes c, through a source file
+#pragma once

@@ -1,0 +1,3 @@
+// fixture: c includes a back: a -> b -> c -> a
+#pragma once
+#include "a/a.hpp"

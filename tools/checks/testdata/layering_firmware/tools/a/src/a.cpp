@@ -1,0 +1,2 @@
+// fixture: a tool including an image's own header
+#include "image_app.hpp"

@@ -1,0 +1,3 @@
+// fixture: the home
+#pragma once
+constexpr unsigned kForceCentral = 65;

@@ -1,0 +1,375 @@
+#include "lab/noise.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+namespace lab {
+
+namespace {
+
+constexpr std::size_t kWindow = 4;          // rows per contrast: orthogonal to a quadratic
+constexpr double kFeatureSd = 4.0;          // contrasts beyond this many robust SD are features
+constexpr double kMedianChi2One = 0.454936; // median of a chi-square with one degree of freedom
+constexpr double kMinDof = 5.0;
+constexpr double kHeldShare = 0.3;          // more repeated readings than this: held between updates
+
+bool contains(const std::string& s, const char* word) { return s.find(word) != std::string::npos; }
+
+// A column that may be computed from the force reading (a thrust in other units, an
+// efficiency in g/W): regressing it out would take the noise with it.
+bool mayHoldForce(const std::string& name) {
+  std::string n = name;
+  for (auto& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (const char* w : {"force", "thrust", "weight", "efficien", "lift", "load", "mass"})
+    if (contains(n, w)) return true;
+  return false;
+}
+
+// The logged conditions whose contrasts are regressed out: every other numeric column logged on
+// every row and not constant.
+std::vector<std::size_t> conditionColumns(const Dataset& d) {
+  std::vector<std::size_t> out;
+  for (std::size_t c = 0; c < d.names.size(); ++c) {
+    const std::string& n = d.names[c];
+    if (n == "pwm_us" || n == "force_g" || n == "run" || mayHoldForce(n)) continue;
+    const auto& v = d.columns[c];
+    bool finite = true, varies = false;
+    for (double x : v) {
+      finite = finite && std::isfinite(x);
+      varies = varies || x != v.front();
+    }
+    if (finite && varies) out.push_back(c);
+  }
+  return out;
+}
+
+// The unit contrast over a window's abscissae x[0..3] orthogonal to 1, x and x^2 (those of them
+// the points can tell apart); false when there is none.
+bool contrastWeights(const double* x, double* w) {
+  const double mean = (x[0] + x[1] + x[2] + x[3]) / 4.0;
+  double scale = 0;
+  for (std::size_t k = 0; k < kWindow; ++k) scale = std::max(scale, std::fabs(x[k] - mean));
+  if (!(scale > 0)) scale = 1;
+  Eigen::Matrix4d q = Eigen::Matrix4d::Zero();
+  int nq = 0;
+  for (int power = 0; power <= 2; ++power) {
+    Eigen::Vector4d b;
+    for (std::size_t k = 0; k < kWindow; ++k) b[static_cast<Eigen::Index>(k)] = std::pow((x[k] - mean) / scale, power);
+    for (int j = 0; j < nq; ++j) b -= q.col(j).dot(b) * q.col(j);
+    if (b.norm() < 1e-9) continue;
+    q.col(nq++) = b.normalized();
+  }
+  const Eigen::Matrix4d p = Eigen::Matrix4d::Identity() - q.leftCols(nq) * q.leftCols(nq).transpose();
+  Eigen::Index best = 0;
+  for (Eigen::Index j = 1; j < 4; ++j)
+    if (p.col(j).norm() > p.col(best).norm()) best = j;
+  if (p.col(best).norm() < 1e-9) return false;
+  const Eigen::Vector4d u = p.col(best).normalized();
+  for (std::size_t k = 0; k < kWindow; ++k) w[k] = u[static_cast<Eigen::Index>(k)];
+  return true;
+}
+
+// One contrast: its window's first row in the group's order, its group, its weights.
+struct Window {
+  std::size_t group = 0, start = 0;
+  double w[kWindow] = {};
+};
+
+// The sweep direction of each row: the sign of the PWM's change in logging order within its run
+// (a repeated set point keeps the direction it had), times the `dir` column's sign when logged,
+// so a sweep restarting from the bottom, or a logged turn, starts a new sweep.
+std::vector<int> directions(const Dataset& d) {
+  std::vector<int> sign(d.rows(), 0);
+  const auto& pwm = d.col("pwm_us");
+  const std::vector<double>* dir = d.has("dir") ? &d.col("dir") : nullptr;
+  std::map<int, std::size_t> last;      // run -> its previous row
+  std::map<int, int> last_sign;         // run -> the direction so far
+  std::map<int, std::vector<std::size_t>> unsigned_rows;  // rows before the run's first change
+  for (std::size_t i = 0; i < d.rows(); ++i) {
+    const int r = d.run[i];
+    const auto it = last.find(r);
+    int s = 0;
+    if (it != last.end() && pwm[i] != pwm[it->second]) s = pwm[i] > pwm[it->second] ? 1 : -1;
+    if (s == 0) s = last_sign[r];
+    if (s != 0 && last_sign[r] == 0)
+      for (std::size_t j : unsigned_rows[r]) sign[j] = s;
+    if (s == 0) unsigned_rows[r].push_back(i);
+    sign[i] = s;
+    last_sign[r] = s;
+    last[r] = i;
+  }
+  if (dir)
+    for (std::size_t i = 0; i < d.rows(); ++i)
+      if (std::isfinite((*dir)[i]) && (*dir)[i] < 0) sign[i] = 2 + sign[i];  // a turn the log says: its own sweep
+  return sign;
+}
+
+// Rows that repeat the previous row's force exactly, in logging order within a run: when most
+// do, the logger held the reading between updates, and one row per update is one reading.
+std::vector<bool> heldReadings(const Dataset& d, bool& held) {
+  const auto& f = d.col("force_g");
+  std::vector<bool> repeat(d.rows(), false);
+  std::map<int, std::size_t> last;
+  std::size_t repeats = 0;
+  for (std::size_t i = 0; i < d.rows(); ++i) {
+    const auto it = last.find(d.run[i]);
+    repeat[i] = it != last.end() && f[i] == f[it->second];
+    repeats += repeat[i] ? 1 : 0;
+    last[d.run[i]] = i;
+  }
+  held = static_cast<double>(repeats) > kHeldShare * static_cast<double>(d.rows());
+  if (!held) std::fill(repeat.begin(), repeat.end(), false);
+  return repeat;
+}
+
+// The rows of each sweep (a run's rows in logging order, cut where the direction turns), sorted
+// by PWM, then by time or logging order; held repeats of a reading left out.
+std::vector<std::vector<std::size_t>> neighbourGroups(const Dataset& d, bool& held) {
+  const auto& pwm = d.col("pwm_us");
+  const std::vector<double>* t = d.has("t_s") ? &d.col("t_s") : nullptr;
+  const std::vector<int> sign = directions(d);
+  const std::vector<bool> repeat = heldReadings(d, held);
+  std::map<std::pair<int, int>, std::vector<std::size_t>> groups;
+  std::map<int, std::pair<int, int>> segment;  // run -> (segment, its direction)
+  for (std::size_t i = 0; i < d.rows(); ++i) {
+    auto [it, fresh] = segment.try_emplace(d.run[i], 0, sign[i]);
+    if (!fresh && sign[i] != it->second.second) it->second = {it->second.first + 1, sign[i]};
+    if (!repeat[i]) groups[{d.run[i], it->second.first}].push_back(i);
+  }
+  std::vector<std::vector<std::size_t>> out;
+  for (auto& [key, rows] : groups) {
+    std::stable_sort(rows.begin(), rows.end(), [&](std::size_t a, std::size_t b) {
+      if (pwm[a] != pwm[b]) return pwm[a] < pwm[b];
+      return t && std::isfinite((*t)[a]) && std::isfinite((*t)[b]) ? (*t)[a] < (*t)[b] : a < b;
+    });
+    out.push_back(std::move(rows));
+  }
+  return out;
+}
+
+// The windows of four neighbours: along the PWM where the four PWMs differ, along time where
+// they are one set point (a transient is smooth in time), none where they mix the two.
+std::vector<Window> windowsOf(const Dataset& d, const std::vector<std::vector<std::size_t>>& groups) {
+  const auto& pwm = d.col("pwm_us");
+  const std::vector<double>* t = d.has("t_s") ? &d.col("t_s") : nullptr;
+  std::vector<Window> out;
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    const auto& rows = groups[g];
+    for (std::size_t s = 0; s + kWindow <= rows.size(); ++s) {
+      double p[kWindow], x[kWindow];
+      std::size_t distinct = 1;
+      for (std::size_t k = 0; k < kWindow; ++k) {
+        p[k] = pwm[rows[s + k]];
+        if (k && p[k] != p[k - 1]) ++distinct;
+      }
+      if (distinct == kWindow) {
+        std::copy(p, p + kWindow, x);
+      } else if (distinct == 1) {
+        for (std::size_t k = 0; k < kWindow; ++k)
+          x[k] = t && std::isfinite((*t)[rows[s + k]]) ? (*t)[rows[s + k]] : static_cast<double>(rows[s + k]);
+      } else {
+        continue;
+      }
+      Window w;
+      w.group = g;
+      w.start = s;
+      if (contrastWeights(x, w.w)) out.push_back(w);
+    }
+  }
+  return out;
+}
+
+// Effective degrees of freedom of the kept contrasts: overlapping windows share rows, so their
+// contrasts correlate; nu = (N - k) N / sum_ij C_ij^2.
+double effectiveDof(const std::vector<Window>& win, const std::vector<bool>& keep, std::size_t n_kept,
+                    std::size_t k) {
+  double sum_c2 = static_cast<double>(n_kept);
+  for (std::size_t i = 0; i < win.size(); ++i) {
+    if (!keep[i]) continue;
+    for (std::size_t j = i + 1; j < win.size() && j <= i + kWindow - 1; ++j) {
+      if (!keep[j] || win[j].group != win[i].group) continue;
+      const std::size_t lag = win[j].start - win[i].start;
+      if (lag == 0 || lag >= kWindow) continue;
+      double c = 0;
+      for (std::size_t a = lag; a < kWindow; ++a) c += win[i].w[a] * win[j].w[a - lag];
+      sum_c2 += 2 * c * c;
+    }
+  }
+  return (static_cast<double>(n_kept) - static_cast<double>(k)) * static_cast<double>(n_kept) / sum_c2;
+}
+
+// Least squares of e on the columns of Z over the kept rows, from the normal equations (Z's
+// columns have unit RMS; a combination the rows do not determine is dropped); returns the
+// residuals of every row and the rank used.
+Eigen::VectorXd regressOut(const Eigen::VectorXd& e, const Eigen::MatrixXd& z, const std::vector<bool>& keep,
+                           Eigen::Index& rank) {
+  rank = 0;
+  if (z.cols() == 0) return e;
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(z.cols(), z.cols());
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(z.cols());
+  for (Eigen::Index i = 0; i < z.rows(); ++i) {
+    if (!keep[static_cast<std::size_t>(i)]) continue;
+    g.selfadjointView<Eigen::Lower>().rankUpdate(z.row(i).transpose());
+    h.noalias() += z.row(i).transpose() * e[i];
+  }
+  g = g.selfadjointView<Eigen::Lower>();
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(g);
+  cod.setThreshold(1e-12);
+  rank = cod.rank();
+  const Eigen::VectorXd beta = cod.solve(h);
+  return e - z * beta;
+}
+
+// The contrasts of the force and of the conditions, one row per window; the conditions' columns
+// scaled to unit RMS, and dropped when their contrasts vanish (a condition constant within
+// every window, or one that moves with the drive: the window cancels it).
+void contrastsOf(const Dataset& d, const std::vector<std::vector<std::size_t>>& groups, const std::vector<Window>& win,
+                 Eigen::VectorXd& e, Eigen::MatrixXd& z, std::vector<std::string>& names) {
+  const auto& f = d.col("force_g");
+  const std::vector<std::size_t> cond = conditionColumns(d);
+  const auto n = static_cast<Eigen::Index>(win.size());
+  const auto nc = static_cast<Eigen::Index>(cond.size());
+  e.resize(n);
+  // per condition: its contrast, and the contrast times the window's mean force (a condition
+  // that changes the force by a factor changes it more where the force is larger)
+  Eigen::MatrixXd all(n, 2 * nc);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Window& w = win[static_cast<std::size_t>(i)];
+    const auto& rows = groups[w.group];
+    double ef = 0, fbar = 0;
+    for (std::size_t k = 0; k < kWindow; ++k) {
+      ef += w.w[k] * f[rows[w.start + k]];
+      fbar += f[rows[w.start + k]] / static_cast<double>(kWindow);
+    }
+    e[i] = ef;
+    for (Eigen::Index c = 0; c < nc; ++c) {
+      double ez = 0;
+      for (std::size_t k = 0; k < kWindow; ++k) ez += w.w[k] * d.columns[cond[static_cast<std::size_t>(c)]][rows[w.start + k]];
+      all(i, c) = ez;
+      all(i, nc + c) = fbar * ez;
+    }
+  }
+  std::vector<Eigen::Index> used;
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    const auto& v = d.columns[cond[static_cast<std::size_t>(c)]];
+    const double mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+    double ss = 0;
+    for (double x : v) ss += (x - mean) * (x - mean);
+    const double sd = std::sqrt(ss / static_cast<double>(v.size()));
+    const double rms = n ? all.col(c).norm() / std::sqrt(static_cast<double>(n)) : 0;
+    if (!(rms > 1e-6 * sd)) continue;
+    for (Eigen::Index col : {c, nc + c}) {
+      const double norm = all.col(col).norm() / std::sqrt(static_cast<double>(n));
+      if (!(norm > 0)) continue;
+      all.col(col) /= norm;
+      used.push_back(col);
+    }
+    names.push_back(d.names[cond[static_cast<std::size_t>(c)]]);
+  }
+  if (used.size() == static_cast<std::size_t>(all.cols())) {
+    z = std::move(all);
+    return;
+  }
+  z.resize(n, static_cast<Eigen::Index>(used.size()));
+  for (std::size_t c = 0; c < used.size(); ++c) z.col(static_cast<Eigen::Index>(c)) = all.col(used[c]);
+}
+
+double medianOfSquares(const Eigen::VectorXd& r, const std::vector<bool>& keep) {
+  std::vector<double> sq;
+  for (Eigen::Index i = 0; i < r.size(); ++i)
+    if (keep[static_cast<std::size_t>(i)]) sq.push_back(r[i] * r[i]);
+  if (sq.empty()) return 0;
+  const auto mid = sq.begin() + static_cast<long>(sq.size() / 2);
+  std::nth_element(sq.begin(), mid, sq.end());
+  return *mid;
+}
+
+}  // namespace
+
+bool NoiseEstimate::known() const { return std::isfinite(sigma_g); }
+
+double chiSquareQuantile(double p, double dof) {
+  // the standard normal quantile (Acklam's rational approximation, central region and tails)
+  auto normalQuantile = [](double q) {
+    static const double a[] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
+                               1.383577518672690e+02, -3.066479806614716e+01, 2.506628277459239e+00};
+    static const double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
+                               6.680131188771972e+01, -1.328068155288572e+01};
+    static const double c[] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
+                               -2.549732539343734e+00, 4.374664141464968e+00, 2.938163982698783e+00};
+    static const double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
+                               3.754408661907416e+00};
+    if (q < 0.02425) {
+      const double s = std::sqrt(-2 * std::log(q));
+      return (((((c[0] * s + c[1]) * s + c[2]) * s + c[3]) * s + c[4]) * s + c[5]) /
+             ((((d[0] * s + d[1]) * s + d[2]) * s + d[3]) * s + 1);
+    }
+    if (q > 1 - 0.02425) {
+      const double s = std::sqrt(-2 * std::log(1 - q));
+      return -(((((c[0] * s + c[1]) * s + c[2]) * s + c[3]) * s + c[4]) * s + c[5]) /
+             ((((d[0] * s + d[1]) * s + d[2]) * s + d[3]) * s + 1);
+    }
+    const double s = q - 0.5, r = s * s;
+    return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * s /
+           (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1);
+  };
+  const double h = 2.0 / (9.0 * dof);
+  const double c = 1 - h + normalQuantile(p) * std::sqrt(h);
+  return dof * std::max(c, 0.0) * std::max(c, 0.0) * std::max(c, 0.0);
+}
+
+NoiseEstimate estimateNoise(const Dataset& data) {
+  NoiseEstimate out;
+  if (!data.has("pwm_us") || !data.has("force_g")) {
+    out.why_not = "the data have no pwm_us or force_g";
+    return out;
+  }
+  bool held = false;
+  const auto groups = neighbourGroups(data, held);
+  if (held) out.note = "most rows repeat the previous force reading (held between updates): one row per update used";
+  const std::vector<Window> win = windowsOf(data, groups);
+  Eigen::VectorXd e;
+  Eigen::MatrixXd z;
+  contrastsOf(data, groups, win, e, z, out.conditions);
+  std::vector<bool> keep(win.size(), true);
+  Eigen::Index rank = 0;
+  // robust scale of the first residuals, then the features left out and the fit again
+  Eigen::VectorXd r = regressOut(e, z, keep, rank);
+  const double robust_sd = std::sqrt(medianOfSquares(r, keep) / kMedianChi2One);
+  std::size_t n_kept = 0;
+  for (std::size_t i = 0; i < win.size(); ++i) {
+    keep[i] = std::fabs(r[static_cast<Eigen::Index>(i)]) <= kFeatureSd * robust_sd;
+    n_kept += keep[i] ? 1 : 0;
+  }
+  out.features = win.size() - n_kept;
+  out.contrasts = n_kept;
+  r = regressOut(e, z, keep, rank);
+  double rss = 0;
+  for (std::size_t i = 0; i < win.size(); ++i)
+    if (keep[i]) rss += r[static_cast<Eigen::Index>(i)] * r[static_cast<Eigen::Index>(i)];
+  const double dof_rss = static_cast<double>(n_kept) - static_cast<double>(rank);
+  out.dof = dof_rss > 0 ? effectiveDof(win, keep, n_kept, static_cast<std::size_t>(rank)) : 0;
+  if (!(out.dof >= kMinDof)) {
+    out.why_not = fmt::format("too few neighbouring rows: {} windows of four rows sorted by PWM within a run "
+                              "(need enough for {} degrees of freedom); log more points per sweep",
+                              win.size(), kMinDof);
+    out.conditions.clear();
+    return out;
+  }
+  out.sigma_g = std::sqrt(rss / dof_rss);
+  out.lo_g = out.sigma_g * std::sqrt(out.dof / chiSquareQuantile(0.975, out.dof));
+  out.hi_g = out.sigma_g * std::sqrt(out.dof / chiSquareQuantile(0.025, out.dof));
+  return out;
+}
+
+std::string describe(const NoiseEstimate& n) {
+  if (!n.known()) return "not estimated (" + n.why_not + ")";
+  return fmt::format("{:.3g} g ({:.3g}..{:.3g}, 95 %)", n.sigma_g, n.lo_g, n.hi_g);
+}
+
+}  // namespace lab

@@ -1,0 +1,29 @@
+// Each image's deepest paths, then how much stack was never used (docs/safety.md): the boot
+// code paints the SRAM above the static data, `status` reports the paint still intact, and the
+// harness scans the simulated SRAM itself as a check on that figure. One home for the
+// scenario: the HIL test (tests/hil_safety/stack_hil_test.cpp) asserts on it and
+// `thrustcal bench footprint` reports it.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace sim {
+
+struct StackHeadroom {
+  int untouched_bytes = -1;          // status: "stack: N of M bytes never used" (-1: no line)
+  int stack_bytes = -1;              // M
+  int scanned_untouched_bytes = -1;  // the paint byte intact from the linker's _end upwards
+  std::vector<std::string> status;   // what status printed
+  std::vector<std::string> deepest;  // the reply of the deepest command (gather_store: store v2)
+  std::string console_tail;          // the console's last lines, for messages
+};
+
+// gather_store on the plant's thesis bench (motor seed 13): cal, range 1040 1800, settle 60,
+// sweep, store v2 (the fit: its deepest path), show, store 1, help under a flood, status.
+StackHeadroom gatherStoreDeepestPaths(const std::string& elf);
+// read_run with two v1 and two v2 slots (the boot decodes both v2 copies): a lift-off, f 200,
+// help under a flood with every motor running (its wait hook flies the frames on top of the
+// reply), status.
+StackHeadroom readRunDeepestPaths(const std::string& elf);
+
+}  // namespace sim
