@@ -5,7 +5,7 @@
 // low, a crash, the link lost; a slave that lets go within nine clocks is recovered in flight.
 // pwm mode (the thesis's controller output around a hover pulse) needs no calibrated slot, so
 // these runs need no gather; the modes' pulses are tested on the fake HAL
-// (tests/firmware/fly). Built only in a tree that has the airframe (tests/hil/CMakeLists.txt).
+// (tests/firmware/fly).
 #include <gtest/gtest.h>
 
 #include <algorithm>
