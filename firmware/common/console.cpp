@@ -282,6 +282,26 @@ void printFixed(int32_t value, uint8_t decimals) {
   }
 }
 
+void printFixed16(int16_t value, uint8_t decimals) {
+  uint16_t magnitude = value < 0 ? static_cast<uint16_t>(-static_cast<int32_t>(value)) : static_cast<uint16_t>(value);
+  if (value < 0) hal::Uart::write('-');
+  if (decimals > 4) decimals = 4;
+  const uint8_t point = static_cast<uint8_t>(4 - decimals);  // the digit before the point
+  bool leading = true;
+  uint16_t power = 10000;  // then 1000, 100, 10, 1: no table to read, no division
+  for (uint8_t k = 0; k < 5; ++k) {
+    uint8_t digit = 0;
+    while (magnitude >= power) {  // at most 9 subtractions (6 for the first digit)
+      magnitude = static_cast<uint16_t>(magnitude - power);
+      ++digit;
+    }
+    if (digit != 0 || k >= point) leading = false;
+    if (!leading) hal::Uart::write(static_cast<uint8_t>('0' + digit));
+    if (k == point && decimals != 0) hal::Uart::write('.');
+    power = power == 10000 ? 1000 : power == 1000 ? 100 : power == 100 ? 10 : 1;
+  }
+}
+
 void printHex2(uint8_t value) {
   for (uint8_t shift = 4;; shift = 0) {
     const uint8_t d = static_cast<uint8_t>((value >> shift) & 0x0F);

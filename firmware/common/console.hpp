@@ -113,6 +113,9 @@ void printUint(uint32_t value);
 // value / 10^decimals with exactly `decimals` digits after the point: printFixed(11350, 3)
 // prints "11.350"; printFixed(-5, 1) prints "-0.5".
 void printFixed(int32_t value, uint8_t decimals);
+// printFixed for a 16-bit value, with no 32-bit division (a few hundred cycles instead of
+// thousands on the AVR: fly prints 50 stream rows a second beside a 400 Hz loop).
+void printFixed16(int16_t value, uint8_t decimals);
 void printHex2(uint8_t value);  // two upper-case hex digits
 void newline();  // "\r\n"
 // The print helpers both apps' console views use (one copy, here).

@@ -31,8 +31,8 @@ void ForceActuators::loadSettings() {
 }
 
 uint8_t ForceActuators::loadSlots(SlotReport report) {
-  v2_.count = 0;
   for (uint8_t i = 0; i < kMotors; ++i) loadSlot(i, report);
+  assignLanes();
   return armableCount();
 }
 
@@ -53,7 +53,7 @@ void ForceActuators::loadSlot(uint8_t index, SlotReport report) {
   m.v2_copy_status[0] = load.v2.copy_status[0];
   m.v2_copy_status[1] = load.v2.copy_status[1];
   m.why = load.why;
-  m.lane = kNoLane;
+  m.source = index;
   m.model.clear();
   if (m.record == tc::DecodeStatus::kOk) {
     const bool loaded = load.layout == tc::SlotLayout::kModelV2 ? m.model.setV2(v2)
@@ -61,15 +61,44 @@ void ForceActuators::loadSlot(uint8_t index, SlotReport report) {
     if (!loaded) {  // the EEPROM changed under the loader: never flown
       m.record = tc::DecodeStatus::kBadContent;
       m.model.clear();
-    } else if (m.model.holdsV2()) {
-      m.lane = v2_.count++;
-      v2_.lane[m.lane].setModel(&m.model.v2());
     }
   }
   m.force_g = 0;
   m.pwm_us = tc::kStopPwmUs;
   m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
   if (report != nullptr) report(index, m, v2, v1);
+}
+
+// A lane per motor whose model is v2, in motor order, flying its source's model.
+void ForceActuators::assignLanes() {
+  v2_.count = 0;
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    Motor& m = motors_[i];
+    const Motor& source = motors_[m.source];
+    m.lane = kNoLane;
+    if (source.fliesV2()) {
+      m.lane = v2_.count++;
+      v2_.lane[m.lane].setModel(&source.model.v2());
+    }
+  }
+}
+
+bool ForceActuators::setModelSource(uint8_t index, uint8_t slot) {
+  if (index >= kMotors || slot >= kMotors || isRunning()) return false;
+  if (slot != index && !motors_[slot].isArmable()) return false;
+  motors_[index].source = slot;
+  assignLanes();
+  return true;
+}
+
+uint16_t ForceActuators::maxForceG(uint8_t index) const {
+  const Motor& source = motors_[motors_[index].source];
+  if (!source.isArmable()) return 0;
+  if (source.model.holdsV2()) return static_cast<uint16_t>(source.model.v2().max_force_dg / 10u);
+  const tc::ThesisRun& thesis = source.model.v1();
+  const uint16_t first = thesis.first.maxGrams();
+  const uint16_t second = thesis.hasSecondCurve() ? thesis.second.maxGrams() : first;
+  return second < first ? second : first;
 }
 
 void ForceActuators::restartFilters() {
@@ -96,8 +125,7 @@ bool ForceActuators::isRunning() const {
 }
 
 void ForceActuators::setForce(uint8_t index, uint16_t force_g) {
-  Motor& m = motors_[index];
-  if (m.isArmable()) m.force_g = force_g;
+  if (isArmable(index)) motors_[index].force_g = force_g;
 }
 
 void ForceActuators::stopAll() {
@@ -106,7 +134,7 @@ void ForceActuators::stopAll() {
     Motor& m = motors_[i];
     m.force_g = 0;
     m.pwm_us = tc::kStopPwmUs;
-    m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
+    m.flags = isArmable(i) ? tc::kStopped : tc::kNotCalibrated;
     pulses_us[i] = tc::kStopPwmUs;
   }
   hal::Esc::writeAll(pulses_us);
@@ -125,7 +153,13 @@ void ForceActuators::setFrameRate(uint16_t frame_hz) {
 // The ESC frame (thesis fig. 6.9, H.3). Integer only.
 
 void ForceActuators::frame() {
-  battery_.sample(v2_.count != 0);
+  sampleBattery();
+  output();
+}
+
+void ForceActuators::sampleBattery() { battery_.sample(v2_.count != 0); }
+
+void ForceActuators::output() {
   if (v2_.count != 0) flyV2Motors();
   uint16_t pulses_us[kMotors];
   for (uint8_t i = 0; i < kMotors; ++i) {
@@ -149,14 +183,15 @@ void ForceActuators::flyV2Motors() {
 // One motor's pulse for this frame from its model. The v2 motors' pulses come from their
 // lanes (flyV2Motors), with no division on their path.
 void ForceActuators::flyMotor(Motor& m) {
-  if (!m.isArmable()) {
+  const Motor& source = motors_[m.source];
+  if (!source.isArmable()) {
     m.force_g = 0;
     m.pwm_us = tc::kStopPwmUs;
     m.flags = tc::kNotCalibrated;
     m.vbat_mv = battery_.medianMv();
     return;
   }
-  if (m.fliesV2()) {
+  if (m.lane != kNoLane) {
     const tc::V2Lane& lane = v2_.lane[m.lane];
     m.pwm_us = lane.pwm_us;
     m.flags = lane.flags;
@@ -165,7 +200,7 @@ void ForceActuators::flyMotor(Motor& m) {
   }
   // Thesis fig. 6.9: the reading sags under this motor's load; add the offset of the PWM it
   // was last sent.
-  const tc::ThesisRun& thesis = m.model.v1();
+  const tc::ThesisRun& thesis = source.model.v1();
   m.vbat_mv = battery_.monitor().compensatedMillivolts(battery_.medianMv(), m.pwm_us, thesis.sag);
   const tc::ForcePwmResult result = tc::forceToPwm<hal::Eeprom>(thesis, m.force_g, m.vbat_mv);
   m.pwm_us = result.pwm_us;

@@ -12,9 +12,13 @@
 //   motors.setForce(i, force_g);              // armable motors only (isArmable(i))
 //   motors.frame();                           // battery, models, four pulses written at once
 //   motors.stopAll();                         // 0 g and the stop pulse on every ESC, now
+// frame() is sampleBattery() then output(): a loop may read the battery less often than it flies
+// (fly reads it every eighth of its 400 Hz frames). setModelSource(i, s) lets motor i fly slot
+// s's record (fly's generic mode: one motor's record for all four, what an uncalibrated
+// aircraft flies); maxForceG(i) is the most its model makes (a mixer's saturation limit).
 //
-// Safety rules kept here: a motor whose record did not load whole and plausible is never armed
-// (held at the stop pulse, every force to it ignored); the per-frame path is integer only.
+// Safety rules kept here: a motor whose model's record did not load whole and plausible is never
+// armed (held at the stop pulse, every force to it ignored); the per-frame path is integer only.
 // Files: force_actuators.cpp (loading, the frame), frame_rules.hpp (the frame's pure
 // decisions); the model a slot flies is tc::SlotModel (core).
 #pragma once
@@ -44,7 +48,9 @@ struct Motor {
   tc::DecodeStatus record = tc::DecodeStatus::kErased;  // kOk: `model` is loaded and flown
   uint8_t v2_copy = tc::kNoCopy;                 // v2: copy flown (0 = A, 1 = B)
   tc::DecodeStatus v2_copy_status[2] = {tc::DecodeStatus::kErased, tc::DecodeStatus::kErased};
-  uint8_t lane = kNoLane;           // v2: its lane in the frame
+  uint8_t source = 0;               // the slot whose model this motor flies (its own, unless
+                                    // setModelSource chose another)
+  uint8_t lane = kNoLane;           // flying a v2 model: its lane in the frame
   tc::Plausibility why;             // record kBadContent: the plausibility rule it broke
   uint16_t force_g = 0;             // the force command: the one place it is kept
   uint16_t pwm_us = tc::kStopPwmUs; // last pulse written to the ESC
@@ -52,6 +58,7 @@ struct Motor {
                                     // v2 the bus filter's value
   uint8_t flags = 0;                // tc::ForcePwmFlag bits of that pulse
 
+  // The slot's own record (what the start-up report and status describe).
   bool isArmable() const { return record == tc::DecodeStatus::kOk; }
   bool fliesV2() const { return isArmable() && model.holdsV2(); }
 };
@@ -101,15 +108,28 @@ class ForceActuators {
   void setForce(uint8_t index, uint16_t force_g);
   // 0 g and the stop pulse on every ESC at once (not waiting for the next frame).
   void stopAll();
-  // One ESC frame: the battery's readings, each motor's pulse from its force through its model,
-  // the four pulses written back to back.
+  // One ESC frame: sampleBattery(), then output().
   void frame();
+  // The battery's readings of a frame (four conversions: the median, the v2 bus reading).
+  void sampleBattery();
+  // Each motor's pulse from its force through its model at the last readings, the four pulses
+  // written back to back.
+  void output();
+
+  // Motor `index` flies the model of slot `slot` from now on (slot == index: its own again,
+  // whatever it holds). Only while no motor runs; false (nothing changed) then, for an index or
+  // slot outside 0..3, or when another slot is not armable.
+  bool setModelSource(uint8_t index, uint8_t slot);
+  // The heaviest force motor `index`'s model makes, in grams (v1: the lighter of its curves'
+  // heaviest gram; v2: its last knot); 0 when it is not armable.
+  uint16_t maxForceG(uint8_t index) const;
   // The v2 bus filter's constant follows the frame rate (its time constant stays the same).
   void setFrameRate(uint16_t frame_hz);
 
   const Motor& motor(uint8_t index) const { return motors_[index]; }
-  bool isArmable(uint8_t index) const { return motors_[index].isArmable(); }
-  uint8_t armableCount() const;
+  // Motor `index` can fly: the slot whose model it flies holds a valid record.
+  bool isArmable(uint8_t index) const { return motors_[motors_[index].source].isArmable(); }
+  uint8_t armableCount() const;  // calibrated slots
   bool isRunning() const;  // any motor commanded above 0 g
   const tc::BoardSettings& boardSettings() const { return board_settings_; }
   tc::BoardSettings& boardSettings() { return board_settings_; }
@@ -122,6 +142,7 @@ class ForceActuators {
 
  private:
   void loadSlot(uint8_t index, SlotReport report);
+  void assignLanes();
   void flyV2Motors();
   void flyMotor(Motor& m);
 

@@ -4,23 +4,15 @@
 #pragma once
 #include <stdint.h>
 
+#include "link_watch.hpp"
 #include "thrustcal/limits.hpp"
 
 namespace rr {
 
-// Failsafe and lift-off link: kFailsafeMs without a keep-alive (or, in a lift-off, a line end).
-inline bool linkLost(uint32_t now_ms, uint32_t last_keepalive_ms) {
-  return now_ms - last_keepalive_ms >= tc::kFailsafeMs;
-}
-
-// The link's state: when the last keep-alive came, and how often the failsafe stopped the motors.
-struct LinkWatch {
-  uint32_t last_ms = 0;
-  uint32_t trips = 0;
-
-  void heard(uint32_t now_ms) { last_ms = now_ms; }
-  bool lost(uint32_t now_ms) const { return linkLost(now_ms, last_ms); }
-};
+// Failsafe and lift-off link: kFailsafeMs without a keep-alive (or, in a lift-off, a line end);
+// shared with fly (firmware/common/link_watch.hpp).
+using fw::linkLost;
+using fw::LinkWatch;
 
 // `stream on`: one CSV row every `every_frames` frames (kStreamLinesPerSecond at any rate).
 constexpr uint8_t kStreamLinesPerSecond = 10;

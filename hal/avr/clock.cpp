@@ -47,4 +47,29 @@ void Clock::sleepUntilInterrupt() {
   sleep_mode();  // sleep_enable, sleep_cpu, sleep_disable; the 1 ms tick wakes at the latest
 }
 
+void Clock::sleepUntil(bool (*ready)()) {
+  set_sleep_mode(SLEEP_MODE_IDLE);
+  for (;;) {
+    cli();
+    if (ready()) break;
+    sleep_enable();
+    sei();  // sei; sleep is atomic (see sleepUnless)
+    sleep_cpu();
+    sleep_disable();
+  }
+  sei();
+}
+
+void Clock::sleepUnless(bool (*pending)()) {
+  set_sleep_mode(SLEEP_MODE_IDLE);
+  cli();
+  if (pending == nullptr || !pending()) {
+    sleep_enable();
+    sei();  // sei; sleep is atomic: an interrupt after the check still wakes the sleep
+    sleep_cpu();
+    sleep_disable();
+  }
+  sei();
+}
+
 }  // namespace hal

@@ -7,7 +7,10 @@
 //  - transmitting takes no time and never waits (so the wait hook is never called);
 //  - an EEPROM address outside 0..4095 throws std::out_of_range (the AVR would wrap around
 //    silently): such an access is a bug in the code under test;
-//  - an ADC conversion takes no simulated time (104 us on the AVR).
+//  - an ADC conversion takes no simulated time (104 us on the AVR);
+//  - a TWI transfer takes none either: it ends inside its start call (about 0.5 ms for a
+//    15-byte read at 400 kHz on the AVR), unless the fake holds SDA low;
+//  - time moves in whole milliseconds, so the ESC phase hook runs up to 1 ms after its time.
 #include <stdexcept>
 #include <deque>
 #include <string>
@@ -38,6 +41,29 @@ struct FakeState {
   uint16_t pulse_us[hal::kEscChannels] = {};
   uint32_t esc_write_alls = 0;
   uint16_t frame_hz = 0;
+  hal::Esc::PhaseHook phase_hook = nullptr;
+  uint16_t phase_us = 0;
+  uint64_t next_phase_us = 0;  // simulated time of the next hook call
+  uint32_t phase_hook_calls = 0;
+
+  // TWI
+  bool twi_slave = false;
+  uint8_t twi_address = 0;
+  uint8_t twi_registers[128] = {};
+  int16_t twi_clear_on_read = -1;
+  bool twi_nack = false;
+  bool twi_sda_low = false;
+  uint8_t twi_release_clocks = 0;
+  std::function<void(uint8_t, uint8_t)> twi_read_hook;
+  std::vector<hal::fake::TwiWrite> twi_writes;
+  uint32_t twi_reads = 0;
+  uint32_t twi_aborts = 0;
+  uint32_t twi_recoveries = 0;
+  uint32_t twi_scl_hz = 0;
+  hal::Twi::Result twi_result = hal::Twi::Result::kIdle;
+  uint8_t twi_status = 0xF8;
+  uint8_t twi_rx[hal::Twi::kMaxRead] = {};
+  uint8_t twi_received = 0;
 
   uint8_t eeprom[hal::Eeprom::kSize];
   uint32_t eeprom_writes = 0;
@@ -82,10 +108,39 @@ void deliverDueInput() {
   s.scheduled = std::move(later);
 }
 
-// One simulated millisecond: time, then due input, then the plant.
+uint32_t framePeriodUs() {
+  const uint16_t hz = state().frame_hz;
+  return hz == 0 ? 0 : 1000000u / hz;
+}
+
+// The next phase after `t_us`: the present frame's, if it is still ahead (as the chip's compare
+// interrupt, enabled mid-frame, comes later in that frame).
+void schedulePhase(uint64_t t_us) {
+  auto& s = state();
+  const uint32_t period = framePeriodUs();
+  if (period == 0) return;
+  uint32_t at_us = s.phase_us < 1 ? 1 : s.phase_us;
+  if (at_us > period - 1) at_us = period - 1;
+  s.next_phase_us = t_us / period * period + at_us;
+  if (s.next_phase_us <= t_us) s.next_phase_us += period;
+}
+
+void callDuePhaseHooks() {
+  auto& s = state();
+  const uint64_t now_us = static_cast<uint64_t>(s.now_ms) * 1000u;
+  const uint32_t period = framePeriodUs();
+  while (s.phase_hook != nullptr && period != 0 && s.next_phase_us <= now_us) {
+    s.next_phase_us += period;
+    ++s.phase_hook_calls;
+    s.phase_hook();
+  }
+}
+
+// One simulated millisecond: time, then the ESC phase hook, due input, then the plant.
 void stepOneMs() {
   auto& s = state();
   ++s.now_ms;
+  callDuePhaseHooks();
   if (!s.scheduled.empty()) deliverDueInput();
   if (s.tick_hook) s.tick_hook(s.now_ms);
 }
@@ -119,6 +174,12 @@ void Clock::init() {}
 uint32_t Clock::millis() { return state().now_ms; }
 void Clock::delayMs(uint16_t ms) { waitMs(ms); }
 void Clock::sleepUntilInterrupt() { waitMs(1); }
+void Clock::sleepUnless(bool (*pending)()) {
+  if (pending == nullptr || !pending()) waitMs(1);  // work pending: back at once, no time passes
+}
+void Clock::sleepUntil(bool (*ready)()) {
+  while (!ready()) waitMs(1);  // the time limit ends a wait for what never comes
+}
 
 // ---- Adc ----
 void Adc::init() {}
@@ -143,7 +204,20 @@ void Esc::init(uint16_t frame_hz) {
 bool Esc::setFrameRate(uint16_t frame_hz) {
   if (frame_hz < kEscMinFrameHz || frame_hz > kEscMaxFrameHz) return false;
   state().frame_hz = frame_hz;
+  schedulePhase(static_cast<uint64_t>(state().now_ms) * 1000u);
   return true;
+}
+
+void Esc::setPhaseHook(uint16_t at_us, PhaseHook hook) {
+  auto& s = state();
+  s.phase_hook = hook;
+  s.phase_us = at_us;
+  schedulePhase(static_cast<uint64_t>(s.now_ms) * 1000u);
+}
+
+uint16_t Esc::frameTimeUs() {
+  const uint32_t period = framePeriodUs();
+  return period == 0 ? 0 : static_cast<uint16_t>((static_cast<uint64_t>(state().now_ms) * 1000u) % period);
 }
 
 uint16_t Esc::frameRateHz() { return state().frame_hz; }
@@ -162,6 +236,93 @@ void Esc::writeAll(const uint16_t (&pwm_us)[kEscChannels]) {
 
 uint16_t Esc::pulseUs(uint8_t channel) {
   return channel < kEscChannels ? state().pulse_us[channel] : 0;
+}
+
+// ---- Twi ----
+namespace {
+
+hal::Twi::Result endTransfer(hal::Twi::Result result, uint8_t status) {
+  state().twi_result = result;
+  state().twi_status = status;
+  return result;
+}
+
+// Serves a transfer as the chip would, at once: false while the bus is held (it never ends).
+bool serveTransfer(uint8_t address, uint8_t reg, uint8_t value, uint8_t read_length) {
+  auto& s = state();
+  if (s.twi_result == hal::Twi::Result::kBusy) return false;
+  s.twi_received = 0;
+  if (read_length != 0) ++s.twi_reads;
+  if (s.twi_sda_low) {  // START never completes
+    s.twi_result = hal::Twi::Result::kBusy;
+    return true;
+  }
+  if (!s.twi_slave || s.twi_nack || address != s.twi_address) {
+    endTransfer(hal::Twi::Result::kNack, 0x20);
+    return true;
+  }
+  reg &= 0x7F;
+  if (read_length == 0) {
+    s.twi_registers[reg] = value;
+    s.twi_writes.push_back({reg, value});
+    endTransfer(hal::Twi::Result::kDone, 0x28);
+    return true;
+  }
+  if (s.twi_read_hook) s.twi_read_hook(reg, read_length);
+  for (uint8_t i = 0; i < read_length; ++i) {
+    const uint8_t r = static_cast<uint8_t>((reg + i) & 0x7F);
+    s.twi_rx[i] = s.twi_registers[r];
+    if (r == s.twi_clear_on_read) s.twi_registers[r] = 0;
+  }
+  s.twi_received = read_length;
+  endTransfer(hal::Twi::Result::kDone, 0x58);
+  return true;
+}
+
+}  // namespace
+
+void Twi::init(uint32_t scl_hz) {
+  auto& s = state();
+  s.twi_scl_hz = scl_hz;
+  s.twi_result = Result::kIdle;
+  s.twi_status = 0xF8;
+}
+
+bool Twi::startWrite(uint8_t address, uint8_t reg, uint8_t value) {
+  return serveTransfer(address, reg, value, 0);
+}
+
+bool Twi::startRead(uint8_t address, uint8_t reg, uint8_t length) {
+  if (length == 0 || length > kMaxRead) return false;
+  return serveTransfer(address, reg, 0, length);
+}
+
+Twi::Result Twi::result() { return state().twi_result; }
+uint8_t Twi::lastStatus() { return state().twi_status; }
+
+uint8_t Twi::readData(uint8_t* dst, uint8_t length) {
+  auto& s = state();
+  const uint8_t n = s.twi_received < length ? s.twi_received : length;
+  for (uint8_t i = 0; i < n; ++i) dst[i] = s.twi_rx[i];
+  return n;
+}
+
+void Twi::abort() {
+  auto& s = state();
+  if (s.twi_result == Result::kBusy) {
+    s.twi_result = Result::kAborted;
+    ++s.twi_aborts;
+  }
+}
+
+bool Twi::recoverBus() {
+  auto& s = state();
+  abort();
+  ++s.twi_recoveries;
+  if (s.twi_sda_low && s.twi_release_clocks != 0 && s.twi_release_clocks <= kRecoveryClocks) {
+    s.twi_sda_low = false;
+  }
+  return !s.twi_sda_low;
 }
 
 // ---- Eeprom ----
@@ -245,6 +406,27 @@ void setAdcSource(std::function<uint16_t(uint8_t channel)> source) {
 uint32_t adcConversions() { return state().adc_conversions; }
 
 uint16_t pulseUs(uint8_t channel) { return Esc::pulseUs(channel); }
+uint32_t phaseHookCalls() { return state().phase_hook_calls; }
+
+void twiAttach(uint8_t address) {
+  state().twi_slave = true;
+  state().twi_address = address;
+}
+uint8_t* twiRegisters() { return state().twi_registers; }
+void twiClearOnRead(uint8_t reg) { state().twi_clear_on_read = reg & 0x7F; }
+void twiSetNack(bool on) { state().twi_nack = on; }
+void twiHoldSdaLow(uint8_t release_after_clocks) {
+  state().twi_sda_low = true;
+  state().twi_release_clocks = release_after_clocks;
+}
+void setTwiReadHook(std::function<void(uint8_t reg, uint8_t length)> hook) {
+  state().twi_read_hook = std::move(hook);
+}
+const std::vector<TwiWrite>& twiWrites() { return state().twi_writes; }
+uint32_t twiReads() { return state().twi_reads; }
+uint32_t twiAborts() { return state().twi_aborts; }
+uint32_t twiRecoveries() { return state().twi_recoveries; }
+uint32_t twiSclHz() { return state().twi_scl_hz; }
 uint32_t escWriteAlls() { return state().esc_write_alls; }
 uint16_t frameRateHz() { return state().frame_hz; }
 

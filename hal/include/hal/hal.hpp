@@ -19,6 +19,14 @@ struct Clock {
   static void delayMs(uint16_t ms);
   // Sleeps (idle mode) until the next interrupt: at the latest the next 1 ms tick.
   static void sleepUntilInterrupt();
+  // The same, unless `pending()` (called with interrupts off) says there is work already. It
+  // closes the window between a loop's last check and its sleep: news an interrupt brings in
+  // that window would otherwise wait for the next interrupt, up to the 1 ms tick (fly: the end
+  // of an IMU read, which must reach the motors within its frame).
+  static void sleepUnless(bool (*pending)());
+  // Sleeps until `ready()` holds, asking it (interrupts off) after every interrupt: a loop with
+  // frequent interrupts that bring it nothing (fly: 16 per IMU read) stays asleep through them.
+  static void sleepUntil(bool (*ready)());
 };
 
 // 10-bit ADC, AVcc (5 V) reference.
@@ -40,6 +48,59 @@ struct Esc {
   // All four at once (read_run's frame): writePulse of each channel, back to back.
   static void writeAll(const uint16_t (&pwm_us)[kEscChannels]);
   static uint16_t pulseUs(uint8_t channel);
+
+  // A flight loop aligned with the frames (fly, docs/fly.md): `hook` is called from the timer
+  // interrupt once per frame, `at_us` after each frame's rising edge (1 .. frame period - 1;
+  // nullptr: none). It runs with interrupts off, so it must be short: fly starts its IMU read
+  // there, on time whatever the main loop is doing. Set it after init / setFrameRate (a new
+  // frame rate keeps the phase's timer tick, not its microseconds).
+  using PhaseHook = void (*)();
+  static void setPhaseHook(uint16_t at_us, PhaseHook hook);
+  // Where the present frame is: microseconds since its rising edge, 0 .. frame period - 1.
+  static uint16_t frameTimeUs();
+};
+
+// The TWI (I2C) as a master, driven by its interrupt (TWI_vect), after the ATmega2560
+// datasheet ch. 24: one transfer at a time, started here and run by the interrupt while the
+// CPU does other work; result() says when it has ended and how.
+//  - register write: START, SLA+W, register, value, STOP (status 08 18 28 28);
+//  - register read of 1..kMaxRead bytes: START, SLA+W, register, repeated START, SLA+R, the
+//    bytes (each acknowledged but the last), STOP (status 08 18 28 10 40 50.. 58).
+// Time-outs are the caller's: a slave that holds a line low never lets a transfer end, so the
+// caller decides how long is too long (fly: the next frame) and calls abort(), then
+// recoverBus(). Pins and rates: hal/board.hpp (kTwiPins, kTwiFastHz). Safe to start from an
+// interrupt (Esc's phase hook) and from the main loop, not from both at once.
+struct Twi {
+  static constexpr uint8_t kMaxRead = 16;
+  static constexpr uint8_t kRecoveryClocks = 9;  // SCL clocks that free any slave mid-byte
+
+  enum class Result : uint8_t {
+    kIdle,      // nothing started since init
+    kBusy,      // a transfer runs
+    kDone,      // the last transfer ended well (STOP sent)
+    kNack,      // no acknowledge to the address or a written byte (status 0x20, 0x30, 0x48)
+    kLost,      // arbitration lost: another master, or a slave holding SDA low (0x38)
+    kBusError,  // an illegal START/STOP (0x00) or a status the transfer cannot have
+    kAborted,   // abort() ended it
+  };
+
+  // Master at `scl_hz` (TWPS 0, TWBR from hal::board::twiBitRateRegister); ends any transfer.
+  static void init(uint32_t scl_hz = kTwiFastHz);
+  // Start a transfer; false (nothing started) while one runs or for a length outside 1..kMaxRead.
+  static bool startWrite(uint8_t address, uint8_t reg, uint8_t value);
+  static bool startRead(uint8_t address, uint8_t reg, uint8_t length);
+  static Result result();
+  // The TWSR status code the last transfer ended on (0x58, 0x28 when well; 0x20 for an absent
+  // slave, ...); 0xF8 before any.
+  static uint8_t lastStatus();
+  // Copies up to `length` bytes of the last read's data (valid after kDone); returns how many.
+  static uint8_t readData(uint8_t* dst, uint8_t length);
+  // Ends the present transfer at once (TWI off and on again: the pins are let go); result()
+  // is kAborted when one was running.
+  static void abort();
+  // Bus recovery (I2C spec 3.1.16): TWI off, up to kRecoveryClocks SCL clocks as an open-drain
+  // GPIO while a slave holds SDA low, a STOP, TWI on again. True when both lines are high after.
+  static bool recoverBus();
 };
 
 // 4 KB EEPROM. updateByte reads first and skips bytes that already hold the value; it kicks the

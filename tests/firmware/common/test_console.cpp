@@ -428,6 +428,28 @@ TEST_F(Console, PrintFixedPrintsExactlyTheRequestedDecimals) {
   }
 }
 
+TEST_F(Console, PrintFixed16PrintsWhatPrintFixedPrintsOverTheWholeSixteenBitRange) {
+  const FixedRow rows[] = {
+      {0, 0, "0"},        {0, 2, "0.00"},         {-5, 1, "-0.5"},       {7, 3, "0.007"},
+      {12345, 2, "123.45"}, {-1234, 1, "-123.4"}, {32767, 0, "32767"},   {-32768, 2, "-327.68"},
+      {100, 0, "100"},    {10000, 4, "1.0000"},   {-1, 4, "-0.0001"},
+  };
+  for (const auto& row : rows) {
+    hal::fake::takeOutput();
+    fw::printFixed16(static_cast<int16_t>(row.value), row.decimals);
+    EXPECT_EQ(hal::fake::output(), row.text) << row.value << " / 10^" << int(row.decimals);
+  }
+  for (int32_t v = -32768; v <= 32767; v += 97) {  // and against printFixed itself
+    for (uint8_t d = 0; d <= 4; ++d) {
+      hal::fake::takeOutput();
+      fw::printFixed(v, d);
+      const std::string wide = hal::fake::takeOutput();
+      fw::printFixed16(static_cast<int16_t>(v), d);
+      ASSERT_EQ(hal::fake::takeOutput(), wide) << v << " / 10^" << int(d);
+    }
+  }
+}
+
 TEST_F(Console, NewlineIsCrLf) {
   fw::newline();
   EXPECT_EQ(hal::fake::output(), "\r\n");

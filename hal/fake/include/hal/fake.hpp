@@ -1,6 +1,7 @@
 // Controls and observes the fake HAL backend from host tests. Host only (uses the STL).
 //
-// Time only moves when the code under test waits (Clock::delayMs, sleepUntilInterrupt) or
+// Time only moves when the code under test waits (Clock::delayMs, sleepUntilInterrupt,
+// sleepUnless with nothing pending) or
 // the test calls advanceMs(). Every simulated millisecond: scheduled input whose time has
 // come is delivered to the UART receive buffer, then the tick hook (if any) runs, so a test
 // can model a plant that reacts to the ESC pulses.
@@ -53,6 +54,37 @@ void setResetFlags(uint8_t flags);
 bool watchdogStarted();
 uint32_t watchdogKicks();
 void setStack(uint16_t size_bytes, uint16_t untouched_bytes);
+
+// ESC frame phase (Esc::setPhaseHook): frames start at multiples of the frame period since
+// reset(); the hook runs once per frame when simulated time passes the frame's start + its
+// phase (at most one step late: time moves in whole milliseconds). Esc::frameTimeUs() is the
+// microseconds since the present frame's start at the present millisecond.
+uint32_t phaseHookCalls();
+
+// TWI: one register-map slave at an address (none at first: every transfer is a NACK). A
+// transfer ends inside its start call (kDone, kNack) unless SDA is held low: then it never
+// ends until Twi::abort(); Twi::recoverBus() frees the bus when the hold lets go within its
+// clocks. lastStatus() is the datasheet's code a chip would have ended on (0x58, 0x28, 0x20,
+// 0x48).
+void twiAttach(uint8_t address);
+uint8_t* twiRegisters();                // the slave's 128 registers, 0x00..0x7F
+void twiClearOnRead(uint8_t reg);       // this register reads, then is 0 (MPU-6050 INT_STATUS)
+void twiSetNack(bool on);               // the slave stops answering its address
+// A slave holds SDA low from now on, letting go after `release_after_clocks` SCL clocks of a
+// bus recovery (0: never).
+void twiHoldSdaLow(uint8_t release_after_clocks);
+// Called when a read is served, before the bytes are copied (a test's sensor model refreshes
+// the registers there).
+void setTwiReadHook(std::function<void(uint8_t reg, uint8_t length)> hook);
+struct TwiWrite {
+  uint8_t reg;
+  uint8_t value;
+};
+const std::vector<TwiWrite>& twiWrites();  // register writes the slave took, in order
+uint32_t twiReads();                       // reads started (whatever became of them)
+uint32_t twiAborts();
+uint32_t twiRecoveries();
+uint32_t twiSclHz();                       // the rate Twi::init was given (0 before)
 
 // Time.
 uint32_t nowMs();

@@ -1,0 +1,320 @@
+// fly: see fly_app.hpp for the flow and the safety rules. This file is the life cycle:
+// start-up, the main loop's pass, the frame (fast path, then one slow job), the failsafes and
+// disarming. The commands are in commands.cpp, every printed line in fly_view.cpp.
+#include "fly_app.hpp"
+
+#include "fly_view.hpp"
+#include "record_report.hpp"
+#include "slot_report.hpp"
+
+namespace fly {
+
+FlyApp* FlyApp::active_ = nullptr;
+
+namespace {
+constexpr float kRadPerDeg = 3.14159265f / 180.0f;
+constexpr float kDegPerRad = 180.0f / 3.14159265f;
+constexpr uint16_t kImuStartMaxMs = 1000;
+constexpr uint16_t kCalibrationMaxMs = 5000;
+
+int16_t centi(float v, float scale) {
+  const float x = v * scale;
+  return x >= 32767.0f ? 32767 : (x <= -32768.0f ? -32768 : static_cast<int16_t>(x));
+}
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Start-up
+
+void FlyApp::printBanner() { view::banner(); }
+
+uint8_t FlyApp::loadCalibration() {
+  motors_.loadSettings();
+  fw::say(TC_FLASH_TEXT("battery monitor: "));
+  fw::printDivider(motors_.boardSettings());
+  fw::newline();
+  const uint8_t calibrated = motors_.loadSlots(&fw::slotLoaded);
+  fw::calibratedCount(calibrated);
+  return calibrated;
+}
+
+void FlyApp::start() {
+  start_ms_ = hal::Clock::millis();
+  starting_ = true;
+  active_ = this;
+  hal::Uart::setWaitHook(&FlyApp::serviceHook);
+  motors_.setFrameRate(kFrameHz);  // the v2 bus filter's constant for one reading per frame
+  mixer_.configure(settings_.layout, settings_.arm_m, settings_.yaw_arm_m);
+  output_.setMode(OutputMode::kForce, 0);
+  gyro_cal_.restart();
+  imu_.begin();
+  schedule();
+}
+
+bool FlyApp::imuSettled() const { return imu_.running() || imu_.state() == ImuState::kFaulted; }
+
+bool FlyApp::startImu() {
+  runUntil(&FlyApp::imuSettled, kImuStartMaxMs);
+  view::imuStarted(imu_);
+  return imu_.running();
+}
+
+bool FlyApp::calibrateGyro() {
+  if (imu_.running()) {
+    view::calibrating();
+    runUntil(&FlyApp::imuReady, kCalibrationMaxMs);
+    if (imu_.fault() != ImuFault::kNone) {
+      view::imuFault(imu_);
+    } else {
+      view::calibrationResult(*this);
+    }
+  }
+  starting_ = false;
+  prompt();
+  return gyro_cal_.done();
+}
+
+void FlyApp::runUntil(bool (FlyApp::*done)() const, uint16_t max_ms) {
+  const uint32_t from_ms = hal::Clock::millis();
+  for (;;) {
+    runOnce();
+    if ((this->*done)() || hal::Clock::millis() - from_ms >= max_ms) return;
+    hal::Clock::sleepUntil(&FlyApp::hasWork);
+  }
+}
+
+// The read starts as late in the frame as the mode's computation allows.
+void FlyApp::schedule() {
+  const uint8_t mask = mixer_.motorMask();
+  stats_.budget_us = computeBudgetUs(output_.mode(), output_.thesisMotors(mask), mixer_.motorCount());
+  stats_.phase_us = readPhaseUs(stats_.budget_us);
+  stats_.compute_max_us = 0;
+  stats_.margin_min_us = 0xFFFF;
+  hal::Esc::setPhaseHook(stats_.phase_us, &FlyApp::phaseHook);
+}
+
+bool FlyApp::escsReady() const { return hal::Clock::millis() - start_ms_ >= tc::kArmMs; }
+
+bool FlyApp::imuReady() const {
+  return imu_.running() && imu_.fault() == ImuFault::kNone && gyro_cal_.done() && estimator_.started() &&
+         imu_.badReads() == 0 && imu_.staleReads() == 0;
+}
+
+ArmInputs FlyApp::armInputs() const {
+  ArmInputs in;
+  in.armed = flight_.armed;
+  in.escs_ready = escsReady();
+  in.imu_fault = imu_.fault() != ImuFault::kNone;
+  in.imu_ready = imuReady();
+  const Attitude& a = estimator_.attitude();
+  in.roll_deg = a.roll_rad * kDegPerRad;
+  in.pitch_deg = a.pitch_rad * kDegPerRad;
+  for (uint8_t i = 0; i < 3; ++i) in.rate_dps[i] = a.rate_rad_s[i] * kDegPerRad;
+  in.motors_ok = output_.motorsReady(mixer_.motorMask());
+  in.mode_ready = output_.settingsReady();
+  return in;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Main loop
+
+void FlyApp::runOnce() {
+  service();
+  handleInput();
+  printNotes();
+}
+
+bool FlyApp::hasWork() { return active_ != nullptr && (active_->imu_.frameDue() || hal::Uart::available()); }
+
+void FlyApp::phaseHook() {
+  if (active_ != nullptr) active_->imu_.onPhase();
+}
+
+void FlyApp::serviceHook() {
+  if (active_ != nullptr) active_->service();
+}
+
+void FlyApp::service() {
+  if (in_service_ || !imu_.frameDue()) return;
+  in_service_ = true;
+  ImuFrame f;
+  const uint16_t t0_us = hal::Esc::frameTimeUs();  // the computation counts from here
+  if (imu_.poll(f)) {
+    frame(f, t0_us);
+    hal::Watchdog::kick();  // a frame came round: the only kick while flying
+  }
+  in_service_ = false;
+}
+
+void FlyApp::handleInput() {
+  const fw::LineEvent event = line_.poll(kRxBytesPerPass);
+  if (event == fw::LineEvent::kRejected) {  // its error line is printed; no keep-alive
+    prompt();
+    return;
+  }
+  if (event != fw::LineEvent::kLine) return;
+  if (!line_.strict() || line_.checked()) link_.heard(hal::Clock::millis());
+  char line[fw::kLineMax + 1];
+  const char* src = line_.line();
+  uint8_t n = 0;
+  while (n < fw::kLineMax && src[n] != '\0') {
+    line[n] = src[n];
+    ++n;
+  }
+  line[n] = '\0';
+  handleLine(line);  // commands.cpp
+}
+
+// What service() had to say; a prompt after it unless stream rows follow. During start-up
+// startImu() and calibrateGyro() say it themselves.
+void FlyApp::printNotes() {
+  const uint8_t notes = notes_;
+  notes_ = 0;
+  if (notes == 0 || starting_) return;
+  if (notes & kNoteImuFault) view::imuFault(imu_);
+  if (notes & kNoteImuRunning) view::imuRunningAgain();
+  if (notes & kNoteCalibrated) view::calibrationResult(*this);
+  if (notes & kNoteDisarmed) view::disarmed(*this);
+  if ((notes & kNoteStream) && streaming_) view::streamRow(row_);
+  if ((notes & ~kNoteStream) != 0 && !streaming_) prompt();
+}
+
+void FlyApp::prompt() { fw::say(TC_FLASH_TEXT("fly> ")); }
+
+// ---------------------------------------------------------------------------------------------
+// The frame
+
+void FlyApp::frame(const ImuFrame& f, uint16_t t0_us) {
+  frame_ += f.frames;
+  const uint16_t since = static_cast<uint16_t>(frames_since_sample_ + f.frames);
+  frames_since_sample_ = since > 255 ? 255 : static_cast<uint8_t>(since);
+  if (f.fault_now) imuFaulted();
+  // Back after a fault: said at its first fresh sample (a frozen IMU restarts and takes its
+  // settings every second, and is no better for it).
+  if (f.has_sample && said_fault_ != ImuFault::kNone) {
+    notes_ |= kNoteImuRunning;
+    said_fault_ = ImuFault::kNone;
+  }
+  if (f.has_sample) {
+    const float dt_s = frames_since_sample_ * kFramePeriodS;
+    frames_since_sample_ = 0;
+    if (estimator_.started()) {
+      estimator_.propagate(f.sample, dt_s);
+      if (flight_.armed) flyFrame(dt_s, t0_us);
+    } else if (!flight_.armed && imu_.running() && gyro_cal_.add(f.sample)) {
+      estimator_.start(gyro_cal_);
+      notes_ |= kNoteCalibrated;
+    }
+  }
+  slowJob(f);
+  checkFailsafes(hal::Clock::millis());
+}
+
+// The fast path, from the estimate to the written pulses; then the integrators and the timing.
+void FlyApp::flyFrame(float dt_s, uint16_t t0_us) {
+  const uint32_t since_arm_ms = hal::Clock::millis() - flight_.armed_ms;
+  const float spool = spoolFraction(since_arm_ms);
+  const Attitude& a = estimator_.attitude();
+  const Torque torque = controller_.torque(a, settings_.setpoint);
+  const ForceQ4 collective = spool >= 1.0f ? flight_.collective : toQ4(gramsOf(flight_.collective) * spool);
+  flight_.mix_limits = mixer_.mix(collective, torque, flight_.min, flight_.max, flight_.force);
+  output_.write(flight_.force, mixer_.motorMask());
+
+  // The read started at the phase: pulses written before the frame's end (at or after the
+  // phase) meet the next rising edge; written after it (before the phase), the one after.
+  const uint16_t t1_us = hal::Esc::frameTimeUs();
+  const uint16_t compute_us =
+      static_cast<uint16_t>(t1_us >= t0_us ? t1_us - t0_us : t1_us + kFrameUs - t0_us);
+  if (compute_us > stats_.compute_max_us) stats_.compute_max_us = compute_us;
+  if (t1_us < stats_.phase_us) {
+    if (stats_.late != 0xFFFF) ++stats_.late;
+  } else if (kFrameUs - t1_us < stats_.margin_min_us) {
+    stats_.margin_min_us = static_cast<uint16_t>(kFrameUs - t1_us);
+  }
+  if (spool >= 1.0f) controller_.integrate(a, settings_.setpoint, dt_s, flight_.mix_limits);
+}
+
+// After the pulses: each slow job on its own frame of a cycle of eight (fly_rules.hpp).
+void FlyApp::slowJob(const ImuFrame& f) {
+  switch (fly::slowJob(frame_)) {
+    case SlowJob::kBattery:
+      motors_.sampleBattery();
+      break;
+    case SlowJob::kBatteryModel:
+      if (output_.mode() == OutputMode::kArduPilot) {
+        output_.batteryRead(kSlowCycleS);
+        if (flight_.armed) updateOutputLimits();  // lift_max follows the voltage
+      }
+      break;
+    case SlowJob::kRollCorrection:
+      if (f.has_sample && estimator_.started()) estimator_.correctRoll(f.sample, kSlowCycleS);
+      break;
+    case SlowJob::kPitchCorrection:
+      if (f.has_sample && estimator_.started()) estimator_.correctPitch(f.sample, kSlowCycleS);
+      break;
+    case SlowJob::kStreamRow:
+      if (streaming_) takeStreamRow(hal::Clock::millis());
+      break;
+    case SlowJob::kNone:
+      break;
+  }
+}
+
+void FlyApp::checkFailsafes(uint32_t now_ms) {
+  if (!flight_.armed) return;
+  const Attitude& a = estimator_.attitude();
+  if (crashed(a.roll_rad, a.pitch_rad, settings_.crash_deg * kRadPerDeg)) {
+    const float roll = a.roll_rad < 0 ? -a.roll_rad : a.roll_rad;
+    const float pitch = a.pitch_rad < 0 ? -a.pitch_rad : a.pitch_rad;
+    flight_.cause_deg = (roll > pitch ? a.roll_rad : a.pitch_rad) * kDegPerRad;
+    disarm(DisarmCause::kCrash);
+  } else if (link_.lost(now_ms)) {
+    ++link_.trips;
+    disarm(DisarmCause::kLink);
+  }
+}
+
+// The IMU faulted (mpu6050.hpp): disarm, and measure the gyro again once it runs. Said once per
+// kind of fault: a start-up that fails every second alike stays quiet.
+void FlyApp::imuFaulted() {
+  if (flight_.armed) disarm(DisarmCause::kImu);
+  gyro_cal_.restart();
+  estimator_.stop();
+  if (imu_.fault() != said_fault_) notes_ |= kNoteImuFault;
+  said_fault_ = imu_.fault();
+}
+
+void FlyApp::updateOutputLimits() {
+  flight_.collective = toQ4(output_.collectivePerMotorG(settings_.thrust_g, mixer_.motorCount()));
+  float min_g, max_g;
+  output_.forceRangeG(mixer_.motorMask(), min_g, max_g);
+  flight_.min = toQ4(min_g);
+  flight_.max = toQ4(max_g);
+}
+
+void FlyApp::disarm(DisarmCause cause) {
+  output_.stop();  // every ESC to the stop pulse, now
+  flight_.armed = false;
+  flight_.last_cause = cause;
+  if (flight_.disarms != 0xFFFF) ++flight_.disarms;
+  for (ForceQ4& f : flight_.force) f = 0;
+  notes_ |= kNoteDisarmed;
+}
+
+void FlyApp::takeStreamRow(uint32_t now_ms) {
+  const Attitude& a = estimator_.attitude();
+  row_.t_ms = now_ms;
+  row_.roll_cdeg = centi(a.roll_rad, 100.0f * kDegPerRad);
+  row_.pitch_cdeg = centi(a.pitch_rad, 100.0f * kDegPerRad);
+  row_.roll_sp_cdeg = centi(settings_.setpoint.roll_rad, 100.0f * kDegPerRad);
+  row_.pitch_sp_cdeg = centi(settings_.setpoint.pitch_rad, 100.0f * kDegPerRad);
+  for (uint8_t i = 0; i < 3; ++i) row_.rate_ddps[i] = centi(a.rate_rad_s[i], 10.0f * kDegPerRad);
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    const int32_t g = roundedGrams(flight_.force[i]);
+    row_.force_g[i] = g <= 0 ? 0 : static_cast<uint16_t>(g);
+    row_.pulse_us[i] = output_.pulseUs(i);
+  }
+  notes_ |= kNoteStream;
+}
+
+}  // namespace fly

@@ -1,0 +1,152 @@
+// fly's decisions as pure functions of numbers: when it may arm, when it must disarm, how its
+// 400 Hz frame is laid out. No HAL, no console, no state of their own: fly_app.cpp calls them,
+// tests/firmware/fly/test_fly_rules.cpp checks them without booting the image. The reasons and
+// the figures behind the constants: docs/fly.md.
+#pragma once
+#include <math.h>
+#include <stdint.h>
+
+#include "link_watch.hpp"
+
+namespace fly {
+
+// ---- the frame ----
+constexpr uint16_t kFrameHz = 400;  // the loop and the ESC frames (hal::Esc at 400 Hz)
+constexpr uint16_t kFrameUs = 1000000u / kFrameHz;
+constexpr float kFramePeriodS = 1.0f / kFrameHz;
+static_assert(1000000u % kFrameHz == 0, "a whole number of microseconds per frame");
+
+// What runs after the pulses are written: each job once in a cycle of eight frames (50 times a
+// second), on its own frame, so no frame carries two: the battery (four ADC conversions and the
+// median), the mode's use of it (ardupilot: its voltage filter and lift_max), a stream row, the
+// accelerometer's roll correction, its pitch correction.
+enum class SlowJob : uint8_t {
+  kNone,
+  kBattery,
+  kBatteryModel,
+  kStreamRow,
+  kRollCorrection,
+  kPitchCorrection
+};
+constexpr uint8_t kSlowCycleFrames = 8;
+inline SlowJob slowJob(uint32_t frame) {
+  switch (frame % kSlowCycleFrames) {
+    case 0:
+      return SlowJob::kBattery;
+    case 1:
+      return SlowJob::kBatteryModel;
+    case 3:
+      return SlowJob::kStreamRow;
+    case 5:
+      return SlowJob::kRollCorrection;
+    case 7:
+      return SlowJob::kPitchCorrection;
+    default:
+      return SlowJob::kNone;
+  }
+}
+constexpr float kSlowCycleS = kSlowCycleFrames * kFramePeriodS;
+
+// When in the frame the IMU read starts (Esc's phase hook): as late as lets the read and the
+// computation end before the frame ends, so the next rising edge carries the result and the
+// time from the end of the read to that edge is the computation's budget, not a whole frame.
+constexpr uint16_t kImuReadUs = 720;   // a 15-byte burst at 400 kHz, its interrupts, the wake-up
+constexpr uint16_t kMinPhaseUs = 100;  // after the rising edge at the earliest
+inline uint16_t readPhaseUs(uint16_t budget_us) {
+  const uint16_t needed = static_cast<uint16_t>(kImuReadUs + budget_us);
+  return needed + kMinPhaseUs >= kFrameUs ? kMinPhaseUs : static_cast<uint16_t>(kFrameUs - needed);
+}
+
+// The computation from a finished read to the written pulses: estimator, controller and mixer,
+// then the output stage's own cost (a budget, not a measurement: status shows the measured
+// time, docs/fly.md the figures).
+enum class OutputMode : uint8_t { kForce, kGeneric, kPwm, kArduPilot };
+constexpr uint16_t kControlBudgetUs = 650;         // taking the sample, estimator, controller, mixer
+constexpr uint16_t kForceApiBudgetUs = 250;        // forces to grams, the v2 frame, the pulses
+constexpr uint16_t kThesisMotorBudgetUs = 190;     // option 2.1 on one motor, EEPROM steps
+constexpr uint16_t kArduPilotMotorBudgetUs = 170;  // one square root and a few products
+constexpr uint16_t kPwmBudgetUs = 100;
+// thesis_motors: the motors that fly a v1 record (force, generic modes); motors: the layout's.
+inline uint16_t computeBudgetUs(OutputMode mode, uint8_t thesis_motors, uint8_t motors) {
+  switch (mode) {
+    case OutputMode::kPwm:
+      return kControlBudgetUs + kPwmBudgetUs;
+    case OutputMode::kArduPilot:
+      return static_cast<uint16_t>(kControlBudgetUs + motors * kArduPilotMotorBudgetUs);
+    default:
+      return static_cast<uint16_t>(kControlBudgetUs + kForceApiBudgetUs +
+                                   thesis_motors * kThesisMotorBudgetUs);
+  }
+}
+
+// ---- arming ----
+constexpr float kArmLevelDeg = 5.0f;  // roll and pitch within this of level
+constexpr float kArmStillDps = 5.0f;  // every body rate below this
+constexpr uint16_t kSpoolMs = 1000;   // the collective ramps up from 0 this long after arming
+
+enum class ArmRefusal : uint8_t {
+  kNone,
+  kArmed,        // already
+  kEscsArming,   // the ESCs' 2 s at the stop pulse after power-on are not over
+  kImuFault,     // the IMU failed (or never answered): status says why
+  kImuStarting,  // the IMU is being set up or its gyro calibrated
+  kNotLevel,
+  kMoving,
+  kMotorNotCalibrated,  // a motor the layout flies has no valid record to fly (force, generic)
+  kModeNeedsSettings,   // pwm: no hover pulse; ardupilot: no parameters
+};
+
+struct ArmInputs {
+  bool armed = false;
+  bool escs_ready = false;
+  bool imu_fault = false;
+  bool imu_ready = false;  // running, gyro calibrated, every recent read good and fresh
+  float roll_deg = 0, pitch_deg = 0;
+  float rate_dps[3] = {0, 0, 0};
+  bool motors_ok = false;  // every motor the layout flies can fly in this mode
+  bool mode_ready = false;
+};
+
+// Why `arm` is refused, in the order a user fixes things; kNone: it may arm.
+inline ArmRefusal armRefusal(const ArmInputs& in) {
+  if (in.armed) return ArmRefusal::kArmed;
+  if (in.imu_fault) return ArmRefusal::kImuFault;
+  if (!in.imu_ready) return ArmRefusal::kImuStarting;
+  if (!in.escs_ready) return ArmRefusal::kEscsArming;
+  if (fabsf(in.roll_deg) > kArmLevelDeg || fabsf(in.pitch_deg) > kArmLevelDeg) return ArmRefusal::kNotLevel;
+  for (uint8_t i = 0; i < 3; ++i) {
+    if (fabsf(in.rate_dps[i]) > kArmStillDps) return ArmRefusal::kMoving;
+  }
+  if (!in.motors_ok) return ArmRefusal::kMotorNotCalibrated;
+  if (!in.mode_ready) return ArmRefusal::kModeNeedsSettings;
+  return ArmRefusal::kNone;
+}
+
+// The collective's share 0..1 at `since_arm_ms` (a linear spool-up; the integrators stay at 0
+// until it is complete).
+inline float spoolFraction(uint32_t since_arm_ms) {
+  return since_arm_ms >= kSpoolMs ? 1.0f : static_cast<float>(since_arm_ms) / kSpoolMs;
+}
+
+// ---- disarming ----
+enum class DisarmCause : uint8_t { kNone, kCommand, kCrash, kImu, kLink };
+
+constexpr uint8_t kDefaultCrashDeg = 45;
+constexpr uint8_t kMinCrashDeg = 10;
+constexpr uint8_t kMaxCrashDeg = 90;
+// Roll or pitch beyond the limit: the aircraft is not flying any more (or about to hit).
+inline bool crashed(float roll_rad, float pitch_rad, float limit_rad) {
+  return fabsf(roll_rad) > limit_rad || fabsf(pitch_rad) > limit_rad;
+}
+
+// The IMU failed: this many reads in a row ended badly (no answer, a time-out, the bus lost) or
+// brought no new sample (DATA_RDY clear: frozen data). 8 frames are 20 ms at 400 Hz.
+constexpr uint8_t kImuMaxBadReads = 8;
+constexpr uint8_t kImuMaxStaleReads = 8;
+inline bool imuReadsFailed(uint8_t bad_in_a_row) { return bad_in_a_row >= kImuMaxBadReads; }
+inline bool imuFrozen(uint8_t stale_in_a_row) { return stale_in_a_row >= kImuMaxStaleReads; }
+
+// While armed, kFailsafeMs without a complete valid line (fw::LinkWatch) disarms.
+using fw::LinkWatch;
+
+}  // namespace fly

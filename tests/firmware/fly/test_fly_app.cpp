@@ -1,0 +1,479 @@
+// fly against the fake HAL: start-up (the IMU's settings, WHO_AM_I, the gyro at rest), arming
+// and its refusals, the four modes' pulses on known records, every disarm cause within 100 ms of
+// simulated time, the watchdog's kicks, status and the stream.
+//
+// Seam: the test links fly_app + fw_force + core + the fake HAL; the IMU is FakeImu on the fake
+// TWI (fly_fixture.hpp), the records are built as gather_store builds them (records_fixture.hpp).
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "fly_fixture.hpp"
+#include "lab/autopilot.hpp"
+
+namespace {
+
+using namespace fly_test;
+
+// ---------------------------------------------------------------------------------------------
+// Start-up
+
+TEST_F(Fly, StartUpSetsTheImuUpAsTheDatasheetSaysAndMeasuresTheGyroAtRest) {
+  storeFourV2Motors();
+  boot();
+  const std::string out = fake::output();
+  // the settings, in order, after WHO_AM_I and the device reset
+  const std::vector<std::pair<uint8_t, uint8_t>> expected = {
+      {0x6B, 0x80}, {0x6B, 0x03}, {0x19, 0x00}, {0x1A, 0x02}, {0x1B, 0x18}, {0x1C, 0x10}, {0x38, 0x01}};
+  ASSERT_EQ(fake::twiWrites().size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(fake::twiWrites()[i].reg, expected[i].first) << i;
+    EXPECT_EQ(fake::twiWrites()[i].value, expected[i].second) << i;
+  }
+  EXPECT_EQ(fake::twiSclHz(), 400000u);
+  EXPECT_TRUE(contains(out, "imu: MPU-6050 at 0x68, WHO_AM_I 0x68")) << out;
+  // the bias the fake IMU has, 37 -21 8 LSB at 16.4 LSB per deg/s
+  EXPECT_TRUE(contains(out, "imu: gyro bias 2.26 -1.28 0.49 deg/s; roll 0.0 pitch 0.0 deg")) << out;
+  EXPECT_EQ(out.find("imu: gyro bias"), out.rfind("imu: gyro bias")) << "said once\n" << out;
+  EXPECT_FALSE(contains(out, "running again")) << out;
+  EXPECT_TRUE(app_->imuReady());
+  EXPECT_FALSE(app_->armed());
+  EXPECT_TRUE(allStopped());
+  EXPECT_EQ(fake::frameRateHz(), 400);
+}
+
+TEST_F(Fly, TheLoopRunsAt400FramesASecondOnTheEscFramesPhaseHook) {
+  storeFourV2Motors();
+  boot();
+  const uint32_t frames = app_->frames();
+  const uint32_t hooks = fake::phaseHookCalls();
+  runFor(1000);
+  EXPECT_EQ(app_->frames() - frames, 400u);
+  EXPECT_EQ(fake::phaseHookCalls() - hooks, 400u);
+  EXPECT_NEAR(static_cast<double>(app_->imu().readsOk()), static_cast<double>(app_->frames()) - 60, 20)
+      << "a read every frame but the start-up's";
+}
+
+TEST_F(Fly, AWrongWhoAmIIsAFaultThatRefusesArmingAndIsTriedAgainEverySecond) {
+  // given: another chip answers at 0x68
+  imu_.attach(0x70);
+  storeFourV2Motors();
+  boot();
+  EXPECT_TRUE(contains(fake::output(), "imu: error: WHO_AM_I is not 0x68 (not an MPU-6050?): read 0x70"))
+      << fake::output();
+  EXPECT_EQ(app_->imu().fault(), fly::ImuFault::kWrongId);
+  runFor(2500);
+  EXPECT_TRUE(contains(command("arm"), "error: arm refused: IMU fault: WHO_AM_I is not 0x68"));
+  EXPECT_TRUE(allStopped());
+  const uint16_t faults = app_->imu().faults();
+  EXPECT_GE(faults, 3) << "tried again every second";
+  EXPECT_TRUE(fake::twiWrites().empty()) << "never configured";
+  // when the right chip answers (a loose module pushed back), it starts and calibrates
+  fake::twiRegisters()[0x75] = 0x68;
+  runFor(2500);
+  EXPECT_TRUE(app_->imuReady());
+  EXPECT_TRUE(contains(command("arm"), "armed:"));
+}
+
+TEST_F(Fly, NoImuOnTheBusSaysWhatToCheck) {
+  fake::twiSetNack(true);
+  storeFourV2Motors();
+  boot();
+  EXPECT_TRUE(contains(fake::output(), "imu: error: no answer at its address (wiring: SDA D20, SCL D21"))
+      << fake::output();
+  EXPECT_EQ(app_->imu().fault(), fly::ImuFault::kNoAnswer);
+  fake::takeOutput();
+  runFor(3000);
+  EXPECT_GE(app_->imu().faults(), 3) << "tried again every second";
+  EXPECT_FALSE(contains(fake::output(), "imu:")) << "the same fault again is not news\n" << fake::output();
+  fake::twiSetNack(false);  // plugged in: at the next try (within 1 s) and its start-up (~0.13 s)
+  runFor(1200);
+  EXPECT_TRUE(contains(fake::output(), "imu: running again; measuring the gyro bias")) << fake::output();
+}
+
+TEST_F(Fly, AVehicleMovedDuringTheGyroCalibrationIsCalibratedOnceStill) {
+  storeFourV2Motors();
+  // given: rocking, 20 deg/s one way then the other every 100 ms (a steady turn would look like
+  // bias: the calibration cannot tell them apart, docs/fly.md)
+  bool rocking = true;
+  fake::setTickHook([&](uint32_t now_ms) {
+    imu_.rate_dps[0] = rocking ? ((now_ms / 100) % 2 ? 20 : -20) : 0;
+    imu_.tick();
+  });
+  boot();
+  EXPECT_TRUE(contains(fake::output(), "imu: gyro not calibrated yet (motion seen")) << fake::output();
+  EXPECT_FALSE(app_->imuReady());
+  EXPECT_TRUE(
+      contains(command("arm"), "error: arm refused: the IMU is starting or its gyro is being calibrated"));
+  rocking = false;
+  runFor(1200);
+  EXPECT_TRUE(app_->imuReady());
+  EXPECT_TRUE(contains(fake::output(), "imu: gyro bias 2.26 -1.28 0.49 deg/s")) << fake::output();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Arming
+
+TEST_F(Fly, ArmingWaitsForTheEscsFirstTwoSecondsAtTheStopPulse) {
+  storeFourV2Motors();
+  boot();
+  ASSERT_LT(fake::nowMs(), tc::kArmMs);
+  EXPECT_TRUE(contains(command("arm"), "error: arm refused: the ESCs are still arming"));
+  runFor(tc::kArmMs - fake::nowMs() + 10);
+  EXPECT_TRUE(contains(command("arm"), "armed: mode force, layout x"));
+}
+
+TEST_F(Fly, ArmingIsRefusedWhenNotLevelOrMoving) {
+  storeFourV2Motors();
+  bootReady();
+  imu_.rate_dps[0] = 8;  // tilting at 8 deg/s
+  runFor(20);
+  const std::string moving = command("arm");
+  EXPECT_TRUE(contains(moving, "error: arm refused: moving: rates 8.0 0.0 0.0 deg/s (all below 5)"))
+      << moving;
+  runFor(1000);  // now at about 8.3 deg
+  imu_.rate_dps[0] = 0;
+  runFor(20);
+  EXPECT_TRUE(contains(command("arm"), "error: arm refused: not level: roll 8.")) << fake::output();
+  EXPECT_FALSE(app_->armed());
+  EXPECT_TRUE(allStopped());
+}
+
+TEST_F(Fly, OnlyACompleteValidArmLineArms) {
+  storeFourV2Motors();
+  bootReady();
+  // a line without its end: nothing
+  fake::feedInput("arm");
+  runFor(100);
+  EXPECT_FALSE(app_->armed());
+  fake::feedInput("\r\n");  // ends "arm": now it is complete
+  runFor(20);
+  EXPECT_TRUE(app_->armed());
+  command("disarm");
+  // a damaged line is rejected whole
+  fake::feedInput("ar");
+  fake::feedDamage();
+  fake::feedInput("m\n");
+  runFor(20);
+  EXPECT_FALSE(app_->armed());
+  EXPECT_TRUE(contains(fake::output(), "error: line damaged in transit")) << fake::output();
+  // strict: a checksum or nothing
+  command("strict on");
+  EXPECT_TRUE(contains(command("arm"), "error: strict mode: \"arm\" needs a checksum"));
+  EXPECT_FALSE(app_->armed());
+  EXPECT_TRUE(contains(command("arm*2B"), "error: checksum *2B does not match"));
+  EXPECT_FALSE(app_->armed());
+  EXPECT_TRUE(contains(command("arm*7E"), "armed:"));  // 'a' ^ 'r' ^ 'm' = 0x7E
+  EXPECT_TRUE(app_->armed());
+}
+
+TEST_F(Fly, AMotorWithoutARecordIsNeverFlownInForceModeGenericModeFliesItOnAnotherSlotsRecord) {
+  storeV2Motor(0, 13.5, mvFromCounts(kCountsV1));
+  storeV2Motor(1, 12.0, mvFromCounts(kCountsV1));
+  storeV2Motor(2, 15.0, mvFromCounts(kCountsV1));  // slot 3 erased
+  bootReady();
+  const std::string refused = command("arm");
+  EXPECT_TRUE(contains(refused, "error: arm refused: motor 3 is not calibrated: erased")) << refused;
+  EXPECT_TRUE(contains(command("mode generic 3"), "error: slot 3 is not calibrated: erased"));
+  EXPECT_TRUE(contains(command("mode generic 1"), "mode: generic (slot 1's record for every motor)"));
+  EXPECT_TRUE(contains(command("arm"), "armed:"));
+  // the seesaw flies motors 0 and 1 only: in force mode slot 3 does not matter
+  command("disarm");
+  command("mode force");
+  command("layout seesaw");
+  EXPECT_TRUE(contains(command("arm"), "armed:")) << fake::output();
+}
+
+TEST_F(Fly, PwmAndArduPilotModesNeedTheirSettingsBeforeArming) {
+  storeFourV2Motors();
+  bootReady();
+  command("mode pwm");
+  EXPECT_TRUE(
+      contains(command("arm"), "error: arm refused: mode pwm needs its hover point: hover US MG_PER_US"));
+  command("hover 1500 1440");
+  EXPECT_TRUE(contains(command("arm"), "armed:"));
+  command("disarm");
+  command("mode ardupilot");
+  EXPECT_TRUE(contains(command("arm"), "error: arm refused: mode ardupilot needs its parameters"));
+  command("ap 6913 1581 9500 1315");
+  EXPECT_TRUE(contains(command("arm"), "armed:"));
+  EXPECT_TRUE(contains(command("mode force"), "error: armed; send disarm first"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The modes' pulses, level and still (no torque: every motor gets the collective)
+
+TEST_F(Fly, ForceModeGivesEachMotorThePulseItsOwnRecordGivesTheForce) {
+  storeFourThesisMotors();
+  bootReady();
+  armAndSpool(1200);
+  uint16_t flown[4];
+  for (uint8_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(fly::gramsOf(app_->flight().force[i]), 300.0f, 0.01f) << int(i);
+    flown[i] = pulse(i);
+  }
+  EXPECT_NE(flown[0], flown[1]) << "four different motors, four different pulses";
+  // the same force through the force API directly
+  fw::ForceActuators reference;
+  reference.loadSettings();
+  reference.loadSlots(nullptr);
+  for (uint8_t i = 0; i < 4; ++i) reference.setForce(i, 300);
+  for (int k = 0; k < 101; ++k) reference.frame();
+  for (uint8_t i = 0; i < 4; ++i) EXPECT_EQ(flown[i], reference.motor(i).pwm_us) << int(i);
+}
+
+TEST_F(Fly, GenericModeGivesEveryMotorThePulseOfOneSlotsRecord) {
+  storeFourV2Motors();
+  bootReady();
+  command("mode generic 2");
+  armAndSpool(1200);
+  for (uint8_t i = 1; i < 4; ++i) EXPECT_EQ(pulse(i), pulse(0)) << int(i);
+  EXPECT_GT(pulse(0), 1100);
+}
+
+TEST_F(Fly, PwmModeFliesTheControllersOutputInMicrosecondsAroundTheHoverPulse) {
+  storeFourV2Motors();
+  bootReady();
+  command("mode pwm");
+  command("layout plus");
+  command("hover 1500 1440");
+  armAndSpool(0);  // the thrust does not apply in pwm mode
+  for (uint8_t i = 0; i < 4; ++i) EXPECT_EQ(pulse(i), 1500) << int(i);
+  // a 5 deg roll setpoint: motor 1 (left) up, motor 3 (right) down by kp * error / lever / slope
+  command("sp 5 0");
+  const double torque_nm = 0.800 * 5 * M_PI / 180;
+  const double delta_us = torque_nm / (2 * 0.225) * 1000 / 9.80665 / 1.440;
+  EXPECT_NEAR(pulse(1) - 1500, delta_us, 1.0);
+  EXPECT_NEAR(1500 - pulse(3), delta_us, 1.0);
+  EXPECT_EQ(pulse(0), 1500);
+  EXPECT_EQ(pulse(2), 1500);
+}
+
+TEST_F(Fly, ArduPilotModeSendsWhatArduPilotSendsForTheForce) {
+  storeFourV2Motors();
+  bootReady();
+  command("mode ardupilot");
+  command("ap 6913 1581 9500 1315");
+  command("apvolt 12600 9900");
+  armAndSpool(1200);
+  lab::autopilot::ArduPilotParams p;
+  p.thst_expo = 0.6913;
+  p.spin_min = 0.1581;
+  p.spin_max = 0.95;
+  p.bat_volt_max_v = 12.6;
+  p.bat_volt_min_v = 9.9;
+  const double vbat_v = app_->motors().batteryMv() / 1000.0;
+  const int want = lab::autopilot::ardupilot::pwmForThrust(p, 300.0 / 1315.0, vbat_v);
+  for (uint8_t i = 0; i < 4; ++i) EXPECT_NEAR(pulse(i), want, 1) << int(i);
+}
+
+TEST_F(Fly, TheSeesawFliesMotorsZeroAndOneAndHoldsTheOthersStopped) {
+  storeFourV2Motors();
+  bootReady();
+  command("layout seesaw");
+  armAndSpool(600);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force[0]), 300.0f, 0.01f);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force[1]), 300.0f, 0.01f);
+  EXPECT_GT(pulse(0), 1100);
+  EXPECT_GT(pulse(1), 1100);
+  EXPECT_EQ(pulse(2), tc::kStopPwmUs);
+  EXPECT_EQ(pulse(3), tc::kStopPwmUs);
+}
+
+TEST_F(Fly, TheCollectiveSpoolsUpOverOneSecondAfterArming) {
+  storeFourV2Motors();
+  bootReady();
+  command("thrust 1200");
+  command("arm");
+  runFor(480);  // 20 ms of the command, then these: about half way
+  const float half = fly::gramsOf(app_->flight().force[0]);
+  EXPECT_NEAR(half, 150.0f, 10.0f);
+  runFor(600);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force[0]), 300.0f, 0.01f);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Disarming: each cause stops every ESC pulse within 100 ms
+
+TEST_F(Fly, ACrashDisarmsWithinAFewFramesOfTheAttitudeLimit) {
+  storeFourV2Motors();
+  bootReady();
+  command("crash 30");
+  armAndSpool(1200);
+  ASSERT_FALSE(allStopped());
+  // when: the vehicle rolls over at 500 deg/s
+  imu_.rate_dps[0] = 500;
+  runUntil([&] { return imu_.roll_deg > 30; }, 200);
+  const uint32_t crossed_ms = fake::nowMs();
+  const uint32_t took_ms = runUntil([&] { return allStopped(); }, 200);
+  // then
+  EXPECT_LE(took_ms, 100u);
+  EXPECT_LE(took_ms, 10u) << "a few frames";
+  EXPECT_FALSE(app_->armed());
+  EXPECT_EQ(app_->flight().last_cause, fly::DisarmCause::kCrash);
+  EXPECT_TRUE(contains(fake::output(), "disarmed: crash (attitude 3")) << fake::output();
+  EXPECT_GE(fake::nowMs(), crossed_ms);
+}
+
+struct ImuFailure {
+  const char* name;
+  void (*inject)(FakeImu& imu);
+  fly::ImuFault fault;
+  const char* says;
+};
+
+void PrintTo(const ImuFailure& f, std::ostream* os) { *os << f.name; }  // names, not bytes, in ctest
+
+class FlyImuFailure : public Fly, public ::testing::WithParamInterface<ImuFailure> {};
+
+TEST_P(FlyImuFailure, DisarmsWithin100MsAndSaysWhy) {
+  storeFourV2Motors();
+  bootReady();
+  armAndSpool(1200);
+  ASSERT_FALSE(allStopped());
+  GetParam().inject(imu_);
+  const uint32_t took_ms = runUntil([&] { return allStopped(); }, 300);
+  EXPECT_LE(took_ms, 100u);
+  EXPECT_FALSE(app_->armed());
+  EXPECT_EQ(app_->flight().last_cause, fly::DisarmCause::kImu);
+  EXPECT_EQ(app_->imu().fault(), GetParam().fault);
+  runFor(20);
+  EXPECT_TRUE(contains(fake::output(), std::string("disarmed: IMU fault (") + GetParam().says))
+      << fake::output();
+  // and nothing spins until a new arm, whatever the IMU does meanwhile; its retries every
+  // second fail alike and are not news
+  runFor(3000);
+  EXPECT_TRUE(allStopped());
+  const std::string out = fake::output();
+  EXPECT_EQ(out.find("imu: fault:"), out.rfind("imu: fault:")) << "said once\n" << out;
+  EXPECT_FALSE(contains(out, "running again")) << out;
+  EXPECT_GE(app_->imu().faults(), 3);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Causes, FlyImuFailure,
+    ::testing::Values(ImuFailure{"Silent", [](FakeImu&) { fake::twiSetNack(true); }, fly::ImuFault::kNoAnswer,
+                                 "no answer at its address"},
+                      ImuFailure{"StuckBus", [](FakeImu&) { fake::twiHoldSdaLow(0); },
+                                 fly::ImuFault::kBusStuck,
+                                 "the bus is stuck (a line held low): a transfer never ended"},
+                      ImuFailure{"FrozenData", [](FakeImu& imu) { imu.frozen = true; },
+                                 fly::ImuFault::kFrozen, "frozen data"}),
+    [](const ::testing::TestParamInfo<ImuFailure>& info) { return std::string(info.param.name); });
+
+TEST_F(Fly, AStuckBusIsRecoveredByNineClocksAndTheImuComesBack) {
+  storeFourV2Motors();
+  bootReady();
+  fake::twiHoldSdaLow(9);  // a slave mid-byte: nine SCL clocks free it
+  runFor(50);
+  EXPECT_GE(app_->imu().recoveries(), 1);
+  EXPECT_GE(fake::twiRecoveries(), 1u);
+  runFor(2500);  // the bus is free: no fault, or one and a new start-up within a second
+  EXPECT_TRUE(app_->imuReady());
+  EXPECT_TRUE(contains(command("arm"), "armed:"));
+}
+
+TEST_F(Fly, LinkLossDisarmsAfterTheFailsafeTime) {
+  storeFourV2Motors();
+  bootReady();
+  armAndSpool(1200);
+  fake::feedInput("\n");
+  runFor(1);
+  const uint32_t last_line_ms = fake::nowMs();
+  const uint32_t took_ms = runUntil([&] { return allStopped(); }, 1000, false);
+  EXPECT_GE(fake::nowMs() - last_line_ms, tc::kFailsafeMs);
+  EXPECT_LE(fake::nowMs() - last_line_ms, tc::kFailsafeMs + 5u) << "at its frame";
+  EXPECT_LE(took_ms, tc::kFailsafeMs + 100u);
+  EXPECT_EQ(app_->flight().last_cause, fly::DisarmCause::kLink);
+  EXPECT_TRUE(contains(fake::output(), "disarmed: link lost (no line for 500 ms)")) << fake::output();
+  EXPECT_EQ(app_->link().trips, 1u);
+}
+
+TEST_F(Fly, DisarmStopsEveryEscAtOnceAndNothingSpinsUntilTheNextArm) {
+  storeFourV2Motors();
+  bootReady();
+  armAndSpool(1200);
+  EXPECT_TRUE(contains(command("disarm"), "disarmed: command; every ESC at the stop pulse"));
+  EXPECT_TRUE(allStopped());
+  command("thrust 2000");
+  command("sp 10 -10");
+  runFor(2000);
+  EXPECT_TRUE(allStopped());
+  command("sp 0 0");
+  EXPECT_TRUE(contains(command("arm"), "armed:"));
+  runFor(100);
+  EXPECT_FALSE(allStopped());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Watchdog
+
+TEST_F(Fly, TheWatchdogIsKickedOncePerFrameAndOnlyWhileFramesComeRound) {
+  storeFourV2Motors();
+  bootReady();
+  EXPECT_TRUE(fake::watchdogStarted());
+  uint32_t kicks = fake::watchdogKicks();
+  runFor(1000);
+  EXPECT_EQ(fake::watchdogKicks() - kicks, 400u) << "one per frame";
+  // a stuck bus: the loop times each read out at the next frame and goes on (a read that
+  // timed out takes its frame and the next), then the faulted IMU rests a frame at a time
+  fake::twiHoldSdaLow(0);
+  kicks = fake::watchdogKicks();
+  runFor(1000);
+  EXPECT_GE(fake::watchdogKicks() - kicks, 400u - fly::kImuMaxBadReads);
+  EXPECT_LE(fake::watchdogKicks() - kicks, 400u);
+  // frames that stop (the frame interrupt never comes): no kick, whatever the console does
+  hal::Esc::setPhaseHook(0, nullptr);
+  kicks = fake::watchdogKicks();
+  command("help");
+  command("status");
+  runFor(200);
+  EXPECT_EQ(fake::watchdogKicks(), kicks) << "the chip would reset";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Status and stream
+
+TEST_F(Fly, StatusSaysStateImuAttitudeLoopTimingAndEachMotor) {
+  storeFourV2Motors();
+  bootReady();
+  armAndSpool(1200);
+  const std::string out = command("status");
+  const uint16_t budget_us = fly::computeBudgetUs(fly::OutputMode::kForce, 0, 4);
+  const std::string loop = "loop: IMU read at " + std::to_string(fly::readPhaseUs(budget_us)) +
+                           " us of each 2500 us frame, computation budget " + std::to_string(budget_us) +
+                           " us";
+  for (const std::string& part :
+       {std::string("state: armed, disarms 0, mode force, layout x"), std::string("imu: running; reads "),
+        std::string("attitude: roll 0.0 pitch 0.0 deg"), std::string("thrust: 1200 g over 4 motors"),
+        std::string("gains: roll/pitch kp 800 ki 0 kd 146, yaw kp 100 ki 0 (mN m)"), loop,
+        std::string("motor 0: 300 g, "), std::string(" us; slot 0 (model v2)"), std::string("stack: ")}) {
+    EXPECT_TRUE(contains(out, part)) << part << "\n" << out;
+  }
+  EXPECT_EQ(app_->loopStats().late, 0);
+}
+
+TEST_F(Fly, TheStreamIsACsvOfFiftyRowsASecond) {
+  storeFourV2Motors();
+  bootReady();
+  armAndSpool(1200);
+  command("stream on");
+  fake::takeOutput();
+  runFor(1000);
+  const std::string out = fake::takeOutput();
+  int rows = 0;
+  for (const std::string& line : lines(out)) {
+    if (line.empty()) continue;
+    std::stringstream fields(line);
+    std::string field;
+    int n = 0;
+    while (std::getline(fields, field, ',')) ++n;
+    EXPECT_EQ(n, 16) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 50);
+  EXPECT_TRUE(contains(out, ",0.00,0.00,0.00,0.00,0.0,0.0,0.0,300,300,300,300,")) << out.substr(0, 200);
+  EXPECT_TRUE(contains(command("stream off"), "# stream off"));
+}
+
+}  // namespace

@@ -1,0 +1,422 @@
+// fly's control parts without booting the image: the mixer (plus, X, seesaw; saturation), the
+// controller (thesis gains, derivative on the rate, integrators), the estimator (atan2, gyro
+// bias at rest, static tilt, a rate step, the accelerometer's correction) and ArduPilot's thrust
+// curve against the lab's reference implementation of ArduPilot's source.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "ardupilot_curve.hpp"
+#include "controller.hpp"
+#include "estimator.hpp"
+#include "lab/autopilot.hpp"
+#include "mixer.hpp"
+
+namespace {
+
+using namespace fly;
+constexpr double kG0 = 9.80665;
+constexpr double kDeg = M_PI / 180.0;
+
+// ---------------------------------------------------------------------------------------------
+// Mixer: the forces it gives must make the torque asked for, on the airframe's geometry as the
+// simulated airframe has it (written out here on its own, not from the mixer's tables).
+
+struct Mount {
+  double x, y;
+  int spin;
+};
+
+std::vector<Mount> mounts(Layout layout, double a) {
+  const double c = a / std::sqrt(2.0);
+  switch (layout) {
+    case Layout::kPlus:
+      return {{a, 0, 1}, {0, a, -1}, {-a, 0, 1}, {0, -a, -1}};
+    case Layout::kX:
+      return {{c, c, 1}, {-c, c, -1}, {-c, -c, 1}, {c, -c, -1}};
+    case Layout::kSeesaw:
+      return {{0, a, 0}, {0, -a, 0}};
+  }
+  return {};
+}
+
+struct Made {
+  double x_nm = 0, y_nm = 0, z_nm = 0, total_g = 0;
+};
+
+Made torqueOf(Layout layout, const ForceQ4 (&force)[4], double arm_m, double kq_m) {
+  Made m;
+  const auto ms = mounts(layout, arm_m);
+  for (std::size_t i = 0; i < ms.size(); ++i) {
+    const double f_g = force[i] / 16.0;
+    const double f_n = f_g * kG0 / 1000.0;
+    m.x_nm += ms[i].y * f_n;
+    m.y_nm += -ms[i].x * f_n;
+    m.z_nm += -ms[i].spin * kq_m * f_n;
+    m.total_g += f_g;
+  }
+  return m;
+}
+
+struct MixCase {
+  Layout layout;
+  float collective_g;
+  Torque torque;
+};
+
+TEST(Mixer, UnsaturatedForcesMakeTheTorqueAndTheCollectiveAskedForToTheSixteenthOfAGram) {
+  const MixCase cases[] = {
+      {Layout::kPlus, 300, {0.0f, 0.0f, 0.0f}},    {Layout::kPlus, 300, {0.2f, 0.0f, 0.0f}},
+      {Layout::kPlus, 300, {0.0f, -0.3f, 0.0f}},   {Layout::kPlus, 300, {0.1f, 0.1f, 0.02f}},
+      {Layout::kX, 300, {0.2f, 0.0f, 0.0f}},       {Layout::kX, 300, {0.0f, 0.2f, 0.0f}},
+      {Layout::kX, 300, {-0.15f, 0.1f, -0.02f}},   {Layout::kX, 250, {0.0f, 0.0f, 0.03f}},
+      {Layout::kSeesaw, 300, {0.3f, 0.2f, 0.05f}},  // pitch and yaw: not on a seesaw
+  };
+  for (const MixCase& c : cases) {
+    Mixer mixer;
+    mixer.configure(c.layout, 0.225f, 0.015f);
+    ForceQ4 f[4];
+    const uint8_t limits = mixer.mix(toQ4(c.collective_g), c.torque, toQ4(20), toQ4(800), f);
+    const Made made = torqueOf(c.layout, f, 0.225, 0.015);
+    const int layout = static_cast<int>(c.layout);
+    EXPECT_EQ(limits, 0) << layout;
+    EXPECT_NEAR(made.x_nm, c.torque.x_nm, 3e-4) << layout;  // forces in 1/16 g
+    if (c.layout == Layout::kSeesaw) {
+      EXPECT_EQ(f[2], 0);
+      EXPECT_EQ(f[3], 0);
+      EXPECT_NEAR(made.total_g, 2 * c.collective_g, 0.07);
+      continue;
+    }
+    EXPECT_NEAR(made.y_nm, c.torque.y_nm, 3e-4) << layout;
+    EXPECT_NEAR(made.z_nm, c.torque.z_nm, 3e-5) << layout;
+    EXPECT_NEAR(made.total_g, 4 * c.collective_g, 0.13) << layout;
+  }
+}
+
+TEST(Mixer, PlusLayoutRollsOnTheSideMotorsAndPitchesOnFrontAndRear) {
+  Mixer mixer;
+  mixer.configure(Layout::kPlus, 0.225f, 0.015f);
+  ForceQ4 f[4];
+  mixer.mix(toQ4(300), {0.1f, 0.0f, 0.0f}, 0, toQ4(1000), f);
+  EXPECT_EQ(f[0], toQ4(300)) << "front: no roll";
+  EXPECT_EQ(f[2], toQ4(300)) << "rear: no roll";
+  EXPECT_GT(f[1], toQ4(300)) << "positive roll (right side down) pushes the left motor up";
+  EXPECT_LT(f[3], toQ4(300));
+  mixer.mix(toQ4(300), {0.0f, 0.1f, 0.0f}, 0, toQ4(1000), f);
+  EXPECT_GT(f[2], toQ4(300)) << "positive pitch (nose down) pushes the rear up";
+  EXPECT_LT(f[0], toQ4(300));
+  EXPECT_EQ(f[1], toQ4(300));
+}
+
+TEST(Mixer, RollAndPitchBeyondTheRangeAreScaledDownKeepingTheirDirectionAndYawIsDropped) {
+  Mixer mixer;
+  mixer.configure(Layout::kX, 0.225f, 0.015f);
+  ForceQ4 f[4];
+  const Torque asked = {3.0f, 1.5f, 0.05f};  // far more than 20..800 g can make
+  const uint8_t limits = mixer.mix(toQ4(300), asked, toQ4(20), toQ4(800), f);
+  EXPECT_EQ(limits & (kMixRollPitchLimited | kMixYawLimited), kMixRollPitchLimited | kMixYawLimited);
+  for (ForceQ4 v : f) {
+    EXPECT_GE(v, toQ4(20) - 1);
+    EXPECT_LE(v, toQ4(800) + 1);
+  }
+  const Made made = torqueOf(Layout::kX, f, 0.225, 0.015);
+  EXPECT_NEAR(made.x_nm / made.y_nm, 2.0, 2e-3) << "the direction of the roll/pitch torque";
+  EXPECT_NEAR(made.z_nm, 0.0, 1e-4);
+  ForceQ4 lo = f[0], hi = f[0];
+  for (ForceQ4 v : f) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  EXPECT_NEAR(hi - lo, toQ4(780), 2) << "the whole range is used";
+}
+
+TEST(Mixer, YawIsScaledToFitWhileRollAndPitchStayWhole) {
+  Mixer mixer;
+  mixer.configure(Layout::kPlus, 0.225f, 0.015f);
+  ForceQ4 f[4];
+  const Torque asked = {0.3f, 0.0f, 0.2f};  // the roll fits alone, roll + yaw do not
+  const uint8_t limits = mixer.mix(toQ4(300), asked, toQ4(20), toQ4(600), f);
+  EXPECT_EQ(limits & kMixYawLimited, kMixYawLimited);
+  EXPECT_EQ(limits & kMixRollPitchLimited, 0);
+  const Made made = torqueOf(Layout::kPlus, f, 0.225, 0.015);
+  EXPECT_NEAR(made.x_nm, 0.3, 3e-4) << "roll untouched";
+  EXPECT_GT(made.z_nm, 0.0);
+  EXPECT_LT(made.z_nm, 0.2);
+  for (ForceQ4 v : f) {
+    EXPECT_GE(v, toQ4(20) - 1);
+    EXPECT_LE(v, toQ4(600) + 1);
+  }
+}
+
+TEST(Mixer, TheCollectiveGivesWayToTheTorqueAtTheBottomAndTheTop) {
+  Mixer mixer;
+  mixer.configure(Layout::kX, 0.225f, 0.015f);
+  for (float collective : {10.0f, 790.0f}) {
+    ForceQ4 f[4];
+    const uint8_t limits = mixer.mix(toQ4(collective), {0.2f, 0.0f, 0.0f}, toQ4(20), toQ4(800), f);
+    EXPECT_EQ(limits, kMixCollectiveLimited) << collective;
+    const Made made = torqueOf(Layout::kX, f, 0.225, 0.015);
+    EXPECT_NEAR(made.x_nm, 0.2, 3e-4) << collective;
+    for (ForceQ4 v : f) {
+      EXPECT_GE(v, toQ4(20));
+      EXPECT_LE(v, toQ4(800));
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Controller
+
+TEST(Controller, TheThesisGainsAreKp22AndKd04ConvertedToTorqueOnTheIqarus) {
+  // 2.2 us/deg and 0.4 us/(deg/s) on two opposite motors 0.225 m out, 1.44 g/us (table 5.1:
+  // 300 g at 1514 us, thrust from ~1097 us, F ~ (pwm - start)^2).
+  const double slope_g_per_us = 2.0 * 300.0 / (1514.0 - 1097.0);
+  const double nm_per_us_per_motor_pair = slope_g_per_us * 2.0 * 0.225 * kG0 / 1000.0;
+  EXPECT_NEAR(kThesisGains.kp_nm_per_rad, 2.2 * nm_per_us_per_motor_pair / kDeg, 0.001);
+  EXPECT_NEAR(kThesisGains.kd_nm_s_per_rad, 0.4 * nm_per_us_per_motor_pair / kDeg, 0.001);
+  EXPECT_EQ(kThesisGains.ki_nm_per_rad_s, 0.0f) << "the thesis flew a PD";
+}
+
+TEST(Controller, ProportionalOnTheAngleErrorDerivativeOnTheMeasuredRate) {
+  AttitudeController c;
+  c.setGains({0.8f, 0.0f, 0.15f}, {0.1f, 0.0f});
+  Attitude a;
+  a.roll_rad = 0.1f;
+  a.pitch_rad = -0.05f;
+  a.rate_rad_s[0] = 0.5f;
+  a.rate_rad_s[1] = 0.0f;
+  a.rate_rad_s[2] = 0.2f;
+  Setpoint sp;
+  sp.pitch_rad = 0.05f;
+  const Torque t = c.torque(a, sp);
+  EXPECT_NEAR(t.x_nm, 0.8 * -0.1 - 0.15 * 0.5, 1e-6);
+  EXPECT_NEAR(t.y_nm, 0.8 * 0.1, 1e-6);
+  EXPECT_NEAR(t.z_nm, 0.1 * -0.2, 1e-6);
+  // a setpoint step changes the torque by kp times the step, no more (no derivative kick)
+  Setpoint step = sp;
+  step.roll_rad += 0.2f;
+  EXPECT_NEAR(c.torque(a, step).x_nm - t.x_nm, 0.8 * 0.2, 1e-6);
+}
+
+TEST(Controller, IntegratorsAccumulateClampHoldWhenTheMixerLimitsAndReset) {
+  AttitudeController c;
+  c.setGains({0.0f, 2.0f, 0.0f}, {0.0f, 1.0f});
+  Attitude a;
+  a.rate_rad_s[2] = -0.5f;
+  Setpoint sp;
+  sp.roll_rad = 0.1f;
+  c.integrate(a, sp, 0.0025f, 0);
+  EXPECT_NEAR(c.integralNm(0), 2.0 * 0.1 * 0.0025, 1e-7);
+  EXPECT_NEAR(c.integralNm(2), 1.0 * 0.5 * 0.0025, 1e-7);
+  c.integrate(a, sp, 0.0025f, kMixRollPitchLimited);
+  EXPECT_NEAR(c.integralNm(0), 2.0 * 0.1 * 0.0025, 1e-7) << "held while roll/pitch are limited";
+  EXPECT_NEAR(c.integralNm(2), 2 * 1.0 * 0.5 * 0.0025, 1e-7);
+  for (int i = 0; i < 10000; ++i) c.integrate(a, sp, 0.0025f, kMixYawLimited);
+  EXPECT_FLOAT_EQ(c.integralNm(0), AttitudeController::kIntegralMaxNm);
+  EXPECT_NEAR(c.integralNm(2), 2 * 1.0 * 0.5 * 0.0025, 1e-7) << "yaw held";
+  EXPECT_NEAR(c.torque(a, sp).x_nm, AttitudeController::kIntegralMaxNm, 1e-6);
+  c.reset();
+  EXPECT_EQ(c.integralNm(0), 0.0f);
+  EXPECT_EQ(c.integralNm(2), 0.0f);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Estimator
+
+ImuSample sampleAt(double roll_deg, double pitch_deg, const double (&rate_dps)[3] = {0, 0, 0},
+                   const int16_t (&bias_lsb)[3] = {0, 0, 0}, double g = 1.0) {
+  const double r = roll_deg * kDeg, p = pitch_deg * kDeg;
+  ImuSample s;
+  const double a[3] = {-std::sin(p), std::sin(r) * std::cos(p), std::cos(r) * std::cos(p)};
+  for (int i = 0; i < 3; ++i) {
+    s.accel[i] = static_cast<int16_t>(std::lround(a[i] * g * 4096.0));
+    s.gyro[i] = static_cast<int16_t>(std::lround(rate_dps[i] * 16.4) + bias_lsb[i]);
+  }
+  s.fresh = true;
+  return s;
+}
+
+TEST(Estimator, Atan2ApproxIsWithinTwoHundredThousandthsOfARadianEverywhere) {
+  double worst = 0;
+  for (int i = 0; i < 720; ++i) {
+    const double angle = (i - 360) * M_PI / 360.0 + 0.001;
+    for (double radius : {0.01, 1.0, 4096.0}) {
+      const float y = static_cast<float>(radius * std::sin(angle)),
+                  x = static_cast<float>(radius * std::cos(angle));
+      worst = std::max(worst, std::fabs(static_cast<double>(atan2Approx(y, x)) - std::atan2(y, x)));
+    }
+  }
+  EXPECT_LT(worst, 2e-5);
+  EXPECT_EQ(atan2Approx(0, 0), 0.0f);
+  EXPECT_NEAR(atan2Approx(1, 0), M_PI / 2, 1e-6);
+  EXPECT_NEAR(atan2Approx(0, -1), M_PI, 1e-6);
+}
+
+TEST(Estimator, GyroBiasAtRestIsTheMeanAndMotionStartsTheCalibrationAgain) {
+  GyroCalibration cal;
+  cal.restart();
+  const int16_t bias[3] = {100, -50, 20};
+  // given: a moving start (30 deg/s about x), then rest with +-3 LSB of noise
+  EXPECT_FALSE(cal.add(sampleAt(0, 0, {0, 0, 0}, bias)));
+  EXPECT_FALSE(cal.add(sampleAt(0, 0, {30, 0, 0}, bias)));
+  EXPECT_EQ(cal.restarts(), 1);
+  int n = 0;
+  bool done = false;
+  while (!done && n < 1000) {
+    ImuSample s = sampleAt(0, 0, {0, 0, 0}, bias);
+    for (int i = 0; i < 3; ++i) s.gyro[i] = static_cast<int16_t>(s.gyro[i] + (n + 2 * i) % 7 - 3);
+    done = cal.add(s);
+    ++n;
+  }
+  // then
+  EXPECT_EQ(n, GyroCalibration::kSamples);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(cal.biasLsb(i), bias[i], 0.5) << i;
+  EXPECT_NEAR(cal.accelMeanLsb(2), 4096, 1);
+}
+
+TEST(Estimator, AnAccelerometerFarFromOneGIsNoRestForTheCalibration) {
+  GyroCalibration cal;
+  cal.restart();
+  for (int n = 0; n < 500; ++n) EXPECT_FALSE(cal.add(sampleAt(0, 0, {0, 0, 0}, {0, 0, 0}, 1.3)));
+  EXPECT_FALSE(cal.done());
+}
+
+AttitudeEstimator startedAt(double roll_deg, double pitch_deg, const int16_t (&bias)[3] = {0, 0, 0}) {
+  GyroCalibration cal;
+  cal.restart();
+  while (!cal.add(sampleAt(roll_deg, pitch_deg, {0, 0, 0}, bias))) {
+  }
+  AttitudeEstimator e;
+  e.start(cal);
+  return e;
+}
+
+TEST(Estimator, AStaticTiltIsTheFirstAttitude) {
+  const struct { double roll, pitch; } tilts[] = {{0, 0}, {10, -5}, {-30, 20}, {60, 0}, {0, -80}};
+  for (const auto& t : tilts) {
+    const AttitudeEstimator e = startedAt(t.roll, t.pitch);
+    EXPECT_NEAR(e.attitude().roll_rad / kDeg, t.roll, 0.05) << t.roll << " " << t.pitch;
+    EXPECT_NEAR(e.attitude().pitch_rad / kDeg, t.pitch, 0.05) << t.roll << " " << t.pitch;
+  }
+}
+
+TEST(Estimator, ARateStepIntegratesWithTheBiasRemoved) {
+  const int16_t bias[3] = {-120, 80, 33};
+  AttitudeEstimator e = startedAt(0, 0, bias);
+  for (int k = 0; k < 100; ++k) e.propagate(sampleAt(0, 0, {100, 0, 0}, bias), 0.0025f);  // 0.25 s
+  EXPECT_NEAR(e.attitude().roll_rad / kDeg, 25.0, 0.1);
+  EXPECT_NEAR(e.attitude().pitch_rad / kDeg, 0.0, 0.01);
+  EXPECT_NEAR(e.attitude().rate_rad_s[0] / kDeg, 100.0, 0.05);
+  for (int k = 0; k < 100; ++k) e.propagate(sampleAt(25, 0, {0, -40, 0}, bias), 0.0025f);
+  EXPECT_NEAR(e.attitude().pitch_rad / kDeg, -10.0, 0.1);
+}
+
+TEST(Estimator, YawingWhileRolledTurnsRollIntoPitch) {
+  AttitudeEstimator e = startedAt(10, 0);
+  for (int k = 0; k < 40; ++k) e.propagate(sampleAt(10, 0, {0, 0, 90}), 0.0025f);  // 0.1 s at 90 deg/s
+  // pitch' = q - r roll: -90 deg/s * 0.1745 rad * 0.1 s = -1.57 deg
+  EXPECT_NEAR(e.attitude().pitch_rad / kDeg, -1.57, 0.05);
+}
+
+TEST(Estimator, TheAccelerometerPullsADriftedEstimateBackWithItsTimeConstant) {
+  AttitudeEstimator e = startedAt(0, 0);
+  // the vehicle is at roll 5, pitch -3 deg, still; the estimate says level
+  const ImuSample s = sampleAt(5, -3);
+  const float interval_s = 8 * 0.0025f;
+  const int per_tau = static_cast<int>(AttitudeEstimator::kTimeConstantS / interval_s + 0.5f);
+  for (int k = 0; k < per_tau; ++k) {
+    e.correctRoll(s, interval_s);
+    e.correctPitch(s, interval_s);
+  }
+  EXPECT_NEAR(e.attitude().roll_rad / kDeg, 5.0 * (1 - std::exp(-1.0)), 0.1) << "one time constant";
+  for (int k = 0; k < 6 * per_tau; ++k) {
+    e.correctRoll(s, interval_s);
+    e.correctPitch(s, interval_s);
+  }
+  EXPECT_NEAR(e.attitude().roll_rad / kDeg, 5.0, 0.02);
+  EXPECT_NEAR(e.attitude().pitch_rad / kDeg, -3.0, 0.02);
+  // a specific force far from 1 g (a jolt) says nothing of tilt: ignored
+  const float before = e.attitude().roll_rad;
+  e.correctRoll(sampleAt(40, 0, {0, 0, 0}, {0, 0, 0}, 1.4), interval_s);
+  EXPECT_EQ(e.attitude().roll_rad, before);
+  EXPECT_EQ(e.untrustedAccel(), 1u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// ArduPilot's curve against the lab's implementation of ArduPilot's source (double precision)
+
+lab::autopilot::ArduPilotParams labParams(const ArduPilotParams& p) {
+  lab::autopilot::ArduPilotParams l;
+  l.thst_expo = p.expo;
+  l.spin_min = p.spin_min;
+  l.spin_max = p.spin_max;
+  l.pwm_min_us = p.pwm_min_us;
+  l.pwm_max_us = p.pwm_max_us;
+  l.bat_volt_max_v = p.bat_volt_max_v;
+  l.bat_volt_min_v = p.bat_volt_min_v;
+  return l;
+}
+
+TEST(ArduPilotCurve, PulsesAreWhatArduPilotSendsWithinOneMicrosecondAtEveryForceAndVoltage) {
+  ArduPilotParams fitted;  // docs/autopilot.md's walkthrough
+  fitted.expo = 0.6913f;
+  fitted.spin_min = 0.1581f;
+  fitted.spin_max = 0.95f;
+  fitted.bat_volt_max_v = 12.6f;
+  fitted.bat_volt_min_v = 9.9f;
+  fitted.full_thrust_g = 1315.1f;
+  ArduPilotParams linear = fitted;
+  linear.expo = 0.0f;
+  ArduPilotParams negative = fitted;
+  negative.expo = -0.3f;
+  negative.pwm_min_us = 1100;
+  negative.pwm_max_us = 1900;
+  ArduPilotParams no_volts = fitted;
+  no_volts.bat_volt_max_v = 0;
+  int compared = 0;
+  for (const ArduPilotParams& p : {fitted, linear, negative, no_volts}) {
+    for (uint16_t mv : {7000, 9500, 10500, 11100, 12000, 12600, 13500}) {
+      ArduPilotCurve curve;
+      curve.setParams(p);
+      curve.updateBattery(mv, 0.01f);  // the first reading sets the filter
+      for (int f = 0; f <= 1400; f += 10) {
+        const int want =
+            lab::autopilot::ardupilot::pwmForThrust(labParams(p), f / p.full_thrust_g, mv / 1000.0);
+        ASSERT_NEAR(curve.pulseUs(static_cast<float>(f)), want, 1)
+            << "expo " << p.expo << " at " << mv << " mV, " << f << " g";
+        ++compared;
+      }
+      EXPECT_NEAR(curve.liftMax(), lab::autopilot::ardupilot::liftMax(labParams(p), mv / 1000.0), 1e-5);
+    }
+  }
+  EXPECT_EQ(compared, 4 * 7 * 141);
+}
+
+TEST(ArduPilotCurve, TheVoltageFollowsArduPilotsHalfHertzFilter) {
+  ArduPilotParams p;
+  p.bat_volt_max_v = 12.6f;
+  p.bat_volt_min_v = 9.9f;
+  p.full_thrust_g = 1300;
+  ArduPilotCurve curve;
+  curve.setParams(p);
+  curve.updateBattery(12600, 0.01f);
+  EXPECT_FLOAT_EQ(curve.voltageRatio(), 1.0f);
+  // a step to 11.34 V (ratio 0.9): after one time constant 1 / (2 pi 0.5 Hz) = 0.318 s, 63 %
+  for (int k = 0; k < 32; ++k) curve.updateBattery(11340, 0.01f);
+  EXPECT_NEAR(curve.voltageRatio(), 1.0 - 0.1 * (1 - std::exp(-1.0)), 0.003);
+  for (int k = 0; k < 400; ++k) curve.updateBattery(11340, 0.01f);
+  EXPECT_NEAR(curve.voltageRatio(), 0.9, 1e-4);
+  EXPECT_NEAR(curve.maxForceG(), 1300 * (0.9 * (1 - 0.65) + 0.65 * 0.81), 0.05);
+}
+
+TEST(ArduPilotCurve, WithoutAFullThrustTheModeIsNotReady) {
+  ArduPilotCurve curve;
+  EXPECT_FALSE(curve.ready());
+  ArduPilotParams p;
+  p.full_thrust_g = 1000;
+  curve.setParams(p);
+  EXPECT_TRUE(curve.ready());
+}
+
+}  // namespace

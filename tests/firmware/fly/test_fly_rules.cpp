@@ -1,0 +1,112 @@
+// fly's pure rules (firmware/fly/fly_rules.hpp), checked without booting the image: arming
+// refusals in the order a user fixes them, the crash limit, the IMU's fault counts, the frame's
+// layout and the spool-up.
+#include <gtest/gtest.h>
+
+#include "fly_rules.hpp"
+
+namespace {
+
+using namespace fly;
+
+ArmInputs readyToArm() {
+  ArmInputs in;
+  in.escs_ready = true;
+  in.imu_ready = true;
+  in.motors_ok = true;
+  in.mode_ready = true;
+  return in;
+}
+
+TEST(FlyRules, ArmingIsRefusedForEachReasonInTheOrderAUserFixesThem) {
+  EXPECT_EQ(armRefusal(readyToArm()), ArmRefusal::kNone);
+  struct Case {
+    void (*change)(ArmInputs&);
+    ArmRefusal why;
+  };
+  const Case cases[] = {
+      {[](ArmInputs& in) { in.armed = true; }, ArmRefusal::kArmed},
+      {[](ArmInputs& in) { in.imu_fault = true; }, ArmRefusal::kImuFault},
+      {[](ArmInputs& in) { in.imu_ready = false; }, ArmRefusal::kImuStarting},
+      {[](ArmInputs& in) { in.escs_ready = false; }, ArmRefusal::kEscsArming},
+      {[](ArmInputs& in) { in.roll_deg = 5.5f; }, ArmRefusal::kNotLevel},
+      {[](ArmInputs& in) { in.pitch_deg = -6.0f; }, ArmRefusal::kNotLevel},
+      {[](ArmInputs& in) { in.rate_dps[2] = 5.1f; }, ArmRefusal::kMoving},
+      {[](ArmInputs& in) { in.rate_dps[0] = -8.0f; }, ArmRefusal::kMoving},
+      {[](ArmInputs& in) { in.motors_ok = false; }, ArmRefusal::kMotorNotCalibrated},
+      {[](ArmInputs& in) { in.mode_ready = false; }, ArmRefusal::kModeNeedsSettings},
+      // two at once: the first in the order wins
+      {[](ArmInputs& in) {
+         in.imu_fault = true;
+         in.roll_deg = 30;
+       },
+       ArmRefusal::kImuFault},
+      {[](ArmInputs& in) {
+         in.roll_deg = 30;
+         in.rate_dps[1] = 50;
+       },
+       ArmRefusal::kNotLevel},
+  };
+  for (const Case& c : cases) {
+    ArmInputs in = readyToArm();
+    c.change(in);
+    EXPECT_EQ(armRefusal(in), c.why) << static_cast<int>(c.why);
+  }
+  ArmInputs edge = readyToArm();
+  edge.roll_deg = kArmLevelDeg;
+  edge.rate_dps[0] = -kArmStillDps;
+  EXPECT_EQ(armRefusal(edge), ArmRefusal::kNone) << "the limits themselves are allowed";
+}
+
+TEST(FlyRules, ACrashIsRollOrPitchBeyondTheLimitEitherWay) {
+  const float limit = 45 * 3.14159265f / 180;
+  EXPECT_FALSE(crashed(0.78f, -0.78f, limit));
+  EXPECT_TRUE(crashed(0.79f, 0, limit));
+  EXPECT_TRUE(crashed(0, -0.79f, limit));
+  EXPECT_TRUE(crashed(-3.0f, 0, limit)) << "upside down";
+}
+
+TEST(FlyRules, TheImuFaultsAfterEightBadOrStaleReadsInARowThat_Is20Milliseconds) {
+  EXPECT_FALSE(imuReadsFailed(kImuMaxBadReads - 1));
+  EXPECT_TRUE(imuReadsFailed(kImuMaxBadReads));
+  EXPECT_FALSE(imuFrozen(kImuMaxStaleReads - 1));
+  EXPECT_TRUE(imuFrozen(kImuMaxStaleReads));
+  EXPECT_LE(kImuMaxBadReads * kFrameUs, 100000u / 4) << "well inside the 100 ms a disarm may take";
+}
+
+TEST(FlyRules, TheReadStartsAsLateAsTheBudgetAllowsSoTheResultMeetsTheNextEdge) {
+  EXPECT_EQ(kFrameUs, 2500);
+  EXPECT_EQ(readPhaseUs(500), 2500 - kImuReadUs - 500);
+  EXPECT_EQ(readPhaseUs(3000), kMinPhaseUs) << "a budget beyond the frame: as early as allowed";
+  // model v2 on four motors: read, compute and write well under a millisecond before the edge
+  const uint16_t v2 = computeBudgetUs(OutputMode::kForce, 0, 4);
+  EXPECT_LT(v2, 1000);
+  EXPECT_EQ(readPhaseUs(v2) + kImuReadUs + v2, kFrameUs);
+  // the thesis records cost more per motor; pwm least
+  EXPECT_GT(computeBudgetUs(OutputMode::kForce, 4, 4), computeBudgetUs(OutputMode::kForce, 1, 4));
+  EXPECT_LT(computeBudgetUs(OutputMode::kPwm, 0, 4), v2);
+  EXPECT_EQ(computeBudgetUs(OutputMode::kArduPilot, 0, 2) + 2 * kArduPilotMotorBudgetUs,
+            computeBudgetUs(OutputMode::kArduPilot, 0, 4));
+  EXPECT_GE(readPhaseUs(computeBudgetUs(OutputMode::kForce, 4, 4)), kMinPhaseUs);
+}
+
+TEST(FlyRules, EachSlowJobRunsFiftyTimesASecondOnAFrameOfItsOwn) {  // one job per frame: slowJob()
+  int count[6] = {};
+  for (uint32_t frame = 0; frame < kFrameHz; ++frame) ++count[static_cast<int>(slowJob(frame))];
+  EXPECT_EQ(slowJob(1), SlowJob::kBatteryModel) << "the frame after the battery's reading";
+  EXPECT_EQ(count[static_cast<int>(SlowJob::kBattery)], 50);
+  EXPECT_EQ(count[static_cast<int>(SlowJob::kBatteryModel)], 50);
+  EXPECT_EQ(count[static_cast<int>(SlowJob::kStreamRow)], 50);
+  EXPECT_EQ(count[static_cast<int>(SlowJob::kRollCorrection)], 50);
+  EXPECT_EQ(count[static_cast<int>(SlowJob::kPitchCorrection)], 50);
+  EXPECT_FLOAT_EQ(kSlowCycleS, 0.02f);
+}
+
+TEST(FlyRules, TheCollectiveSpoolsUpLinearlyOverOneSecond) {
+  EXPECT_EQ(spoolFraction(0), 0.0f);
+  EXPECT_FLOAT_EQ(spoolFraction(250), 0.25f);
+  EXPECT_EQ(spoolFraction(kSpoolMs), 1.0f);
+  EXPECT_EQ(spoolFraction(60000), 1.0f);
+}
+
+}  // namespace
