@@ -124,6 +124,16 @@ void calibratedCount(uint8_t calibrated) {
   }
 }
 
+uint8_t loadAndReport(ForceActuators& motors) {
+  motors.loadSettings();
+  say(TC_FLASH_TEXT("battery monitor: "));
+  printDivider(motors.boardSettings());
+  newline();
+  const uint8_t calibrated = motors.loadSlots(&slotLoaded);
+  calibratedCount(calibrated);
+  return calibrated;
+}
+
 // "<prefix>motor N<middle><why it is not calibrated><suffix>" and the line end.
 void motorLine(const char* prefix, uint8_t index, const Motor& m, const char* middle,
                const char* suffix) {

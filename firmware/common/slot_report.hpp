@@ -17,6 +17,10 @@ void sayRecordStatus(const Motor& m);
 void slotLoaded(uint8_t index, const Motor& m, const tc::ModelV2& v2, const tc::MotorCalibration& v1);
 // "calibrated motors: K of 4", and a warning when none is.
 void calibratedCount(uint8_t calibrated);
+// Start-up (and after a divider change): the board's divider first (counts -> volts, and the
+// voltages a record may hold), then the four slots, each with its line, and the count. Returns
+// the number of calibrated motors.
+uint8_t loadAndReport(ForceActuators& motors);
 // "<prefix>motor N<middle><why it is not calibrated><suffix>" and the line end.
 void motorLine(const char* prefix, uint8_t index, const Motor& m, const char* middle,
                const char* suffix);

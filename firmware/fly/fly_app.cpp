@@ -28,15 +28,7 @@ int16_t centi(float v, float scale) {
 
 void FlyApp::printBanner() { view::banner(); }
 
-uint8_t FlyApp::loadCalibration() {
-  motors_.loadSettings();
-  fw::say(TC_FLASH_TEXT("battery monitor: "));
-  fw::printDivider(motors_.boardSettings());
-  fw::newline();
-  const uint8_t calibrated = motors_.loadSlots(&fw::slotLoaded);
-  fw::calibratedCount(calibrated);
-  return calibrated;
-}
+uint8_t FlyApp::loadCalibration() { return fw::loadAndReport(motors_); }
 
 void FlyApp::start() {
   start_ms_ = hal::Clock::millis();

@@ -18,16 +18,7 @@ ReadRunApp* ReadRunApp::active_ = nullptr;
 
 void ReadRunApp::printBanner() { view::banner(); }
 
-uint8_t ReadRunApp::loadCalibration() {
-  // The board's divider first: counts -> volts, and the voltages a record may hold.
-  motors_.loadSettings();
-  fw::say(TC_FLASH_TEXT("battery monitor: "));
-  fw::printDivider(motors_.boardSettings());
-  fw::newline();
-  const uint8_t calibrated = motors_.loadSlots(&fw::slotLoaded);
-  fw::calibratedCount(calibrated);
-  return calibrated;
-}
+uint8_t ReadRunApp::loadCalibration() { return fw::loadAndReport(motors_); }
 
 void ReadRunApp::arm() {
   mode_ = Mode::kArming;

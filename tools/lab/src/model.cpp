@@ -484,16 +484,7 @@ struct Model::Impl {
       const Eigen::Map<const RowMatrix> B(cache.data(), static_cast<Eigen::Index>(b.n), nb);
       return B * c + add;
     }
-    Eigen::VectorXd out(static_cast<Eigen::Index>(b.n));
-    double row[64];
-    for (std::size_t i = 0; i < b.n; ++i) {
-      const auto r = static_cast<Eigen::Index>(i);
-      basisRow(x[i], mul[r], row);
-      double v = add[r];
-      for (int a = 0; a < nb; ++a) v += row[a] * c[a];
-      out[r] = v;
-    }
-    return out;
+    return uncapped(b, x, mul, add, c);
   }
 
   // The curve's prediction on every row (no cap), from the coefficients c.
