@@ -21,6 +21,7 @@
 #include "lab/autopilot.hpp"
 #include "lab/autopilot_export.hpp"
 #include "lab/cli.hpp"
+#include "lab_cli_run.hpp"
 #include "lab/dataset.hpp"
 #include "lab/generate.hpp"
 
@@ -604,38 +605,15 @@ TEST(AutopilotExport, HoverThrustFromTheTakeOffWeightMakesTheModelLiftItsShare) 
   EXPECT_THROW(ap::buildExport(d, o), std::invalid_argument);
 }
 
-struct CliRunAutopilot {
-  int rc = 0;
-  std::string out, err;
-};
 
-CliRunAutopilot thrustcalAutopilot(std::vector<std::string> args) {
-  CLI::App app{"thrustcal"};
-  app.require_subcommand(1);
-  lab::registerCommands(app);
-  args.insert(args.begin(), "thrustcal");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  CliRunAutopilot r;
-  testing::internal::CaptureStdout();
-  testing::internal::CaptureStderr();
-  try {
-    app.parse(static_cast<int>(argv.size()), argv.data());
-  } catch (const CLI::Error& e) {
-    r.rc = e.get_exit_code();
-    r.err = e.what();
-  }
-  r.out = testing::internal::GetCapturedStdout();
-  r.err += testing::internal::GetCapturedStderr();
-  return r;
-}
+labtest::CliRun thrustcalAutopilot(std::vector<std::string> args) { return labtest::runLabCli(std::move(args)); }
 
 TEST(AutopilotExportCli, WritesTheFileEachGroundStationLoads) {
   const std::string data = tmpAutopilot("ap_cli.csv");
   generatedSet("none", data);
   // ArduPilot: NAME,VALUE lines (Mission Planner, MAVProxy), comments with '#'
   const std::string parm = tmpAutopilot("quad.parm");
-  CliRunAutopilot r = thrustcalAutopilot({"lab", "export", data, "--to", "ardupilot", "-o", parm, "--auw-g", "1400", "--motors", "4"});
+  labtest::CliRun r = thrustcalAutopilot({"lab", "export", data, "--to", "ardupilot", "-o", parm, "--auw-g", "1400", "--motors", "4"});
   ASSERT_EQ(r.rc, 0) << r.err;
   const auto ap_file = parmFile(slurpAutopilot(parm));
   for (const char* name : {"MOT_THST_EXPO", "MOT_SPIN_MIN", "MOT_SPIN_MAX", "MOT_PWM_MIN", "MOT_PWM_MAX",
@@ -666,7 +644,7 @@ TEST(AutopilotExportCli, MixingTheBoardExportWithToOrForgettingTheOutputIsRefuse
   const std::string data = tmpAutopilot("ap_cli_refuse.csv");
   generatedSet("none", data);
   EXPECT_NE(thrustcalAutopilot({"lab", "export", data, "--to", "ardupilot"}).rc, 0);  // no -o
-  CliRunAutopilot r = thrustcalAutopilot({"lab", "export", data, "--to", "ardupilot", "-o", tmpAutopilot("x.parm"), "--slot", "1"});
+  labtest::CliRun r = thrustcalAutopilot({"lab", "export", data, "--to", "ardupilot", "-o", tmpAutopilot("x.parm"), "--slot", "1"});
   EXPECT_NE(r.rc, 0);
   EXPECT_NE(r.err.find("use one or the other"), std::string::npos) << r.err;
   EXPECT_NE(thrustcalAutopilot({"lab", "export", data, "--to", "inav", "-o", tmpAutopilot("x.parm")}).rc, 0);
@@ -678,7 +656,7 @@ TEST(AutopilotExportCli, PlotsThroughGnuplot) {
   const std::string data = tmpAutopilot("ap_plot.csv");
   generatedSet("none", data);
   const std::string base = tmpAutopilot("ap_plot_fit");
-  const CliRunAutopilot r = thrustcalAutopilot({"lab", "export", data, "--to", "px4", "-o", tmpAutopilot("plot.params"), "--plot", base});
+  const labtest::CliRun r = thrustcalAutopilot({"lab", "export", data, "--to", "px4", "-o", tmpAutopilot("plot.params"), "--plot", base});
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_TRUE(fs::exists(base + ".tsv"));
   EXPECT_TRUE(fs::exists(base + ".gp"));

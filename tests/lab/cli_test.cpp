@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lab/cli.hpp"
+#include "lab_cli_run.hpp"
 #include "lab/effect.hpp"
 #include "lab/dataset.hpp"
 #include "lab/generate.hpp"
@@ -42,21 +43,9 @@ std::vector<std::string> writeRuns(const char* hidden) {
 }
 
 int run(std::vector<std::string> args, std::string& out) {
-  CLI::App app{"thrustcal"};
-  app.require_subcommand(1);
-  lab::registerCommands(app);
-  args.insert(args.begin(), "thrustcal");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  testing::internal::CaptureStdout();
-  int rc = 0;
-  try {
-    app.parse(static_cast<int>(argv.size()), argv.data());
-  } catch (const CLI::Error& e) {
-    rc = e.get_exit_code();
-  }
-  out = testing::internal::GetCapturedStdout();
-  return rc;
+  const labtest::CliRun r = labtest::runLabCli(std::move(args));
+  out = r.out;
+  return r.rc;
 }
 
 TEST(LabCli, DiagnoseJsonHasTheIssueShapeWithSuspectsBestFirst) {
@@ -165,12 +154,10 @@ TEST(LabCli, LadderAndWalkJsonCarryTheNoiseFloor) {
 TEST(LabCli, BadInputIsAnErrorExitNotACrash) {
   const std::string bad = tmpCli("bad.csv");
   std::ofstream(bad) << "pwm_us,force_g\n1000,1\n1100,x\n";
-  std::string out;
-  testing::internal::CaptureStderr();
-  EXPECT_NE(run({"lab", "diagnose", bad, "--model", "curve"}, out), 0);
-  EXPECT_NE(run({"lab", "diagnose", bad, "--model", "nonsense"}, out), 0);
-  const std::string err = testing::internal::GetCapturedStderr();
-  EXPECT_NE(err.find("bad.csv:3:6"), std::string::npos) << err;
+  const labtest::CliRun bad_cell = labtest::runLabCli({"lab", "diagnose", bad, "--model", "curve"});
+  EXPECT_NE(bad_cell.rc, 0);
+  EXPECT_NE(bad_cell.err.find("bad.csv:3:6"), std::string::npos) << bad_cell.err;
+  EXPECT_NE(labtest::runLabCli({"lab", "diagnose", bad, "--model", "nonsense"}).rc, 0);
 }
 
 // The sag data as an RCbenchmark 1585 export (thrust logged negative in newtons, App message),
@@ -218,12 +205,10 @@ TEST(LabCli, EveryReaderNoteAndDataWarningIsInTheJson) {
 
 TEST(LabCli, HoldoutOnOneRunIsAnErrorNotNan) {
   const std::string file = standFile("stand_one_run.csv");
-  std::string out;
-  testing::internal::CaptureStderr();
-  EXPECT_EQ(run({"lab", "diagnose", file, "--model", "curve+deadband", "--holdout", "runs"}, out), 2);
-  const std::string err = testing::internal::GetCapturedStderr();
-  EXPECT_NE(err.find("needs at least two runs"), std::string::npos) << err;
-  EXPECT_EQ(out.find("nan"), std::string::npos) << out;
+  const labtest::CliRun r = labtest::runLabCli({"lab", "diagnose", file, "--model", "curve+deadband", "--holdout", "runs"});
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.err.find("needs at least two runs"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("nan"), std::string::npos) << r.out;
 }
 
 TEST(LabCli, ReportIsOneSelfContainedPageWithUnitsAndStaysSmallOnLargeData) {

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "lab/cli.hpp"
+#include "lab_cli_run.hpp"
 #include "lab/dataset.hpp"
 #include "lab/export.hpp"
 #include "lab/generate.hpp"
@@ -36,30 +37,7 @@ std::string slurpExport(const std::string& path) {
   return s.str();
 }
 
-struct CliRunExport {
-  int rc = 0;
-  std::string out, err;
-};
-
-CliRunExport thrustcalExport(std::vector<std::string> args) {
-  CLI::App app{"thrustcal"};
-  app.require_subcommand(1);
-  lab::registerCommands(app);
-  args.insert(args.begin(), "thrustcal");
-  std::vector<const char*> argv;
-  for (const auto& a : args) argv.push_back(a.c_str());
-  CliRunExport r;
-  testing::internal::CaptureStdout();
-  testing::internal::CaptureStderr();
-  try {
-    app.parse(static_cast<int>(argv.size()), argv.data());
-  } catch (const CLI::Error& e) {
-    r.rc = e.get_exit_code();
-  }
-  r.out = testing::internal::GetCapturedStdout();
-  r.err = testing::internal::GetCapturedStderr();
-  return r;
-}
+labtest::CliRun thrustcalExport(std::vector<std::string> args) { return labtest::runLabCli(std::move(args)); }
 
 lab::Dataset generatedExport(const char* hidden, const std::string& path) {
   lab::GenerateOptions o;
@@ -94,7 +72,7 @@ TEST(LabExport, RecordReadBackFromTheHexFileFliesTheLabModelsForceWithin1Percent
   hex::writeIntelHexFile(hex, patterned());
 
   // when the fitted model is exported into slot 1
-  const CliRunExport r = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "1", "--eeprom", hex});
+  const labtest::CliRun r = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "1", "--eeprom", hex});
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("wrote slot 1 copy A, sequence 1"), std::string::npos) << r.out;
 
@@ -172,7 +150,7 @@ TEST(LabExport, SecondExportIsTheNextSequenceInTheOtherCopyAndTheFirstStaysValid
 
   // when a different model goes into the same slot (one that misses the sag: 3.7 % RMS, let
   // through by a looser limit)
-  const CliRunExport r = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "2", "--eeprom", hex,
+  const labtest::CliRun r = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "2", "--eeprom", hex,
                               "--max-error-pct", "5"});
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("wrote slot 2 copy B, sequence 2"), std::string::npos) << r.out;
@@ -210,7 +188,7 @@ TEST(LabExport, EffectsTheFirmwareCannotRunAreRefusedByNameAndTheFileIsUntouched
   };
   for (const auto& c : cases) {
     // when exporting a model with the effect
-    const CliRunExport r = thrustcalExport({"lab", "export", csv, "--model", c.spec, "--slot", "1", "--eeprom", hex});
+    const labtest::CliRun r = thrustcalExport({"lab", "export", csv, "--model", c.spec, "--slot", "1", "--eeprom", hex});
     // then it fails, names the effect with a reason, and writes nothing
     EXPECT_NE(r.rc, 0) << c.spec;
     EXPECT_NE(r.err.find(std::string("cannot export ") + c.named), std::string::npos) << r.err;
@@ -225,12 +203,12 @@ TEST(LabExport, SeveralMotorsAreRefusedUnlessMotorPicksOne) {
   generatedExport("motor", csv);
   fs::remove(hex);
   // when exported as one model, then refused and no file appears
-  const CliRunExport all = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "0", "--eeprom", hex});
+  const labtest::CliRun all = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage", "--slot", "0", "--eeprom", hex});
   EXPECT_NE(all.rc, 0);
   EXPECT_NE(all.err.find("--motor"), std::string::npos) << all.err;
   EXPECT_FALSE(fs::exists(hex));
   // when one motor is picked (the `motor` effect is then moot), then its record lands
-  const CliRunExport one = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage+motor", "--motor", "2",
+  const labtest::CliRun one = thrustcalExport({"lab", "export", csv, "--model", "curve+deadband+voltage+motor", "--motor", "2",
                              "--slot", "0", "--eeprom", hex});
   ASSERT_EQ(one.rc, 0) << one.err;
   g_image = hex::readIntelHexFile(hex, lab::kEepromBytes);
@@ -298,7 +276,7 @@ TEST(LabExport, DataOrFitsThatCannotMakeARightRecordAreRefusedNamingTheLimitAndN
     // when exported
     std::vector<std::string> args = {"lab", "export", csv, "--model", c.model, "--slot", "1", "--eeprom", hex};
     args.insert(args.end(), c.extra_args.begin(), c.extra_args.end());
-    const CliRunExport r = thrustcalExport(args);
+    const labtest::CliRun r = thrustcalExport(args);
     // then refused with what failed, its value and what to do, and nothing written
     EXPECT_EQ(r.rc, 2) << c.name << "\n" << r.out;
     EXPECT_NE(r.err.find("cannot export"), std::string::npos) << c.name << ": " << r.err;
@@ -323,13 +301,13 @@ TEST(LabExport, ForceThatFallsAsTheDriveRisesIsRefusedUntilWhereCutsItOff) {
   const std::string hex = tmpExport("collapse.hex");
   fs::remove(hex);
   // when exported as is, then refused with the PWM where it starts and the --where that helps
-  const CliRunExport all = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex});
+  const labtest::CliRun all = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex});
   EXPECT_EQ(all.rc, 2);
   EXPECT_NE(all.err.find("the force falls while the drive rises"), std::string::npos) << all.err;
   EXPECT_NE(all.err.find("--where 'pwm_us < 1800'"), std::string::npos) << all.err;
   EXPECT_FALSE(fs::exists(hex));
   // when the rows below the collapse are exported, then the record lands
-  const CliRunExport cut = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex, "--where",
+  const labtest::CliRun cut = thrustcalExport({"lab", "export", csv, "--model", kSpec, "--slot", "0", "--eeprom", hex, "--where",
                                 "pwm_us < 1800"});
   EXPECT_EQ(cut.rc, 0) << cut.err;
   EXPECT_NE(cut.err.find("kept"), std::string::npos) << cut.err;
