@@ -17,14 +17,16 @@
 #pragma once
 #include <stdint.h>
 
+#include "thrustcal/record_limits.hpp"
+
 namespace fly {
 
 struct ArduPilotParams {
   float expo = 0.65f;          // MOT_THST_EXPO
   float spin_min = 0.15f;      // MOT_SPIN_MIN
   float spin_max = 0.95f;      // MOT_SPIN_MAX
-  uint16_t pwm_min_us = 1000;  // MOT_PWM_MIN
-  uint16_t pwm_max_us = 2000;  // MOT_PWM_MAX
+  uint16_t pwm_min_us = tc::kThrottleMinUs;  // MOT_PWM_MIN
+  uint16_t pwm_max_us = tc::kThrottleMaxUs;  // MOT_PWM_MAX
   float bat_volt_max_v = 0;    // MOT_BAT_VOLT_MAX (0: no voltage scaling)
   float bat_volt_min_v = 0;    // MOT_BAT_VOLT_MIN
   float full_thrust_g = 0;     // 0: not given (the mode refuses to arm)

@@ -12,6 +12,7 @@
 
 #include "lab/dataset.hpp"
 #include "lab/model.hpp"
+#include "hal/board.hpp"
 #include "hex/intel_hex.hpp"
 #include "test_records.hpp"
 #include "thrustcal/board_settings.hpp"
@@ -55,7 +56,7 @@ void intelHex(const uint8_t* data, std::size_t size) {
   } catch (const hex::HexError&) {
     return;  // refused with a message: fine
   }
-  if (image.size() != 4096) violation("image size " + std::to_string(image.size()));
+  if (image.size() != hal::kEepromBytes) violation("image size " + std::to_string(image.size()));
   const std::vector<uint8_t> back = hex::parseIntelHex(hex::formatIntelHex(image), 4096, "roundtrip.hex");
   if (back != image) violation("an accepted image does not round-trip through formatIntelHex");
 }

@@ -68,7 +68,9 @@ TEST(BoardTable, EachMotorsPulseLeavesOnThePinTheTableNamesAndTheSimulatorMeasur
     ASSERT_GT(watch[ch].pulses, 0);
     EXPECT_GT(watch[ch].last_width_us, 1050.0);
     EXPECT_NEAR(rig.board.escPulseUs(ch), watch[ch].last_width_us, 0.3);
-    if (ch > 0) EXPECT_GT(watch[ch].last_width_us, watch[ch - 1].last_width_us + 5.0);
+    if (ch > 0) {
+      EXPECT_GT(watch[ch].last_width_us, watch[ch - 1].last_width_us + 5.0);
+    }
   }
 }
 

@@ -2,7 +2,8 @@
 """Each shared fact is defined in one place: a grep over core/, hal/, firmware/, tools/ and tests/.
 
 Every row of FACTS is a fact, the regular expression that finds a definition of it, and the one
-file allowed to hold that definition. The check fails (exit 1) when the definition is found
+file allowed to hold that definition (None: a literal no file may write; the named constant is
+its home). The check fails (exit 1) when the definition is found
 anywhere else (a copy that could drift), or not in its home (the table is stale). Add a row
 when a fact gets its one home.
 
@@ -37,6 +38,22 @@ FACTS = [
      'tools/hex/src/intel_hex.cpp'),
     ('a slot\'s flown model (the v1/v2 union)', r'\bclass\s+SlotModel\b',
      'core/include/thrustcal/slot_model.hpp'),
+    # The board (hal/board.hpp): the firmware, the simulator, the plant and the tools read it.
+    ('the CPU clock', r'\bconstexpr\s+[\w:]+\s+k\w*CpuHz\s*=\s*\d', 'hal/include/hal/board.hpp'),
+    ('the EEPROM size', r'\bconstexpr\s+[\w:]+\s+k\w*Eeprom\w*\s*=\s*\d', 'hal/include/hal/board.hpp'),
+    ('the flash size', r'\bconstexpr\s+[\w:]+\s+k\w*Flash\w*Bytes\s*=\s*\d', 'hal/include/hal/board.hpp'),
+    ('a UART baud rate', r'\bconstexpr\s+[\w:]+\s+k\w*Baud\s*=\s*\d', 'hal/include/hal/board.hpp'),
+    ('the ESC pin table', r'\bEscPin\s+kEscPins\[\]\s*=', 'hal/include/hal/board.hpp'),
+    ('an ESC pin as a (port, bit) literal', r"\{\s*'[A-L]'\s*,\s*[0-7]\s*\}", None),
+    ('the timer driver\'s pulse clamp', r'\bconstexpr\s+[\w:]+\s+kPulseClamp(Min|Max)Us\s*=',
+     'hal/include/hal/board.hpp'),
+    # Protocol facts (core).
+    ('the ESC\'s throttle range', r'\bconstexpr\s+[\w:]+\s+kThrottle(Min|Max)Us\s*=',
+     'core/include/thrustcal/record_limits.hpp'),
+    ('a bare throttle-range default', r'\buint16_t\s+pwm_(min|max)_us\s*=\s*(1000|2000)\s*;', None),
+    ('gather_store\'s setting ranges', r'\bconstexpr\s+[\w:]+\s+kSweep(Pwm|Step|Settle)\w*\s*=',
+     'core/include/thrustcal/sweep_limits.hpp'),
+    ('the flash-text macros', r'#\s*define\s+TC_FLASH', 'core/include/thrustcal/flash_text.hpp'),
 ]
 SOURCES = ('.cpp', '.hpp', '.h', '.c', '.inc')
 FOLDERS = ('core', 'hal', 'firmware', 'tools', 'tests')
@@ -67,6 +84,11 @@ def main():
     failed = False
     for i, (what, _, home) in enumerate(FACTS):
         places = found[i]
+        if home is None:  # a literal that must not be written anywhere
+            for p, n in places:
+                failed = True
+                print(f'error: {p}:{n}: writes {what}; read it from its named constant instead')
+            continue
         elsewhere = [(p, n) for p, n in places if p != home]
         for p, n in elsewhere:
             failed = True

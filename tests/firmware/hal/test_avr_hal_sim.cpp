@@ -36,7 +36,7 @@
 
 namespace {
 
-constexpr double kCpuHz = 16e6;
+constexpr double kCpuHz = hal::kCpuHz;  // the board table (hal/board.hpp)
 constexpr avr_cycle_count_t kCyclesPerUartByte = 1389;  // 10 bits at 115200 baud
 // Pulse widths: simavr timestamps pin edges between instructions, so an edge may land up to
 // 4 cycles (0.25 us) late; one timer tick off (OCR off by one) is 0.5 us and still fails.

@@ -39,7 +39,7 @@ class ReadRun : public ::testing::Test {
     app_ = std::make_unique<rr::ReadRunApp>();
     hal::Esc::init(hal::kEscDefaultFrameHz);
     hal::Clock::init();
-    hal::Uart::init(115200);
+    hal::Uart::init(hal::kUartBaud);
     hal::Adc::init();
     app_->printBanner();
     calibrated_ = app_->loadCalibration();

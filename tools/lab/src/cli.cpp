@@ -513,7 +513,7 @@ int runExport(const ExportArgs& a) {
   else
     std::printf("wrote slot %d copy %c, sequence %u (%u bytes changed) into %s (%s %zu-byte EEPROM image)\n",
                 a.slot, r.write.copy ? 'B' : 'A', r.write.sequence, r.write.bytes_changed, a.eeprom.c_str(),
-                existed ? "existing" : "new, erased", kEepromBytes);
+                existed ? "existing" : "new, erased", static_cast<std::size_t>(kEepromBytes));
   std::printf("  knots %u (%u every %.1f g, then every %.1f g), start threshold %.2f us, max force %.1f g, "
               "resting voltage %.2f V, sag at max force %.2f V\n",
               m.knots, m.fine_knots, m.step_dg / 10.0, m.coarse_step_dg / 10.0, m.start_q4_us / 16.0,

@@ -183,11 +183,27 @@ double Actuator::omegaSteady(double u_v, double ke, double r) const {
   const double i0 = p_.motor.i0_a;
   if (u_v / r <= i0) return 0.0;  // cannot overcome friction
   // g(w) = Kt ((u - Ke w) / R - I0) - Q(w) falls monotonically from > 0 at 0 to < 0 at u/Ke.
+  // The Illinois variant of regula falsi: the root stays bracketed as in a bisection, and it
+  // converges superlinearly (about ten torque evaluations to 1e-12 instead of eighty).
+  auto g = [&](double w) { return ke * ((u_v - ke * w) / r - i0) - torqueAt_nm(w); };
   double lo = 0.0, hi = u_v / ke;
-  for (int i = 0; i < 80; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    const double g = ke * ((u_v - ke * mid) / r - i0) - torqueAt_nm(mid);
-    (g > 0.0 ? lo : hi) = mid;
+  double g_lo = g(lo), g_hi = g(hi);
+  int kept = 0;  // which end stayed last time: -1 lo, +1 hi
+  for (int i = 0; i < 200 && hi - lo > 1e-12 * hi; ++i) {
+    const double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+    const double g_mid = g(mid);
+    if (g_mid == 0.0) return mid;
+    if (g_mid > 0.0) {
+      lo = mid;
+      g_lo = g_mid;
+      if (kept == +1) g_hi *= 0.5;
+      kept = +1;
+    } else {
+      hi = mid;
+      g_hi = g_mid;
+      if (kept == -1) g_lo *= 0.5;
+      kept = -1;
+    }
   }
   return 0.5 * (lo + hi);
 }

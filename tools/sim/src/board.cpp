@@ -508,24 +508,33 @@ uint64_t Board::cycle() const { return avr_->cycle; }
 
 void Board::run(uint64_t cycles) {
   const auto wall0 = std::chrono::steady_clock::now();
-  const uint64_t start = avr_->cycle;
+  avr_t* const avr = avr_;
+  const uint64_t start = avr->cycle;
   const uint64_t end = start + cycles;
-  while (avr_->cycle < end) {
-    for (const PcWatch& w : pc_watches_)
-      if (avr_->pc == w.byte_address) w.probe(avr_->cycle);
-    const int state = avr_run(avr_);
-    if (state == cpu_Done || state == cpu_Crashed) {
-      const double t = timeS();
-      simulated_s_ += cyclesToSeconds(avr_->cycle - start);
-      throw BoardError(fmt::format(
-          "the firmware {} at t = {:.6f} s (pc 0x{:05X}); {}",
-          state == cpu_Crashed ? "crashed" : "stopped (sleep with interrupts off, or main returned)",
-          t, avr_->pc,
-          state == cpu_Crashed ? "run it under simavr -g and avr-gdb to see where"
-                               : "the image must loop forever with interrupts on"));
+  int state = cpu_Running;
+  if (pc_watches_.empty()) {
+    // The hot loop of every simulation: one call per instruction, nothing else.
+    while (avr->cycle < end) {
+      state = avr_run(avr);
+      if (state == cpu_Done || state == cpu_Crashed) break;
+    }
+  } else {
+    while (avr->cycle < end) {
+      for (const PcWatch& w : pc_watches_)
+        if (avr->pc == w.byte_address) w.probe(avr->cycle);
+      state = avr_run(avr);
+      if (state == cpu_Done || state == cpu_Crashed) break;
     }
   }
-  simulated_s_ += cyclesToSeconds(avr_->cycle - start);
+  simulated_s_ += cyclesToSeconds(avr->cycle - start);
+  if (state == cpu_Done || state == cpu_Crashed) {
+    throw BoardError(fmt::format(
+        "the firmware {} at t = {:.6f} s (pc 0x{:05X}); {}",
+        state == cpu_Crashed ? "crashed" : "stopped (sleep with interrupts off, or main returned)",
+        timeS(), avr->pc,
+        state == cpu_Crashed ? "run it under simavr -g and avr-gdb to see where"
+                             : "the image must loop forever with interrupts on"));
+  }
   wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
 }
 

@@ -1,5 +1,6 @@
 #include "sim/cycle_probe.hpp"
 
+#include "hal/board.hpp"
 #include "sim/lsan_simavr.hpp"
 
 #include <simavr/sim_avr.h>
@@ -96,7 +97,7 @@ CycleProbeRun runCycleProbe(const std::string& elf_path, uint64_t budget_cycles,
   avr_t* avr = avr_make_mcu_by_name("atmega2560");
   if (!avr) throw std::runtime_error("simavr has no atmega2560 core");
   avr_init(avr);
-  avr->frequency = 16000000;
+  avr->frequency = hal::kCpuHz;
   avr->log = 0;
   avr_load_firmware(avr, &fw);
   avr->sleep = noSleep;
