@@ -55,10 +55,11 @@ TEST(SwapHil, ForceModeMeetsTheTargetsWithAKv900InSlot1) {
   // the public interface: runs[] and targets[] with the fields
   const nlohmann::json j = r.toJson();
   ASSERT_EQ(j.at("runs").size(), 4u);
-  for (const char* key : {"rig", "mode", "part", "axis", "step_deg", "seed", "rise_s", "overshoot_pct", "settling_s",
-                          "sse_deg", "itae", "integrator", "hover_pwm_spread_us"})
+  for (const char* key : {"rig", "mode", "part", "axis", "step_deg", "seed", "rise_s", "overshoot_pct",
+                          "settling_s", "sse_deg", "itae", "integrator", "hover_pwm_spread_us"})
     EXPECT_TRUE(j["runs"][0].contains(key)) << key;
-  for (const char* key : {"target", "figure", "wanted", "met"}) EXPECT_TRUE(j["targets"][0].contains(key)) << key;
+  for (const char* key : {"target", "figure", "wanted", "met"})
+    EXPECT_TRUE(j["targets"][0].contains(key)) << key;
 }
 
 }  // namespace

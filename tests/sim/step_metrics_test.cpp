@@ -1,14 +1,14 @@
 // The swap experiment's step-response figures (sim/step_metrics.hpp) against responses whose
 // figures are known in closed form: a first-order lag, an underdamped second-order system, and
 // responses that never settle (NaN, never a guess).
+#include "sim/step_metrics.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
 #include <stdexcept>
 #include <vector>
-
-#include "sim/step_metrics.hpp"
 
 namespace {
 
@@ -113,7 +113,9 @@ TEST(StepMetrics, AResponseThatNeverSettlesHasNoSettlingTime) {
   // given: a lag with a 2 Hz oscillation of amplitude 2 that never dies, ending on a crest, and
   // a ramp that never stops
   const StepSeries ringing = sampledStep(
-      [](double t) { return 10.0 * (1.0 - std::exp(-t / 0.1)) + 2.0 * std::sin(2 * kStepPi * 2.0 * t + kStepPi / 2); },
+      [](double t) {
+        return 10.0 * (1.0 - std::exp(-t / 0.1)) + 2.0 * std::sin(2 * kStepPi * 2.0 * t + kStepPi / 2);
+      },
       2.0);
   const StepSeries ramp = sampledStep([](double t) { return 10.0 * t; }, 2.0);
   sim::StepSpec spec;
@@ -131,17 +133,20 @@ TEST(StepMetrics, AResponseThatNeverSettlesHasNoSettlingTime) {
 TEST(StepMetrics, RefusesSeriesItCannotMeasure) {
   sim::StepSpec spec;
   spec.target = 1;
-  EXPECT_THROW(sim::stepMetrics({0, 1, 2}, {0, 1}, spec), std::invalid_argument);            // unequal
-  EXPECT_THROW(sim::stepMetrics({0, 2, 1, 3}, {0, 1, 1, 1}, spec), std::invalid_argument);   // unordered
-  EXPECT_THROW(sim::stepMetrics({-1, 0, 1}, {0, 1, 1}, spec), std::invalid_argument);        // 2 after the step
-  EXPECT_THROW(sim::stepMetrics({0, 1, 2, 3}, {0, 0, 0, 0}, spec), std::invalid_argument);   // no step
+  EXPECT_THROW(sim::stepMetrics({0, 1, 2}, {0, 1}, spec), std::invalid_argument);           // unequal
+  EXPECT_THROW(sim::stepMetrics({0, 2, 1, 3}, {0, 1, 1, 1}, spec), std::invalid_argument);  // unordered
+  EXPECT_THROW(sim::stepMetrics({-1, 0, 1}, {0, 1, 1}, spec), std::invalid_argument);  // 2 after the step
+  EXPECT_THROW(sim::stepMetrics({0, 1, 2, 3}, {0, 0, 0, 0}, spec), std::invalid_argument);  // no step
 }
 
 TEST(StepMetrics, MeanSpreadIsTheSpreadOfTheChannelsMeans) {
   // given: four pulses, motor 2 10 us above the rest on average in the window, noise around it
   const std::vector<double> t = {-0.3, -0.2, -0.1, 0.0, 0.1};
-  const std::vector<std::vector<double>> rows = {
-      {0, 0, 0, 0}, {1500, 1502, 1510, 1500}, {1500, 1498, 1510, 1500}, {1500, 1500, 1510, 1500}, {0, 0, 0, 0}};
+  const std::vector<std::vector<double>> rows = {{0, 0, 0, 0},
+                                                 {1500, 1502, 1510, 1500},
+                                                 {1500, 1498, 1510, 1500},
+                                                 {1500, 1500, 1510, 1500},
+                                                 {0, 0, 0, 0}};
   // when / then: the rows at -0.3 and 0.1 are outside [-0.25, 0]
   EXPECT_DOUBLE_EQ(sim::meanSpread(t, rows, -0.25, 0.0), 10.0);
   EXPECT_THROW(sim::meanSpread(t, rows, 1.0, 2.0), std::invalid_argument);

@@ -20,12 +20,13 @@ void checkSeries(const std::vector<double>& t_s, const std::vector<double>& y) {
   std::size_t after = 0;
   for (std::size_t i = 0; i < t_s.size(); ++i) {
     if (i && !(t_s[i] > t_s[i - 1]))
-      throw std::invalid_argument(fmt::format("step metrics: time does not increase at sample {} ({} after {})", i,
-                                              t_s[i], t_s[i - 1]));
+      throw std::invalid_argument(fmt::format(
+          "step metrics: time does not increase at sample {} ({} after {})", i, t_s[i], t_s[i - 1]));
     after += t_s[i] >= 0;
   }
   if (after < 3)
-    throw std::invalid_argument(fmt::format("step metrics: {} samples after the step; at least 3 needed", after));
+    throw std::invalid_argument(
+        fmt::format("step metrics: {} samples after the step; at least 3 needed", after));
 }
 
 // The time the response first reaches `level` going in direction `dir` (+1 up, -1 down), from
@@ -35,8 +36,9 @@ double firstCrossing(const std::vector<double>& t, const std::vector<double>& y,
     if (t[i] < 0 || dir * (y[i] - level) < 0) continue;
     if (i == 0) return t[i];
     const double before = y[i - 1];
-    const double at = dir * (before - level) < 0 ? t[i - 1] + (t[i] - t[i - 1]) * (level - before) / (y[i] - before)
-                                                 : t[i - 1];
+    const double at = dir * (before - level) < 0
+                          ? t[i - 1] + (t[i] - t[i - 1]) * (level - before) / (y[i] - before)
+                          : t[i - 1];
     return std::max(at, 0.0);
   }
   return kNaN;
@@ -44,7 +46,8 @@ double firstCrossing(const std::vector<double>& t, const std::vector<double>& y,
 
 // When |y - final| enters the band for good (interpolated); 0 if it never leaves it after the
 // step, NaN if it is outside at the end.
-double settlingTime(const std::vector<double>& t, const std::vector<double>& y, double final_value, double band) {
+double settlingTime(const std::vector<double>& t, const std::vector<double>& y, double final_value,
+                    double band) {
   std::size_t last_out = t.size();
   for (std::size_t i = 0; i < t.size(); ++i)
     if (t[i] >= 0 && std::fabs(y[i] - final_value) > band) last_out = i;
@@ -79,7 +82,8 @@ StepMetrics stepMetrics(const std::vector<double>& t_s, const std::vector<double
     if (t_s[i] >= 0 && t_s[i] >= t_end - spec.final_window_s) sum += y[i], ++n;
   m.final_value = sum / n;
   const double amplitude = m.final_value - spec.y0;
-  if (amplitude == 0) throw std::invalid_argument("step metrics: the response ends where it started (no step)");
+  if (amplitude == 0)
+    throw std::invalid_argument("step metrics: the response ends where it started (no step)");
   const double dir = amplitude > 0 ? 1.0 : -1.0;
   const double lo = firstCrossing(t_s, y, spec.y0 + spec.rise_low * amplitude, dir);
   const double hi = firstCrossing(t_s, y, spec.y0 + spec.rise_high * amplitude, dir);
@@ -105,7 +109,8 @@ double meanSpread(const std::vector<double>& t_s, const std::vector<std::vector<
     ++n;
   }
   if (n == 0 || sum.empty())
-    throw std::invalid_argument(fmt::format("no sample between {:.3f} s and {:.3f} s for the pulse spread", from_s, to_s));
+    throw std::invalid_argument(
+        fmt::format("no sample between {:.3f} s and {:.3f} s for the pulse spread", from_s, to_s));
   const auto [lo, hi] = std::minmax_element(sum.begin(), sum.end());
   return (*hi - *lo) / n;
 }

@@ -21,10 +21,14 @@ namespace fs = std::filesystem;
 
 const char* modeName(Mode mode) {
   switch (mode) {
-    case Mode::kGeneric: return "generic";
-    case Mode::kPwm: return "pwm";
-    case Mode::kArduPilot: return "ardupilot";
-    case Mode::kForce: break;
+    case Mode::kGeneric:
+      return "generic";
+    case Mode::kPwm:
+      return "pwm";
+    case Mode::kArduPilot:
+      return "ardupilot";
+    case Mode::kForce:
+      break;
   }
   return "force";
 }
@@ -40,7 +44,8 @@ const char* gainsName(Gains gains) { return gains == Gains::kPid ? "pid" : "pd";
 Gains parseGains(const std::string& name) {
   if (name == "pd") return Gains::kPd;
   if (name == "pid") return Gains::kPid;
-  throw std::invalid_argument(fmt::format("unknown gains '{}'; use pd (the thesis's) or pid (with --pid-ki)", name));
+  throw std::invalid_argument(
+      fmt::format("unknown gains '{}'; use pd (the thesis's) or pid (with --pid-ki)", name));
 }
 
 namespace {
@@ -63,7 +68,9 @@ std::vector<RunSpec> plan(const SwapOptions& o) {
   return runs;
 }
 
-std::string groupOf(const RunSpec& r) { return fmt::format("{} {} {}", airRigName(r.rig), modeName(r.mode), r.part); }
+std::string groupOf(const RunSpec& r) {
+  return fmt::format("{} {} {}", airRigName(r.rig), modeName(r.mode), r.part);
+}
 
 // Flies the runs on `jobs` threads (results in plan order); a progress line per finished group.
 std::vector<RunResult> flyAll(const SwapOptions& o, const Calibration& c, const std::vector<RunSpec>& runs,
@@ -155,8 +162,8 @@ Comparison compare(const std::vector<RunResult>& runs, const std::string& part, 
 Target target(const std::string& what, const std::string& part, AirRig rig, int pairs, const Worst& w,
               const std::string& figure, const std::string& wanted, double limit) {
   Target t;
-  t.target = fmt::format("3. swap, force mode, PD, {}: {} with {} in slot {} ({} runs)", airRigName(rig), what, part,
-                         kSwapSlot, pairs);
+  t.target = fmt::format("3. swap, force mode, PD, {}: {} with {} in slot {} ({} runs)", airRigName(rig),
+                         what, part, kSwapSlot, pairs);
   t.wanted = wanted;
   t.met = w.seen && !w.undefined && std::fabs(w.value) <= limit;
   t.figure = w.undefined ? fmt::format("not measurable ({}: no rise or no settling)", w.where)
@@ -174,12 +181,12 @@ std::vector<Target> swapTargets(const std::vector<RunResult>& runs, const std::v
       if (c.pairs == 0) continue;
       out.push_back(target("overshoot vs stock", part, rig, c.pairs, c.overshoot,
                            "worst {:+.1f} pp (stock {:.1f} %)", "within 5 pp of stock", 5.0));
-      out.push_back(target("rise time vs stock", part, rig, c.pairs, c.rise, "worst {:+.1f} % (stock {:.3f} s)",
-                           "within 10 % of stock", 10.0));
-      out.push_back(target("steady-state error", part, rig, c.pairs, c.sse, "worst {:.2f} deg (stock {:.2f} deg)",
-                           "<= 0.5 deg", 0.5));
-      out.push_back(target("ITAE vs stock", part, rig, c.pairs, c.itae, "worst {:.2f}x (stock {:.3f} deg s^2)",
-                           "<= 1.5x stock", 1.5));
+      out.push_back(target("rise time vs stock", part, rig, c.pairs, c.rise,
+                           "worst {:+.1f} % (stock {:.3f} s)", "within 10 % of stock", 10.0));
+      out.push_back(target("steady-state error", part, rig, c.pairs, c.sse,
+                           "worst {:.2f} deg (stock {:.2f} deg)", "<= 0.5 deg", 0.5));
+      out.push_back(target("ITAE vs stock", part, rig, c.pairs, c.itae,
+                           "worst {:.2f}x (stock {:.3f} deg s^2)", "<= 1.5x stock", 1.5));
     }
   return out;
 }
@@ -193,7 +200,8 @@ void riseChanges(std::vector<Dynamics>& dynamics, const std::vector<RunResult>& 
     double sum = 0;
     int n = 0;
     for (const RunResult& r : runs) {
-      if (r.spec.part != d.part || r.spec.mode != Mode::kForce || r.spec.gains != Gains::kPd || r.spec.axis != "roll")
+      if (r.spec.part != d.part || r.spec.mode != Mode::kForce || r.spec.gains != Gains::kPd ||
+          r.spec.axis != "roll")
         continue;
       const RunResult* s = stockTwin(runs, r.spec);
       if (s && !std::isnan(r.metrics.rise_s) && !std::isnan(s->metrics.rise_s))
@@ -214,8 +222,9 @@ SwapResult runSwap(const SwapOptions& o) {
   res.calibration = calibrate(o);
   res.dynamics = measureDynamics(o);
   const std::vector<RunSpec> runs = plan(o);
-  progress(fmt::format("{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s)",
-                       runs.size(), o.rigs.size(), o.modes.size(), o.parts.size(), o.gains.size(), o.imu_seeds.size()));
+  progress(fmt::format(
+      "{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s)", runs.size(),
+      o.rigs.size(), o.modes.size(), o.parts.size(), o.gains.size(), o.imu_seeds.size()));
   res.runs = flyAll(o, res.calibration, runs, progress);
   res.targets = swapTargets(res.runs, o.parts);
   riseChanges(res.dynamics.parts, res.runs);

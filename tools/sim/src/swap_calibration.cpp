@@ -38,8 +38,8 @@ const Part& findPart(const std::string& name) {
     if (p.name == name) return p;
     known += (known.empty() ? "" : ", ") + p.name;
   }
-  throw std::invalid_argument(fmt::format("unknown part '{}'; the parts that can replace motor {} are: {}", name,
-                                          kSwapSlot, known));
+  throw std::invalid_argument(
+      fmt::format("unknown part '{}'; the parts that can replace motor {} are: {}", name, kSwapSlot, known));
 }
 
 namespace {
@@ -77,14 +77,16 @@ namespace {
 // FNV-1a of a file's bytes: the cache key changes when gather_store does.
 std::string fileDigest(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot read the image; build it (cmake --build --preset avr)", path));
+  if (!in)
+    throw std::runtime_error(
+        fmt::format("{}: cannot read the image; build it (cmake --build --preset avr)", path));
   uint64_t h = 1469598103934665603ULL;
   for (char c; in.get(c);) h = (h ^ static_cast<uint8_t>(c)) * 1099511628211ULL;
   return fmt::format("{:016x}", h);
 }
 
 void writeAtomically(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp" + std::to_string(std::hash<std::string>{}(text) & 0xFFFF);
+  const fs::path tmp = path.string() + ".tmp" + std::to_string(std::hash<std::string>{}(text)&0xFFFF);
   {
     std::ofstream out(tmp, std::ios::trunc);
     if (!out) throw std::runtime_error(fmt::format("{}: cannot write; check --out-dir", tmp.string()));
@@ -102,11 +104,15 @@ std::string readText(const fs::path& path) {
 
 // What made a calibration: the image, the settings, the motors (and for a part, the stock key).
 nlohmann::json cacheKey(const SwapOptions& o, const std::string& elf_digest, const Part* part) {
-  nlohmann::json k = {{"gather_store", elf_digest}, {"model", gatherModelName(o.model)},
-                      {"variation", o.variation}, {"stock_preset", o.stock_preset},
+  nlohmann::json k = {{"gather_store", elf_digest},   {"model", gatherModelName(o.model)},
+                      {"variation", o.variation},     {"stock_preset", o.stock_preset},
                       {"stock_seeds", o.stock_seeds}, {"sweep", "scenario defaults"}};
-  if (part) k["part"] = {{"name", part->name}, {"preset", part->preset}, {"seed", part->seed},
-                         {"thrust_scale", part->thrust_scale}, {"slot", kSwapSlot}};
+  if (part)
+    k["part"] = {{"name", part->name},
+                 {"preset", part->preset},
+                 {"seed", part->seed},
+                 {"thrust_scale", part->thrust_scale},
+                 {"slot", kSwapSlot}};
   return k;
 }
 
@@ -149,20 +155,23 @@ PartCalibration gatherCached(const std::string& name, const nlohmann::json& key,
 }
 
 // Every byte outside slot 1 as the stock image has it: the other slots' records were not touched.
-void checkOtherSlots(const std::vector<uint8_t>& stock, const std::vector<uint8_t>& swapped, const std::string& part) {
+void checkOtherSlots(const std::vector<uint8_t>& stock, const std::vector<uint8_t>& swapped,
+                     const std::string& part) {
   const std::size_t lo = static_cast<std::size_t>(kSwapSlot) * 1024, hi = lo + 1024;
   for (std::size_t a = 0; a < stock.size(); ++a) {
     if (a >= lo && a < hi) continue;
     if (stock[a] != swapped.at(a))
-      throw std::runtime_error(fmt::format(
-          "calibrating {} into slot {} changed EEPROM byte {} (slot {}): 0x{:02X} -> 0x{:02X}; only slot {} may "
-          "change. Delete the cached images in the output folder and run again; if it stays, gather_store wrote "
-          "outside the slot it calibrated",
-          part, kSwapSlot, a, a / 1024, stock[a], swapped.at(a), kSwapSlot));
+      throw std::runtime_error(
+          fmt::format("calibrating {} into slot {} changed EEPROM byte {} (slot {}): 0x{:02X} -> 0x{:02X}; "
+                      "only slot {} may "
+                      "change. Delete the cached images in the output folder and run again; if it stays, "
+                      "gather_store wrote "
+                      "outside the slot it calibrated",
+                      part, kSwapSlot, a, a / 1024, stock[a], swapped.at(a), kSwapSlot));
   }
   if (std::equal(stock.begin() + lo, stock.begin() + hi, swapped.begin() + lo))
-    throw std::runtime_error(fmt::format("calibrating {} left slot {} as it was: the store did not happen", part,
-                                         kSwapSlot));
+    throw std::runtime_error(
+        fmt::format("calibrating {} left slot {} as it was: the store did not happen", part, kSwapSlot));
 }
 
 }  // namespace

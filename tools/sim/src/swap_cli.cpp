@@ -27,15 +27,20 @@ struct SwapArgs {
 
 void declareSwapOptions(CLI::App* cmd, SwapArgs& a) {
   swap::SwapOptions* o = &a.o;
-  cmd->add_option("--json", a.json,
-                  "results as JSON: runs[] (rig, mode, part, axis, step_deg, seed, rise_s, overshoot_pct, "
-                  "settling_s, sse_deg, itae, integrator, hover_pwm_spread_us) and targets[] (target, figure, "
-                  "wanted, met)");
+  cmd->add_option(
+      "--json", a.json,
+      "results as JSON: runs[] (rig, mode, part, axis, step_deg, seed, rise_s, overshoot_pct, "
+      "settling_s, sse_deg, itae, integrator, hover_pwm_spread_us) and targets[] (target, figure, "
+      "wanted, met)");
   cmd->add_option("--out-dir", o->out_dir,
                   "cached calibrations (calibration/), every run's time series (series/*.csv), plots")
       ->capture_default_str();
-  cmd->add_flag("--quick", a.quick, "one IMU unit, modes force and pwm, PD gains only (the demo's run)");
-  cmd->add_option("--rigs", a.rigs, "seesaw and/or gimbal")->delimiter(',')->check(CLI::IsMember({"seesaw", "gimbal"}))
+  cmd->add_flag("--quick", a.quick,
+                "one IMU unit, modes force and pwm, PD gains only (tools/demo.sh flies every mode with "
+                "--imu-seeds 1 --gains pd)");
+  cmd->add_option("--rigs", a.rigs, "seesaw and/or gimbal")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"seesaw", "gimbal"}))
       ->capture_default_str();
   cmd->add_option("--modes", a.modes, "fly's output modes to compare")
       ->delimiter(',')
@@ -49,20 +54,28 @@ void declareSwapOptions(CLI::App* cmd, SwapArgs& a) {
       ->delimiter(',')
       ->check(CLI::IsMember({"pd", "pid"}))
       ->capture_default_str();
-  cmd->add_option("--imu-seeds", o->imu_seeds, "the MPU-6050 units, one flight each")->delimiter(',')
+  cmd->add_option("--imu-seeds", o->imu_seeds, "the MPU-6050 units, one flight each")
+      ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--pid-ki", o->pid_ki, "integral gain of the PID runs, mN m per rad s")
-      ->check(CLI::Range(1, 10000))->capture_default_str();
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
   cmd->add_option("--model", a.model, "what gather_store stores: v2 (model v2) or v1 (the thesis's curves)")
-      ->check(CLI::IsMember({"v1", "v2"}))->capture_default_str();
+      ->check(CLI::IsMember({"v1", "v2"}))
+      ->capture_default_str();
   cmd->add_option("--step-deg", o->step_deg, "the step")->check(CLI::Range(1, 20))->capture_default_str();
   cmd->add_option("--settle-s", o->settle_s, "level flight after the spool-up, before the step")
-      ->check(CLI::Range(0.2, 10.0))->capture_default_str();
-  cmd->add_option("--pid-settle-s", o->pid_settle_s, "the same with PID gains (the integrator takes up the mismatch)")
-      ->check(CLI::Range(0.2, 20.0))->capture_default_str();
-  cmd->add_option("--window-s", o->window_s, "simulated time after the step")->check(CLI::Range(0.5, 20.0))
+      ->check(CLI::Range(0.2, 10.0))
       ->capture_default_str();
-  cmd->add_option("--jobs", o->jobs, "flights at once, each on its own simulated board")->check(CLI::Range(1, 64))
+  cmd->add_option("--pid-settle-s", o->pid_settle_s,
+                  "the same with PID gains (the integrator takes up the mismatch)")
+      ->check(CLI::Range(0.2, 20.0))
+      ->capture_default_str();
+  cmd->add_option("--window-s", o->window_s, "simulated time after the step")
+      ->check(CLI::Range(0.5, 20.0))
+      ->capture_default_str();
+  cmd->add_option("--jobs", o->jobs, "flights at once, each on its own simulated board")
+      ->check(CLI::Range(1, 64))
       ->capture_default_str();
   cmd->add_option("--gather-elf", o->gather_elf, "gather_store ELF image")->capture_default_str();
   cmd->add_option("--fly-elf", o->fly_elf, "fly ELF image")->capture_default_str();
@@ -92,11 +105,14 @@ void runSwapCommand(const SwapArgs& a) {
   fmt::print("{}", swap::formatTable(r));
   fmt::print("\n{}\n{}", swap::formatTargets(r), swap::formatDynamics(r));
   const auto& m = r.calibration.modes;
-  fmt::print("modes without records: pwm hover {} us at {:.3f} g/us (the stock LiPo sweeps); ardupilot {} (the lab's "
-             "fit on {} rows of the stock sweeps, RMS {:.1f} g)\n",
-             m.hover_us, m.slope_g_per_us, fmt::join(m.ardupilot_lines, ", "), m.ardupilot_rows, m.ardupilot_rms_g);
+  fmt::print(
+      "modes without records: pwm hover {} us at {:.3f} g/us (the stock LiPo sweeps); ardupilot {} (the "
+      "lab's "
+      "fit on {} rows of the stock sweeps, RMS {:.1f} g)\n",
+      m.hover_us, m.slope_g_per_us, fmt::join(m.ardupilot_lines, ", "), m.ardupilot_rows, m.ardupilot_rms_g);
   std::vector<std::string> warnings;
-  const std::vector<std::string> images = a.no_plots ? std::vector<std::string>{} : swap::writePlots(r, o.out_dir, warnings);
+  const std::vector<std::string> images =
+      a.no_plots ? std::vector<std::string>{} : swap::writePlots(r, o.out_dir, warnings);
   for (const std::string& w : warnings) fmt::print(stderr, "thrustcal sim swap: warning: {}\n", w);
   if (!a.json.empty()) {
     if (fs::path(a.json).has_parent_path()) fs::create_directories(fs::path(a.json).parent_path());
@@ -104,10 +120,12 @@ void runSwapCommand(const SwapArgs& a) {
     if (!out) throw std::runtime_error(fmt::format("{}: cannot write the JSON result", a.json));
     out << r.toJson().dump(2) << "\n";
   }
-  fmt::print("sim: {} flights, {:.1f} s simulated in {:.1f} s of flight ({:.1f}x real time); {:.1f} s wall in all\n",
-             r.runs.size(), r.simulated_s, r.flight_wall_s, r.flight_wall_s > 0 ? r.simulated_s / r.flight_wall_s : 0,
-             r.wall_s);
-  fmt::print("files: {}/series/*.csv{}{}\n", o.out_dir, images.empty() ? "" : ", " + fmt::format("{}", fmt::join(images, ", ")),
+  fmt::print(
+      "sim: {} flights, {:.1f} s simulated in {:.1f} s of flight ({:.1f}x real time); {:.1f} s wall in all\n",
+      r.runs.size(), r.simulated_s, r.flight_wall_s,
+      r.flight_wall_s > 0 ? r.simulated_s / r.flight_wall_s : 0, r.wall_s);
+  fmt::print("files: {}/series/*.csv{}{}\n", o.out_dir,
+             images.empty() ? "" : ", " + fmt::format("{}", fmt::join(images, ", ")),
              a.json.empty() ? "" : ", " + a.json);
 }
 

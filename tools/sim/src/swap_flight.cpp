@@ -36,8 +36,9 @@ std::vector<std::string> setupLines(const SwapOptions& o, const Calibration& c, 
       lines.insert(lines.end(), {"mode generic 0", fmt::format("thrust {}", thrust_g)});
       break;
     case Mode::kPwm:
-      lines.insert(lines.end(), {fmt::format("hover {} {}", c.modes.hover_us, std::lround(c.modes.slope_g_per_us * 1000)),
-                                 "mode pwm"});
+      lines.insert(lines.end(),
+                   {fmt::format("hover {} {}", c.modes.hover_us, std::lround(c.modes.slope_g_per_us * 1000)),
+                    "mode pwm"});
       break;
     case Mode::kArduPilot:
       lines.insert(lines.end(), c.modes.ardupilot_lines.begin(), c.modes.ardupilot_lines.end());
@@ -50,7 +51,8 @@ std::vector<std::string> setupLines(const SwapOptions& o, const Calibration& c, 
 // A part heavier than the motor it replaced tilts the seesaw (its weight sits 0.225 m out): as on
 // a real rig, a counterweight of the difference beside motor 0 levels the beam again, motor and
 // propeller each at their own height. The gimbal turns about the centre of gravity.
-void counterweigh(plant::SeesawParams& s, const plant::ActuatorParams& replaced, const plant::ActuatorParams& part) {
+void counterweigh(plant::SeesawParams& s, const plant::ActuatorParams& replaced,
+                  const plant::ActuatorParams& part) {
   const double motor_kg = (part.motor.mass_g - replaced.motor.mass_g) / 1000.0;
   const double prop_kg = (part.prop.mass_g - replaced.prop.mass_g) / 1000.0;
   if (motor_kg != 0) s.parts.push_back({"counterweight (motor)", motor_kg, s.arm_m, s.motor_height_m, 0.0});
@@ -61,7 +63,8 @@ AirframeOptions rigOptions(const SwapOptions& o, const RunSpec& r) {
   AirframeOptions a;
   a.rig = r.rig;
   a.gimbal.layout = plant::Layout::kPlus;  // the thesis's Iqarus
-  for (int i = 0; i < 4; ++i) a.motors[i] = actuatorOf({kStock, o.stock_preset, o.stock_seeds[i], 1.0, ""}, o.variation);
+  for (int i = 0; i < 4; ++i)
+    a.motors[i] = actuatorOf({kStock, o.stock_preset, o.stock_seeds[i], 1.0, ""}, o.variation);
   if (r.part != kStock) {
     const plant::ActuatorParams replaced = a.motors[kSwapSlot];
     a.motors[kSwapSlot] = actuatorOf(findPart(r.part), o.variation);
@@ -90,7 +93,8 @@ void mustSay(Console& con, const std::string& line, const RunSpec& r) {
 double armed(AirframeRig& rig, Console& con, const std::vector<std::string>& lines, const RunSpec& r) {
   con.expectText("imu: gyro bias", 5.0);
   con.waitPrompt(1.0);
-  rig.run(std::max(0.0, tc::kArmMs / 1000.0 + 0.1 - rig.board().timeS()));  // the ESCs' time at the stop pulse
+  rig.run(
+      std::max(0.0, tc::kArmMs / 1000.0 + 0.1 - rig.board().timeS()));  // the ESCs' time at the stop pulse
   for (const std::string& line : lines) mustSay(con, line, r);
   const auto reply = con.command("arm");
   std::smatch m;
@@ -133,10 +137,13 @@ void writeSeries(const std::string& path, const std::vector<AirSample>& rows, do
   }
 }
 
-double settleOf(const SwapOptions& o, const RunSpec& r) { return r.gains == Gains::kPid ? o.pid_settle_s : o.settle_s; }
+double settleOf(const SwapOptions& o, const RunSpec& r) {
+  return r.gains == Gains::kPid ? o.pid_settle_s : o.settle_s;
+}
 
 // The rows of the rig's log from the level flight before the step to the window's end.
-std::vector<AirSample> windowOf(const std::vector<AirSample>& log, double t_step, double settle_s, double window_s) {
+std::vector<AirSample> windowOf(const std::vector<AirSample>& log, double t_step, double settle_s,
+                                double window_s) {
   std::vector<AirSample> rows;
   for (const AirSample& s : log)
     if (s.truth.t_s >= t_step - settle_s && s.truth.t_s <= t_step + window_s + 1e-9) rows.push_back(s);
@@ -167,8 +174,8 @@ void measure(RunResult& res, const std::vector<AirSample>& rows, double t_step, 
 }  // namespace
 
 std::string runId(const RunSpec& r) {
-  return fmt::format("{}_{}_{}_{}_{}_s{}", airRigName(r.rig), modeName(r.mode), gainsName(r.gains), r.part, r.axis,
-                     r.imu_seed);
+  return fmt::format("{}_{}_{}_{}_{}_s{}", airRigName(r.rig), modeName(r.mode), gainsName(r.gains), r.part,
+                     r.axis, r.imu_seed);
 }
 
 RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, const std::string& csv_path) {

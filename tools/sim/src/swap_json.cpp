@@ -37,7 +37,10 @@ nlohmann::json setupJson(const SwapOptions& o) {
   nlohmann::json parts = nlohmann::json::array();
   for (const std::string& name : o.parts) {
     const Part& p = findPart(name);
-    parts.push_back({{"part", p.name}, {"preset", p.preset}, {"seed", p.seed}, {"thrust_scale", p.thrust_scale},
+    parts.push_back({{"part", p.name},
+                     {"preset", p.preset},
+                     {"seed", p.seed},
+                     {"thrust_scale", p.thrust_scale},
                      {"description", p.description}});
   }
   return {{"stock", {{"preset", o.stock_preset}, {"seeds", o.stock_seeds}, {"variation", o.variation}}},
@@ -56,19 +59,23 @@ nlohmann::json setupJson(const SwapOptions& o) {
 nlohmann::json calibrationJson(const Calibration& c) {
   nlohmann::json parts = nlohmann::json::array();
   for (const PartCalibration& p : c.parts)
-    parts.push_back({{"part", p.part},
-                     {"slots", p.part == kStock ? nlohmann::json({0, 1, 2, 3}) : nlohmann::json({kSwapSlot})},
-                     {"eeprom", p.eeprom_path},
-                     {"cached", p.cached},
-                     {"curve_error_max_g", p.cached ? nlohmann::json(nullptr) : nlohmann::json(p.curve_error_max_g)},
-                     {"other_slots_unchanged", p.part == kStock ? nlohmann::json(nullptr) : nlohmann::json(true)}});
+    parts.push_back(
+        {{"part", p.part},
+         {"slots", p.part == kStock ? nlohmann::json({0, 1, 2, 3}) : nlohmann::json({kSwapSlot})},
+         {"eeprom", p.eeprom_path},
+         {"cached", p.cached},
+         {"curve_error_max_g", p.cached ? nlohmann::json(nullptr) : nlohmann::json(p.curve_error_max_g)},
+         {"other_slots_unchanged", p.part == kStock ? nlohmann::json(nullptr) : nlohmann::json(true)}});
   nlohmann::json ap;
   for (const auto& [name, value] : c.modes.ardupilot_params) ap[name] = value;
   return {{"parts", parts},
           {"pwm", {{"hover_us", c.modes.hover_us}, {"slope_g_per_us", c.modes.slope_g_per_us}}},
-          {"ardupilot", {{"params", ap}, {"full_g", c.modes.ardupilot_full_g},
-                         {"rows", c.modes.ardupilot_rows}, {"rms_g", c.modes.ardupilot_rms_g},
-                         {"console", c.modes.ardupilot_lines}}},
+          {"ardupilot",
+           {{"params", ap},
+            {"full_g", c.modes.ardupilot_full_g},
+            {"rows", c.modes.ardupilot_rows},
+            {"rms_g", c.modes.ardupilot_rms_g},
+            {"console", c.modes.ardupilot_lines}}},
           {"stock_sweeps", c.stock_sweeps}};
 }
 
@@ -79,8 +86,11 @@ nlohmann::json SwapResult::toJson() const {
   for (const RunResult& r : runs) runs_json.push_back(runJson(r, options.step_deg));
   nlohmann::json targets_json = nlohmann::json::array();
   for (const Target& t : targets)
-    targets_json.push_back(
-        {{"section", "swap"}, {"target", t.target}, {"figure", t.figure}, {"wanted", t.wanted}, {"met", t.met}});
+    targets_json.push_back({{"section", "swap"},
+                            {"target", t.target},
+                            {"figure", t.figure},
+                            {"wanted", t.wanted},
+                            {"met", t.met}});
   nlohmann::json dyn = nlohmann::json::array();
   for (const Dynamics& d : dynamics.parts)
     dyn.push_back({{"part", d.part},
@@ -89,9 +99,14 @@ nlohmann::json SwapResult::toJson() const {
                    {"tau_change_pct", 100.0 * (d.tau_s / d.stock_tau_s - 1.0)},
                    {"rise_change_pct", num(d.rise_change_pct)}});
   return {{"scenario", "swap"},
-          {"units", {{"rise_s", "s"}, {"overshoot_pct", "% of the step"}, {"settling_s", "s, 2 % band"},
-                     {"sse_deg", "deg"}, {"itae", "deg s^2"}, {"integrator", "mN m"},
-                     {"hover_pwm_spread_us", "us"}}},
+          {"units",
+           {{"rise_s", "s"},
+            {"overshoot_pct", "% of the step"},
+            {"settling_s", "s, 2 % band"},
+            {"sse_deg", "deg"},
+            {"itae", "deg s^2"},
+            {"integrator", "mN m"},
+            {"hover_pwm_spread_us", "us"}}},
           {"setup", setupJson(options)},
           {"calibration", calibrationJson(calibration)},
           {"dynamics", {{"stock_tau_s", dynamics.stock_tau_s}, {"parts", dyn}}},

@@ -37,13 +37,15 @@ HoverPoint hoverOnSweep(const std::string& path, double force_g) {
       h.pulse_us = pts[i - 1].first + (pts[i].first - pts[i - 1].first) * (force_g - pts[i - 1].second) /
                                           (pts[i].second - pts[i - 1].second);
   if (h.pulse_us == 0)
-    throw std::runtime_error(fmt::format("{}: the sweep never crosses {:.0f} g; the motor cannot hover this frame", path,
-                                         force_g));
+    throw std::runtime_error(fmt::format(
+        "{}: the sweep never crosses {:.0f} g; the motor cannot hover this frame", path, force_g));
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   int n = 0;
   for (const auto& [p, f] : pts)
     if (std::fabs(p - h.pulse_us) <= kSlopeHalfSpanUs) sx += p, sy += f, sxx += p * p, sxy += p * f, ++n;
-  if (n < 3) throw std::runtime_error(fmt::format("{}: too few steps around {:.0f} us for the slope", path, h.pulse_us));
+  if (n < 3)
+    throw std::runtime_error(
+        fmt::format("{}: too few steps around {:.0f} us for the slope", path, h.pulse_us));
   h.slope_g_per_us = (n * sxy - sx * sy) / (n * sxx - sx * sx);
   return h;
 }
@@ -77,7 +79,10 @@ void arduPilotFit(const std::vector<std::string>& sweeps, ModeSettings& m) {
   lab::Dataset data;
   for (const std::string& path : sweeps) {
     const lab::Dataset part = risingPart(path);
-    if (data.rows() == 0) data = part; else data.append(part);
+    if (data.rows() == 0)
+      data = part;
+    else
+      data.append(part);
   }
   lab::autopilot::ExportOptions eo;
   eo.to = "ardupilot";
@@ -86,7 +91,8 @@ void arduPilotFit(const std::vector<std::string>& sweeps, ModeSettings& m) {
   m.ardupilot_params = r.params;
   m.ardupilot_full_g = r.full_g;
   double ss = 0;
-  for (std::size_t i = 0; i < r.rows.size(); ++i) ss += std::pow(r.rows[i].force_g - r.models.front().predicted_g[i], 2);
+  for (std::size_t i = 0; i < r.rows.size(); ++i)
+    ss += std::pow(r.rows[i].force_g - r.models.front().predicted_g[i], 2);
   m.ardupilot_rows = r.rows.size();
   m.ardupilot_rms_g = r.rows.empty() ? 0 : std::sqrt(ss / static_cast<double>(r.rows.size()));
   auto e4 = [](double v) { return static_cast<long>(std::lround(v * 1e4)); };
@@ -95,7 +101,8 @@ void arduPilotFit(const std::vector<std::string>& sweeps, ModeSettings& m) {
       fmt::format("ap {} {} {} {}", e4(paramOf(r, "MOT_THST_EXPO")), e4(paramOf(r, "MOT_SPIN_MIN")),
                   e4(paramOf(r, "MOT_SPIN_MAX")), std::lround(r.full_g)),
       fmt::format("apvolt {} {}", mv(paramOf(r, "MOT_BAT_VOLT_MAX")), mv(paramOf(r, "MOT_BAT_VOLT_MIN"))),
-      fmt::format("appwm {} {}", std::lround(paramOf(r, "MOT_PWM_MIN")), std::lround(paramOf(r, "MOT_PWM_MAX")))};
+      fmt::format("appwm {} {}", std::lround(paramOf(r, "MOT_PWM_MIN")),
+                  std::lround(paramOf(r, "MOT_PWM_MAX")))};
 }
 
 // The pulse for `force_g` on a motor in steady state at `bus_v` (bisection on the plant).
@@ -110,7 +117,8 @@ double pulseFor(const plant::Actuator& a, double force_g, double bus_v) {
 
 double hoverTau(const plant::ActuatorParams& p, double hover_g, double bus_v) {
   const plant::Actuator a(p, plant::Environment{});
-  return plant::stepTimeConstant_s(p, bus_v, pulseFor(a, 0.9 * hover_g, bus_v), pulseFor(a, 1.1 * hover_g, bus_v));
+  return plant::stepTimeConstant_s(p, bus_v, pulseFor(a, 0.9 * hover_g, bus_v),
+                                   pulseFor(a, 1.1 * hover_g, bus_v));
 }
 
 }  // namespace
@@ -127,7 +135,8 @@ ModeSettings modeSettings(const SwapOptions& o, const std::vector<std::string>& 
     const HoverPoint h = hoverOnSweep(path, o.hover_g);
     pulse += h.pulse_us, slope += h.slope_g_per_us, ++n;
   }
-  if (n == 0) throw std::runtime_error("no stock LiPo sweep (gather_slotK_curve1.csv) for the pwm mode's hover point");
+  if (n == 0)
+    throw std::runtime_error("no stock LiPo sweep (gather_slotK_curve1.csv) for the pwm mode's hover point");
   m.hover_us = static_cast<int>(std::lround(pulse / n));
   m.slope_g_per_us = slope / n;
   arduPilotFit(stock_sweeps, m);
@@ -138,8 +147,8 @@ DynamicsReport measureDynamics(const SwapOptions& o) {
   constexpr double kBusV = 12.0;  // a 3S pack under a hover load
   DynamicsReport d;
   for (int i = 0; i < 4; ++i)
-    d.stock_tau_s[i] =
-        hoverTau(actuatorOf({kStock, o.stock_preset, o.stock_seeds[i], 1.0, ""}, o.variation), o.hover_g, kBusV);
+    d.stock_tau_s[i] = hoverTau(actuatorOf({kStock, o.stock_preset, o.stock_seeds[i], 1.0, ""}, o.variation),
+                                o.hover_g, kBusV);
   for (const std::string& name : o.parts)
     d.parts.push_back({name, hoverTau(actuatorOf(findPart(name), o.variation), o.hover_g, kBusV),
                        d.stock_tau_s[kSwapSlot]});

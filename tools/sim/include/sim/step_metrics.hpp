@@ -16,21 +16,21 @@
 namespace sim {
 
 struct StepSpec {
-  double y0 = 0;               // the value before the step (e.g. its mean over the last 0.1 s)
-  double target = 0;           // the command after the step
+  double y0 = 0;      // the value before the step (e.g. its mean over the last 0.1 s)
+  double target = 0;  // the command after the step
   double final_window_s = 0.25;
   double rise_low = 0.10, rise_high = 0.90;
-  double settle_band = 0.02;   // of |final - y0|
+  double settle_band = 0.02;  // of |final - y0|
 };
 
 struct StepMetrics {
   double rise_s = 0;
-  double overshoot_pct = 0;    // 0 when the response never passes its final value
+  double overshoot_pct = 0;  // 0 when the response never passes its final value
   double settling_s = 0;
-  double sse = 0;              // in y's unit
-  double itae = 0;             // y's unit times s^2
+  double sse = 0;   // in y's unit
+  double itae = 0;  // y's unit times s^2
   double final_value = 0;
-  double peak = 0;             // the extreme in the step's direction
+  double peak = 0;  // the extreme in the step's direction
 };
 
 // `t_s` from the step (t = 0 at the step, increasing), `y` the response, same length, at least

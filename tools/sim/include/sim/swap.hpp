@@ -19,10 +19,9 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "plant/params.hpp"
 #include "sim/airframe.hpp"
@@ -51,7 +50,7 @@ struct Part {
   double thrust_scale = 1.0;
   std::string description;
 };
-constexpr int kSwapSlot = 1;                // the slot (and ESC output) whose motor is replaced
+constexpr int kSwapSlot = 1;  // the slot (and ESC output) whose motor is replaced
 constexpr const char* kStock = "stock";
 // The swapped parts: another KV1100 unit, a KV900 with an 11x4.7 propeller, the stock motor 1
 // with a propeller giving 8 % less thrust (C_T x 0.92 at every rpm; C_P, hence the rpm at a
@@ -64,7 +63,7 @@ plant::ActuatorParams actuatorOf(const Part& part, double variation);
 
 struct SwapOptions {
   std::string gather_elf, fly_elf;
-  std::string out_dir = "build/swap";       // cache, series CSVs, plots
+  std::string out_dir = "build/swap";  // cache, series CSVs, plots
   GatherModel model = GatherModel::kModelV2;
   std::string stock_preset = "kv1100_9x4.7";
   std::array<uint64_t, 4> stock_seeds = {11, 12, 13, 14};
@@ -78,30 +77,31 @@ struct SwapOptions {
   int pid_ki = 800;                             // the integral gain of the PID runs
   double hover_g = 300;                         // per motor (thrust: 4x on the gimbal, 2x on the seesaw)
   int step_deg = 10;
-  double settle_s = 0.5;                        // level flight after the spool-up, before the step
-  double pid_settle_s = 4.0;                    // ... with PID gains: the integrator's time to take up the mismatch
-  double window_s = 2.5;                        // after the step
+  double settle_s = 0.5;      // level flight after the spool-up, before the step
+  double pid_settle_s = 4.0;  // ... with PID gains: the integrator's time to take up the mismatch
+  double window_s = 2.5;      // after the step
   double log_period_s = 0.0025;
-  int jobs = 1;                                 // flights at once (each its own simulated board)
+  int jobs = 1;  // flights at once (each its own simulated board)
   ProgressFn progress;
 };
 
 // What the flights fly on: the EEPROM images and the settings of the modes without records.
 struct ModeSettings {
-  int hover_us = 0;             // pwm mode: the stock motors' pulse for hover_g (LiPo sweeps)
-  double slope_g_per_us = 0;    // ... and their force per microsecond there
+  int hover_us = 0;                          // pwm mode: the stock motors' pulse for hover_g (LiPo sweeps)
+  double slope_g_per_us = 0;                 // ... and their force per microsecond there
   std::vector<std::string> ardupilot_lines;  // ap, apvolt, appwm: the lab's fit on the stock sweeps
   std::vector<std::pair<std::string, std::string>> ardupilot_params;  // as `lab export` writes them
   double ardupilot_full_g = 0;
-  std::size_t ardupilot_rows = 0;  // the sweeps' rows it was fitted on (each up to where its force stops rising)
-  double ardupilot_rms_g = 0;      // its error on them
+  std::size_t ardupilot_rows =
+      0;                       // the sweeps' rows it was fitted on (each up to where its force stops rising)
+  double ardupilot_rms_g = 0;  // its error on them
 };
 
 struct PartCalibration {
   std::string part;
-  std::vector<uint8_t> eeprom;  // stock: four slots; a part: slot 1 calibrated again
-  bool cached = false;          // taken from the output folder
-  double curve_error_max_g = 0; // the stored model against the plant (runGather)
+  std::vector<uint8_t> eeprom;   // stock: four slots; a part: slot 1 calibrated again
+  bool cached = false;           // taken from the output folder
+  double curve_error_max_g = 0;  // the stored model against the plant (runGather)
   std::string eeprom_path;
 };
 
