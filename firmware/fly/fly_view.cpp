@@ -450,6 +450,17 @@ void statusLoop(const FlyApp& app) {
   newline();
 }
 
+// What the integrators hold now (the mismatch they absorb; 0 without integral gains).
+void statusIntegrators(const FlyApp& app) {
+  say(TC_FLASH_TEXT("integrators: roll "));
+  sayFloat(app.controller().integralNm(0) * 1000.0f, 1);
+  say(TC_FLASH_TEXT(" pitch "));
+  sayFloat(app.controller().integralNm(1) * 1000.0f, 1);
+  say(TC_FLASH_TEXT(" yaw "));
+  sayFloat(app.controller().integralNm(2) * 1000.0f, 1);
+  sayLine(TC_FLASH_TEXT(" mN m"));
+}
+
 // "motor N: F g, P us; slot S (model v2)" and what keeps it from flying.
 void statusMotor(const FlyApp& app, uint8_t i) {
   const fw::Motor& m = app.motors().motor(i);
@@ -486,6 +497,8 @@ void status(const FlyApp& app, void (*yield)()) {
   yield();
   gains(app);
   crashLimit(app);
+  yield();
+  statusIntegrators(app);
   yield();
   statusLoop(app);
   for (uint8_t i = 0; i < kMotors; ++i) {

@@ -6,6 +6,7 @@
 // TWI (fly_fixture.hpp), the records are built as gather_store builds them (records_fixture.hpp).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <sstream>
 
 #include "fly_fixture.hpp"
@@ -446,11 +447,33 @@ TEST_F(Fly, StatusSaysStateImuAttitudeLoopTimingAndEachMotor) {
   for (const std::string& part :
        {std::string("state: armed, disarms 0, mode force, layout x"), std::string("imu: running; reads "),
         std::string("attitude: roll 0.0 pitch 0.0 deg"), std::string("thrust: 1200 g over 4 motors"),
-        std::string("gains: roll/pitch kp 800 ki 0 kd 146, yaw kp 100 ki 0 (mN m)"), loop,
+        std::string("gains: roll/pitch kp 800 ki 0 kd 146, yaw kp 100 ki 0 (mN m)"),
+        std::string("integrators: roll 0.0 pitch 0.0 yaw 0.0 mN m"), loop,
         std::string("motor 0: 300 g, "), std::string(" us; slot 0 (model v2)"), std::string("stack: ")}) {
     EXPECT_TRUE(contains(out, part)) << part << "\n" << out;
   }
   EXPECT_EQ(app_->loopStats().late, 0);
+}
+
+TEST_F(Fly, StatusSaysWhatTheIntegratorsHold) {
+  storeFourV2Motors();
+  bootReady();
+  command("gains 800 1000 146");
+  armAndSpool(1200);
+  command("sp 10 0");  // the fake IMU stays level: a steady roll error of 10 degrees
+  runFor(400);
+  const float before_mnm = app_->controller().integralNm(0) * 1000.0f;
+  const std::string out = command("status");  // it goes on integrating while status prints
+  const float after_mnm = app_->controller().integralNm(0) * 1000.0f;
+  EXPECT_GT(before_mnm, 50.0f) << "1 N m/(rad s) x 0.17 rad for ~0.4 s";
+  const std::size_t at = out.find("integrators: roll ");
+  ASSERT_NE(at, std::string::npos) << out;
+  float shown = 0;
+  char rest[32] = {};
+  ASSERT_EQ(std::sscanf(out.c_str() + at, "integrators: roll %f %31[^\r\n]", &shown, rest), 2) << out;
+  EXPECT_GE(shown, before_mnm - 0.051f) << out;
+  EXPECT_LE(shown, after_mnm + 0.051f) << out;
+  EXPECT_STREQ(rest, "pitch 0.0 yaw 0.0 mN m") << out;
 }
 
 TEST_F(Fly, TheStreamIsACsvOfFiftyRowsASecond) {

@@ -20,7 +20,6 @@
 #include "sim/sim_board.hpp"
 
 namespace sim {
-namespace {
 
 namespace fs = std::filesystem;
 
@@ -34,6 +33,8 @@ std::string defaultElf(const std::string& name) {
       if (fs::exists(p)) return p.string();
   return (dirs.back() / "firmware" / name / (name + ".elf")).string();
 }
+
+namespace {
 
 std::vector<uint8_t> loadEepromOrErased(const std::string& path, bool must_exist) {
   if (path.empty() || (!must_exist && !fs::exists(path)))
@@ -633,6 +634,7 @@ void registerCommands(CLI::App& app) {
   addFleet(*sim);
   addRunCommand(*sim);
   addImuCommand(*sim);
+  addSwapCommand(*sim);
 }
 
 }  // namespace sim

@@ -533,6 +533,29 @@ void gatherOverPty(const GatherOptions& o, const plant::BenchParams& params,
   wall_s = rig->board.wallSeconds();
 }
 
+// gather_slotK_curves.csv: the stored model's PWM per gram at each sweep's conditions beside
+// the plant's true PWM for the same thrust.
+void writeCurvesCsv(const GatherOptions& o, const std::array<StoredCurve, 2>& stored,
+                    const std::array<TruthTable, 2>& tables, GatherMotorResult& mr) {
+  mr.curves_csv_path =
+      (std::filesystem::path(o.log_dir) / fmt::format("gather_slot{}_curves.csv", mr.slot)).string();
+  std::ofstream out(mr.curves_csv_path, std::ios::trunc);
+  out << fmt::format("# stored {} (PWM per gram, from EEPROM) and the plant's true PWM for "
+                     "the same thrust at each sweep's starting conditions\n",
+                     o.model == GatherModel::kModelV2
+                         ? "model v2 holding each force at each sweep's conditions"
+                         : "curves");
+  out << "force_g,curve1_pwm_us,curve2_pwm_us,true1_pwm_us,true2_pwm_us\n";
+  const int top = std::max(stored[0].max_g, stored[1].max_g);
+  for (int g = 1; g <= top; ++g) {
+    auto pwm = [g](const StoredCurve& c) {
+      return g <= c.max_g ? std::to_string(c.pwm_us_for_g(g)) : "";
+    };
+    out << g << "," << pwm(stored[0]) << "," << pwm(stored[1]) << "," << truePwm(tables[0], g)
+        << "," << truePwm(tables[1], g) << "\n";
+  }
+}
+
 }  // namespace
 
 GatherResult runGather(const GatherOptions& o) {
@@ -558,6 +581,7 @@ GatherResult runGather(const GatherOptions& o) {
     params.actuator = motorForSeed(o.preset, mr.seed, o.variation);
     params.load_cell.seed = mr.seed * 1000003ULL + 17;
     params.battery_sensor.seed = mr.seed * 1000003ULL + 29;
+    if (o.adjust_bench) o.adjust_bench(params);
     mr.mount_weight_g = std::round(params.actuator.mountWeight_g());
     mr.second_source = o.second == SecondCurveSource::kBenchSupply
                            ? fmt::format("bench supply {:.2f} V, 6.32 A limit", o.supply_v)
@@ -585,26 +609,7 @@ GatherResult runGather(const GatherOptions& o) {
         mr.curve1.max_g, mr.curve1.error_max_g, mr.curve2.start_v, mr.curve2.max_g,
         mr.curve2.error_max_g));
 
-    if (!o.log_dir.empty()) {
-      mr.curves_csv_path =
-          (std::filesystem::path(o.log_dir) / fmt::format("gather_slot{}_curves.csv", mr.slot))
-              .string();
-      std::ofstream out(mr.curves_csv_path, std::ios::trunc);
-      out << fmt::format("# stored {} (PWM per gram, from EEPROM) and the plant's true PWM for "
-                         "the same thrust at each sweep's starting conditions\n",
-                         o.model == GatherModel::kModelV2
-                             ? "model v2 holding each force at each sweep's conditions"
-                             : "curves");
-      out << "force_g,curve1_pwm_us,curve2_pwm_us,true1_pwm_us,true2_pwm_us\n";
-      const int top = std::max(stored[0].max_g, stored[1].max_g);
-      for (int g = 1; g <= top; ++g) {
-        auto pwm = [g](const StoredCurve& c) {
-          return g <= c.max_g ? std::to_string(c.pwm_us_for_g(g)) : "";
-        };
-        out << g << "," << pwm(stored[0]) << "," << pwm(stored[1]) << "," << truePwm(table1, g)
-            << "," << truePwm(table2, g) << "\n";
-      }
-    }
+    if (!o.log_dir.empty()) writeCurvesCsv(o, stored, tables, mr);
     result.simulated_s += sim_s;
     result.wall_s += wall_s;
     result.motors.push_back(std::move(mr));

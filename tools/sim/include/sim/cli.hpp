@@ -1,7 +1,13 @@
-// `thrustcal sim ...`: the virtual bench scenarios (gather, liftoff, console).
+// `thrustcal sim ...`: the virtual bench scenarios (gather, liftoff, console, swap, ...).
 #pragma once
 #include <CLI/CLI.hpp>
 
+#include <string>
+
 namespace sim {
 void registerCommands(CLI::App& app);
-}
+// Where an AVR image is by default: $THRUSTCAL_AVR_BUILD_DIR, else <source>/build/avr
+// (firmware/NAME/NAME.elf).
+std::string defaultElf(const std::string& name);
+void addSwapCommand(CLI::App& sim);  // thrustcal sim swap (swap_cli.cpp)
+}  // namespace sim

@@ -28,6 +28,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plant/bench.hpp"
 #include "plant/params.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/motor_calibration.hpp"
@@ -75,6 +76,9 @@ struct GatherOptions {
   double band_top_frac = 0.95;          //   band_top_frac * the curve's heaviest gram
   std::string log_dir;                  // sweep CSVs and curve tables go here ("" = none)
   ProgressFn progress;
+  // Changes the bench before each motor is calibrated, its varied motor already on it (e.g.
+  // another propeller, the amplifier's offset trimmed for a heavier motor); null: as it is.
+  std::function<void(plant::BenchParams&)> adjust_bench;
 };
 
 // A stored model at one sweep's conditions against the plant. v1: the stored curve of that

@@ -1,0 +1,65 @@
+// The swap experiment reduced (`thrustcal sim swap --rigs gimbal --modes force --parts
+// kv900_11x4.7 --gains pd --imu-seeds 1`): four stock motors calibrated with the real
+// gather_store, fly's 10-degree roll and pitch steps on the plus gimbal, motor 1 replaced by a
+// KV900 with an 11x4.7 propeller (the part most unlike the stock one), only slot 1 calibrated
+// again, the same steps with the same gains. The targets of force mode with PD gains are
+// asserted on the simulated figures (the rig's true attitude in simulated time), never on wall
+// time. The calibrations are cached beside the test binary, as `sim swap` caches them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "hil_support.hpp"
+#include "sim/swap.hpp"
+
+namespace {
+
+sim::swap::SwapOptions reducedSwapOptions() {
+  sim::swap::SwapOptions o;
+  o.gather_elf = hil::imagePath("gather_store");
+  o.fly_elf = hil::imagePath("fly");
+  o.out_dir = (std::filesystem::path(HIL_CACHE_DIR) / "swap").string();
+  o.rigs = {sim::AirRig::kGimbal};
+  o.modes = {sim::swap::Mode::kForce};
+  o.parts = {"kv900_11x4.7"};
+  o.gains = {sim::swap::Gains::kPd};
+  o.imu_seeds = {1};
+  o.progress = [](const std::string&) {};
+  return o;
+}
+
+TEST(SwapHil, ForceModeMeetsTheTargetsWithAKv900InSlot1) {
+  HIL_REQUIRE_IMAGE("gather_store");
+  HIL_REQUIRE_IMAGE("fly");
+  // when
+  const sim::swap::SwapResult r = sim::swap::runSwap(reducedSwapOptions());
+  // then: stock and swapped, roll and pitch, each a step that rose and settled
+  ASSERT_EQ(r.runs.size(), 4u);
+  for (const sim::swap::RunResult& run : r.runs) {
+    const std::string id = sim::swap::runId(run.spec);
+    EXPECT_FALSE(std::isnan(run.metrics.rise_s)) << id;
+    EXPECT_FALSE(std::isnan(run.metrics.settling_s)) << id;
+    EXPECT_GT(run.metrics.peak, run.y0_deg + 8.0) << id;  // it moved by about the 10 degrees asked
+    EXPECT_DOUBLE_EQ(run.integrator_mnm, 0.0) << id;      // PD gains: no integral term
+  }
+  // the four targets: overshoot within 5 pp of stock, rise time within 10 %, sse <= 0.5 deg,
+  // ITAE <= 1.5x stock, each the worst of the two axes
+  ASSERT_EQ(r.targets.size(), 4u);
+  for (const sim::swap::Target& t : r.targets) EXPECT_TRUE(t.met) << t.target << ": " << t.figure;
+  // and what the calibration cannot change is measured: the KV900's own motor time constant
+  ASSERT_EQ(r.dynamics.parts.size(), 1u);
+  EXPECT_GT(r.dynamics.parts[0].tau_s, 0.0);
+  EXPECT_NE(r.dynamics.parts[0].tau_s, r.dynamics.parts[0].stock_tau_s);
+  // the public interface: runs[] and targets[] with the fields
+  const nlohmann::json j = r.toJson();
+  ASSERT_EQ(j.at("runs").size(), 4u);
+  for (const char* key : {"rig", "mode", "part", "axis", "step_deg", "seed", "rise_s", "overshoot_pct",
+                          "settling_s", "sse_deg", "itae", "integrator", "hover_pwm_spread_us"})
+    EXPECT_TRUE(j["runs"][0].contains(key)) << key;
+  for (const char* key : {"target", "figure", "wanted", "met"})
+    EXPECT_TRUE(j["targets"][0].contains(key)) << key;
+}
+
+}  // namespace

@@ -1,0 +1,180 @@
+// The swap experiment (`thrustcal sim swap`; docs/fly.md, "The swap experiment"): the thesis's
+// claim that a calibrated actuator can be exchanged "without affecting the quadrocopter
+// performance" (sec. 1), measured in closed loop with the real images.
+//
+//   1. four stock motors are calibrated with gather_store on the virtual bench (runGather);
+//   2. fly flies 10-degree steps from level on the seesaw (its one axis) and on the gimbal
+//      (plus layout: roll and pitch), one flight per IMU unit, in each output mode;
+//   3. motor 1 is replaced by another part, only slot 1 is calibrated again (the other slots'
+//      bytes must not change: checked), and the same steps are flown with the same gains.
+// Each run's figures (sim/step_metrics.hpp) come from the rig's true attitude in simulated time.
+// The modes get what their users would have: force each slot's own record; generic slot 0's
+// record for every motor; pwm the stock motors' hover pulse and force per microsecond; ardupilot
+// the lab's ArduPilot fit (`lab export --to ardupilot`) of the stock sweeps. None of those three
+// is calibrated again after the swap. What static calibration cannot equalise, the motors' time
+// constants, is measured on the plant beside the flights.
+//
+// Calibrations are cached in the output folder (an EEPROM image per part and a key of what made
+// it): a second run does not gather again unless gather_store or the settings changed.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "plant/params.hpp"
+#include "sim/airframe.hpp"
+#include "sim/scenarios.hpp"
+#include "sim/step_metrics.hpp"
+
+namespace sim::swap {
+
+enum class Mode { kForce, kGeneric, kPwm, kArduPilot };
+const char* modeName(Mode mode);  // "force", "generic", "pwm", "ardupilot"
+// Throws std::invalid_argument naming the modes.
+Mode parseMode(const std::string& name);
+
+// The controller's gains: the thesis's PD (Kp 2.2, Kd 0.4 as fly's default 800 0 146 mN m), and
+// the same with an integral term, whose final value says what mismatch it had to absorb.
+enum class Gains { kPd, kPid };
+const char* gainsName(Gains gains);  // "pd", "pid"
+Gains parseGains(const std::string& name);
+
+// A motor + propeller in a slot: the preset's part varied by `seed` (plant::makeVaried), its
+// propeller's thrust coefficient times `thrust_scale`.
+struct Part {
+  std::string name;  // "stock" for the stock motor in a slot; a swapped part's own name
+  std::string preset;
+  uint64_t seed = 0;
+  double thrust_scale = 1.0;
+  std::string description;
+};
+constexpr int kSwapSlot = 1;  // the slot (and ESC output) whose motor is replaced
+constexpr const char* kStock = "stock";
+// The swapped parts: another KV1100 unit, a KV900 with an 11x4.7 propeller, the stock motor 1
+// with a propeller giving 8 % less thrust (C_T x 0.92 at every rpm; C_P, hence the rpm at a
+// pulse, unchanged).
+const std::vector<Part>& swapParts();
+// Throws std::invalid_argument listing the names.
+const Part& findPart(const std::string& name);
+// The plant's motor for a part (the same on the bench and on the rig).
+plant::ActuatorParams actuatorOf(const Part& part, double variation);
+
+struct SwapOptions {
+  std::string gather_elf, fly_elf;
+  std::string out_dir = "build/swap";  // cache, series CSVs, plots
+  GatherModel model = GatherModel::kModelV2;
+  std::string stock_preset = "kv1100_9x4.7";
+  std::array<uint64_t, 4> stock_seeds = {11, 12, 13, 14};
+  double variation = 0.03;
+  std::vector<AirRig> rigs = {AirRig::kSeesaw, AirRig::kGimbal};
+  std::vector<Mode> modes = {Mode::kForce, Mode::kGeneric, Mode::kPwm, Mode::kArduPilot};
+  std::vector<std::string> parts = {"kv1100_9x4.7", "kv900_11x4.7", "prop-8pct"};
+  std::vector<Gains> gains = {Gains::kPd, Gains::kPid};
+  std::vector<uint64_t> imu_seeds = {1, 2, 3};
+  std::array<int, 3> pd_gains = {800, 0, 146};  // fly's `gains KP KI KD`, mN m per rad, rad s, rad/s
+  int pid_ki = 800;                             // the integral gain of the PID runs
+  double hover_g = 300;                         // per motor (thrust: 4x on the gimbal, 2x on the seesaw)
+  int step_deg = 10;
+  double settle_s = 0.5;      // level flight after the spool-up, before the step
+  double pid_settle_s = 4.0;  // ... with PID gains: the integrator's time to take up the mismatch
+  double window_s = 2.5;      // after the step
+  double log_period_s = 0.0025;
+  int jobs = 1;  // flights at once (each its own simulated board)
+  ProgressFn progress;
+};
+
+// What the flights fly on: the EEPROM images and the settings of the modes without records.
+struct ModeSettings {
+  int hover_us = 0;                          // pwm mode: the stock motors' pulse for hover_g (LiPo sweeps)
+  double slope_g_per_us = 0;                 // ... and their force per microsecond there
+  std::vector<std::string> ardupilot_lines;  // ap, apvolt, appwm: the lab's fit on the stock sweeps
+  std::vector<std::pair<std::string, std::string>> ardupilot_params;  // as `lab export` writes them
+  double ardupilot_full_g = 0;
+  std::size_t ardupilot_rows =
+      0;                       // the sweeps' rows it was fitted on (each up to where its force stops rising)
+  double ardupilot_rms_g = 0;  // its error on them
+};
+
+struct PartCalibration {
+  std::string part;
+  std::vector<uint8_t> eeprom;   // stock: four slots; a part: slot 1 calibrated again
+  bool cached = false;           // taken from the output folder
+  double curve_error_max_g = 0;  // the stored model against the plant (runGather)
+  std::string eeprom_path;
+};
+
+struct Calibration {
+  std::vector<PartCalibration> parts;  // stock first
+  ModeSettings modes;
+  std::vector<std::string> stock_sweeps;  // the stock sweep CSVs (the ArduPilot fit's data)
+  const PartCalibration& of(const std::string& part) const;
+};
+
+// The motor time constants the calibration cannot change: each part's and the stock motor 1's,
+// the rpm's first-order time constant for a step from hover_g - 10 % to + 10 % at 12.0 V.
+struct Dynamics {
+  std::string part;
+  double tau_s = 0, stock_tau_s = 0;
+  double rise_change_pct = 0;  // the flights' mean rise time against stock (force, PD, roll)
+};
+struct DynamicsReport {
+  std::array<double, 4> stock_tau_s{};  // the four stock motors, slot 0..3: their own spread
+  std::vector<Dynamics> parts;
+};
+
+struct RunSpec {
+  AirRig rig = AirRig::kGimbal;
+  Mode mode = Mode::kForce;
+  std::string part = kStock;
+  Gains gains = Gains::kPd;
+  std::string axis = "roll";  // roll | pitch
+  uint64_t imu_seed = 1;
+};
+std::string runId(const RunSpec& spec);  // "gimbal_force_pd_stock_roll_s1"
+
+struct RunResult {
+  RunSpec spec;
+  StepMetrics metrics;             // of the true angle of the step's axis, in degrees
+  double y0_deg = 0;               // mean over the 0.1 s before the step
+  double integrator_mnm = 0;       // the step axis's integrator at the end (fly's status)
+  double hover_pwm_spread_us = 0;  // max - min of the flying motors' mean pulses, last 0.25 s before the step
+  std::string csv_path;            // the time series
+  double simulated_s = 0, wall_s = 0;
+};
+
+struct Target {
+  std::string target, figure, wanted;
+  bool met = false;
+};
+
+struct SwapResult {
+  SwapOptions options;
+  Calibration calibration;
+  DynamicsReport dynamics;
+  std::vector<RunResult> runs;
+  std::vector<Target> targets;
+  double simulated_s = 0, flight_wall_s = 0, wall_s = 0;
+  // runs[] and targets[] as the public interface has them (DESIGN.md), plus setup, dynamics, sim.
+  nlohmann::json toJson() const;
+};
+
+// Calibrates (or takes the cached images), flies every run, computes the targets. Throws
+// std::runtime_error with what went wrong (a refused command, a slot that changed, a flight
+// that never armed) and what to do.
+SwapResult runSwap(const SwapOptions& options);
+
+// ---- pieces (sim/src/swap_*.cpp), public for the tests ----
+Calibration calibrate(const SwapOptions& options);
+ModeSettings modeSettings(const SwapOptions& options, const std::vector<std::string>& stock_sweeps);
+DynamicsReport measureDynamics(const SwapOptions& options);
+// One flight: fly booted on the rig with the part in slot 1, the mode set, armed, settled, the
+// step, the window; its time series written to `csv_path` ("" = none).
+RunResult flyRun(const SwapOptions& options, const Calibration& calibration, const RunSpec& spec,
+                 const std::string& csv_path);
+// The targets of force mode with PD gains, each swapped part against stock, run by run (same
+// rig, axis and IMU unit).
+std::vector<Target> swapTargets(const std::vector<RunResult>& runs, const std::vector<std::string>& parts);
+
+}  // namespace sim::swap

@@ -1,0 +1,206 @@
+// One flight of the swap experiment (sim/swap.hpp): fly booted on the rig with the part's EEPROM,
+// set up over its console as a user would, armed, level for a moment, then the step; the
+// figures from the rig's true attitude, the integrator from fly's status.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <regex>
+#include <stdexcept>
+
+#include "sim/console.hpp"
+#include "sim/swap.hpp"
+#include "thrustcal/limits.hpp"
+
+namespace sim::swap {
+
+namespace {
+
+constexpr double kKeepAliveS = 0.1;      // fly disarms after 500 ms without a line
+constexpr double kBaselineS = 0.1;       // y0: the mean true angle over this before the step
+constexpr double kSpreadWindowS = 0.25;  // the hover pulses: their means over this before the step
+
+// The console lines that set a flight up, in order (layout, gains, the mode and what it needs).
+std::vector<std::string> setupLines(const SwapOptions& o, const Calibration& c, const RunSpec& r) {
+  const bool seesaw = r.rig == AirRig::kSeesaw;
+  const int ki = r.gains == Gains::kPid ? o.pid_ki : o.pd_gains[1];
+  std::vector<std::string> lines = {seesaw ? "layout seesaw" : "layout plus",
+                                    fmt::format("gains {} {} {}", o.pd_gains[0], ki, o.pd_gains[2])};
+  const long thrust_g = std::lround(o.hover_g * (seesaw ? 2 : 4));
+  switch (r.mode) {
+    case Mode::kForce:
+      lines.insert(lines.end(), {"mode force", fmt::format("thrust {}", thrust_g)});
+      break;
+    case Mode::kGeneric:
+      lines.insert(lines.end(), {"mode generic 0", fmt::format("thrust {}", thrust_g)});
+      break;
+    case Mode::kPwm:
+      lines.insert(lines.end(),
+                   {fmt::format("hover {} {}", c.modes.hover_us, std::lround(c.modes.slope_g_per_us * 1000)),
+                    "mode pwm"});
+      break;
+    case Mode::kArduPilot:
+      lines.insert(lines.end(), c.modes.ardupilot_lines.begin(), c.modes.ardupilot_lines.end());
+      lines.insert(lines.end(), {"mode ardupilot", fmt::format("thrust {}", thrust_g)});
+      break;
+  }
+  return lines;
+}
+
+// A part heavier than the motor it replaced tilts the seesaw (its weight sits 0.225 m out): as on
+// a real rig, a counterweight of the difference beside motor 0 levels the beam again, motor and
+// propeller each at their own height. The gimbal turns about the centre of gravity.
+void counterweigh(plant::SeesawParams& s, const plant::ActuatorParams& replaced,
+                  const plant::ActuatorParams& part) {
+  const double motor_kg = (part.motor.mass_g - replaced.motor.mass_g) / 1000.0;
+  const double prop_kg = (part.prop.mass_g - replaced.prop.mass_g) / 1000.0;
+  if (motor_kg != 0) s.parts.push_back({"counterweight (motor)", motor_kg, s.arm_m, s.motor_height_m, 0.0});
+  if (prop_kg != 0) s.parts.push_back({"counterweight (propeller)", prop_kg, s.arm_m, s.prop_height_m, 0.0});
+}
+
+AirframeOptions rigOptions(const SwapOptions& o, const RunSpec& r) {
+  AirframeOptions a;
+  a.rig = r.rig;
+  a.gimbal.layout = plant::Layout::kPlus;  // the thesis's Iqarus
+  for (int i = 0; i < 4; ++i)
+    a.motors[i] = actuatorOf({kStock, o.stock_preset, o.stock_seeds[i], 1.0, ""}, o.variation);
+  if (r.part != kStock) {
+    const plant::ActuatorParams replaced = a.motors[kSwapSlot];
+    a.motors[kSwapSlot] = actuatorOf(findPart(r.part), o.variation);
+    if (r.rig == AirRig::kSeesaw) counterweigh(a.seesaw, replaced, a.motors[kSwapSlot]);
+  }
+  a.imu_params.seed = r.imu_seed;
+  a.log_period_s = o.log_period_s;
+  return a;
+}
+
+// `s` simulated seconds with a keep-alive line every 100 ms.
+void flyFor(AirframeRig& rig, double s) {
+  for (double done = 0; done < s - 1e-9; done += kKeepAliveS) {
+    rig.board().sendText("\r");
+    rig.run(std::min(kKeepAliveS, s - done));
+  }
+}
+
+void mustSay(Console& con, const std::string& line, const RunSpec& r) {
+  for (const std::string& l : con.command(line))
+    if (l.rfind("error:", 0) == 0)
+      throw std::runtime_error(fmt::format("{}: fly refused \"{}\": {}\n{}", runId(r), line, l, con.tail()));
+}
+
+// Boots fly, sets it up, arms it and waits out the spool-up; returns the spool-up's length.
+double armed(AirframeRig& rig, Console& con, const std::vector<std::string>& lines, const RunSpec& r) {
+  con.expectText("imu: gyro bias", 5.0);
+  con.waitPrompt(1.0);
+  rig.run(
+      std::max(0.0, tc::kArmMs / 1000.0 + 0.1 - rig.board().timeS()));  // the ESCs' time at the stop pulse
+  for (const std::string& line : lines) mustSay(con, line, r);
+  const auto reply = con.command("arm");
+  std::smatch m;
+  static const std::regex kSpool("spooling up for (\\d+) ms");
+  if (reply.empty() || reply[0].rfind("armed:", 0) != 0 || !std::regex_search(reply[0], m, kSpool))
+    throw std::runtime_error(fmt::format("{}: fly did not arm\n{}", runId(r), con.tail()));
+  return std::stod(m[1]) / 1000.0;
+}
+
+double integratorOf(Console& con, const RunSpec& r) {
+  static const std::regex kLine("^integrators: roll (-?[0-9.]+) pitch (-?[0-9.]+) yaw (-?[0-9.]+) mN m");
+  for (const std::string& l : con.command("status")) {
+    std::smatch m;
+    if (std::regex_search(l, m, kLine)) return std::stod(m[r.axis == "roll" ? 1 : 2]);
+  }
+  throw std::runtime_error(fmt::format("{}: fly's status has no integrators line\n{}", runId(r), con.tail()));
+}
+
+double angleOf(const AirSample& s, const std::string& axis) {
+  return axis == "roll" ? s.truth.roll_deg : s.truth.pitch_deg;
+}
+
+void writeSeries(const std::string& path, const std::vector<AirSample>& rows, double t_step, const RunSpec& r,
+                 double sp_deg) {
+  std::ofstream out(path, std::ios::trunc);
+  if (!out) throw std::runtime_error(fmt::format("{}: cannot write the time series; check --out-dir", path));
+  const int motors = rows.empty() ? 0 : rows.front().motors;
+  out << fmt::format("# thrustcal sim swap: {} (the rig's truth; t from the step)\n", runId(r));
+  out << "t_s,sp_deg,angle_deg,roll_deg,pitch_deg,yaw_deg";
+  for (int i = 0; i < motors; ++i) out << fmt::format(",pulse{}_us", i);
+  for (int i = 0; i < motors; ++i) out << fmt::format(",force{}_g", i);
+  out << "\n";
+  for (const AirSample& s : rows) {
+    const double t = s.truth.t_s - t_step;
+    out << fmt::format("{:.4f},{},{:.3f},{:.3f},{:.3f},{:.3f}", t, t < 0 ? 0.0 : sp_deg, angleOf(s, r.axis),
+                       s.truth.roll_deg, s.truth.pitch_deg, s.truth.yaw_deg);
+    for (int i = 0; i < motors; ++i) out << fmt::format(",{:.1f}", s.pulse_us[i]);
+    for (int i = 0; i < motors; ++i) out << fmt::format(",{:.1f}", s.thrust_g[i]);
+    out << "\n";
+  }
+}
+
+double settleOf(const SwapOptions& o, const RunSpec& r) {
+  return r.gains == Gains::kPid ? o.pid_settle_s : o.settle_s;
+}
+
+// The rows of the rig's log from the level flight before the step to the window's end.
+std::vector<AirSample> windowOf(const std::vector<AirSample>& log, double t_step, double settle_s,
+                                double window_s) {
+  std::vector<AirSample> rows;
+  for (const AirSample& s : log)
+    if (s.truth.t_s >= t_step - settle_s && s.truth.t_s <= t_step + window_s + 1e-9) rows.push_back(s);
+  return rows;
+}
+
+// The figures of the step (the window's rows, t from the step) and of the level flight before it.
+void measure(RunResult& res, const std::vector<AirSample>& rows, double t_step, const SwapOptions& o) {
+  std::vector<double> t, y, base_t;
+  std::vector<std::vector<double>> pulses;
+  double base = 0;
+  for (const AirSample& s : rows) {
+    const double ts = s.truth.t_s - t_step;
+    t.push_back(ts);
+    y.push_back(angleOf(s, res.spec.axis));
+    if (ts < 0 && ts >= -kBaselineS) base += y.back(), base_t.push_back(ts);
+    pulses.emplace_back(s.pulse_us.begin(), s.pulse_us.begin() + s.motors);
+  }
+  if (base_t.empty()) throw std::runtime_error(runId(res.spec) + ": no sample before the step");
+  res.y0_deg = base / static_cast<double>(base_t.size());
+  StepSpec spec;
+  spec.y0 = res.y0_deg;
+  spec.target = o.step_deg;
+  res.metrics = stepMetrics(t, y, spec);
+  res.hover_pwm_spread_us = meanSpread(t, pulses, -kSpreadWindowS, 0.0);
+}
+
+}  // namespace
+
+std::string runId(const RunSpec& r) {
+  return fmt::format("{}_{}_{}_{}_{}_s{}", airRigName(r.rig), modeName(r.mode), gainsName(r.gains), r.part,
+                     r.axis, r.imu_seed);
+}
+
+RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, const std::string& csv_path) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  RunResult res;
+  res.spec = r;
+  AirframeRig rig(o.fly_elf, rigOptions(o, r));
+  rig.board().setEeprom(c.of(r.part).eeprom);
+  Console con(rig.board(), "fly> ");
+  const double spool_s = armed(rig, con, setupLines(o, c, r), r);
+  const double settle_s = settleOf(o, r);
+  flyFor(rig, spool_s + settle_s);
+  const double t_step = rig.board().timeS();  // the step: the moment its line is sent
+  mustSay(con, r.axis == "roll" ? fmt::format("sp {} 0", o.step_deg) : fmt::format("sp 0 {}", o.step_deg), r);
+  flyFor(rig, t_step + o.window_s - rig.board().timeS());
+  res.integrator_mnm = integratorOf(con, r);
+  const std::vector<AirSample> rows = windowOf(rig.samples(), t_step, settle_s, o.window_s);
+  measure(res, rows, t_step, o);
+  if (!csv_path.empty()) {
+    writeSeries(csv_path, rows, t_step, r, o.step_deg);
+    res.csv_path = csv_path;
+  }
+  res.simulated_s = rig.board().timeS();
+  res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return res;
+}
+
+}  // namespace sim::swap
