@@ -43,8 +43,6 @@ constexpr uint8_t kEepeBit = 1, kEempeBit = 2;
 constexpr uint16_t kSramStart = 0x200;
 
 
-void noSleep(avr_t*, avr_cycle_count_t) {}
-
 // simavr logs "Loaded N .text" and friends for every image; keep errors only.
 void quietLogger(avr_t* avr, const int level, const char* format, va_list ap) {
   (void)avr;
@@ -208,7 +206,7 @@ void Board::load(const FlashImages& images) {
   avr_->custom.data = this;
   core_reset_ = avr_->reset;
   avr_->reset = &Board::onCoreReset;
-  avr_->sleep = noSleep;  // idle sleep skips ahead instead of waiting on the wall clock
+  avr_->sleep = &Board::onSleep;  // idle sleep skips ahead instead of waiting on the wall clock
   eraseEeprom(avr_);
   avr_->frequency = loadImages(avr_, app, boot, images.application);
   if (boot.hi > boot.lo) boot_address_ = boot.lo;
@@ -284,6 +282,16 @@ uint64_t Board::tickTimer(avr_t*, uint64_t when, void* param) {
 }
 
 // --- reset ---
+
+// simavr adds 1 + how_long cycles after this callback; nothing waits on the wall clock.
+void Board::onSleep(avr_t* avr, uint64_t how_long_cycles) {
+  static_cast<Board*>(avr->custom.data)->slept_cycles_ += 1 + how_long_cycles;
+}
+
+void Board::setProfiling(bool on) {
+  profiling_ = on;
+  if (on && profile_.empty()) profile_.assign(kFlashBytes / 2, 0);
+}
 
 void Board::onCoreReset(avr_t* avr) {
   auto* self = static_cast<Board*>(avr->custom.data);
@@ -513,7 +521,10 @@ void Board::run(uint64_t cycles) {
   while (avr_->cycle < end) {
     for (const PcWatch& w : pc_watches_)
       if (avr_->pc == w.byte_address) w.probe(avr_->cycle);
+    const uint32_t pc = avr_->pc;
+    const uint64_t cycle_before = avr_->cycle, slept_before = slept_cycles_;
     const int state = avr_run(avr_);
+    if (profiling_) profile_[pc / 2] += (avr_->cycle - cycle_before) - (slept_cycles_ - slept_before);
     if (state == cpu_Done || state == cpu_Crashed) {
       const double t = timeS();
       simulated_s_ += cyclesToSeconds(avr_->cycle - start);
