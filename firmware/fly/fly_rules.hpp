@@ -138,6 +138,10 @@ constexpr uint8_t kMaxCrashDeg = 90;
 inline bool crashed(float roll_rad, float pitch_rad, float limit_rad) {
   return fabsf(roll_rad) > limit_rad || fabsf(pitch_rad) > limit_rad;
 }
+// The same rule on the estimator's integer angles (every frame: no float), limit > 0.
+inline bool crashedUnits(int32_t roll, int32_t pitch, int32_t limit) {
+  return roll > limit || roll < -limit || pitch > limit || pitch < -limit;
+}
 
 // The IMU failed: this many reads in a row ended badly (no answer, a time-out, the bus lost) or
 // brought no new sample (DATA_RDY clear: frozen data). 8 frames are 20 ms at 400 Hz.

@@ -135,7 +135,7 @@ class FlyMeter {
       : board_(rig.board()), symbols_(symbols) {
     board_.watchPc(sim::elfSymbol(elf, "fly::FlyApp::runOnce()").address,
                    [this](uint64_t c) { on(loop_, c); });
-    board_.watchPc(sim::elfSymbol(elf, "fly::FlyApp::flyFrame(float, unsigned int)").address,
+    board_.watchPc(sim::elfSymbol(elf, "fly::FlyApp::flyFrame(unsigned char, unsigned int)").address,
                    [this](uint64_t c) { on(frame_, c); });
     board_.watchPc(sim::elfSymbol(elf, "hal::Esc::writeAll(unsigned int const (&) [4])").address,
                    [this](uint64_t c) {
