@@ -254,16 +254,15 @@ void armInMode(sim::AirframeRig& rig, sim::Console& con, const FlyMode& mode) {
   flyFor(rig, 1.2);  // the spool-up (1 s)
 }
 
-// "loop: IMU read at P us of each 2500 us frame, computation budget B us; ..." from status.
-void readLoopLine(const std::vector<std::string>& status, FlyModeFigures& f) {
-  static const std::regex re(R"(IMU read at (\d+) us of each \d+ us frame, computation budget (\d+) us)");
-  for (const std::string& line : status) {
-    std::smatch m;
-    if (std::regex_search(line, m, re)) {
-      f.read_phase_us = std::stoi(m[1]);
-      f.budget_us = std::stoi(m[2]);
-    }
-  }
+// "loop: IMU read at P us of each 2500 us frame, computation budget B us; ..." from status,
+// waited for as a line of its own: the stream rows before it leave no prompt to go by.
+void readLoopLine(sim::Console& con, FlyModeFigures& f) {
+  con.send("status");
+  const std::vector<std::string> m =
+      con.expect(R"(loop: IMU read at (\d+) us of each \d+ us frame, computation budget (\d+) us)", 2.0);
+  f.read_phase_us = std::stoi(m[1]);
+  f.budget_us = std::stoi(m[2]);
+  con.waitPrompt(2.0);
 }
 
 FlyModeFigures flyMode(const std::string& elf, const FlyMode& mode, const BenchRecords& records,
@@ -290,7 +289,7 @@ FlyModeFigures flyMode(const std::string& elf, const FlyMode& mode, const BenchR
   meter.stop(f, true);
   command(con, "stream off");
   f.stayed_armed = rig.board().output().find("disarmed", flight_from) == std::string::npos;
-  readLoopLine(con.command("status"), f);
+  readLoopLine(con, f);
   const sim::StackHeadroom stack = sim::flyDeepestPaths(elf, con);
   f.stack_never_used_bytes = stack.untouched_bytes;
   f.stack_bytes = stack.stack_bytes;
