@@ -9,6 +9,10 @@
 #pragma once
 #include <stdint.h>
 
+// The helpers below are a few instructions each once inlined (a constant gain folds its shifts
+// away); avr-gcc at -Os would call them instead, which costs more than their bodies.
+#define FLY_INLINE __attribute__((always_inline)) inline
+
 namespace fly {
 
 struct Gain {
@@ -44,7 +48,7 @@ float gainValue(const Gain& g);
 // v >> n (arithmetic) and v << n for n in 0..31 as at most five constant shifts: the AVR has
 // no barrel shifter, and gcc shifts a 32-bit value by a variable count one bit per loop turn
 // (~6 cycles a bit), by 16 or 8 with register moves. Bit for bit the same as the shift.
-inline int32_t shiftRight(int32_t v, uint8_t n) {
+FLY_INLINE int32_t shiftRight(int32_t v, uint8_t n) {
   if (n & 16) v >>= 16;
   if (n & 8) v >>= 8;
   if (n & 4) v >>= 4;
@@ -52,7 +56,7 @@ inline int32_t shiftRight(int32_t v, uint8_t n) {
   if (n & 1) v >>= 1;
   return v;
 }
-inline uint32_t shiftLeft(uint32_t v, uint8_t n) {
+FLY_INLINE uint32_t shiftLeft(uint32_t v, uint8_t n) {
   if (n & 16) v <<= 16;
   if (n & 8) v <<= 8;
   if (n & 4) v <<= 4;
@@ -62,11 +66,11 @@ inline uint32_t shiftLeft(uint32_t v, uint8_t n) {
 }
 // (v + 2^(n-1)) >> n, n in 1..32, without the sum: floor((floor(v / 2^(n-1)) + 1) / 2) is the
 // same integer.
-inline int32_t roundedShiftRight(int32_t v, uint8_t n) { return (shiftRight(v, static_cast<uint8_t>(n - 1)) + 1) >> 1; }
+FLY_INLINE int32_t roundedShiftRight(int32_t v, uint8_t n) { return (shiftRight(v, static_cast<uint8_t>(n - 1)) + 1) >> 1; }
 
 // v * g.m / 2^g.s, rounded half up: v = hi * 2^16 + lo (hi signed, lo unsigned), two 16 x 16
 // products summed with the 2^16 weight folded into the shift.
-inline int32_t applyGain(int32_t v, const Gain& g) {
+FLY_INLINE int32_t applyGain(int32_t v, const Gain& g) {
   const int32_t m = g.m;
   const int32_t hi = static_cast<int32_t>(static_cast<int16_t>(v >> 16)) * m;
   const int32_t lo = static_cast<int32_t>(static_cast<uint16_t>(v)) * m;
