@@ -13,17 +13,17 @@
 
 namespace {
 
-bench::AvrPaths avrPaths() {
+bench::AvrPaths flyAvrPaths() {
   bench::AvrPaths p;
   p.avr_build = THRUSTCAL_AVR_BUILD_DIR;
   return p;
 }
 
-const char* const kModes[] = {"force_v2", "force_thesis", "generic", "pwm", "ardupilot"};
+const char* const kFlyModes[] = {"force_v2", "force_thesis", "generic", "pwm", "ardupilot"};
 
 void everyModeFliesTheWholeWindowWithEveryFigureMeasured(const nlohmann::json& j) {
   ASSERT_EQ(j["modes"].size(), 5u);
-  for (const char* key : kModes) {
+  for (const char* key : kFlyModes) {
     SCOPED_TRACE(key);
     const nlohmann::json& m = j["modes"][key];
     ASSERT_TRUE(m.is_object());
@@ -66,7 +66,7 @@ void everyModeFliesTheWholeWindowWithEveryFigureMeasured(const nlohmann::json& j
 
 void whereTheCyclesGoAddsUpToTheCpuLoad(const nlohmann::json& j) {
   const double frame_cycles = 16e6 / j["frame_hz"].get<double>();
-  for (const char* key : kModes) {
+  for (const char* key : kFlyModes) {
     SCOPED_TRACE(key);
     const nlohmann::json& parts = j["breakdown"][key];
     double sum = 0;
@@ -93,7 +93,7 @@ void modesRankAsTheirOutputPathsCostAndTheImageFits(const nlohmann::json& j) {
   EXPECT_GT(j["sram_static_bytes"].get<int>(), 500);
   EXPECT_LT(j["sram_static_bytes"].get<int>(), 8 * 1024);
   // the verdicts are the figures against the targets
-  for (const char* key : kModes) {
+  for (const char* key : kFlyModes) {
     SCOPED_TRACE(key);
     EXPECT_EQ(j["met"][key]["cpu_load"].get<bool>(), cpu(key) <= bench::kFlyCpuTargetPct);
     EXPECT_EQ(j["met"][key]["read_to_edge"].get<bool>(),
@@ -101,7 +101,7 @@ void modesRankAsTheirOutputPathsCostAndTheImageFits(const nlohmann::json& j) {
   }
   EXPECT_EQ(j["worst"]["stack_never_used_bytes"].get<int>(), [&] {
     int least = 1 << 30;
-    for (const char* key : kModes) least = std::min(least, j["modes"][key]["stack_never_used_bytes"].get<int>());
+    for (const char* key : kFlyModes) least = std::min(least, j["modes"][key]["stack_never_used_bytes"].get<int>());
     return least;
   }());
 }
@@ -110,9 +110,9 @@ void modesRankAsTheirOutputPathsCostAndTheImageFits(const nlohmann::json& j) {
 
 // One simulated run (~3 s of CPU, more with the sanitizers) for all three checks.
 TEST(BenchFlySection, EveryModeIsMeasuredAndTheFiguresAgree) {
-  if (!std::filesystem::exists(avrPaths().elf("fly"))) GTEST_SKIP() << "no fly image in " << THRUSTCAL_AVR_BUILD_DIR;
+  if (!std::filesystem::exists(flyAvrPaths().elf("fly"))) GTEST_SKIP() << "no fly image in " << THRUSTCAL_AVR_BUILD_DIR;
   // when: fly flies in each mode in simavr
-  const bench::Section s = bench::flySection(avrPaths());
+  const bench::Section s = bench::flySection(flyAvrPaths());
   ASSERT_TRUE(s.json.value("available", false)) << s.json.dump();
   {
     SCOPED_TRACE("every mode flies the whole window with every figure measured");
