@@ -23,6 +23,7 @@ void ArduPilotCurve::setParams(const ArduPilotParams& p) {
   filter_set_ = false;
   ratio_filt_ = 1.0f;
   derive();
+  buildTable();
 }
 
 float ArduPilotCurve::ratioFor(float vbat_v) const {
@@ -61,6 +62,87 @@ void ArduPilotCurve::derive() {
   const float span_us = static_cast<float>(p_.pwm_max_us) - static_cast<float>(p_.pwm_min_us);
   p0_ = static_cast<float>(p_.pwm_min_us) + span_us * p_.spin_min;
   p1_ = span_us * (p_.spin_max - p_.spin_min);
+  // pulseUsQ4's: thrust 1 at full thrust x lift_max; pulse = p0 + p1 u / v
+  max_force_q4_ = roundToInt32(p_.full_thrust_g * lift_max_ * 16.0f);
+  p0_x16_ = roundToInt32(p0_ * 16.0f);
+  p_top_x16_ = roundToInt32((p0_ + p1_) * 16.0f);
+  pulse_per_u_ = gainOf(p1_ * battery_scale * (16.0f / 32768.0f));
+}
+
+// u for a force at full voltage: e u^2 + (1 - e) u = x, x = F / full thrust in 0..1, as
+// 2 x / ((1 - e) + sqrt((1 - e)^2 + 4 e x)): no cancellation, whatever e.
+float ArduPilotCurve::throttleAtFullVoltage(float force_g) const {
+  const float x = clamp(force_g / p_.full_thrust_g, 0.0f, 1.0f);
+  if (x <= 0.0f) return 0.0f;
+  const float b = 1.0f - expo_;
+  const float root = b * b + 4.0f * expo_ * x;
+  return clamp(2.0f * x / (b + (root > 0 ? sqrtf(root) : 0.0f)), 0.0f, 1.0f);
+}
+
+// Nodes evenly spaced in sqrt(2 e u + 1 - e) (in u when e is near 0), each node's force rounded
+// to 1/16 g and its u worked out again at that force, so a node is exact where it lies.
+void ArduPilotCurve::buildTable() {
+  table_ok_ = false;
+  if (!ready()) return;
+  const float e = expo_;
+  const bool near_linear = fabsf(e) < 0.01f;
+  const float w0 = sqrtf(1.0f - e), w1 = sqrtf(1.0f + e);
+  for (uint8_t i = 0; i <= kTableSegments; ++i) {
+    const float t = static_cast<float>(i) / kTableSegments;
+    const float w = w0 + (w1 - w0) * t;
+    const float u = near_linear ? t : clamp((w * w - (1.0f - e)) / (2.0f * e), 0.0f, 1.0f);
+    Node& n = table_[i];
+    n.force_q4 = roundToInt32((e * u * u + (1.0f - e) * u) * p_.full_thrust_g * 16.0f);
+    n.u_q15 = static_cast<uint16_t>(roundToInt32(throttleAtFullVoltage(n.force_q4 / 16.0f) * 32768.0f));
+  }
+  for (uint8_t i = 0; i < kTableSegments; ++i) {
+    const int32_t df = table_[i + 1].force_q4 - table_[i].force_q4;
+    const float du = static_cast<float>(table_[i + 1].u_q15) - static_cast<float>(table_[i].u_q15);
+    table_[i].slope = df > 0 ? gainOf(du / static_cast<float>(df)) : Gain();
+  }
+  table_[kTableSegments].slope = Gain();
+  table_ok_ = fabsf(e) <= kTableMaxExpo;
+}
+
+// The table's worst error in pulse, at the lowest voltage ratio the parameters allow (the
+// largest 1 / v), from three forces inside each segment: the tests' measure of kTableMaxExpo
+// (too slow for the AVR to run on every parameter change: 120 float throttles).
+float ArduPilotCurve::tableErrorUs() const {
+  float worst_u = 0;
+  for (uint8_t i = 0; i < kTableSegments; ++i) {
+    const int32_t from = table_[i].force_q4, width = table_[i + 1].force_q4 - from;
+    for (int32_t k = 1; k <= 3; ++k) {
+      const int32_t f = from + width * k / 4;
+      const float u_table = tableThrottleQ15(f) / 32768.0f;
+      const float error = fabsf(u_table - throttleAtFullVoltage(f / 16.0f));
+      if (error > worst_u) worst_u = error;
+    }
+  }
+  const bool scaled = p_.bat_volt_max_v > 0 && p_.bat_volt_min_v < p_.bat_volt_max_v;
+  const float lowest_ratio = scaled ? vmin_v_ * inv_vmax_ : 1.0f;
+  return worst_u * p1_ / lowest_ratio + 1.0f / 16.0f;  // + the pulse's own 1/16 us
+}
+
+int32_t ArduPilotCurve::tableThrottleQ15(int32_t force_q4) const {
+  uint8_t lo = 0, hi = kTableSegments;  // table_[lo].force_q4 <= force_q4 < table_[hi].force_q4
+  while (hi - lo > 1) {
+    const uint8_t mid = static_cast<uint8_t>((lo + hi) / 2);
+    if (table_[mid].force_q4 <= force_q4) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  const Node& n = table_[lo];
+  return n.u_q15 + applyGain(force_q4 - n.force_q4, n.slope);
+}
+
+uint16_t ArduPilotCurve::pulseUsQ4(int32_t force_q4) const {
+  if (!table_ok_) return pulseUs(force_q4 * (1.0f / 16.0f));
+  const int32_t f = force_q4 < 0 ? 0 : (force_q4 > max_force_q4_ ? max_force_q4_ : force_q4);
+  int32_t pulse_x16 = p0_x16_ + applyGain(tableThrottleQ15(f), pulse_per_u_);
+  if (pulse_x16 > p_top_x16_) pulse_x16 = p_top_x16_;  // y <= 1
+  return pulse_x16 > 0 ? static_cast<uint16_t>(pulse_x16 >> 4) : 0;  // truncated, as output_to_pwm
 }
 
 uint16_t ArduPilotCurve::pulseUs(float force_g) const {

@@ -12,11 +12,22 @@
 // e = MOT_THST_EXPO (clamped to -1..1), SPIN_MIN/MAX, PWM_MIN/MAX, BAT_VOLT_MAX/MIN as the .parm
 // file names them; the full thrust (grams at the top pulse on a full battery) is what the fit
 // prints next to them (or (take-off weight / motors) / MOT_THST_HOVER).
-// Per motor one square root and four products: whatever depends only on the voltage is worked
-// out once per battery reading (updateBattery).
+// pulseUs is that arithmetic in float (one square root and a few products per motor), the
+// reference; the frame path is pulseUsQ4, integer, from a table made with the parameters:
+//   the throttle at full voltage for a force, u = y v, solves e u^2 + (1 - e) u = F / full thrust
+//   (lift_max cancels), so it depends on the parameters only. The table holds u at kTableNodes
+//   forces (1/16 g), spaced evenly in sqrt(2 e u + 1 - e) (the interpolation's error is then
+//   the same in every segment, (sqrt(1 + e) - sqrt(1 - e))^2 / (4 |e| segments^2) in u), each
+//   segment's slope as a gain; a force is found by bisection and interpolated, then
+//   pulse = PWM_MIN + span (SPIN_MIN + (SPIN_MAX - SPIN_MIN) min(u / v, 1)) with the per-reading
+//   gain. Within |e| <= kTableMaxExpo the table is within kTableMaxErrorUs of the float
+//   arithmetic at every force and voltage (the tests sweep e and measure it: tableErrorUs);
+//   beyond (an expo near +-1) pulseUsQ4 flies the float path.
+// Whatever depends only on the voltage is worked out once per battery reading (updateBattery).
 #pragma once
 #include <stdint.h>
 
+#include "fixed_point.hpp"
 #include "thrustcal/record_limits.hpp"
 
 namespace fly {
@@ -46,12 +57,33 @@ class ArduPilotCurve {
   float liftMax() const { return lift_max_; }
   // The most it will ask of a motor at this voltage: full thrust x lift_max (its thrust 1).
   float maxForceG() const { return p_.full_thrust_g * lift_max_; }
-  // The pulse ArduPilot sends for `force_g` on one motor.
+  // The pulse ArduPilot sends for `force_g` on one motor (float: the reference).
   uint16_t pulseUs(float force_g) const;
+  // The same for a force in 1/16 g, from the table (the frame path); within a microsecond of
+  // pulseUs.
+  uint16_t pulseUsQ4(int32_t force_q4) const;
+  // Whether pulseUsQ4 flies the table (false: the parameters need the float path).
+  bool usesTable() const { return table_ok_; }
+
+  static constexpr uint8_t kTableSegments = 40;
+  static constexpr float kTableMaxErrorUs = 0.5f;
+  static constexpr float kTableMaxExpo = 0.95f;
+  // The table's worst error in microseconds of pulse against the float arithmetic, at the
+  // lowest voltage the parameters allow (tests; slow on the AVR).
+  float tableErrorUs() const;
 
  private:
+  struct Node {
+    int32_t force_q4;  // at this node
+    uint16_t u_q15;    // the throttle at full voltage there, 1/32768
+    Gain slope;        // to the next node: u_q15 per 1/16 g
+  };
+
   void derive();
   float ratioFor(float vbat_v) const;
+  void buildTable();
+  float throttleAtFullVoltage(float force_g) const;
+  int32_t tableThrottleQ15(int32_t force_q4) const;
 
   ArduPilotParams p_;
   float expo_ = 0.65f;     // clamped
@@ -65,6 +97,13 @@ class ArduPilotCurve {
   // Per-reading constants of pulseUs: thrust = F * thrust_per_g_; y = (c_ + sqrt(a_ + b_ thrust)) d_
   // (linear branch when e == 0: y = lin_ thrust); pulse = p0_ + p1_ y.
   float thrust_per_g_ = 0, a_ = 0, b_ = 0, c_ = 0, d_ = 0, lin_ = 0, p0_ = 0, p1_ = 0;
+  // pulseUsQ4: the table, and per reading the force that makes thrust 1 and u's pulse gain.
+  Node table_[kTableSegments + 1];
+  bool table_ok_ = false;
+  int32_t max_force_q4_ = 0;    // full thrust x lift_max
+  int32_t p0_x16_ = 0;          // PWM_MIN + span SPIN_MIN, 1/16 us
+  int32_t p_top_x16_ = 0;       // the pulse at y = 1
+  Gain pulse_per_u_;            // 1/16 us per u_q15: span (SPIN_MAX - SPIN_MIN) / v
 };
 
 }  // namespace fly

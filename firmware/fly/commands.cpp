@@ -88,6 +88,7 @@ void FlyApp::cmdDisarm() {
 void FlyApp::cmdSetpoint(int8_t roll_deg, int8_t pitch_deg) {
   settings_.setpoint.roll_rad = roll_deg * kRadPerDeg;
   settings_.setpoint.pitch_rad = pitch_deg * kRadPerDeg;
+  settings_.setpoint_q = fixedSetpoint(settings_.setpoint);
   view::setpoint(*this);
 }
 
@@ -127,7 +128,7 @@ void FlyApp::cmdMode(OutputMode mode, uint8_t generic_slot) {
 void FlyApp::cmdLayout(Layout layout) {
   if (refuseWhileArmed()) return;
   settings_.layout = layout;
-  mixer_.configure(layout, settings_.arm_m, settings_.yaw_arm_m);
+  configureMixer();
   schedule();
   view::layout(*this);
 }
@@ -136,7 +137,7 @@ void FlyApp::cmdAirframe(uint16_t arm_mm, uint16_t yaw_arm_um) {
   if (refuseWhileArmed()) return;
   settings_.arm_m = arm_mm * 0.001f;
   settings_.yaw_arm_m = yaw_arm_um * 0.000001f;
-  mixer_.configure(settings_.layout, settings_.arm_m, settings_.yaw_arm_m);
+  configureMixer();
   view::layout(*this);
 }
 
@@ -188,6 +189,7 @@ void FlyApp::cmdArduPilotPwm(uint16_t min_us, uint16_t max_us) {
 
 void FlyApp::cmdCrash(uint8_t deg) {
   settings_.crash_deg = deg;
+  settings_.crash_units = angleUnitsOfDegrees(deg);
   view::crashLimit(*this);
 }
 

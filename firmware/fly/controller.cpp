@@ -7,8 +7,37 @@ namespace {
 float clampSym(float v, float limit) { return v > limit ? limit : (v < -limit ? -limit : v); }
 }  // namespace
 
+SetpointQ fixedSetpoint(const Setpoint& sp) {
+  SetpointQ q;
+  q.roll = angleUnits(sp.roll_rad);
+  q.pitch = angleUnits(sp.pitch_rad);
+  q.yaw_rate = roundToInt32(sp.yaw_rate_rad_s * (1.0f / kRadPerRateUnit));
+  return q;
+}
+
 void AttitudeController::reset() {
   for (float& i : integral_nm_) i = 0;
+  has_integral_ = false;
+}
+
+void AttitudeController::scale() {
+  kp_xy_ = gainOf(rp_.kp_nm_per_rad * q4_per_nm_xy_ * kRadPerAngleUnit);
+  kd_xy_ = gainOf(rp_.kd_nm_s_per_rad * q4_per_nm_xy_ * kRadPerRateUnit);
+  kp_z_ = gainOf(yaw_.kp_nm_s_per_rad * q4_per_nm_z_ * kRadPerRateUnit);
+  integrating_ = rp_.ki_nm_per_rad_s != 0.0f || yaw_.ki_nm_per_rad != 0.0f;
+}
+
+TorqueQ4 AttitudeController::torqueQ4(const AttitudeQ& a, const SetpointQ& sp) const {
+  TorqueQ4 t;
+  t.x = applyGain(sp.roll - a.roll, kp_xy_) - applyGain(a.rate[0], kd_xy_);
+  t.y = applyGain(sp.pitch - a.pitch, kp_xy_) - applyGain(a.rate[1], kd_xy_);
+  t.z = applyGain(sp.yaw_rate - a.rate[2], kp_z_);
+  if (has_integral_) {  // float, only while an integral gain is in use
+    t.x += roundToInt32(integral_nm_[0] * q4_per_nm_xy_);
+    t.y += roundToInt32(integral_nm_[1] * q4_per_nm_xy_);
+    t.z += roundToInt32(integral_nm_[2] * q4_per_nm_z_);
+  }
+  return t;
 }
 
 Torque AttitudeController::torque(const Attitude& a, const Setpoint& sp) const {
@@ -32,6 +61,7 @@ void AttitudeController::integrate(const Attitude& a, const Setpoint& sp, float 
     integral_nm_[2] = clampSym(
         integral_nm_[2] + yaw_.ki_nm_per_rad * dt_s * (sp.yaw_rate_rad_s - a.rate_rad_s[2]), kIntegralMaxNm);
   }
+  has_integral_ = integral_nm_[0] != 0.0f || integral_nm_[1] != 0.0f || integral_nm_[2] != 0.0f;
 }
 
 }  // namespace fly

@@ -10,6 +10,9 @@
 // step then does not kick the motors, and the gyro's rate needs no differencing.
 // Integrators: frozen on an axis the mixer had to limit (anti-windup), held within
 // kIntegralMaxNm, reset on every arm; no integral term by default (the thesis had none).
+// The frame path (torqueQ4) is the same law in fixed point on the estimator's AttitudeQ, its
+// output already the mixer's 1/16 g: the gains times the mixer's scale, made when either
+// changes; torque() in N m is the law as written, the reference torqueQ4 is tested against.
 #pragma once
 #include <stdint.h>
 
@@ -42,6 +45,22 @@ struct Torque {
   float z_nm = 0;
 };
 
+// The setpoint in the estimator's units (estimator.hpp), made when it changes.
+struct SetpointQ {
+  int32_t roll = 0;      // angle units
+  int32_t pitch = 0;
+  int32_t yaw_rate = 0;  // rate units
+};
+SetpointQ fixedSetpoint(const Setpoint& sp);
+
+// A torque as the mixer takes it: the force it adds to each motor, 1/16 g per lever (x, y) or
+// per spin (z) (Mixer's units: torque times Mixer::q4PerNmXy / q4PerNmZ).
+struct TorqueQ4 {
+  int32_t x = 0;
+  int32_t y = 0;
+  int32_t z = 0;
+};
+
 // What the mixer had to give up (Mixer::mix's result): the integrators of those axes hold.
 enum MixLimit : uint8_t {
   kMixRollPitchLimited = 1u << 0,
@@ -56,20 +75,38 @@ class AttitudeController {
   void setGains(const AxisGains& roll_pitch, const YawGains& yaw) {
     rp_ = roll_pitch;
     yaw_ = yaw;
+    scale();
+  }
+  // The mixer's 1/16 g per N m about x and y, and about z (Mixer::q4PerNmXy, q4PerNmZ).
+  void setForceScale(float q4_per_nm_xy, float q4_per_nm_z) {
+    q4_per_nm_xy_ = q4_per_nm_xy;
+    q4_per_nm_z_ = q4_per_nm_z;
+    scale();
   }
   const AxisGains& gains() const { return rp_; }
   const YawGains& yawGains() const { return yaw_; }
   void reset();
-  // This frame's torque: P and D now, the integrals as they stand (fast path).
+  // This frame's torque: P and D now, the integrals as they stand (the law, in N m).
   Torque torque(const Attitude& a, const Setpoint& sp) const;
+  // The same in fixed point, as the mixer takes it (the frame path): each term rounded to
+  // 1/16 g, so within a few of torque() times the scale, rounded.
+  TorqueQ4 torqueQ4(const AttitudeQ& a, const SetpointQ& sp) const;
+  // Whether integrate() does anything: an integral gain is set.
+  bool integrating() const { return integrating_; }
   // The integrals advanced by dt (after the output), except on axes the mixer limited.
   void integrate(const Attitude& a, const Setpoint& sp, float dt_s, uint8_t mix_limits);
   float integralNm(uint8_t axis) const { return integral_nm_[axis]; }
 
  private:
+  void scale();
+
   AxisGains rp_ = kThesisGains;
   YawGains yaw_ = kDefaultYawGains;
   float integral_nm_[3] = {0, 0, 0};
+  bool has_integral_ = false;  // some integral is not 0 (torqueQ4 adds them)
+  bool integrating_ = false;
+  float q4_per_nm_xy_ = 0, q4_per_nm_z_ = 0;
+  Gain kp_xy_, kd_xy_, kp_z_;  // 1/16 g per angle unit, per rate unit
 };
 
 }  // namespace fly

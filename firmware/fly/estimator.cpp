@@ -8,15 +8,42 @@ namespace fly {
 namespace {
 constexpr float kPi = 3.14159265f;
 constexpr float kHalfPi = 1.57079633f;
-// |a|^2 within (1 g +-15 %)^2, in LSB^2.
-constexpr float kAccelMin2 = (0.85f * mpu::kAccelLsbPerG) * (0.85f * mpu::kAccelLsbPerG);
-constexpr float kAccelMax2 = (1.15f * mpu::kAccelLsbPerG) * (1.15f * mpu::kAccelLsbPerG);
+// |a|^2 within (1 g +-15 %)^2, in LSB^2, the bounds rounded inwards; integers, so the host and
+// the AVR (whose double is a float) agree to the LSB.
+constexpr uint32_t kLsbPerG = 4096;
+static_assert(mpu::kAccelLsbPerG == kLsbPerG, "+-8 g");
+constexpr uint32_t kAccelMinTenths = 85 * kLsbPerG / 10;   // 0.85 g in 1/10 LSB
+constexpr uint32_t kAccelMaxTenths = 115 * kLsbPerG / 10;  // 1.15 g
+constexpr uint32_t kAccelMin2 = (kAccelMinTenths * kAccelMinTenths + 99) / 100;
+constexpr uint32_t kAccelMax2 = kAccelMaxTenths * kAccelMaxTenths / 100;
+bool nearOneG(const ImuSample& s) {
+  const uint32_t n2 = squaredNormLsb2(s);
+  return n2 >= kAccelMin2 && n2 <= kAccelMax2;
+}
 
-float squaredNorm(const ImuSample& s) {
-  const float x = s.accel[0], y = s.accel[1], z = s.accel[2];
-  return x * x + y * y + z * z;
+// r * angle in rate units (the Euler rates' coupling): r in whole gyro LSB times the angle in
+// 1024 angle units, a 16 x 16 product, times the unit that product is.
+constexpr Gain kCouplingGain = gainOf(16.0f * 1024.0f * kRadPerAngleUnit);
+int16_t saturated16(int32_t v) { return v > 32767 ? 32767 : (v < -32768 ? -32768 : static_cast<int16_t>(v)); }
+int32_t coupling(int32_t r, int32_t angle) {
+  const int32_t product = static_cast<int32_t>(saturated16((r + 8) >> 4)) * saturated16((angle + 512) >> 10);
+  return applyGain(product, kCouplingGain);
+}
+int32_t heldAngle(int32_t angle) {
+  return angle > kMaxAngleUnits ? kMaxAngleUnits : (angle < -kMaxAngleUnits ? -kMaxAngleUnits : angle);
 }
 }  // namespace
+
+int32_t angleUnits(float rad) { return roundToInt32(rad * (1.0f / kRadPerAngleUnit)); }
+
+uint32_t squaredNormLsb2(const ImuSample& s) {
+  uint32_t sum = 0;
+  for (uint8_t i = 0; i < 3; ++i) {
+    const int32_t a = s.accel[i];
+    sum += static_cast<uint32_t>(a * a);
+  }
+  return sum;
+}
 
 // atan on 0..1 as Abramowitz & Stegun 4.4.47 (a 9th-order odd polynomial, error <= 1e-5 rad),
 // mapped to the quadrants.
@@ -52,8 +79,7 @@ void GyroCalibration::begin() {
 
 bool GyroCalibration::add(const ImuSample& s) {
   if (done_) return true;
-  const float n2 = squaredNorm(s);
-  bool still = n2 >= kAccelMin2 && n2 <= kAccelMax2;
+  bool still = nearOneG(s);
   for (uint8_t i = 0; i < 3 && still; ++i) {
     const int16_t g = s.gyro[i];
     if (count_ == 0 || g < gyro_min_[i]) gyro_min_[i] = g;
@@ -83,33 +109,48 @@ bool GyroCalibration::add(const ImuSample& s) {
 
 void AttitudeEstimator::start(const GyroCalibration& c) {
   for (uint8_t i = 0; i < 3; ++i) {
-    const float q4 = c.biasLsb(i) * 16.0f;
-    bias_q4_[i] = static_cast<int32_t>(q4 < 0 ? q4 - 0.5f : q4 + 0.5f);
-    attitude_.rate_rad_s[i] = 0;
+    bias_q4_[i] = roundToInt32(c.biasLsb(i) * 16.0f);
+    q_.rate[i] = 0;
   }
   const float ax = c.accelMeanLsb(0), ay = c.accelMeanLsb(1), az = c.accelMeanLsb(2);
-  attitude_.roll_rad = atan2Approx(ay, az);
-  attitude_.pitch_rad = atan2Approx(-ax, sqrtf(ay * ay + az * az));
+  q_.roll = angleUnits(atan2Approx(ay, az));
+  q_.pitch = angleUnits(atan2Approx(-ax, sqrtf(ay * ay + az * az)));
   started_ = true;
 }
 
-void AttitudeEstimator::propagate(const ImuSample& s, float dt_s) {
-  float* w = attitude_.rate_rad_s;
-  for (uint8_t i = 0; i < 3; ++i) w[i] = static_cast<float>(s.gyro[i] * 16L - bias_q4_[i]) * kRadPerQ4;
-  const float roll = attitude_.roll_rad;
-  attitude_.roll_rad = roll + (w[0] + w[2] * attitude_.pitch_rad) * dt_s;
-  attitude_.pitch_rad += (w[1] - w[2] * roll) * dt_s;
+// Integer only: the rates are the angles' increments per frame.
+void AttitudeEstimator::propagate(const ImuSample& s, uint8_t frames) {
+  int32_t* w = q_.rate;
+  for (uint8_t i = 0; i < 3; ++i) w[i] = s.gyro[i] * 16L - bias_q4_[i];
+  int32_t roll_step = w[0] + coupling(w[2], q_.pitch);
+  int32_t pitch_step = w[1] - coupling(w[2], q_.roll);
+  if (frames != 1) {
+    roll_step *= frames;
+    pitch_step *= frames;
+  }
+  q_.roll = heldAngle(q_.roll + roll_step);
+  q_.pitch = heldAngle(q_.pitch + pitch_step);
 }
 
-bool AttitudeEstimator::accelTrusted(const ImuSample& s) const {
-  const float n2 = squaredNorm(s);
-  return n2 >= kAccelMin2 && n2 <= kAccelMax2;
+Attitude AttitudeEstimator::attitude() const {
+  Attitude a;
+  a.roll_rad = q_.roll * kRadPerAngleUnit;
+  a.pitch_rad = q_.pitch * kRadPerAngleUnit;
+  for (uint8_t i = 0; i < 3; ++i) a.rate_rad_s[i] = q_.rate[i] * kRadPerRateUnit;
+  return a;
 }
 
-float AttitudeEstimator::blend(float estimate, float measured, float interval_s) {
-  float k = interval_s * (1.0f / kTimeConstantS);
-  if (k > 1.0f) k = 1.0f;
-  return estimate + k * (measured - estimate);
+bool AttitudeEstimator::accelTrusted(const ImuSample& s) const { return nearOneG(s); }
+
+// estimate + k (measured - estimate), k = interval / kTimeConstantS at most 1; k's gain is made
+// again only when the interval changes (fly's is always the same).
+int32_t AttitudeEstimator::blend(int32_t estimate, float measured_rad, float interval_s) {
+  if (interval_s != blend_interval_s_) {
+    const float k = interval_s * (1.0f / kTimeConstantS);
+    blend_gain_ = gainOf(k > 1.0f ? 1.0f : k);
+    blend_interval_s_ = interval_s;
+  }
+  return heldAngle(estimate + applyGain(angleUnits(measured_rad) - estimate, blend_gain_));
 }
 
 void AttitudeEstimator::correctRoll(const ImuSample& s, float interval_s) {
@@ -117,7 +158,7 @@ void AttitudeEstimator::correctRoll(const ImuSample& s, float interval_s) {
     ++untrusted_;
     return;
   }
-  attitude_.roll_rad = blend(attitude_.roll_rad, atan2Approx(s.accel[1], s.accel[2]), interval_s);
+  q_.roll = blend(q_.roll, atan2Approx(s.accel[1], s.accel[2]), interval_s);
 }
 
 void AttitudeEstimator::correctPitch(const ImuSample& s, float interval_s) {
@@ -126,8 +167,7 @@ void AttitudeEstimator::correctPitch(const ImuSample& s, float interval_s) {
     return;
   }
   const float y = s.accel[1], z = s.accel[2];
-  attitude_.pitch_rad = blend(attitude_.pitch_rad,
-                              atan2Approx(-static_cast<float>(s.accel[0]), sqrtf(y * y + z * z)), interval_s);
+  q_.pitch = blend(q_.pitch, atan2Approx(-static_cast<float>(s.accel[0]), sqrtf(y * y + z * z)), interval_s);
 }
 
 }  // namespace fly

@@ -4,10 +4,10 @@
 // within kStillSpreadLsb (2 deg/s) of its own range and the accelerometer reads 1 g +-15 %; any
 // motion starts it again. The mean accelerometer of the same samples is the first attitude.
 //
-// Complementary filter (AttitudeEstimator), angles in radians, rates in rad/s, the IMU's axes
-// the body's (x forward, y left, z up; roll positive = right side down, pitch positive = nose
-// down, as the simulated airframe: docs/fly.md):
-//   propagate (every frame, before the controller): body rates = (gyro - bias) * scale;
+// Complementary filter (AttitudeEstimator), the IMU's axes the body's (x forward, y left, z up;
+// roll positive = right side down, pitch positive = nose down, as the simulated airframe:
+// docs/fly.md):
+//   propagate (every frame, before the controller): body rates = gyro - bias;
 //     roll += (p + r * pitch) dt, pitch += (q - r * roll) dt (the Euler rates to first order);
 //   correct (after the pulses, each axis every eighth frame): roll += k (atan2(ay, az) - roll),
 //     pitch += k (atan2(-ax, sqrt(ay^2 + az^2)) - pitch), k = interval / kTimeConstantS, only
@@ -15,9 +15,16 @@
 // kTimeConstantS 0.5 s: the gyro rules the loop's band (a 2 Hz attitude loop), the accelerometer
 // only its drift. Valid within +-90 deg of pitch; the crash limit disarms far inside that.
 // atan2 is a polynomial (atan2Approx: one division, error below 0.00002 rad), not atan2f.
+//
+// The state is fixed point (AttitudeQ), so the frame's integration is integer: a rate unit is a
+// sixteenth of a gyro LSB, an angle unit one rate unit held for one frame, so a frame adds the
+// rate itself; the coupling terms are one 16 x 16 product and one gain each (fixed_point.hpp).
+// attitude() gives the same state in radians (status, arming, tests).
 #pragma once
 #include <stdint.h>
 
+#include "fixed_point.hpp"
+#include "fly_rules.hpp"
 #include "mpu6050.hpp"
 
 namespace fly {
@@ -58,30 +65,54 @@ struct Attitude {
   float rate_rad_s[3] = {0, 0, 0};  // p, q, r about body x, y, z
 };
 
+// The frame path's units (see the top).
+constexpr float kRadPerRateUnit = 3.14159265f / 180.0f / mpu::kGyroLsbPerDps / 16.0f;
+constexpr float kRadPerAngleUnit = kRadPerRateUnit * kFramePeriodS;
+// Angles are held within +-100 rad (a board turned over and over while disarmed), far beyond
+// any attitude flown, so an integral never wraps.
+constexpr int32_t kMaxAngleUnits = static_cast<int32_t>(100.0f / kRadPerAngleUnit);
+
+struct AttitudeQ {
+  int32_t roll = 0;                // angle units
+  int32_t pitch = 0;
+  int32_t rate[3] = {0, 0, 0};     // rate units: p, q, r
+};
+
+// Radians to angle units, rounded and saturated (settings, slow jobs).
+int32_t angleUnits(float rad);
+// Whole degrees (0..255) to angle units, rounded: constant limits such as the crash limit.
+constexpr int32_t angleUnitsOfDegrees(uint8_t deg) {
+  return static_cast<int32_t>(deg * (3.14159265f / 180.0f) / kRadPerAngleUnit + 0.5f);
+}
+// |a|^2 in LSB^2, exactly.
+uint32_t squaredNormLsb2(const ImuSample& s);
+
 class AttitudeEstimator {
  public:
   static constexpr float kTimeConstantS = 0.5f;
-  static constexpr float kRadPerLsb = 3.14159265f / 180.0f / mpu::kGyroLsbPerDps;
-  static constexpr float kRadPerQ4 = kRadPerLsb / 16.0f;
 
   // From a finished calibration: its bias, and the attitude its mean accelerometer gives.
   void start(const GyroCalibration& calibration);
   // Until the next start(): the gyro is being calibrated (again), the estimate is not flown.
   void stop() { started_ = false; }
   bool started() const { return started_; }
-  void propagate(const ImuSample& s, float dt_s);
+  // A sample `frames` frames after the last one (1 unless the loop was late).
+  void propagate(const ImuSample& s, uint8_t frames);
   // The accelerometer's correction of one axis, `interval_s` after that axis's last one.
   void correctRoll(const ImuSample& s, float interval_s);
   void correctPitch(const ImuSample& s, float interval_s);
-  const Attitude& attitude() const { return attitude_; }
+  Attitude attitude() const;
+  const AttitudeQ& fixed() const { return q_; }
   uint32_t untrustedAccel() const { return untrusted_; }  // corrections skipped (|a| off 1 g)
 
  private:
   bool accelTrusted(const ImuSample& s) const;
-  static float blend(float estimate, float measured, float interval_s);
+  int32_t blend(int32_t estimate, float measured_rad, float interval_s);
 
-  Attitude attitude_;
-  int32_t bias_q4_[3] = {0, 0, 0};  // the bias in 1/16 LSB: subtracted before the one conversion
+  AttitudeQ q_;
+  int32_t bias_q4_[3] = {0, 0, 0};  // the bias in 1/16 LSB: rate units
+  Gain blend_gain_;                 // k of the last interval_s
+  float blend_interval_s_ = -1.0f;
   bool started_ = false;
   uint32_t untrusted_ = 0;
 };

@@ -12,7 +12,6 @@ namespace fly {
 FlyApp* FlyApp::active_ = nullptr;
 
 namespace {
-constexpr float kRadPerDeg = 3.14159265f / 180.0f;
 constexpr float kDegPerRad = 180.0f / 3.14159265f;
 constexpr uint16_t kImuStartMaxMs = 1000;
 constexpr uint16_t kCalibrationMaxMs = 5000;
@@ -36,7 +35,7 @@ void FlyApp::start() {
   active_ = this;
   hal::Uart::setWaitHook(&FlyApp::serviceHook);
   motors_.setFrameRate(kFrameHz);  // the v2 bus filter's constant for one reading per frame
-  mixer_.configure(settings_.layout, settings_.arm_m, settings_.yaw_arm_m);
+  configureMixer();
   output_.setMode(OutputMode::kForce, 0);
   gyro_cal_.restart();
   imu_.begin();
@@ -75,6 +74,11 @@ void FlyApp::runUntil(bool (FlyApp::*done)() const, uint16_t max_ms) {
   }
 }
 
+void FlyApp::configureMixer() {
+  mixer_.configure(settings_.layout, settings_.arm_m, settings_.yaw_arm_m);
+  controller_.setForceScale(mixer_.q4PerNmXy(), mixer_.q4PerNmZ());
+}
+
 // The read starts as late in the frame as the mode's computation allows.
 void FlyApp::schedule() {
   const uint8_t mask = mixer_.motorMask();
@@ -98,7 +102,7 @@ ArmInputs FlyApp::armInputs() const {
   in.escs_ready = escsReady();
   in.imu_fault = imu_.fault() != ImuFault::kNone;
   in.imu_ready = imuReady();
-  const Attitude& a = estimator_.attitude();
+  const Attitude a = estimator_.attitude();
   in.roll_deg = a.roll_rad * kDegPerRad;
   in.pitch_deg = a.pitch_rad * kDegPerRad;
   for (uint8_t i = 0; i < 3; ++i) in.rate_dps[i] = a.rate_rad_s[i] * kDegPerRad;
@@ -188,11 +192,11 @@ void FlyApp::frame(const ImuFrame& f, uint16_t t0_us) {
     said_fault_ = ImuFault::kNone;
   }
   if (f.has_sample) {
-    const float dt_s = frames_since_sample_ * kFramePeriodS;
+    const uint8_t frames = frames_since_sample_;
     frames_since_sample_ = 0;
     if (estimator_.started()) {
-      estimator_.propagate(f.sample, dt_s);
-      if (flight_.armed) flyFrame(dt_s, t0_us);
+      estimator_.propagate(f.sample, frames);
+      if (flight_.armed) flyFrame(frames, t0_us);
     } else if (!flight_.armed && imu_.running() && gyro_cal_.add(f.sample)) {
       estimator_.start(gyro_cal_);
       notes_ |= kNoteCalibrated;
@@ -202,14 +206,15 @@ void FlyApp::frame(const ImuFrame& f, uint16_t t0_us) {
   checkFailsafes(hal::Clock::millis());
 }
 
-// The fast path, from the estimate to the written pulses; then the integrators and the timing.
-void FlyApp::flyFrame(float dt_s, uint16_t t0_us) {
+// The fast path, from the estimate to the written pulses (integer, but for the collective while
+// it spools up); then the integrators and the timing.
+void FlyApp::flyFrame(uint8_t frames, uint16_t t0_us) {
   const uint32_t since_arm_ms = hal::Clock::millis() - flight_.armed_ms;
-  const float spool = spoolFraction(since_arm_ms);
-  const Attitude& a = estimator_.attitude();
-  const Torque torque = controller_.torque(a, settings_.setpoint);
-  const ForceQ4 collective = spool >= 1.0f ? flight_.collective : toQ4(gramsOf(flight_.collective) * spool);
-  flight_.mix_limits = mixer_.mix(collective, torque, flight_.min, flight_.max, flight_.force);
+  const bool spooled = since_arm_ms >= kSpoolMs;
+  const TorqueQ4 torque = controller_.torqueQ4(estimator_.fixed(), settings_.setpoint_q);
+  const ForceQ4 collective =
+      spooled ? flight_.collective : toQ4(gramsOf(flight_.collective) * spoolFraction(since_arm_ms));
+  flight_.mix_limits = mixer_.mixQ4(collective, torque, flight_.min, flight_.max, flight_.force);
   output_.write(flight_.force, mixer_.motorMask());
 
   // The read started at the phase: pulses written before the frame's end (at or after the
@@ -223,7 +228,8 @@ void FlyApp::flyFrame(float dt_s, uint16_t t0_us) {
   } else if (kFrameUs - t1_us < stats_.margin_min_us) {
     stats_.margin_min_us = static_cast<uint16_t>(kFrameUs - t1_us);
   }
-  if (spool >= 1.0f) controller_.integrate(a, settings_.setpoint, dt_s, flight_.mix_limits);
+  if (spooled && controller_.integrating())
+    controller_.integrate(estimator_.attitude(), settings_.setpoint, frames * kFramePeriodS, flight_.mix_limits);
 }
 
 // After the pulses: each slow job on its own frame of a cycle of eight (fly_rules.hpp).
@@ -254,8 +260,9 @@ void FlyApp::slowJob(const ImuFrame& f) {
 
 void FlyApp::checkFailsafes(uint32_t now_ms) {
   if (!flight_.armed) return;
-  const Attitude& a = estimator_.attitude();
-  if (crashed(a.roll_rad, a.pitch_rad, settings_.crash_deg * kRadPerDeg)) {
+  const AttitudeQ& q = estimator_.fixed();
+  if (crashedUnits(q.roll, q.pitch, settings_.crash_units)) {
+    const Attitude a = estimator_.attitude();
     const float roll = a.roll_rad < 0 ? -a.roll_rad : a.roll_rad;
     const float pitch = a.pitch_rad < 0 ? -a.pitch_rad : a.pitch_rad;
     flight_.cause_deg = (roll > pitch ? a.roll_rad : a.pitch_rad) * kDegPerRad;
@@ -294,7 +301,7 @@ void FlyApp::disarm(DisarmCause cause) {
 }
 
 void FlyApp::takeStreamRow(uint32_t now_ms) {
-  const Attitude& a = estimator_.attitude();
+  const Attitude a = estimator_.attitude();
   row_.t_ms = now_ms;
   row_.roll_cdeg = centi(a.roll_rad, 100.0f * kDegPerRad);
   row_.pitch_cdeg = centi(a.pitch_rad, 100.0f * kDegPerRad);

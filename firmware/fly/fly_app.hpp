@@ -52,8 +52,10 @@ constexpr uint8_t kRxBytesPerPass = fw::kLineMax + 2;
 // What the user set (commands.cpp).
 struct FlightSettings {
   Setpoint setpoint;
+  SetpointQ setpoint_q;  // the same in the estimator's units (the frame path)
   float thrust_g = 0;  // collective: the total over the layout's motors
   uint8_t crash_deg = kDefaultCrashDeg;
+  int32_t crash_units = angleUnitsOfDegrees(kDefaultCrashDeg);  // the same in angle units
   Layout layout = Layout::kX;
   float arm_m = kDefaultArmM;
   float yaw_arm_m = kDefaultYawArmM;
@@ -117,7 +119,7 @@ class FlyApp {
   bool armed() const { return flight_.armed; }
   const FlightState& flight() const { return flight_; }
   const FlightSettings& settings() const { return settings_; }
-  const Attitude& attitude() const { return estimator_.attitude(); }
+  Attitude attitude() const { return estimator_.attitude(); }
   const AttitudeEstimator& estimator() const { return estimator_; }
   const AttitudeController& controller() const { return controller_; }
   const Mixer& mixer() const { return mixer_; }
@@ -175,13 +177,14 @@ class FlyApp {
   static void serviceHook();
   static void phaseHook();
   void frame(const ImuFrame& f, uint16_t t0_us);
-  void flyFrame(float dt_s, uint16_t t0_us);
+  void flyFrame(uint8_t frames, uint16_t t0_us);
   void slowJob(const ImuFrame& f);
   void checkFailsafes(uint32_t now_ms);
   void imuFaulted();
   void takeStreamRow(uint32_t now_ms);
   void disarm(DisarmCause cause);
   void schedule();  // the read's phase from the mode's budget
+  void configureMixer();  // the layout and airframe to the mixer, its scale to the controller
   void updateOutputLimits();
 
   fw::ForceActuators motors_;

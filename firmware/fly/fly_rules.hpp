@@ -64,7 +64,7 @@ enum class OutputMode : uint8_t { kForce, kGeneric, kPwm, kArduPilot };
 constexpr uint16_t kControlBudgetUs = 650;         // taking the sample, estimator, controller, mixer
 constexpr uint16_t kForceApiBudgetUs = 250;        // forces to grams, the v2 frame, the pulses
 constexpr uint16_t kThesisMotorBudgetUs = 190;     // option 2.1 on one motor, EEPROM steps
-constexpr uint16_t kArduPilotMotorBudgetUs = 170;  // one square root and a few products
+constexpr uint16_t kArduPilotMotorBudgetUs = 70;   // one square root and a few products
 constexpr uint16_t kPwmBudgetUs = 100;
 // thesis_motors: the motors that fly a v1 record (force, generic modes); motors: the layout's.
 inline uint16_t computeBudgetUs(OutputMode mode, uint8_t thesis_motors, uint8_t motors) {
@@ -137,6 +137,10 @@ constexpr uint8_t kMaxCrashDeg = 90;
 // Roll or pitch beyond the limit: the aircraft is not flying any more (or about to hit).
 inline bool crashed(float roll_rad, float pitch_rad, float limit_rad) {
   return fabsf(roll_rad) > limit_rad || fabsf(pitch_rad) > limit_rad;
+}
+// The same rule on the estimator's integer angles (every frame: no float), limit > 0.
+inline bool crashedUnits(int32_t roll, int32_t pitch, int32_t limit) {
+  return roll > limit || roll < -limit || pitch > limit || pitch < -limit;
 }
 
 // The IMU failed: this many reads in a row ended badly (no answer, a time-out, the bus lost) or

@@ -422,7 +422,7 @@ void statusImu(const FlyApp& app) {
 }
 
 void statusAttitude(const FlyApp& app) {
-  const Attitude& a = app.attitude();
+  const Attitude a = app.attitude();
   say(TC_FLASH_TEXT("attitude: roll "));
   sayDeg(a.roll_rad);
   say(TC_FLASH_TEXT(" pitch "));

@@ -62,10 +62,19 @@ void Mixer::rollPitch(ForceQ4 x, ForceQ4 y, ForceQ4 (&rp)[4]) const {
 
 uint8_t Mixer::mix(ForceQ4 collective, const Torque& torque, ForceQ4 min, ForceQ4 max,
                    ForceQ4 (&force)[4]) const {
+  TorqueQ4 t;
+  t.x = rounded(torque.x_nm * q4_per_nm_xy_);
+  t.y = rounded(torque.y_nm * q4_per_nm_xy_);
+  t.z = rounded(torque.z_nm * q4_per_nm_z_);
+  return mixQ4(collective, t, min, max, force);
+}
+
+uint8_t Mixer::mixQ4(ForceQ4 collective, const TorqueQ4& torque, ForceQ4 min, ForceQ4 max,
+                     ForceQ4 (&force)[4]) const {
   const uint8_t n = motorCount();
-  const ForceQ4 z = layout_ == Layout::kSeesaw ? 0 : rounded(torque.z_nm * q4_per_nm_z_);
+  const ForceQ4 z = layout_ == Layout::kSeesaw ? 0 : torque.z;
   ForceQ4 rp[4];
-  rollPitch(rounded(torque.x_nm * q4_per_nm_xy_), rounded(torque.y_nm * q4_per_nm_xy_), rp);
+  rollPitch(torque.x, torque.y, rp);
   ForceQ4 e[4];
   for (uint8_t i = 0; i < kQuad; ++i) e[i] = (i & 1u) ? rp[i] + z : rp[i] - z;
   ForceQ4 lo, hi;

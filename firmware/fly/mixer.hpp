@@ -13,9 +13,9 @@
 // scaled down only if it alone exceeds the motors' range, and yaw is then dropped), yaw next
 // (scaled so the spread fits), the collective last (shifted to fit). mix() says what it gave
 // up (MixLimit bits), so the controller holds those integrators.
-// Forces are fixed point, 1/16 g in an int32 (ForceQ4): the torques (N m, float) are turned into
-// grams once, and the spreads, clamps and sums that follow are integer (on the AVR a float add
-// or compare costs ~100 cycles, an integer one a few); force and pwm modes never go back to float.
+// Forces are fixed point, 1/16 g in an int32 (ForceQ4): the torques come in the mixer's units
+// (TorqueQ4, the controller's fixed-point output; mix() rounds torques in N m to them), and the
+// spreads, clamps and sums that follow are integer; force and pwm modes never go back to float.
 #pragma once
 #include <stdint.h>
 
@@ -46,9 +46,16 @@ class Mixer {
   uint8_t motorCount() const { return layout_ == Layout::kSeesaw ? 2 : 4; }
   bool flies(uint8_t motor) const { return (motorMask() >> motor) & 1u; }
 
+  // 1/16 g on each motor per N m of roll or pitch torque, and per N m of yaw torque: the
+  // controller's torques in the mixer's units (AttitudeController::setForceScale).
+  float q4PerNmXy() const { return q4_per_nm_xy_; }
+  float q4PerNmZ() const { return q4_per_nm_z_; }
+
   // The four forces for `collective` (per motor) and `torque`, each flown motor's within
   // [min, max] (0 for the others); returns MixLimit bits.
   uint8_t mix(ForceQ4 collective, const Torque& torque, ForceQ4 min, ForceQ4 max, ForceQ4 (&force)[4]) const;
+  // The same for a torque already in the mixer's units (the frame path: integer only).
+  uint8_t mixQ4(ForceQ4 collective, const TorqueQ4& torque, ForceQ4 min, ForceQ4 max, ForceQ4 (&force)[4]) const;
 
  private:
   void rollPitch(ForceQ4 x, ForceQ4 y, ForceQ4 (&rp)[4]) const;

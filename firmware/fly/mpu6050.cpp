@@ -110,13 +110,6 @@ bool Mpu6050::poll(ImuFrame& out) {
   return true;
 }
 
-bool Mpu6050::frameDue() const {
-  const uint8_t phase = phase_;
-  if (phase == handled_phase_) return false;
-  return transfer_ != Transfer::kInFlight || phase != started_phase_ ||
-         hal::Twi::result() != hal::Twi::Result::kBusy;
-}
-
 void Mpu6050::finish(hal::Twi::Result result, ImuFrame& out) {
   if (result != Result::kDone) last_status_ = result == Result::kAborted ? kTimedOut : hal::Twi::lastStatus();
   const uint16_t faults_before = faults_;

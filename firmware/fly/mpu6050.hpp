@@ -88,8 +88,14 @@ class Mpu6050 {
   // Main loop: true once per frame, when that frame's transfer has ended (or timed out, or none
   // was due); `out` says what it brought. Prepares the next frame's transfer.
   bool poll(ImuFrame& out);
-  // Whether poll() has a frame to hand out now (with interrupts off: the sleep's last check).
-  bool frameDue() const;
+  // Whether poll() has a frame to hand out now (with interrupts off: the sleep's last check,
+  // after every interrupt: inline, ~20 times a frame).
+  __attribute__((always_inline)) bool frameDue() const {
+    const uint8_t phase = phase_;
+    if (phase == handled_phase_) return false;
+    return transfer_ != Transfer::kInFlight || phase != started_phase_ ||
+           hal::Twi::result() != hal::Twi::Result::kBusy;
+  }
 
   ImuState state() const { return state_; }
   ImuFault fault() const { return fault_; }

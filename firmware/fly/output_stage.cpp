@@ -105,7 +105,7 @@ void OutputStage::write(const ForceQ4 (&force)[4], uint8_t mask) {
     } else if (mode_ == OutputMode::kPwm) {
       pulse_us_[i] = pwmModePulse(force[i]);
     } else {
-      pulse_us_[i] = ardupilot_.pulseUs(gramsOf(force[i]));
+      pulse_us_[i] = ardupilot_.pulseUsQ4(force[i]);
     }
   }
   hal::Esc::writeAll(pulse_us_);

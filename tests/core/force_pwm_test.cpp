@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <climits>
+#include <cstdint>
+
 #include "thrustcal/force_pwm.hpp"
 
 namespace {
@@ -159,3 +162,32 @@ TEST(ForcePwm, ExtremeVoltagesAndCurvesDoNotOverflow) {
 }
 
 }  // namespace
+
+// Option 2.1's rounded division (the short long division for small quotients, the library's
+// beyond) against the definition: the truncated quotient, one more in magnitude when twice the
+// remainder reaches the divisor.
+TEST(ForcePwm, RoundedDivisionIsTheNearestQuotientHalvesAwayFromZero) {
+  const auto want = [](int64_t num, int64_t den) {
+    int64_t q = num / den;
+    const int64_t r = num % den;
+    if (2 * (r < 0 ? -r : r) >= (den < 0 ? -den : den)) q += (num < 0) != (den < 0) ? -1 : 1;
+    return q;
+  };
+  uint32_t x = 7;
+  long compared = 0;
+  for (int i = 0; i < 400000; ++i) {
+    x = x * 1664525u + 1013904223u;
+    const int shift = static_cast<int>(x >> 27);                         // every magnitude
+    int32_t num = static_cast<int32_t>(x * 2654435761u) >> (shift & 31);
+    if (num == INT32_MIN) num = INT32_MAX;
+    int32_t den = static_cast<int32_t>((x >> 5) & 0x1FFFF) >> ((x >> 3) & 15);  // up to 2^17
+    if (den == 0) den = 1;
+    if (x & 1u) den = -den;
+    ASSERT_EQ(tc::force_pwm_detail::divRound(num, den), want(num, den)) << num << " / " << den;
+    ++compared;
+  }
+  for (int32_t den : {1, 2, 3, 1900, -1900, 65535, 65536, -65535})
+    for (int32_t num = -600 * 256; num <= 600 * 256; num += 7)
+      ASSERT_EQ(tc::force_pwm_detail::divRound(num, den), want(num, den)) << num << " / " << den;
+  EXPECT_EQ(compared, 400000);
+}

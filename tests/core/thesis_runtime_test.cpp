@@ -86,6 +86,16 @@ TEST_P(ThesisRuntime, GivesOption21sPwmForEveryGramAndBatteryReading) {
     }
   }
   EXPECT_GT(compared, 1500000);
+
+  // and: grams in a scattered order (each curve keeps the sums of the block it last looked up:
+  // a jump to another block, back, and a neighbour in the same block)
+  const uint16_t mv = monitor.millivoltsFromCounts(800);
+  uint32_t x = 12345;
+  for (int i = 0; i < 20000; ++i) {
+    x = x * 1103515245u + 12345u;
+    const uint16_t g = static_cast<uint16_t>((x >> 16) % 520);
+    ASSERT_EQ(tc::forceToPwm<RamStorage>(run, g, mv).pwm_us, tc::forceToPwm(decoded, g, mv).pwm_us) << g << " g";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(

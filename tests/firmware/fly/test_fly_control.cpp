@@ -4,7 +4,10 @@
 // curve against the lab's reference implementation of ArduPilot's source.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
+#include <string>
 #include <vector>
 
 #include "ardupilot_curve.hpp"
@@ -221,6 +224,36 @@ TEST(Controller, IntegratorsAccumulateClampHoldWhenTheMixerLimitsAndReset) {
   EXPECT_EQ(c.integralNm(2), 0.0f);
 }
 
+// The frame path (torqueQ4 on the estimator's fixed-point units, in the mixer's 1/16 g) is the
+// law torque() writes in N m, times the mixer's scale: within a sixteenth of a gram per term.
+TEST(Controller, TheFixedPointTorqueIsTheLawTimesTheMixersScale) {
+  Mixer m;
+  m.configure(Layout::kPlus, 0.225f, 0.0149f);
+  AttitudeController c;
+  c.setGains({0.8f, 0.0f, 0.146f}, {0.1f, 0.0f});
+  c.setForceScale(m.q4PerNmXy(), m.q4PerNmZ());
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> angle(-0.6, 0.6), rate(-6.0, 6.0);
+  for (int k = 0; k < 2000; ++k) {
+    AttitudeQ q;
+    q.roll = angleUnits(static_cast<float>(angle(rng)));
+    q.pitch = angleUnits(static_cast<float>(angle(rng)));
+    for (int32_t& r : q.rate) r = static_cast<int32_t>(std::lround(rate(rng) / kRadPerRateUnit));
+    Setpoint sp;
+    sp.roll_rad = static_cast<float>(angle(rng) / 3);
+    sp.pitch_rad = static_cast<float>(angle(rng) / 3);
+    Attitude a;  // the same state in radians, in double first
+    a.roll_rad = static_cast<float>(q.roll * static_cast<double>(kRadPerAngleUnit));
+    a.pitch_rad = static_cast<float>(q.pitch * static_cast<double>(kRadPerAngleUnit));
+    for (int i = 0; i < 3; ++i) a.rate_rad_s[i] = static_cast<float>(q.rate[i] * static_cast<double>(kRadPerRateUnit));
+    const Torque t = c.torque(a, sp);
+    const TorqueQ4 f = c.torqueQ4(q, fixedSetpoint(sp));
+    ASSERT_NEAR(f.x, t.x_nm * m.q4PerNmXy(), 2.0) << k;
+    ASSERT_NEAR(f.y, t.y_nm * m.q4PerNmXy(), 2.0) << k;
+    ASSERT_NEAR(f.z, t.z_nm * m.q4PerNmZ(), 2.0) << k;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Estimator
 
@@ -304,17 +337,17 @@ TEST(Estimator, AStaticTiltIsTheFirstAttitude) {
 TEST(Estimator, ARateStepIntegratesWithTheBiasRemoved) {
   const int16_t bias[3] = {-120, 80, 33};
   AttitudeEstimator e = startedAt(0, 0, bias);
-  for (int k = 0; k < 100; ++k) e.propagate(sampleAt(0, 0, {100, 0, 0}, bias), 0.0025f);  // 0.25 s
+  for (int k = 0; k < 100; ++k) e.propagate(sampleAt(0, 0, {100, 0, 0}, bias), 1);  // 0.25 s, a frame each
   EXPECT_NEAR(e.attitude().roll_rad / kDeg, 25.0, 0.1);
   EXPECT_NEAR(e.attitude().pitch_rad / kDeg, 0.0, 0.01);
   EXPECT_NEAR(e.attitude().rate_rad_s[0] / kDeg, 100.0, 0.05);
-  for (int k = 0; k < 100; ++k) e.propagate(sampleAt(25, 0, {0, -40, 0}, bias), 0.0025f);
+  for (int k = 0; k < 100; ++k) e.propagate(sampleAt(25, 0, {0, -40, 0}, bias), 1);
   EXPECT_NEAR(e.attitude().pitch_rad / kDeg, -10.0, 0.1);
 }
 
 TEST(Estimator, YawingWhileRolledTurnsRollIntoPitch) {
   AttitudeEstimator e = startedAt(10, 0);
-  for (int k = 0; k < 40; ++k) e.propagate(sampleAt(10, 0, {0, 0, 90}), 0.0025f);  // 0.1 s at 90 deg/s
+  for (int k = 0; k < 40; ++k) e.propagate(sampleAt(10, 0, {0, 0, 90}), 1);  // 0.1 s at 90 deg/s
   // pitch' = q - r roll: -90 deg/s * 0.1745 rad * 0.1 s = -1.57 deg
   EXPECT_NEAR(e.attitude().pitch_rad / kDeg, -1.57, 0.05);
 }
@@ -391,6 +424,64 @@ TEST(ArduPilotCurve, PulsesAreWhatArduPilotSendsWithinOneMicrosecondAtEveryForce
     }
   }
   EXPECT_EQ(compared, 4 * 7 * 141);
+}
+
+// The frame path: the integer table (pulseUsQ4) against the same reference, same tolerance.
+TEST(ArduPilotCurve, TheTablesPulsesAreWhatArduPilotSendsWithinOneMicrosecond) {
+  ArduPilotParams fitted;
+  fitted.expo = 0.6913f;
+  fitted.spin_min = 0.1581f;
+  fitted.spin_max = 0.95f;
+  fitted.bat_volt_max_v = 12.6f;
+  fitted.bat_volt_min_v = 9.9f;
+  fitted.full_thrust_g = 1315.1f;
+  ArduPilotParams negative = fitted;
+  negative.expo = -0.3f;
+  negative.pwm_min_us = 1100;
+  negative.pwm_max_us = 1900;
+  ArduPilotParams low_min = fitted;  // V_MIN raised to 0.6 V_MAX: the largest 1 / v
+  low_min.bat_volt_min_v = 5.0f;
+  ArduPilotParams steep = fitted;
+  steep.expo = ArduPilotCurve::kTableMaxExpo;
+  for (const ArduPilotParams& p : {fitted, negative, low_min, steep}) {
+    for (uint16_t mv : {7000, 7560, 9500, 11100, 12600, 13500}) {
+      ArduPilotCurve curve;
+      curve.setParams(p);
+      ASSERT_TRUE(curve.usesTable()) << "expo " << p.expo;
+      curve.updateBattery(mv, 0.01f);
+      for (int q4 = 0; q4 <= 1400 * 16; q4 += 7) {
+        const int want =
+            lab::autopilot::ardupilot::pwmForThrust(labParams(p), q4 / 16.0 / p.full_thrust_g, mv / 1000.0);
+        ASSERT_NEAR(curve.pulseUsQ4(q4), want, 1) << "expo " << p.expo << " at " << mv << " mV, " << q4 << " q4";
+      }
+    }
+  }
+}
+
+// The table's interpolation error, swept over the expo at the lowest voltage ratio (0.6): within
+// kTableMaxErrorUs up to kTableMaxExpo; beyond it pulseUsQ4 flies the float arithmetic.
+TEST(ArduPilotCurve, TheTableIsWithinHalfAMicrosecondUpToItsExpoLimitAndFloatBeyond) {
+  ArduPilotParams p;
+  p.bat_volt_max_v = 12.6f;
+  p.bat_volt_min_v = 7.56f;
+  p.full_thrust_g = 1300;
+  float worst = 0;
+  for (int e100 = -100; e100 <= 100; ++e100) {
+    p.expo = e100 / 100.0f;
+    ArduPilotCurve curve;
+    curve.setParams(p);
+    const bool inside = std::fabs(p.expo) <= ArduPilotCurve::kTableMaxExpo;
+    EXPECT_EQ(curve.usesTable(), inside) << "expo " << p.expo;
+    if (!inside) {
+      curve.updateBattery(9000, 0.01f);
+      for (int q4 = 0; q4 <= 1300 * 16; q4 += 160) EXPECT_EQ(curve.pulseUsQ4(q4), curve.pulseUs(q4 / 16.0f));
+      continue;
+    }
+    const float error = curve.tableErrorUs();
+    EXPECT_LT(error, ArduPilotCurve::kTableMaxErrorUs) << "expo " << p.expo;
+    worst = std::max(worst, error);
+  }
+  RecordProperty("worst_table_error_us", std::to_string(worst));
 }
 
 TEST(ArduPilotCurve, TheVoltageFollowsArduPilotsHalfHertzFilter) {

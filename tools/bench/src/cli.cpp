@@ -143,7 +143,7 @@ void addReport(CLI::App& bench) {
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime, "
-               "safety; each figure next to its target");
+               "safety, fly; each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -174,6 +174,10 @@ void registerCommands(CLI::App& app) {
       "issue 8 in simavr: time to stop every ESC pulse after a hang (watchdog), read_run's frame "
       "timing under UART floods",
       [](const Options& o) { return std::vector<Section>{safetySection(o.paths)}; });
+  add(*bench, o, "fly",
+      "fly, the 400 Hz attitude loop, on the virtual airframe in each mode: CPU load, loop period, IMU "
+      "read to ESC edge, flash/SRAM, stack never used (simavr)",
+      [](const Options& o) { return std::vector<Section>{flySection(o.paths)}; });
   addReport(*bench);
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
@@ -185,6 +189,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(liftoffSection(o.paths, o.quick));
         all.push_back(runtimeSection(o.paths));
         all.push_back(safetySection(o.paths));
+        all.push_back(flySection(o.paths));
         return all;
       });
 }

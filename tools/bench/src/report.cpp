@@ -119,6 +119,19 @@ std::string calibrationRow(const nlohmann::json& b) {
       num(b, "calibration.thesis.sweep_simulated_s_max"));
 }
 
+std::string flyRow(const nlohmann::json& b) {
+  const std::vector<std::string> modes = {"force_v2", "force_thesis", "generic", "pwm", "ardupilot"};
+  std::string cpu;
+  for (const auto& m : modes)
+    cpu += fmt::format("{}{:.1f}", cpu.empty() ? "" : " / ", num(b, "fly.modes." + m + ".cpu_load_pct"));
+  return fmt::format(
+      "| fly's 400 Hz attitude loop on the simulated gimbal, five modes (force v2 / thesis records, generic, "
+      "pwm, ardupilot) | CPU {} %; IMU read to the ESC edge that carries it {:.0f}..{:.0f} us; loop period "
+      "<= {:.2f} ms; stack {:.0f} B never used | `thrustcal bench fly` |\n",
+      cpu, minOf(b, "fly.modes", modes, "read_to_edge_us.max"), maxOf(b, "fly.modes", modes, "read_to_edge_us.max"),
+      num(b, "fly.worst.loop_period_max_ms"), num(b, "fly.worst.stack_never_used_bytes"));
+}
+
 const char* kResultsIntro =
     "# Results: what was measured, and how to measure it again\n"
     "\n"
@@ -164,7 +177,7 @@ std::string resultsMarkdown(const nlohmann::json& bench) {
 
 std::string measuredTable(const nlohmann::json& b) {
   return "| what | figure | reproduce |\n|---|---|---|\n" + hangRow(b) + floodRow(b) + footprintRows(b) +
-         computeAndRuntimeRows(b) + calibrationRow(b) +
+         computeAndRuntimeRows(b) + flyRow(b) + calibrationRow(b) +
          "| console fuzz | 10,000+ lines per image, every rule held | `ctest --test-dir build/host -R "
          "ConsoleFuzz` |\n";
 }

@@ -4,10 +4,10 @@
 // read_run flies the tethered quad (tools/sim's QuadRig: four varied KV1100 + 9x4.7 motors on one
 // 3S LiPo at 50 % charge) through `liftoff 300 1000 3000` (commands change every frame during the
 // 1 s ramp, then a 3 s hold), at 50 and at 400 Hz, once with thesis (v1) records and once with v2
-// records made on the host from the plant's sweeps (bench::simulateSweep, as benchmark 1). Over
+// records made on the host from the plant's sweeps (bench/records.hpp, as benchmark 1). Over
 // the lift-off it counts:
 //   CPU load      cycles the CPU is awake / all cycles (the image sleeps until the next
-//                 interrupt between loop passes; simavr skips asleep cycles);
+//                 interrupt between loop passes; simavr skips asleep cycles: Board::sleptCycles);
 //   frame         awake cycles from entering rr::ReadRunApp::frame to its return: the four
 //                 battery conversions (asleep while converting), the median, the v2 frame, the
 //                 v1 motors and the four pulses, with the 1 ms tick and UART interrupts that hit it;
@@ -34,16 +34,12 @@
 extern "C" {
 #include <simavr/sim_avr.h>
 }
-#include "bench/sweeps.hpp"
+#include "bench/records.hpp"
 #include "plant/bench.hpp"
 #include "sim/board.hpp"
 #include "sim/console.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
-#include "thrustcal/curve_builder.hpp"
-#include "thrustcal/eeprom_codec.hpp"
-#include "thrustcal/model_v2.hpp"
-#include "thrustcal/record_v2.hpp"
 #endif
 
 namespace bench {
@@ -68,9 +64,6 @@ namespace {
 
 constexpr uint16_t kRamEnd = 0x21FF;  // ATmega2560
 constexpr uint8_t kPaint = 0xA5;
-const std::vector<uint64_t> kSeeds = {11, 12, 13, 14};
-const std::string kPreset = "kv1100_9x4.7";
-constexpr double kVariation = 0.03;
 
 struct Symbol {
   uint32_t addr = 0, size = 0;
@@ -120,75 +113,6 @@ uint32_t stackHighWater(sim::Board& board, uint16_t heap_start) {
     if (board.avr()->data[a] != kPaint) return kRamEnd - a + 1;
   return 0;
 }
-
-// Four varied motors' records made on the host from the plant's sweeps, as gather_store makes
-// them: thesis v1 (curve 1 on the LiPo at 12.4 V with the sag offsets, curve 2 on a 10.5 V
-// bench supply) and v2 (fit from the LiPo sweep, refined by the bench-supply sweep).
-struct Records {
-  std::vector<uint8_t> v1, v2;
-};
-
-struct ImageStorage {
-  static std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
-};
-std::vector<uint8_t>* ImageStorage::image = nullptr;
-
-const Records& benchRecords() {
-  static Records r;
-  if (!r.v1.empty()) return r;
-  r.v1.assign(sim::kEepromBytes, 0xFF);
-  r.v2.assign(sim::kEepromBytes, 0xFF);
-  for (size_t i = 0; i < kSeeds.size(); ++i) {
-    const plant::ActuatorParams motor = sim::motorForSeed(kPreset, kSeeds[i], kVariation);
-    SweepSpec spec;
-    spec.pwm_min_us = 1040;
-    spec.settle_ms = 600;
-    spec.noise_seed = kSeeds[i];
-    const Sweep lipo = simulateSweep(motor, lipoAt(12.4), spec);
-    plant::BatteryParams supply = plant::BatteryParams::benchSupply(10.5, 6.32);
-    const Sweep bench_supply = simulateSweep(motor, supply, spec);
-    // v1
-    auto cal = std::make_unique<tc::MotorCalibration>();
-    for (int c = 0; c < 2; ++c) {
-      const Sweep& sweep = c == 0 ? lipo : bench_supply;
-      auto builder = std::make_unique<tc::CurveBuilder<161>>();
-      tc::SagBuilder sag;
-      sag.reset(static_cast<uint16_t>(spec.pwm_min_us));
-      for (const SweepPoint& p : sweep.points) {
-        builder->add(p.pwm_us, p.force_dg);
-        sag.add(p.pwm_us, p.vbat_mv);
-      }
-      tc::ThesisCurve& curve = c == 0 ? cal->first : cal->second;
-      if (builder->build(curve).status != tc::BuildStatus::kOk)
-        throw std::runtime_error(fmt::format("runtime bench: no thesis curve for motor {}", i));
-      uint16_t start_mv = 0;
-      tc::SagTable second;
-      sag.build(c == 0 ? cal->sag : second, start_mv);
-      curve.start_mv = start_mv;
-    }
-    ImageStorage::image = &r.v1;
-    tc::writeRecord<ImageStorage>(static_cast<uint8_t>(i), *cal);
-    // v2
-    auto fitter = std::make_unique<tc::ModelV2Fitter<161>>();
-    tc::ModelV2 model;
-    for (const SweepPoint& p : lipo.points) fitter->add(p.pwm_us, p.force_dg, p.vbat_mv);
-    if (fitter->fit(model).status != tc::FitV2Status::kOk)
-      throw std::runtime_error(fmt::format("runtime bench: model v2 fit failed for motor {}", i));
-    fitter->reset();
-    for (const SweepPoint& p : bench_supply.points) fitter->add(p.pwm_us, p.force_dg, p.vbat_mv);
-    fitter->refine(model);
-    ImageStorage::image = &r.v2;
-    if (tc::writeModelV2<ImageStorage>(static_cast<uint8_t>(i), model).status != tc::WriteV2Status::kWritten)
-      throw std::runtime_error(fmt::format("runtime bench: model v2 of motor {} not written", i));
-  }
-  return r;
-}
-
-// Cycles simavr skipped while the CPU slept (its run loop adds 1 + howLong after this callback).
-uint64_t g_slept = 0;
-void countSleep(avr_t*, avr_cycle_count_t how_long) { g_slept += 1 + how_long; }
 
 uint16_t stackPointer(const avr_t* avr) { return static_cast<uint16_t>(avr->data[0x5D] | (avr->data[0x5E] << 8)); }
 
@@ -287,15 +211,17 @@ struct FlightTimers {
 };
 
 // Runs one instruction with every timer around it.
-void stepTimed(avr_t* avr, const std::string& output, FlightTimers& t) {
-  const uint64_t before = avr->cycle, slept_before = g_slept;
+void stepTimed(sim::Board& board, FlightTimers& t) {
+  avr_t* avr = board.avr();
+  const std::string& output = board.output();
+  const uint64_t before = avr->cycle, slept_before = board.sleptCycles();
   if (avr->state != cpu_Sleeping && avr->pc == t.run_once) t.loop.enter(before, output.size());
   t.frame.before(avr);
   if (t.has_fly) t.fly.before(avr);
   const int state = avr_run(avr);
   if (state == cpu_Done || state == cpu_Crashed)
     throw std::runtime_error(fmt::format("read_run stopped at pc 0x{:05X} during the runtime bench", avr->pc));
-  const uint64_t awake_now = avr->cycle - before - (g_slept - slept_before);
+  const uint64_t awake_now = avr->cycle - before - (board.sleptCycles() - slept_before);
   t.awake += awake_now;
   t.frame.after(avr, awake_now);
   if (t.has_fly) t.fly.after(avr, awake_now);
@@ -348,11 +274,8 @@ FlightFigures flyReadRun(const std::string& elf, const std::vector<uint8_t>& eep
   f.records = records;
   plant::QuadFrameParams qp;
   qp.power = plant::BatteryParams::lipo3s(0.5);
-  std::array<plant::ActuatorParams, 4> motors;
-  for (int i = 0; i < 4; ++i) motors[i] = sim::motorForSeed(kPreset, kSeeds[i], kVariation);
-  sim::QuadRig rig(elf, qp, motors, 0.05);
+  sim::QuadRig rig(elf, qp, benchRecords().motors, 0.05);
   rig.board.setEeprom(eeprom);
-  rig.board.avr()->sleep = countSleep;
   const uint16_t heap_start = paintStack(rig.board, elf);
   sim::Console con(rig.board, "rr> ");
   con.waitPrompt(10.0);
@@ -377,7 +300,7 @@ FlightFigures flyReadRun(const std::string& elf, const std::vector<uint8_t>& eep
       con.send("");
       next_keepalive += keepalive;
     }
-    stepTimed(avr, rig.board.output(), timers);
+    stepTimed(rig.board, timers);
     if ((++instructions & 0x3FFF) == 0 && rig.board.output().size() != seen) {
       done = liftoffEnded(rig.board.output(), seen);
       seen = rig.board.output().size();
@@ -411,7 +334,7 @@ Section runtimeSection(const AvrPaths& paths) {
   }
   Table t(title, {"records", "rate", "CPU load", "frame() load", "frame() mean", "max, quiet", "max, printing",
                   "V2Frame::fly max", "no interrupt", "loop period max, quiet", "with a print"});
-  const Records& records = benchRecords();
+  const BenchRecords& records = benchRecords();
   for (const int hz : {50, 400}) {
     for (const char* kind : {"v2", "v1"}) {
       std::cerr << fmt::format("bench: read_run runtime in simavr, {} records, {} Hz\n", kind, hz);

@@ -34,7 +34,6 @@ namespace bench {
 namespace {
 constexpr double kStopTargetMs = 100.0;    // issue 8: target 100 ms (required 150 ms)
 constexpr double kStopRequiredMs = 150.0;
-constexpr int kStackTargetBytes = 512;
 }  // namespace
 
 #ifndef THRUSTCAL_BENCH_HAVE_SIM

@@ -43,8 +43,6 @@ constexpr uint8_t kEepeBit = 1, kEempeBit = 2;
 constexpr uint16_t kSramStart = 0x200;
 
 
-void noSleep(avr_t*, avr_cycle_count_t) {}
-
 // simavr logs "Loaded N .text" and friends for every image; keep errors only.
 void quietLogger(avr_t* avr, const int level, const char* format, va_list ap) {
   (void)avr;
@@ -208,7 +206,7 @@ void Board::load(const FlashImages& images) {
   avr_->custom.data = this;
   core_reset_ = avr_->reset;
   avr_->reset = &Board::onCoreReset;
-  avr_->sleep = noSleep;  // idle sleep skips ahead instead of waiting on the wall clock
+  avr_->sleep = &Board::onSleep;  // idle sleep skips ahead instead of waiting on the wall clock
   eraseEeprom(avr_);
   avr_->frequency = loadImages(avr_, app, boot, images.application);
   if (boot.hi > boot.lo) boot_address_ = boot.lo;
@@ -284,6 +282,16 @@ uint64_t Board::tickTimer(avr_t*, uint64_t when, void* param) {
 }
 
 // --- reset ---
+
+// simavr adds 1 + how_long cycles after this callback; nothing waits on the wall clock.
+void Board::onSleep(avr_t* avr, uint64_t how_long_cycles) {
+  static_cast<Board*>(avr->custom.data)->slept_cycles_ += 1 + how_long_cycles;
+}
+
+void Board::setProfiling(bool on) {
+  profiling_ = on;
+  if (on && profile_.empty()) profile_.assign(kFlashBytes / 2, 0);
+}
 
 void Board::onCoreReset(avr_t* avr) {
   auto* self = static_cast<Board*>(avr->custom.data);
@@ -512,7 +520,7 @@ void Board::run(uint64_t cycles) {
   const uint64_t start = avr->cycle;
   const uint64_t end = start + cycles;
   int state = cpu_Running;
-  if (pc_watches_.empty()) {
+  if (pc_watches_.empty() && !profiling_) {
     // The hot loop of every simulation: one call per instruction, nothing else.
     while (avr->cycle < end) {
       state = avr_run(avr);
@@ -522,7 +530,10 @@ void Board::run(uint64_t cycles) {
     while (avr->cycle < end) {
       for (const PcWatch& w : pc_watches_)
         if (avr->pc == w.byte_address) w.probe(avr->cycle);
+      const uint32_t pc = avr->pc;
+      const uint64_t cycle_before = avr->cycle, slept_before = slept_cycles_;
       state = avr_run(avr);
+      if (profiling_) profile_[pc / 2] += (avr->cycle - cycle_before) - (slept_cycles_ - slept_before);
       if (state == cpu_Done || state == cpu_Crashed) break;
     }
   }

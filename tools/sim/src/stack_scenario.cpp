@@ -99,4 +99,26 @@ StackHeadroom readRunDeepestPaths(const std::string& elf) {
   return h;
 }
 
+StackHeadroom flyDeepestPaths(const std::string& elf, Console& con) {
+  Board& board = con.board();
+  const auto fly = [&](double seconds) {  // with a keep-alive line every 0.1 s: fly stays armed
+    for (double done = 0; done < seconds - 1e-9; done += 0.1) {
+      board.sendText("\r");
+      board.runFor(std::min(0.1, seconds - done));
+    }
+  };
+  con.send("stream on");
+  fly(0.3);
+  con.command("stream off");
+  board.sendText("help\r" + flood(100));  // line editing while the reply waits for room
+  fly(0.6);  // the reply, the flood's echo and its rejection (an empty line gets no prompt)
+  while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.1);
+  StackHeadroom h;
+  readStatus(con.command("status"), h);
+  h.deepest = h.status;
+  h.scanned_untouched_bytes = scanUntouched(board, elf);
+  h.console_tail = con.tail(40);
+  return h;
+}
+
 }  // namespace sim

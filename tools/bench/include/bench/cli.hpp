@@ -6,6 +6,7 @@
 //   thrustcal bench calibration  [--json FILE] [--avr-build DIR]
 //   thrustcal bench liftoff      [--json FILE] [--avr-build DIR]
 //   thrustcal bench safety       [--json FILE] [--avr-build DIR]
+//   thrustcal bench fly          [--json FILE] [--avr-build DIR]
 //   thrustcal bench all          [--json FILE] [--avr-build DIR]
 #pragma once
 #include <CLI/CLI.hpp>

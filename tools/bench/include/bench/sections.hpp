@@ -37,6 +37,20 @@ struct AvrPaths {
   std::string elf(const std::string& image) const;  // <avr_build>/firmware/<image>/<image>.elf
 };
 
+// Targets more than one section checks (issues 8 and 19).
+constexpr int kStackTargetBytes = 512;              // stack never used after the deepest paths
+constexpr uint64_t kStaticSramTargetBytes = 6144;  // 8 KB minus 2 KB for the stack
+
+// avr-size -A on an image (sections_avr.cpp): flash = .text + .data, static SRAM = .data +
+// .bss + .noinit. Throws std::runtime_error when avr-size fails (binutils-avr missing).
+struct ImageSize {
+  uint64_t flash_bytes = 0, sram_static_bytes = 0;
+};
+ImageSize imageSize(const std::string& elf);
+// A path as the docs show it: relative to the source tree when inside it (docs/results.md is
+// written from the JSON and must not name the machine it was measured on).
+std::string shownPath(const std::string& path);
+
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
 Section footprintSection(const AvrPaths& paths);
@@ -48,6 +62,10 @@ Section runtimeSection(const AvrPaths& paths);
 // Issue 8 (sections_safety.cpp): time to stop after a hang in both images, read_run's loop
 // timing under floods.
 Section safetySection(const AvrPaths& paths);
+// Issue 19 item 4 (sections_fly.cpp): fly, the 400 Hz attitude loop, on the virtual airframe
+// in each of its modes: CPU load, loop period, IMU read to the ESC edge that carries it, flash
+// and static SRAM, stack never used.
+Section flySection(const AvrPaths& paths);
 // Footprint rows: each image's stack never used after its deepest paths (simulated).
 void addStackHeadroom(const AvrPaths& paths, Table& table, nlohmann::json& json,
                       std::vector<TargetCheck>& targets);

@@ -185,6 +185,14 @@ class Board {
   bool runUntil(const std::function<bool()>& done, uint64_t budget_cycles,
                 uint64_t check_cycles = kCpuHz / 1000);
 
+  // Where the simulated time goes. The idle sleep: cycles simavr skipped while the CPU slept
+  // (since construction; the awake cycles of a stretch are its cycles minus these). The
+  // profile (while on): each instruction's awake cycles added at its word address, pc / 2 (an
+  // interrupt's entry counts at the instruction it interrupted; asleep cycles never count).
+  uint64_t sleptCycles() const { return slept_cycles_; }
+  void setProfiling(bool on);
+  const std::vector<uint64_t>& awakeCyclesByWord() const { return profile_; }
+
   // Wall time spent inside run() and the simulated time covered; their ratio is the real-time
   // factor (simulated seconds per wall second).
   double wallSeconds() const { return wall_s_; }
@@ -202,6 +210,7 @@ class Board {
   static uint64_t tickTimer(avr_t* avr, uint64_t when, void* param);
   static uint64_t rxTimer(avr_t* avr, uint64_t when, void* param);
   static void onCoreReset(avr_t* avr);
+  static void onSleep(avr_t* avr, uint64_t how_long_cycles);
   static void onEecrWrite(avr_t* avr, uint16_t addr, uint8_t value, void* param);
   static uint64_t eepeClear(avr_t* avr, uint64_t when, void* param);
   void afterReset();
@@ -243,6 +252,9 @@ class Board {
   std::string output_;
   double wall_s_ = 0;
   double simulated_s_ = 0;
+  uint64_t slept_cycles_ = 0;
+  bool profiling_ = false;
+  std::vector<uint64_t> profile_;  // awake cycles by word address (setProfiling)
   std::vector<avr_irq_t*> irqs_;
   uint32_t boot_address_ = 0;  // 0: no bootloader
   std::unique_ptr<Twi> twi_;

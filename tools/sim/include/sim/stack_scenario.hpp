@@ -1,13 +1,15 @@
 // Each image's deepest paths, then how much stack was never used (docs/safety.md): the boot
 // code paints the SRAM above the static data, `status` reports the paint still intact, and the
 // harness scans the simulated SRAM itself as a check on that figure. One home for the
-// scenario: the HIL test (tests/hil_safety/stack_hil_test.cpp) asserts on it and
-// `thrustcal bench footprint` reports it.
+// scenario: the HIL test (tests/hil_safety/stack_hil_test.cpp) asserts on it, `thrustcal bench
+// footprint` reports it, and `thrustcal bench fly` for fly in each of its modes.
 #pragma once
 #include <string>
 #include <vector>
 
 namespace sim {
+
+class Console;
 
 struct StackHeadroom {
   int untouched_bytes = -1;          // status: "stack: N of M bytes never used" (-1: no line)
@@ -25,5 +27,10 @@ StackHeadroom gatherStoreDeepestPaths(const std::string& elf);
 // help under a flood with every motor running (its wait hook flies the frames on top of the
 // reply), status.
 StackHeadroom readRunDeepestPaths(const std::string& elf);
+// fly (image `elf`) armed and flying on the caller's board (the virtual airframe) behind
+// `con`: a stream of rows, help under a flood and status, each while the frames run (the wait
+// hook serves them inside the long replies), keep-alive lines between them. Call it after the
+// flight whose paths count (each mode its own); status reports the stack never used since reset.
+StackHeadroom flyDeepestPaths(const std::string& elf, Console& con);
 
 }  // namespace sim
