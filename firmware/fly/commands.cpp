@@ -47,6 +47,7 @@ struct Commands {
   static void apPwm(App& app, const Args& a) { app.cmdArduPilotPwm(u16(a[0]), u16(a[1])); }
   static void crash(App& app, const Args& a) { app.cmdCrash(static_cast<uint8_t>(a[0])); }
   static void calibrate(App& app, const Args&) { app.cmdCalibrate(); }
+  static void level(App& app, const Args&) { app.cmdLevel(); }
   static void stream(App& app, const Args& a) { app.cmdStream(a[0] == 0); }  // on|off
   static void status(App& app, const Args&) { app.cmdStatus(); }
   static void strict(App& app, const Args& a) { app.cmdStrict(a[0] == 0); }  // on|off
@@ -200,6 +201,13 @@ void FlyApp::cmdCalibrate() {
   view::calibrating();
 }
 
+// A calibration whose mean accelerometer becomes the level trim when it ends (frame()).
+void FlyApp::cmdLevel() {
+  if (refuseWhileArmed()) return;
+  level_pending_ = true;
+  cmdCalibrate();
+}
+
 void FlyApp::cmdStream(bool on) {
   if (on) {
     view::streamHeader();
@@ -279,6 +287,7 @@ const char kApVoltName[] TC_FLASH = "apvolt";
 const char kApPwmName[] TC_FLASH = "appwm";
 const char kCrashName[] TC_FLASH = "crash";
 const char kCalibrateName[] TC_FLASH = "calibrate";
+const char kLevelName[] TC_FLASH = "level";
 const char kStreamName[] TC_FLASH = "stream";
 const char kStatusName[] TC_FLASH = "status";
 const char kStrictName[] TC_FLASH = "strict";
@@ -306,6 +315,7 @@ const char kApVoltHelp[] TC_FLASH = "MOT_BAT_VOLT_MAX, MOT_BAT_VOLT_MIN (0 0: of
 const char kApPwmHelp[] TC_FLASH = "MOT_PWM_MIN, MOT_PWM_MAX";
 const char kCrashHelp[] TC_FLASH = "disarm beyond this roll or pitch";
 const char kCalibrateHelp[] TC_FLASH = "measure the gyro bias again (1 s still)";
+const char kLevelHelp[] TC_FLASH = "the vehicle stands level: trim the accelerometer (1 s still)";
 const char kStreamHelp[] TC_FLASH =
     "CSV t_s,roll,pitch,roll_sp,pitch_sp (deg),p,q,r (deg/s),\nforce0..3 (g),pulse0..3 (us), 50 lines/s";
 const char kStatusHelp[] TC_FLASH = "state, IMU, attitude, settings, loop timing, motors";
@@ -330,6 +340,7 @@ const fw::Command<FlyApp> kCommands[] TC_FLASH = {
     {{kApPwmName, kApPwmArgs, 2, 2, 0, kApPwmHelp}, &Commands::apPwm},
     {{kCrashName, kCrashArgs, 1, 1, 0, kCrashHelp}, &Commands::crash},
     {{kCalibrateName, nullptr, 0, 0, 0, kCalibrateHelp}, &Commands::calibrate},
+    {{kLevelName, nullptr, 0, 0, 0, kLevelHelp}, &Commands::level},
     {{kStreamName, kOnOffArgs, 1, 1, 0, kStreamHelp}, &Commands::stream},
     {{kStatusName, nullptr, 0, 0, 0, kStatusHelp}, &Commands::status},
     {{kStrictName, kOnOffArgs, 1, 1, 0, kStrictHelp}, &Commands::strict},

@@ -112,10 +112,22 @@ void AttitudeEstimator::start(const GyroCalibration& c) {
     bias_q4_[i] = roundToInt32(c.biasLsb(i) * 16.0f);
     q_.rate[i] = 0;
   }
-  const float ax = c.accelMeanLsb(0), ay = c.accelMeanLsb(1), az = c.accelMeanLsb(2);
+  const float ax = c.accelMeanLsb(0) - trim_lsb_[0], ay = c.accelMeanLsb(1) - trim_lsb_[1];
+  const float az = c.accelMeanLsb(2) - trim_lsb_[2];
   q_.roll = angleUnits(atan2Approx(ay, az));
   q_.pitch = angleUnits(atan2Approx(-ax, sqrtf(ay * ay + az * az)));
   started_ = true;
+}
+
+bool AttitudeEstimator::trimLevel(const GyroCalibration& c) {
+  int16_t trim[3];
+  for (uint8_t i = 0; i < 3; ++i) {
+    const float off = c.accelMeanLsb(i) - (i == 2 ? mpu::kAccelLsbPerG : 0.0f);  // level: (0, 0, 1 g)
+    if (off > kMaxLevelTrimLsb || off < -kMaxLevelTrimLsb) return false;
+    trim[i] = static_cast<int16_t>(off < 0 ? off - 0.5f : off + 0.5f);
+  }
+  for (uint8_t i = 0; i < 3; ++i) trim_lsb_[i] = trim[i];
+  return true;
 }
 
 // Integer only: the rates are the angles' increments per frame.
@@ -158,7 +170,8 @@ void AttitudeEstimator::correctRoll(const ImuSample& s, float interval_s) {
     ++untrusted_;
     return;
   }
-  q_.roll = blend(q_.roll, atan2Approx(s.accel[1], s.accel[2]), interval_s);
+  const float y = static_cast<float>(s.accel[1] - trim_lsb_[1]);
+  q_.roll = blend(q_.roll, atan2Approx(y, static_cast<float>(s.accel[2] - trim_lsb_[2])), interval_s);
 }
 
 void AttitudeEstimator::correctPitch(const ImuSample& s, float interval_s) {
@@ -166,8 +179,10 @@ void AttitudeEstimator::correctPitch(const ImuSample& s, float interval_s) {
     ++untrusted_;
     return;
   }
-  const float y = s.accel[1], z = s.accel[2];
-  q_.pitch = blend(q_.pitch, atan2Approx(-static_cast<float>(s.accel[0]), sqrtf(y * y + z * z)), interval_s);
+  const float x = static_cast<float>(s.accel[0] - trim_lsb_[0]);
+  const float y = static_cast<float>(s.accel[1] - trim_lsb_[1]);
+  const float z = static_cast<float>(s.accel[2] - trim_lsb_[2]);
+  q_.pitch = blend(q_.pitch, atan2Approx(-x, sqrtf(y * y + z * z)), interval_s);
 }
 
 }  // namespace fly

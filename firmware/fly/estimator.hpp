@@ -16,10 +16,14 @@
 // only its drift. Valid within +-90 deg of pitch; the crash limit disarms far inside that.
 // atan2 is a polynomial (atan2Approx: one division, error below 0.00002 rad), not atan2f.
 //
-// The state is fixed point (AttitudeQ), so the frame's integration is integer: a rate unit is a
-// sixteenth of a gyro LSB, an angle unit one rate unit held for one frame, so a frame adds the
-// rate itself; the coupling terms are one 16 x 16 product and one gain each (fixed_point.hpp).
-// attitude() gives the same state in radians (status, arming, tests).
+// Level trim (the `level` command, as flight controllers calibrate their accelerometer): an
+// MPU-6050's zero-g offsets may be +-50 mg on x and y, +-80 mg on z (its datasheet); on x and y
+// that is up to 2.9 deg of tilt the accelerometer reports on a level vehicle, on z a tilt read
+// short by up to 8 % (0.8 deg at 10 deg), and the controller holds what the estimate says. With
+// the vehicle standing level and still, the calibration's mean x, y and z - 1 g become the trim,
+// subtracted before every tilt the accelerometer gives. Refused beyond kMaxLevelTrimLsb on any
+// axis (the vehicle is not level, or the sensor is off its datasheet), so a trim never hides a
+// real tilt of more.
 #pragma once
 #include <stdint.h>
 
@@ -90,6 +94,12 @@ uint32_t squaredNormLsb2(const ImuSample& s);
 class AttitudeEstimator {
  public:
   static constexpr float kTimeConstantS = 0.5f;
+  static constexpr int16_t kMaxLevelTrimLsb = 410;  // 100 mg at 4096 LSB/g: 5.7 deg on x, y
+
+  // The level trim from a finished calibration taken level and still; false (the trim kept)
+  // when an axis is beyond kMaxLevelTrimLsb. Takes effect at the next start().
+  bool trimLevel(const GyroCalibration& calibration);
+  int16_t levelTrimLsb(uint8_t axis) const { return trim_lsb_[axis]; }  // x, y, z
 
   // From a finished calibration: its bias, and the attitude its mean accelerometer gives.
   void start(const GyroCalibration& calibration);
@@ -111,6 +121,7 @@ class AttitudeEstimator {
 
   AttitudeQ q_;
   int32_t bias_q4_[3] = {0, 0, 0};  // the bias in 1/16 LSB: rate units
+  int16_t trim_lsb_[3] = {0, 0, 0};  // the accelerometer's level trim, x, y, z
   Gain blend_gain_;                 // k of the last interval_s
   float blend_interval_s_ = -1.0f;
   bool started_ = false;

@@ -169,6 +169,7 @@ void FlyApp::printNotes() {
   if (notes == 0 || starting_) return;
   if (notes & kNoteImuFault) view::imuFault(imu_);
   if (notes & kNoteImuRunning) view::imuRunningAgain();
+  if (notes & kNoteLevel) view::levelResult(*this);
   if (notes & kNoteCalibrated) view::calibrationResult(*this);
   if (notes & kNoteDisarmed) view::disarmed(*this);
   if ((notes & kNoteStream) && streaming_) view::streamRow(row_);
@@ -198,6 +199,11 @@ void FlyApp::frame(const ImuFrame& f, uint16_t t0_us) {
       estimator_.propagate(f.sample, frames);
       if (flight_.armed) flyFrame(frames, t0_us);
     } else if (!flight_.armed && imu_.running() && gyro_cal_.add(f.sample)) {
+      if (level_pending_) {
+        level_pending_ = false;
+        level_trimmed_ = estimator_.trimLevel(gyro_cal_);
+        notes_ |= kNoteLevel;
+      }
       estimator_.start(gyro_cal_);
       notes_ |= kNoteCalibrated;
     }

@@ -126,6 +126,7 @@ class FlyApp {
   const OutputStage& output() const { return output_; }
   const Mpu6050& imu() const { return imu_; }
   const GyroCalibration& gyroCalibration() const { return gyro_cal_; }
+  bool levelTrimmed() const { return level_trimmed_; }  // the last `level` took its trim
   const fw::ForceActuators& motors() const { return motors_; }
   const LoopStats& loopStats() const { return stats_; }
   const fw::LineReader& console() const { return line_; }
@@ -159,6 +160,7 @@ class FlyApp {
   void cmdArduPilotPwm(uint16_t min_us, uint16_t max_us);
   void cmdCrash(uint8_t deg);
   void cmdCalibrate();
+  void cmdLevel();
   void cmdStream(bool on);
   void cmdStatus();
   void cmdStrict(bool on);
@@ -208,6 +210,8 @@ class FlyApp {
   bool streaming_ = false;
   bool in_service_ = false;
   bool hold_prompt_ = false;
+  bool level_pending_ = false;  // `level`: the calibration under way sets the level trim
+  bool level_trimmed_ = false;
 
   // service() -> printNotes(): what happened.
   static constexpr uint8_t kNoteDisarmed = 0x01;
@@ -215,6 +219,7 @@ class FlyApp {
   static constexpr uint8_t kNoteCalibrated = 0x04;
   static constexpr uint8_t kNoteStream = 0x08;
   static constexpr uint8_t kNoteImuRunning = 0x10;
+  static constexpr uint8_t kNoteLevel = 0x20;
   uint8_t notes_ = 0;
   static FlyApp* active_;  // the instance the hooks serve
 };

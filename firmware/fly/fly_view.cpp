@@ -185,6 +185,34 @@ void calibrationResult(const FlyApp& app) {
   sayLine(TC_FLASH_TEXT(" deg"));
 }
 
+// "x 39.1 y -17.8 z 14.6" in mg, from LSB (kAccelLsbPerG a g).
+void sayMilliG(const float lsb[3]) {
+  for (uint8_t i = 0; i < 3; ++i) {
+    hal::Uart::write(' ');
+    hal::Uart::write(static_cast<char>('x' + i));
+    hal::Uart::write(' ');
+    sayFloat(lsb[i] * (1000.0f / mpu::kAccelLsbPerG), 1);
+  }
+}
+
+void levelResult(const FlyApp& app) {
+  float lsb[3];
+  if (app.levelTrimmed()) {
+    for (uint8_t i = 0; i < 3; ++i) lsb[i] = app.estimator().levelTrimLsb(i);
+    say(TC_FLASH_TEXT("level: accelerometer trim"));
+    sayMilliG(lsb);
+    sayLine(TC_FLASH_TEXT(" mg: this attitude is level from now on"));
+    return;
+  }
+  const GyroCalibration& c = app.gyroCalibration();
+  for (uint8_t i = 0; i < 3; ++i) lsb[i] = c.accelMeanLsb(i) - (i == 2 ? mpu::kAccelLsbPerG : 0.0f);
+  say(TC_FLASH_TEXT("error: level refused: off level the accelerometer reads"));
+  sayMilliG(lsb);
+  say(TC_FLASH_TEXT(" mg, over "));
+  sayFloat(AttitudeEstimator::kMaxLevelTrimLsb * (1000.0f / mpu::kAccelLsbPerG), 0);
+  sayLine(TC_FLASH_TEXT(" mg: stand the vehicle level and try again (trim kept)"));
+}
+
 void armRefused(ArmRefusal why, const FlyApp& app) {
   const ArmInputs in = app.armInputs();
   say(TC_FLASH_TEXT("error: arm refused: "));

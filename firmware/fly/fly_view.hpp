@@ -16,6 +16,8 @@ void imuFault(const Mpu6050& imu);
 void imuRunningAgain();
 void calibrating();
 void calibrationResult(const FlyApp& app);
+// What `level` did: the trim taken, or why it was refused.
+void levelResult(const FlyApp& app);
 void armRefused(ArmRefusal why, const FlyApp& app);
 void armed(const FlyApp& app);
 void disarmed(const FlyApp& app);

@@ -26,6 +26,7 @@ struct FakeImu {
   double roll_deg = 0, pitch_deg = 0;
   double rate_dps[3] = {0, 0, 0};
   int16_t gyro_bias_lsb[3] = {37, -21, 8};
+  int16_t accel_offset_lsb[3] = {0, 0, 0};  // zero-g offsets (the datasheet allows +-50 mg on x, y)
   bool frozen = false;
 
   void attach(uint8_t who_am_i = 0x68) {
@@ -45,7 +46,7 @@ struct FakeImu {
     const double a[3] = {-std::sin(p), std::sin(r) * std::cos(p), std::cos(r) * std::cos(p)};
     uint8_t* regs = fake::twiRegisters();
     for (int i = 0; i < 3; ++i) {
-      put(regs, 0x3B + 2 * i, std::lround(a[i] * 4096.0));
+      put(regs, 0x3B + 2 * i, std::lround(a[i] * 4096.0) + accel_offset_lsb[i]);
       put(regs, 0x43 + 2 * i, std::lround(rate_dps[i] * 16.4) + gyro_bias_lsb[i]);
     }
     put(regs, 0x41, std::lround((25.0 - 36.53) * 340.0));

@@ -112,6 +112,59 @@ TEST_F(Fly, AVehicleMovedDuringTheGyroCalibrationIsCalibratedOnceStill) {
   EXPECT_TRUE(contains(fake::output(), "imu: gyro bias 2.26 -1.28 0.49 deg/s")) << fake::output();
 }
 
+TEST_F(Fly, LevelTrimsTheAccelerometersOffsetSoALevelVehicleReadsLevel) {
+  storeFourV2Motors();
+  // given an IMU whose zero-g offsets are 39.1 mg on x, -17.8 mg on y and 58.6 mg on z (within
+  // its datasheet)
+  imu_.accel_offset_lsb[0] = 160;
+  imu_.accel_offset_lsb[1] = -73;
+  imu_.accel_offset_lsb[2] = 240;
+  bootReady();
+  // then the level vehicle reads 2.2 deg nose up and 1.0 deg left side down
+  EXPECT_NEAR(app_->attitude().pitch_rad * 180 / M_PI, -2.11, 0.05);
+  EXPECT_NEAR(app_->attitude().roll_rad * 180 / M_PI, -0.96, 0.05);
+  // when `level` runs while it stands level and still
+  EXPECT_TRUE(contains(command("level"), "imu: measuring the gyro bias: keep the vehicle still"));
+  runFor(1100);
+  // then the trim is the offsets and the estimate reads level
+  EXPECT_TRUE(contains(fake::output(), "level: accelerometer trim x 39.1 y -17.8 z 58.6 mg")) << fake::output();
+  EXPECT_EQ(app_->estimator().levelTrimLsb(0), 160);
+  EXPECT_EQ(app_->estimator().levelTrimLsb(1), -73);
+  EXPECT_EQ(app_->estimator().levelTrimLsb(2), 240);
+  EXPECT_NEAR(app_->attitude().pitch_rad * 180 / M_PI, 0.0, 0.05);
+  EXPECT_NEAR(app_->attitude().roll_rad * 180 / M_PI, 0.0, 0.05);
+  // and a real tilt reads as itself, through the filter's corrections (without the z trim, 10
+  // deg would read 9.46)
+  imu_.roll_deg = 10.0;
+  runFor(3000);
+  EXPECT_NEAR(app_->attitude().roll_rad * 180 / M_PI, 10.0, 0.1);
+  // and a plain `calibrate` keeps the trim
+  command("calibrate");
+  runFor(1100);
+  EXPECT_EQ(app_->estimator().levelTrimLsb(0), 160);
+}
+
+TEST_F(Fly, LevelIsRefusedWhenTheVehicleIsNotLevelOrArmed) {
+  storeFourV2Motors();
+  bootReady();
+  // given a vehicle standing 8 deg nose down (139 mg on x)
+  imu_.pitch_deg = 8.0;
+  command("level");
+  runFor(1100);
+  // then no trim is taken, and the tilt is still seen
+  EXPECT_TRUE(contains(fake::output(), "error: level refused: off level the accelerometer reads x -139.2 y 0.0 z -9.8 mg, over 100 mg"))
+      << fake::output();
+  EXPECT_FALSE(app_->levelTrimmed());
+  EXPECT_EQ(app_->estimator().levelTrimLsb(0), 0);
+  EXPECT_NEAR(app_->attitude().pitch_rad * 180 / M_PI, 8.0, 0.1);
+  // and armed, `level` is refused outright
+  imu_.pitch_deg = 0.0;
+  runFor(3000);
+  armAndSpool(1200);
+  EXPECT_TRUE(contains(command("level"), "error:")) << fake::output();
+  EXPECT_TRUE(app_->armed());
+}
+
 // ---------------------------------------------------------------------------------------------
 // Arming
 

@@ -80,6 +80,8 @@ void declareSwapOptions(CLI::App* cmd, SwapArgs& a) {
   cmd->add_option("--gather-elf", o->gather_elf, "gather_store ELF image")->capture_default_str();
   cmd->add_option("--fly-elf", o->fly_elf, "fly ELF image")->capture_default_str();
   cmd->add_flag("--no-plots", a.no_plots, "no gnuplot");
+  cmd->add_flag("--no-level", [o](std::int64_t) { o->level = false; },
+                "skip fly's `level` before each flight (the IMU's zero-g offsets then tilt what it holds)");
 }
 
 swap::SwapOptions optionsFrom(const SwapArgs& a) {

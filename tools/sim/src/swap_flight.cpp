@@ -89,10 +89,24 @@ void mustSay(Console& con, const std::string& line, const RunSpec& r) {
       throw std::runtime_error(fmt::format("{}: fly refused \"{}\": {}\n{}", runId(r), line, l, con.tail()));
 }
 
-// Boots fly, sets it up, arms it and waits out the spool-up; returns the spool-up's length.
-double armed(AirframeRig& rig, Console& con, const std::vector<std::string>& lines, const RunSpec& r) {
+// fly's `level` on the rig at rest (level, still): the accelerometer's trim, as a user calibrates
+// the accelerometer before flying.
+void levelled(Console& con, const RunSpec& r) {
+  mustSay(con, "level", r);
+  const std::vector<std::string> m = con.expect("^(level: accelerometer trim .*|error: level refused.*)$", 3.0);
+  if (m[0].rfind("error:", 0) == 0)
+    throw std::runtime_error(fmt::format("{}: fly refused to level on the rig at rest: {}\n{}", runId(r), m[0], con.tail()));
+  con.expectText("imu: gyro bias", 1.0);
+  con.waitPrompt(1.0);
+}
+
+// Boots fly, levels and sets it up, arms it and waits out the spool-up; returns the spool-up's
+// length.
+double armed(AirframeRig& rig, Console& con, const std::vector<std::string>& lines, const RunSpec& r,
+             bool level) {
   con.expectText("imu: gyro bias", 5.0);
   con.waitPrompt(1.0);
+  if (level) levelled(con, r);
   rig.run(
       std::max(0.0, tc::kArmMs / 1000.0 + 0.1 - rig.board().timeS()));  // the ESCs' time at the stop pulse
   for (const std::string& line : lines) mustSay(con, line, r);
@@ -185,7 +199,7 @@ RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, c
   AirframeRig rig(o.fly_elf, rigOptions(o, r));
   rig.board().setEeprom(c.of(r.part).eeprom);
   Console con(rig.board(), "fly> ");
-  const double spool_s = armed(rig, con, setupLines(o, c, r), r);
+  const double spool_s = armed(rig, con, setupLines(o, c, r), r, o.level);
   const double settle_s = settleOf(o, r);
   flyFor(rig, spool_s + settle_s);
   const double t_step = rig.board().timeS();  // the step: the moment its line is sent

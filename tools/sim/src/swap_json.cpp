@@ -50,6 +50,7 @@ nlohmann::json setupJson(const SwapOptions& o) {
           {"hover_g_per_motor", o.hover_g},
           {"step_deg", o.step_deg},
           {"settle_s", {{"pd", o.settle_s}, {"pid", o.pid_settle_s}}},
+          {"level", o.level},
           {"window_s", o.window_s},
           {"log_period_s", o.log_period_s},
           {"gimbal_layout", "plus"},

@@ -78,6 +78,7 @@ struct SwapOptions {
   double hover_g = 300;                         // per motor (thrust: 4x on the gimbal, 2x on the seesaw)
   int step_deg = 10;
   double settle_s = 0.5;      // level flight after the spool-up, before the step
+  bool level = true;          // fly's `level` (the accelerometer's trim) before each flight
   double pid_settle_s = 4.0;  // ... with PID gains: the integrator's time to take up the mismatch
   double window_s = 2.5;      // after the step
   double log_period_s = 0.0025;
