@@ -110,6 +110,17 @@ Section accuracySection(const AccuracyConfig& config) {
 
 namespace bench {
 
+Section unavailableSection(const std::string& key, const std::string& title, const std::string& why) {
+  Section s;
+  s.key = key;
+  Table t(title, {"item", "figure"});
+  t.addRow({"not available", "-"});
+  t.addNote(why);
+  s.tables.push_back(std::move(t));
+  s.json = {{"available", false}, {"reason", why}};
+  return s;
+}
+
 Table targetsTable(const std::vector<Section>& sections) {
   Table t("Targets (issues 5 and 11)", {"target", "figure", "wanted", "met?"});
   for (const Section& s : sections)

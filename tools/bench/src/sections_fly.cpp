@@ -36,15 +36,8 @@ namespace bench {
 #ifndef THRUSTCAL_BENCH_HAVE_SIM
 
 Section flySection(const AvrPaths&) {
-  Section s;
-  s.key = "fly";
-  const std::string why = "tools/sim (thrustcal_sim) is not part of this build: no virtual airframe";
-  Table t("7. fly", {"item", "figure"});
-  t.addRow({"not available", "-"});
-  t.addNote(why);
-  s.tables.push_back(std::move(t));
-  s.json = {{"available", false}, {"reason", why}};
-  return s;
+  return unavailableSection("fly", "7. fly",
+                            "tools/sim (thrustcal_sim) is not part of this build: no virtual airframe");
 }
 
 #else
@@ -310,17 +303,9 @@ sim::AirframeOptions airframe(const BenchRecords& records) {
 
 Section flySection(const AvrPaths& paths) {
   const std::string elf = paths.elf("fly");
-  if (!std::filesystem::exists(elf)) {
-    Section s;
-    s.key = "fly";
-    const std::string why = elf + " not found: build the AVR tree (--target fly) or pass --avr-build DIR";
-    Table t("7. fly", {"item", "figure"});
-    t.addRow({"not available", "-"});
-    t.addNote(why);
-    s.tables.push_back(std::move(t));
-    s.json = {{"available", false}, {"reason", why}};
-    return s;
-  }
+  if (!std::filesystem::exists(elf))
+    return unavailableSection("fly", "7. fly",
+                              elf + " not found: build the AVR tree (--target fly) or pass --avr-build DIR");
   const BenchRecords& records = benchRecords();
   const sim::AirframeOptions options = airframe(records);
   const std::vector<sim::FlashSymbol> symbols = sim::flashSymbols(elf);

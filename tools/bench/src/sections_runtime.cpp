@@ -47,15 +47,8 @@ namespace bench {
 #ifndef THRUSTCAL_BENCH_HAVE_SIM
 
 Section runtimeSection(const AvrPaths&) {
-  Section s;
-  s.key = "runtime";
-  const std::string why = "tools/sim (thrustcal_sim) is not part of this build: no simulated board";
-  Table t("6. Runtime", {"item", "figure"});
-  t.addRow({"not available", "-"});
-  t.addNote(why);
-  s.tables.push_back(std::move(t));
-  s.json = {{"available", false}, {"reason", why}};
-  return s;
+  return unavailableSection("runtime", "6. Runtime",
+                            "tools/sim (thrustcal_sim) is not part of this build: no simulated board");
 }
 
 #else
@@ -323,15 +316,9 @@ Section runtimeSection(const AvrPaths& paths) {
       "6. Runtime: read_run in simavr on the tethered quad, liftoff 300 g (1 s ramp, 3 s hold), one 3S "
       "LiPo at 50 %; cycles awake, interrupts included";
   const std::string elf = paths.elf("read_run");
-  if (!std::filesystem::exists(elf)) {
-    Table t(title, {"item", "figure"});
-    t.addRow({"not available", "-"});
-    const std::string why = elf + " not found: build the AVR tree (--target read_run) or pass --avr-build DIR";
-    t.addNote(why);
-    s.tables.push_back(std::move(t));
-    s.json = {{"available", false}, {"reason", why}};
-    return s;
-  }
+  if (!std::filesystem::exists(elf))
+    return unavailableSection("runtime", title,
+                              elf + " not found: build the AVR tree (--target read_run) or pass --avr-build DIR");
   Table t(title, {"records", "rate", "CPU load", "frame() load", "frame() mean", "max, quiet", "max, printing",
                   "V2Frame::fly max", "no interrupt", "loop period max, quiet", "with a print"});
   const BenchRecords& records = benchRecords();

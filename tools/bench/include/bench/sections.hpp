@@ -26,6 +26,10 @@ struct Section {
   std::vector<TargetCheck> targets;
 };
 
+// A section that could not be measured (no simulator in this build, an image not built): one
+// "not available" row and the reason, in the table and as {"available": false, "reason": why}.
+Section unavailableSection(const std::string& key, const std::string& title, const std::string& why);
+
 // The targets of several sections as one table (printed last by `bench all`) and as JSON.
 Table targetsTable(const std::vector<Section>& sections);
 nlohmann::json targetsJson(const std::vector<Section>& sections);
