@@ -391,14 +391,20 @@ lab::autopilot::ArduPilotParams labParams(const ArduPilotParams& p) {
   return l;
 }
 
+// The parameters `lab export --to ardupilot` fitted in docs/autopilot.md's walkthrough.
+ArduPilotParams walkthroughParams() {
+  ArduPilotParams p;
+  p.expo = 0.6913f;
+  p.spin_min = 0.1581f;
+  p.spin_max = 0.95f;
+  p.bat_volt_max_v = 12.6f;
+  p.bat_volt_min_v = 9.9f;
+  p.full_thrust_g = 1315.1f;
+  return p;
+}
+
 TEST(ArduPilotCurve, PulsesAreWhatArduPilotSendsWithinOneMicrosecondAtEveryForceAndVoltage) {
-  ArduPilotParams fitted;  // docs/autopilot.md's walkthrough
-  fitted.expo = 0.6913f;
-  fitted.spin_min = 0.1581f;
-  fitted.spin_max = 0.95f;
-  fitted.bat_volt_max_v = 12.6f;
-  fitted.bat_volt_min_v = 9.9f;
-  fitted.full_thrust_g = 1315.1f;
+  const ArduPilotParams fitted = walkthroughParams();
   ArduPilotParams linear = fitted;
   linear.expo = 0.0f;
   ArduPilotParams negative = fitted;
@@ -428,13 +434,7 @@ TEST(ArduPilotCurve, PulsesAreWhatArduPilotSendsWithinOneMicrosecondAtEveryForce
 
 // The frame path: the integer table (pulseUsQ4) against the same reference, same tolerance.
 TEST(ArduPilotCurve, TheTablesPulsesAreWhatArduPilotSendsWithinOneMicrosecond) {
-  ArduPilotParams fitted;
-  fitted.expo = 0.6913f;
-  fitted.spin_min = 0.1581f;
-  fitted.spin_max = 0.95f;
-  fitted.bat_volt_max_v = 12.6f;
-  fitted.bat_volt_min_v = 9.9f;
-  fitted.full_thrust_g = 1315.1f;
+  const ArduPilotParams fitted = walkthroughParams();
   ArduPilotParams negative = fitted;
   negative.expo = -0.3f;
   negative.pwm_min_us = 1100;
