@@ -143,6 +143,7 @@ void FlyApp::service() {
 }
 
 void FlyApp::handleInput() {
+  if (flight_.armed && !consoleMayStart(hal::Esc::frameTimeUs(), stats_.phase_us)) return;
   const fw::LineEvent event = line_.poll(kRxBytesPerPass);
   if (event == fw::LineEvent::kRejected) {  // its error line is printed; no keep-alive
     prompt();

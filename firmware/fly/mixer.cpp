@@ -1,6 +1,8 @@
 // The mixer (mixer.hpp).
 #include "mixer.hpp"
 
+#include "fixed_point.hpp"
+
 namespace fly {
 
 namespace {
@@ -21,10 +23,50 @@ void bounds(const ForceQ4 (&v)[4], uint8_t n, ForceQ4& lo, ForceQ4& hi) {
 // A float already in 1/16 g, rounded.
 ForceQ4 rounded(float q4) { return static_cast<ForceQ4>(q4 < 0 ? q4 - 0.5f : q4 + 0.5f); }
 
-// a * num / den for the saturation path (rare): in float, the products exceed 32 bits.
-ForceQ4 scaled(ForceQ4 a, ForceQ4 num, ForceQ4 den) {
-  return toQ4(gramsOf(a) * (static_cast<float>(num) / static_cast<float>(den)));
+// num / den for 0 <= num < den (the saturation path's two ratios are strictly below 1) as a
+// 16-bit mantissa and a shift: f = floor(num * 2^s / den) in [2^15, 2^16), exact, by restoring
+// division (the remainder stays below den < 2^31, so its double fits 32 bits): ~50 turns of a
+// shift, a compare and a subtraction at most, against a float division and four float products,
+// conversions and roundings per motor before. Relative error below 2^-15, so a scaled value is
+// off by less than its own size * 2^-15 (not the size of the value scaled).
+struct Fraction {
+  uint16_t f = 0;
+  uint8_t s = 16;  // 16..47; f 0: the ratio is below 2^-32 (or num <= 0), nothing of it is left
+};
+Fraction fraction(ForceQ4 num, ForceQ4 den) {
+  Fraction out;
+  if (num <= 0 || den <= num) return out;
+  const uint32_t d = static_cast<uint32_t>(den);
+  uint32_t r = static_cast<uint32_t>(num);
+  uint8_t s = 0;
+  while ((r << 1) < d) {  // the leading zeros of the ratio
+    r <<= 1;
+    if (++s > 31) return out;
+  }
+  uint16_t f = 0;
+  for (uint8_t bit = 0; bit < 16; ++bit) {
+    r <<= 1;
+    f = static_cast<uint16_t>(f << 1);
+    if (r >= d) {
+      r -= d;
+      f |= 1u;
+    }
+  }
+  out.f = f;
+  out.s = static_cast<uint8_t>(s + 16);
+  return out;
 }
+
+// floor(a * f / 2^s): a = hi * 2^16 + lo, two 16 x 16 products (the AVR's MUL) give
+// floor(a * f / 2^16) exactly, then an arithmetic shift (a floor of a floor).
+ForceQ4 floorScaled(ForceQ4 a, const Fraction& q) {
+  const int32_t hi = static_cast<int32_t>(static_cast<int16_t>(a >> 16)) * q.f;
+  const uint32_t lo = static_cast<uint32_t>(static_cast<uint16_t>(a)) * q.f;
+  return shiftRight(hi + static_cast<int32_t>(lo >> 16), static_cast<uint8_t>(q.s - 16));
+}
+
+// a * f / 2^s towards zero: a share that never exceeds the exact one in magnitude.
+ForceQ4 truncScaled(ForceQ4 a, const Fraction& q) { return a < 0 ? -floorScaled(-a, q) : floorScaled(a, q); }
 
 }  // namespace
 
@@ -104,11 +146,16 @@ uint8_t Mixer::fit(const ForceQ4 (&rp)[4], ForceQ4 z, ForceQ4 range, ForceQ4 (&e
   bounds(rp, n, lo, hi);
   const ForceQ4 rp_spread = hi - lo;
   if (rp_spread > range) {  // roll and pitch alone do not fit: scale them, no yaw
-    for (uint8_t i = 0; i < kQuad; ++i) e[i] = scaled(rp[i], range, rp_spread);
+    // Each floored with a floored fraction: floor(hi f) - floor(lo f) < (hi - lo) f + 1 <=
+    // range + 1, so the scaled spread is at most the range (an integer).
+    const Fraction f = fraction(range, rp_spread);
+    for (uint8_t i = 0; i < kQuad; ++i) e[i] = floorScaled(rp[i], f);
     bounds(e, n, lo, hi);
     return kMixRollPitchLimited | kMixYawLimited;
   }
-  const ForceQ4 share_z = scaled(z, range - rp_spread, full_spread - rp_spread);
+  // Towards zero: the share lies between 0 and the exact share, where the (convex) spread is at
+  // most the range at both ends, so it is at most the range.
+  const ForceQ4 share_z = truncScaled(z, fraction(range - rp_spread, full_spread - rp_spread));
   for (uint8_t i = 0; i < kQuad; ++i) e[i] = (i & 1u) ? rp[i] + share_z : rp[i] - share_z;
   bounds(e, n, lo, hi);
   return kMixYawLimited;

@@ -152,6 +152,158 @@ TEST(Mixer, YawIsScaledToFitWhileRollAndPitchStayWhole) {
   }
 }
 
+// The saturation path as it was in float (a * num / den per motor, rounded to 1/16 g): the
+// reference the integer path (a 16-bit fraction and a shift, floored; yaw's share towards zero)
+// is held to. Tolerance: kSaturatedToleranceQ4 per motor (3/16 g): the fraction's relative
+// 2^-15 and the floor against the float's rounding put each scaled term within ~1.5 of the
+// float's for scaled values (which never exceed the range) up to 2^15 (2 kg), whatever the torque
+// asked for; the collective shifts by the bounds, which may differ as much. The roll/pitch and
+// yaw limit bits are the same (decided before any scaling); the collective's bit may differ
+// where the float path's rounding left its spread a sixteenth over the range. Unlike the float
+// path the integer one never leaves [min, max] (the floors keep each spread at most the range).
+constexpr ForceQ4 kSaturatedToleranceQ4 = 3;
+
+struct FloatMix {
+  ForceQ4 force[4];
+  uint8_t limits;
+};
+
+FloatMix floatReferenceMix(Layout layout, ForceQ4 collective, TorqueQ4 t, ForceQ4 min, ForceQ4 max) {
+  const int n = layout == Layout::kSeesaw ? 2 : 4;
+  const ForceQ4 z = layout == Layout::kSeesaw ? 0 : t.z;
+  ForceQ4 rp[4];
+  switch (layout) {
+    case Layout::kPlus:
+      rp[0] = -t.y, rp[1] = t.x, rp[2] = t.y, rp[3] = -t.x;
+      break;
+    default:  // kX
+      rp[0] = t.x - t.y, rp[1] = t.x + t.y, rp[2] = t.y - t.x, rp[3] = -t.x - t.y;
+      break;
+  }
+  if (layout == Layout::kSeesaw) rp[0] = t.x, rp[1] = -t.x, rp[2] = 0, rp[3] = 0;
+  auto bounds = [n](const ForceQ4 (&v)[4], ForceQ4& lo, ForceQ4& hi) {
+    lo = hi = v[0];
+    for (int i = 1; i < n; ++i) lo = std::min(lo, v[i]), hi = std::max(hi, v[i]);
+  };
+  auto scaled = [](ForceQ4 a, ForceQ4 num, ForceQ4 den) {
+    return toQ4(gramsOf(a) * (static_cast<float>(num) / static_cast<float>(den)));
+  };
+  FloatMix out{};
+  ForceQ4 e[4];
+  for (int i = 0; i < 4; ++i) e[i] = (i & 1) ? rp[i] + z : rp[i] - z;
+  ForceQ4 lo, hi;
+  bounds(e, lo, hi);
+  const ForceQ4 range = max > min ? max - min : 0;
+  if (hi - lo > range) {
+    const ForceQ4 full = hi - lo;
+    bounds(rp, lo, hi);
+    const ForceQ4 rp_spread = hi - lo;
+    if (rp_spread > range) {
+      for (int i = 0; i < 4; ++i) e[i] = scaled(rp[i], range, rp_spread);
+      out.limits = kMixRollPitchLimited | kMixYawLimited;
+    } else {
+      const ForceQ4 share = scaled(z, range - rp_spread, full - rp_spread);
+      for (int i = 0; i < 4; ++i) e[i] = (i & 1) ? rp[i] + share : rp[i] - share;
+      out.limits = kMixYawLimited;
+    }
+    bounds(e, lo, hi);
+  }
+  ForceQ4 c = collective;
+  if (c < min - lo) {
+    c = min - lo;
+    out.limits |= kMixCollectiveLimited;
+  } else if (c > max - hi) {
+    c = max - hi;
+    out.limits |= kMixCollectiveLimited;
+  }
+  for (int i = 0; i < 4; ++i) out.force[i] = i < n ? c + e[i] : 0;
+  return out;
+}
+
+struct SaturatedCase {
+  Layout layout;
+  float collective_g, min_g, max_g;
+  TorqueQ4 torque;  // 1/16 g per motor
+  uint8_t limits;   // what the mixer must say it gave up (the collective's bit aside)
+};
+
+TEST(Mixer, TheIntegerSaturationPathMatchesTheFloatReferenceWithinThreeSixteenthsOfAGram) {
+  constexpr uint8_t kRpYaw = kMixRollPitchLimited | kMixYawLimited;
+  const SaturatedCase cases[] = {
+      // roll and pitch alone too wide: scaled, yaw dropped
+      {Layout::kX, 300, 20, 800, {toQ4(700), toQ4(350), toQ4(40)}, kRpYaw},
+      {Layout::kX, 300, 20, 800, {toQ4(-700), toQ4(350), toQ4(-40)}, kRpYaw},
+      {Layout::kX, 500, 0, 1000, {toQ4(3000), toQ4(-2900), toQ4(900)}, kRpYaw},
+      {Layout::kX, 300, 20, 800, {toQ4(401), 0, 0}, kRpYaw},  // just over, on one axis
+      {Layout::kPlus, 300, 20, 800, {toQ4(500), toQ4(-450), 7}, kRpYaw},
+      {Layout::kPlus, 300, 20, 600, {toQ4(-1200), toQ4(10), toQ4(-5)}, kRpYaw},
+      {Layout::kSeesaw, 300, 20, 800, {toQ4(900), toQ4(100), toQ4(100)}, kRpYaw},
+      {Layout::kSeesaw, 400, 0, 1200, {toQ4(-1999.9f), 0, 0}, kRpYaw},
+      // roll and pitch fit, yaw scaled to the rest
+      {Layout::kX, 300, 20, 800, {toQ4(150), toQ4(-100), toQ4(300)}, kMixYawLimited},
+      {Layout::kX, 300, 20, 800, {toQ4(-150), toQ4(100), toQ4(-300)}, kMixYawLimited},
+      {Layout::kX, 700, 20, 800, {toQ4(30), toQ4(30), toQ4(500)}, kMixYawLimited},
+      {Layout::kPlus, 300, 20, 600, {toQ4(90), 0, toQ4(250)}, kMixYawLimited},
+      {Layout::kPlus, 100, 20, 600, {0, toQ4(-120), toQ4(-2000)}, kMixYawLimited},
+      {Layout::kPlus, 300, 0, 1000, {toQ4(499), toQ4(499), toQ4(3)}, kMixYawLimited},
+      {Layout::kX, 2000, 0, 4000, {toQ4(900), toQ4(800), toQ4(9000)}, kMixYawLimited},  // > 2^15
+  };
+  for (const SaturatedCase& c : cases) {
+    SCOPED_TRACE(testing::Message() << "layout " << static_cast<int>(c.layout) << " torque " << c.torque.x
+                                    << " " << c.torque.y << " " << c.torque.z);
+    Mixer mixer;
+    mixer.configure(c.layout, 0.225f, 0.015f);
+    ForceQ4 f[4];
+    const ForceQ4 min = toQ4(c.min_g), max = toQ4(c.max_g);
+    const uint8_t limits = mixer.mixQ4(toQ4(c.collective_g), c.torque, min, max, f);
+    const FloatMix ref = floatReferenceMix(c.layout, toQ4(c.collective_g), c.torque, min, max);
+    EXPECT_EQ(limits & kRpYaw, c.limits);
+    EXPECT_EQ(limits & kRpYaw, ref.limits & kRpYaw);
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_NEAR(f[i], ref.force[i], kSaturatedToleranceQ4) << "motor " << i;
+      if (mixer.flies(static_cast<uint8_t>(i))) {
+        EXPECT_GE(f[i], min) << "motor " << i;
+        EXPECT_LE(f[i], max) << "motor " << i;
+      } else {
+        EXPECT_EQ(f[i], 0);
+      }
+    }
+  }
+}
+
+// The same over random torques up to 2 kg a motor on each axis (most of them saturate) on each
+// layout: never outside [min, max], within the tolerance of the float reference, the same
+// roll/pitch and yaw limits.
+TEST(Mixer, RandomSaturatedTorquesStayInRangeAndNearTheFloatReference) {
+  std::mt19937 rng(19);
+  std::uniform_int_distribution<ForceQ4> torque(-toQ4(2000), toQ4(2000));
+  std::uniform_int_distribution<ForceQ4> collective(toQ4(0), toQ4(1000));
+  ForceQ4 worst = 0;
+  for (Layout layout : {Layout::kPlus, Layout::kX, Layout::kSeesaw}) {
+    Mixer mixer;
+    mixer.configure(layout, 0.225f, 0.015f);
+    for (int k = 0; k < 20000; ++k) {
+      const TorqueQ4 t = {torque(rng), torque(rng), torque(rng)};
+      const ForceQ4 min = toQ4(20), max = toQ4(800), c = collective(rng);
+      ForceQ4 f[4];
+      const uint8_t limits = mixer.mixQ4(c, t, min, max, f);
+      const FloatMix ref = floatReferenceMix(layout, c, t, min, max);
+      ASSERT_EQ(limits & (kMixRollPitchLimited | kMixYawLimited),
+                ref.limits & (kMixRollPitchLimited | kMixYawLimited))
+          << k;
+      for (int i = 0; i < 4; ++i) {
+        worst = std::max(worst, std::abs(f[i] - ref.force[i]));
+        ASSERT_NEAR(f[i], ref.force[i], kSaturatedToleranceQ4) << k << " motor " << i;
+        if (mixer.flies(static_cast<uint8_t>(i))) {
+          ASSERT_GE(f[i], min) << k;
+          ASSERT_LE(f[i], max) << k;
+        }
+      }
+    }
+  }
+  RecordProperty("worst_q4", worst);
+}
+
 TEST(Mixer, TheCollectiveGivesWayToTheTorqueAtTheBottomAndTheTop) {
   Mixer mixer;
   mixer.configure(Layout::kX, 0.225f, 0.015f);

@@ -90,6 +90,26 @@ TEST(FlyRules, TheReadStartsAsLateAsTheBudgetAllowsSoTheResultMeetsTheNextEdge) 
   EXPECT_GE(readPhaseUs(computeBudgetUs(OutputMode::kForce, 4, 4)), kMinPhaseUs);
 }
 
+// Issue 19 item 4: read end to edge at most 1 ms needs a budget at most ~780 us (the read's
+// ~220 us of kImuReadUs spare come on top); thesis records keep their budget (they cannot).
+TEST(FlyRules, TheBudgetsOfForceGenericArduPilotAndPwmKeepReadToEdgeWithinAMillisecond) {
+  for (OutputMode mode : {OutputMode::kForce, OutputMode::kGeneric, OutputMode::kPwm, OutputMode::kArduPilot})
+    EXPECT_LE(computeBudgetUs(mode, 0, 4), 780) << static_cast<int>(mode);
+  EXPECT_EQ(computeBudgetUs(OutputMode::kForce, 4, 4), 1660) << "the thesis records' budget as it was";
+}
+
+// Armed, a console line starts only early enough to end before the read does.
+TEST(FlyRules, AConsoleLineStartsOnlyWellBeforeTheReadUnlessTheReadLeavesNoRoom) {
+  const uint16_t phase = readPhaseUs(computeBudgetUs(OutputMode::kForce, 0, 4));
+  EXPECT_TRUE(consoleMayStart(0, phase));
+  EXPECT_TRUE(consoleMayStart(static_cast<uint16_t>(phase - kConsoleSliceUs - 1), phase));
+  EXPECT_FALSE(consoleMayStart(static_cast<uint16_t>(phase - kConsoleSliceUs), phase));
+  EXPECT_FALSE(consoleMayStart(phase, phase)) << "the read and the computation";
+  EXPECT_FALSE(consoleMayStart(kFrameUs - 1, phase));
+  const uint16_t thesis = readPhaseUs(computeBudgetUs(OutputMode::kForce, 4, 4));
+  for (uint16_t t = 0; t < kFrameUs; t += 100) EXPECT_TRUE(consoleMayStart(t, thesis)) << t;
+}
+
 TEST(FlyRules, EachSlowJobRunsFiftyTimesASecondOnAFrameOfItsOwn) {  // one job per frame: slowJob()
   int count[6] = {};
   for (uint32_t frame = 0; frame < kFrameHz; ++frame) ++count[static_cast<int>(slowJob(frame))];
