@@ -81,6 +81,7 @@ void printDiagnosis(const Diagnosis& d, const Dataset& data, const Common& c) {
   printCauses(d);
   printUntested(d.variables);
   printEvidence(d);
+  printAssessmentExtras(d);
   if (!d.regions.empty()) std::printf("where the residual is:\n");
   for (const auto& r : d.regions) std::printf("  - %s\n", r.text.c_str());
   std::printf("verdict: %s\n", d.verdict_text.c_str());
@@ -141,7 +142,7 @@ void printLadder(const std::vector<LadderStep>& steps, const Dataset& data, cons
   const NoiseEstimate& noise = steps.back().assessment.noise;
   std::printf("error ladder on %zu samples in %zu run(s); BIC = n ln(RSS/n) + k ln n, an effect earns its\n"
               "parameters when BIC falls by more than 2; noise floor %s\n\n",
-              data.rows(), data.runs(), describe(noise).c_str());
+              data.rows(), data.runs(), floorText(noise).c_str());
   std::printf("%-4s %-34s %4s %10s %7s %9s %8s %11s %9s  %s\n", "step", "model", "k", "RMSE g", "/noise", "max g",
               "RMSE %", "BIC", "dBIC", "verdict");
   for (std::size_t i = 0; i < steps.size(); ++i) {
@@ -163,6 +164,7 @@ void printLadder(const std::vector<LadderStep>& steps, const Dataset& data, cons
     std::printf("  %-16s score %.3f -> %s\n", s.variable.c_str(), s.score, s.advice.c_str());
   }
   printUntested(last.variables);
+  printAssessmentExtras(last.assessment);
   for (const auto& r : last.assessment.regions) std::printf("where the residual is: %s\n", r.text.c_str());
   std::printf("verdict: %s\n", last.assessment.verdict_text.c_str());
 }
