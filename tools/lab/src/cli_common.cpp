@@ -27,6 +27,9 @@ void addCommon(CLI::App* cmd, Common& c) {
       ->capture_default_str();
   cmd->add_option("--report", c.report_dir, "write plots (PNG+SVG) and report.md into this directory");
   cmd->add_flag("--json", c.json_out, "print JSON instead of text");
+  cmd->add_option("--fix", c.fixes,
+                  "hold a parameter at a known value instead of fitting it, NAME=VALUE, repeatable (a bench's own "
+                  "filter: --fix tau_cell_s=0.03 --fix cell_stages=3)");
   cmd->add_flag("--no-motor-split", c.no_motor_split, "one run per file even with a motor column");
 }
 
@@ -57,13 +60,19 @@ Dataset load(const Common& c, std::vector<std::string>& warnings, bool collapse_
   return d;
 }
 
+ModelSpec specOf(const Common& c) {
+  ModelSpec spec = parseSpec(c.model);
+  for (const auto& f : c.fixes) fixParameter(spec, f);
+  return spec;
+}
+
 json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 json paramsJson(const FitResult& f) {
   json a = json::array();
   for (const auto& p : f.params)
     a.push_back({{"name", p.name}, {"unit", p.unit}, {"effect", p.effect}, {"value", num(p.value)},
-                 {"sigma", num(p.sigma)}});
+                 {"sigma", num(p.sigma)}, {"fixed", p.fixed}});
   return a;
 }
 
@@ -149,6 +158,7 @@ std::string commandLine(const std::string& sub, const Common& c, const std::vect
   for (const auto& m : c.maps) s += " --map '" + m + "'";
   s += " --model '" + c.model + "'";
   if (!c.where.empty()) s += " --where '" + c.where + "'";
+  for (const auto& f : c.fixes) s += " --fix '" + f + "'";
   for (const auto& a : adds) s += " --add '" + a + "'";
   return s;
 }

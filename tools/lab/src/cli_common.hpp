@@ -26,7 +26,11 @@ struct Common {
   std::string holdout = "none";
   bool no_motor_split = false;
   std::string where;
+  std::vector<std::string> fixes;  // --fix NAME=VALUE
 };
+
+// The model SPEC with the --fix values held.
+ModelSpec specOf(const Common& c);
 
 void addCommon(CLI::App* cmd, Common& c);
 

@@ -91,7 +91,7 @@ void printDiagnosis(const Diagnosis& d, const Dataset& data, const Common& c) {
 int runDiagnose(const Common& c) {
   std::vector<std::string> warnings;
   const Dataset data = load(c, warnings, /*collapse_warnings=*/false);
-  const ModelSpec spec = parseSpec(c.model);
+  const ModelSpec spec = specOf(c);
   const Diagnosis d = diagnose(data, spec, parseHoldout(c.holdout));
   ReportFiles rep;
   if (!c.report_dir.empty()) {
@@ -172,7 +172,7 @@ void printLadder(const std::vector<LadderStep>& steps, const Dataset& data, cons
 int runLadder(const Common& c, const std::vector<std::string>& adds) {
   std::vector<std::string> warnings;
   const Dataset data = load(c, warnings);
-  const ModelSpec spec = parseSpec(c.model);
+  const ModelSpec spec = specOf(c);
   for (const auto& a : adds) parseSpec(a);  // fail early on a typo
   const auto steps = ladder(data, spec, adds, parseHoldout(c.holdout));
   ReportFiles rep;
@@ -230,7 +230,7 @@ void printWalk(const Walk& w, const Common& c) {
 int runWalk(const Common& c, int max_adds) {
   std::vector<std::string> warnings;
   const Dataset data = load(c, warnings, /*collapse_warnings=*/false);
-  const ModelSpec spec = parseSpec(c.model);
+  const ModelSpec spec = specOf(c);
   if (max_adds < 1) throw std::invalid_argument("--max-adds must be 1 or more");
   const Walk w = walk(data, spec, max_adds, parseHoldout(c.holdout));
   ReportFiles rep;

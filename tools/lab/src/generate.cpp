@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -13,6 +14,7 @@
 #include "plant/params.hpp"
 #include "plant/power_source.hpp"
 #include "plant/random.hpp"
+#include "plant/sensors.hpp"
 #endif
 
 namespace lab {
@@ -261,6 +263,7 @@ class Session {
     if (h_ == "lag") act.setSpeed_rpm(act.steadyState(points.front().first, kStepBusV).rpm);
     clock_ += run.pause_before_s;
     const double run_start = clock_;
+    cell_.fill(act.thrust_g());
     for (const auto& [pulse, dir] : points) {
       act.holdPulse(pulse);
       // sag: the pack also feeds the frame's other motors, 0..8 A that change point by point
@@ -281,6 +284,7 @@ class Session {
         bus_v = ps.solveBusVoltage(load);
         bus_current = act.step(kDt, bus_v);
         ps.step(kDt, bus_current + other_a);
+        readCell(act.thrust_g());
         if ((k + 1) % every == 0)
           record(now + kDt, run, run_index, act, ps, env, {pulse, dir, other_a, plate, bus_current, bus_v});
       }
@@ -292,6 +296,14 @@ class Session {
     double pulse, dir, other_a, plate, bus_current, bus_v;
   };
 
+  // The bench's load-cell low-pass between the thrust and its reading (--bench-filter): the
+  // plant's stages (plant/sensors.hpp), stepped with the plant.
+  void readCell(double thrust_g) {
+    const auto& tau = plant::LoadCellParams().lowpass_tau_s;
+    double in = thrust_g;
+    for (std::size_t k = 0; k < cell_.size(); ++k) in = cell_[k] += (1 - std::exp(-kDt / tau[k])) * (in - cell_[k]);
+  }
+
   // One row: the bench's reading now.
   void record(double now, const RunSetup& run, std::size_t run_index, const plant::Actuator& act,
               const plant::PowerSource& ps, const plant::Environment& env, const Point& pt) {
@@ -299,7 +311,7 @@ class Session {
     r.t_s = now;
     r.motor = run.motor;
     r.pwm_us = pt.pulse;
-    double force = act.thrust_g();
+    double force = o_.bench_filter ? cell_.back() : act.thrust_g();
     if (h_ == "plate") {
       const double ratio = run.params.prop.diameter_m / 2 / (4 * pt.plate);
       force /= 1 - ratio * ratio;
@@ -327,6 +339,7 @@ class Session {
   plant::Rng& rng_;
   double creep_g_per_min_;
   double noise_state_ = 0.0;
+  std::array<double, 3> cell_{};
   double clock_ = 0.0;
   std::vector<Row> rows_;
 };
@@ -370,7 +383,10 @@ void describe(const GenerateOptions& o, const HiddenEffectInfo& info, double set
     comments.push_back(fmt::format("a model without it: {}; the effect that explains it: {}; "
                                    "the variable to blame: {}",
                                    info.start_model, info.right_effect, info.responsible));
-  comments.push_back(fmt::format("load-cell noise: {} g (one standard deviation)", o.noise_g));
+  comments.push_back(fmt::format("load-cell noise: {} g (one standard deviation){}", o.noise_g,
+                                 o.noise_lag1 > 0 ? fmt::format(", lag-1 autocorrelation {}", o.noise_lag1) : ""));
+  if (o.bench_filter)
+    comments.push_back("the force read through the plant's load-cell low-pass (its stages: plant/sensors.hpp)");
 }
 
 }  // namespace

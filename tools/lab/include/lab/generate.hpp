@@ -18,6 +18,7 @@ struct GenerateOptions {
   double log_hz = 0;    // 0: one row per PWM point at the end of its settling; else rows at this rate
   double settle_s = 0;  // time per PWM point; 0: the hidden effect's default (0.5 s, 2 s)
   double noise_lag1 = 0;  // the noise's lag-1 autocorrelation between successive rows (AR(1)), 0..0.95
+  bool bench_filter = false;  // read the force through the plant's load-cell low-pass (three 30 ms stages)
 };
 
 struct HiddenEffectInfo {
