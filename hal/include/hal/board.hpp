@@ -14,6 +14,8 @@
 #pragma once
 #include <stdint.h>
 
+#include "hal/mega_pins.hpp"
+
 namespace hal {
 
 constexpr uint32_t kCpuHz = 16000000UL;  // the crystal; the AVR backend asserts F_CPU == this
@@ -159,6 +161,18 @@ static_assert(kTwiPins.sda_bit != kTwiPins.scl_bit, "SDA and SCL are two pins");
 static_assert(board::twiSclHz(board::twiBitRateRegister(kTwiFastHz)) == kTwiFastHz,
               "400 kHz is exact from 16 MHz (TWBR 12)");
 static_assert((kImuI2cAddress >> 7) == 0, "a 7-bit I2C address");
+
+namespace board {
+// Each table's Arduino pin numbers are the header's (hal/mega_pins.hpp).
+constexpr bool escPinsOnHeader(uint8_t i = 0) {
+  return i >= kEscChannels || (megaPinOf(kEscPins[i].port, kEscPins[i].bit) == kEscPins[i].arduino_pin &&
+                               escPinsOnHeader(static_cast<uint8_t>(i + 1)));
+}
+}  // namespace board
+static_assert(board::escPinsOnHeader(), "each ESC pin's D number is the Mega header's for its port pin");
+static_assert(megaPinOf(kTwiPins.port, kTwiPins.sda_bit) == kTwiPins.sda_arduino_pin &&
+                  megaPinOf(kTwiPins.port, kTwiPins.scl_bit) == kTwiPins.scl_arduino_pin,
+              "SDA and SCL are the Mega header's D20 and D21");
 
 static_assert(kEscChannels == 4, "four ESC outputs: one per calibration slot (tc::kMotorSlots)");
 static_assert(board::escPinsValid(), "each ESC pin is a compare output A..C of timer 1, 3, 4 or 5");
