@@ -109,14 +109,14 @@ TEST(TimerModes, PhaseCorrectWithEveryTopTheExtremesAndToggle) {
   // Timer1 mode 1 (8 bit), clk/64: 510 ticks
   EXPECT_EQ(last(log.periods("D11"), 2), (V{32640, 32640}));
   EXPECT_EQ(last(log.highs("D11"), 2), (V{8192, 8192}));
-  // Timer0 mode 5, OCR0A = 100, clk/8: OC0A toggles at TOP, OC0B 2 * 25 ticks
-  EXPECT_EQ(last(log.periods("D13"), 3), (V{3200, 3200, 3200}));
-  EXPECT_EQ(last(log.highs("D13"), 3), (V{1600, 1600, 1600}));
-  EXPECT_EQ(last(log.periods("D4"), 3), (V{1600, 1600, 1600}));
-  EXPECT_EQ(last(log.highs("D4"), 3), (V{400, 400, 400}));
-  // Timer2 mode 1, clk/1
-  EXPECT_EQ(last(log.periods("D9"), 3), (V{510, 510, 510}));
-  EXPECT_EQ(last(log.highs("D9"), 3), (V{200, 200, 200}));
+  // Timer0 mode 5, OCR0A = 100, clk/64: OC0A toggles at TOP, OC0B 2 * 25 ticks
+  EXPECT_EQ(last(log.periods("D13"), 3), (V{25600, 25600, 25600}));
+  EXPECT_EQ(last(log.highs("D13"), 3), (V{12800, 12800, 12800}));
+  EXPECT_EQ(last(log.periods("D4"), 3), (V{12800, 12800, 12800}));
+  EXPECT_EQ(last(log.highs("D4"), 3), (V{3200, 3200, 3200}));
+  // Timer2 mode 1, clk/8
+  EXPECT_EQ(last(log.periods("D9"), 3), (V{4080, 4080, 4080}));
+  EXPECT_EQ(last(log.highs("D9"), 3), (V{1600, 1600, 1600}));
 }
 
 TEST(TimerModes, PhaseAndFrequencyCorrect) {
