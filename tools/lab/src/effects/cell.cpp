@@ -76,6 +76,12 @@ const EffectDef kCell = {
     .export_note = "the bench's response is not the motor's: the record holds the steady-state curve; fit without it",
     .needs = "lag",
     .needs_why = "filters the drive after the motor's own dynamics",
+    .suggests = {.variables = {"t_s", "time*"},
+                 .advice = "the reading trails the motor's first-order lag by more than it explains (the bench's load "
+                           "cell, amplifier or logger filters after the motor); add `cell` (with --fix tau_cell_s=... "
+                           "when the bench's response is known)",
+                 .still = "the bench's response is not equal first-order stages (identify it once on the bench: "
+                          "gather_store's `dyn cell`, and hold it with --fix)"},
     .make = [](Setup& s) -> std::unique_ptr<Term> { return std::make_unique<Cell>(s); },
 };
 
