@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "lab/effect.hpp"
+#include "lowpass.hpp"
 
 namespace lab::effects {
 namespace {
@@ -22,21 +23,7 @@ class Cell : public Term {
     const double tau = f.p(tau_);
     if (tau <= f.defs[static_cast<std::size_t>(tau_)].lo) return;  // off: the model without it
     const int stages = static_cast<int>(std::lround(f.p(stages_)));
-    const Rows& b = f.rows;
-    for (int k = 0; k < stages; ++k) {
-      std::vector<long> last_row;
-      std::vector<double> last_y;
-      for (std::size_t i = 0; i < b.n; ++i) {
-        const auto r = static_cast<std::size_t>(std::max((*b.run)[i], 0));
-        if (r >= last_row.size()) last_row.resize(r + 1, -1), last_y.resize(r + 1, 0.0);
-        if (last_row[r] >= 0) {
-          const double dt = (*b.t)[i] - (*b.t)[static_cast<std::size_t>(last_row[r])];
-          if (dt > 0 && std::isfinite(dt)) x[i] = last_y[r] + (1 - std::exp(-dt / tau)) * (x[i] - last_y[r]);
-        }
-        last_row[r] = static_cast<long>(i);
-        last_y[r] = x[i];
-      }
-    }
+    for (int k = 0; k < stages; ++k) lowPassPerRun(f.rows, true, x, [tau](std::size_t, bool) { return tau; });
   }
   void check(const Dataset& d) const override {
     if (!Setup::usable(d, "t_s")) throw std::invalid_argument("effect `cell` needs t_s on every row");

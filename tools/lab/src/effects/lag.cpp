@@ -8,6 +8,7 @@
 
 #include "lab/effect.hpp"
 #include "lab/steps.hpp"
+#include "lowpass.hpp"
 
 namespace lab::effects {
 namespace {
@@ -47,27 +48,10 @@ class Lag : public Term {
     // at their lower bounds the lag is off: exactly the model without it
     if (f.p(up_) <= lower(f, up_) && f.p(down_) <= lower(f, down_)) return;
     const Rows& b = f.rows;
-    std::vector<long> last_row;  // per run: last row seen (-1: none)
-    std::vector<double> last_x;
-    const bool by_time = !in_samples_ && b.t;
-    for (std::size_t i = 0; i < b.n; ++i) {
-      const auto r = static_cast<std::size_t>(std::max((*b.run)[i], 0));
-      if (r >= last_row.size()) {
-        last_row.resize(r + 1, -1);
-        last_x.resize(r + 1, 0.0);
-      }
-      if (last_row[r] >= 0) {
-        const auto prev = static_cast<std::size_t>(last_row[r]);
-        const double dt = by_time          ? (*b.t)[i] - (*b.t)[prev]
-                          : b.sample_index ? (*b.sample_index)[i] - (*b.sample_index)[prev]
-                                           : 1.0;
-        const int m = per_motor_ ? std::max(b.motor_index[i], 0) : 0;
-        const double tau = f.p((x[i] > last_x[r] ? up_ : down_) + 2 * m);
-        if (dt > 0 && std::isfinite(dt)) x[i] = last_x[r] + (1 - std::exp(-dt / tau)) * (x[i] - last_x[r]);
-      }
-      last_row[r] = static_cast<long>(i);
-      last_x[r] = x[i];
-    }
+    lowPassPerRun(b, !in_samples_ && b.t, x, [&](std::size_t i, bool rising) {
+      const int m = per_motor_ ? std::max(b.motor_index[i], 0) : 0;
+      return f.p((rising ? up_ : down_) + 2 * m);
+    });
   }
 
  private:
