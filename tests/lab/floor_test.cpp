@@ -2,13 +2,20 @@
 // pooled scatter within the set points' steady parts (pure error), corrected for samples that
 // correlate; where it does not, the neighbours' contrasts are corrected for an AR(1) noise. And
 // the lack-of-fit test of a model against the pure error.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
 #include <random>
 
+#include "lab/dataset.hpp"
 #include "lab/noise.hpp"
 #include "lab/steps.hpp"
+#include "lab_cli_run.hpp"
 
 namespace {
 
@@ -77,8 +84,8 @@ TEST(LabFloor, WhiteNoiseGivesTheSameFloorEitherWay) {
   EXPECT_LT(neighbours.lag1, 0.05);
 }
 
-TEST(LabFloor, WithoutRepeatedSetPointsTheNeighboursAreCorrectedForCorrelatedSamples) {
-  // given a ramp-like log: every row its own PWM (no set point repeats), noise AR(1) with r = 0.5
+// A ramp-like log: every row its own PWM (no set point repeats), noise AR(1) with lag-1 r = 0.5, 3 g.
+lab::Dataset correlatedRamp() {
   std::mt19937 rng(3);
   std::normal_distribution<double> normal(0.0, 1.0);
   lab::Dataset d;
@@ -93,6 +100,12 @@ TEST(LabFloor, WithoutRepeatedSetPointsTheNeighboursAreCorrectedForCorrelatedSam
     d.run.push_back(0);
   }
   d.set("pwm_us", pwm), d.set("force_g", force);
+  return d;
+}
+
+TEST(LabFloor, WithoutRepeatedSetPointsTheNeighboursAreCorrectedForCorrelatedSamples) {
+  // given a ramp-like log: every row its own PWM (no set point repeats), noise AR(1) with r = 0.5
+  const lab::Dataset d = correlatedRamp();
   const lab::NoiseEstimate n = lab::estimateNoise(d);
   ASSERT_TRUE(n.known()) << n.why_not;
   EXPECT_EQ(n.method, "neighbours");
@@ -125,6 +138,33 @@ TEST(LabFloor, LackOfFitIsSignificantOnlyWhenTheSetPointsMeansMissTheModel) {
   EXPECT_TRUE(off.significant) << off.text;
   EXPECT_NEAR(off.excess_g, 3.0, 0.5) << off.text;
   EXPECT_EQ(off.dof1, 90 - 12);
+}
+
+TEST(LabFloor, TheReportAndTheJsonStateWhatTheNoRepeatFloorAssumes) {
+  // given the correlated ramp as a CSV file
+  namespace fs = std::filesystem;
+  const std::string dir = std::string(THRUSTCAL_LAB_TMP_DIR) + "/floor_assumption";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir + "/ramp.csv") << lab::toCsv(correlatedRamp(), {});
+  // when it is diagnosed with a report
+  const auto r = labtest::runLabCli({"lab", "diagnose", dir + "/ramp.csv", "--model", "curve", "--json", "--report",
+                                     dir + "/report"});
+  ASSERT_EQ(r.rc, 0) << r.err;
+  // then the JSON names the estimator and its assumption (AR(1), the measured correlation) ...
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["noise"]["estimator"], "neighbours");
+  const std::string assumption = j["noise"]["assumption"];
+  EXPECT_NE(assumption.find("AR(1)"), std::string::npos) << assumption;
+  EXPECT_NEAR(j["noise"]["lag1"].get<double>(), 0.5, 0.08);
+  EXPECT_NE(assumption.find(fmt::format("lag-1 autocorrelation {:.2f}", j["noise"]["lag1"].get<double>())),
+            std::string::npos)
+      << assumption;
+  EXPECT_FALSE(j["noise"]["lack_of_fit"]["tested"].get<bool>());  // no set points: nothing to test against
+  // ... and the report says it in words
+  std::ifstream page(dir + "/report/report.md");
+  const std::string md((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
+  EXPECT_NE(md.find("What the floor assumes: " + assumption), std::string::npos) << md.substr(0, 3000);
 }
 
 }  // namespace
