@@ -133,7 +133,7 @@ void printFit(const FitResult& f, const NoiseEstimate* noise) {
       ++curve;
       continue;
     }
-    std::printf("  %-20s %-28s (%s)\n", p.name.c_str(), fmtSigma(p).c_str(), p.effect.c_str());
+    std::printf("  %-20s %-28s (%s%s)\n", p.name.c_str(), fmtSigma(p).c_str(), p.effect.c_str(), p.fixed ? ", held" : "");
   }
   if (curve) std::printf("  + %d curve coefficients c1..c%d [g] (in --json)\n", curve, curve);
   for (const auto& w : f.warnings) std::printf("  note: %s\n", w.c_str());
