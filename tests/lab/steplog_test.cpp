@@ -39,11 +39,13 @@ lab::Dataset motor0(const lab::Dataset& d) {
 std::string asGatherStoreStream(const lab::Dataset& d) {
   std::string s = "# dyn motor 0: 5 points, steps up and down\nt_s,pwm_us,force_g,vbat_v,motor,dir\n";
   const auto &t = d.col("t_s"), &p = d.col("pwm_us"), &f = d.col("force_g"), &v = d.col("vbat_v");
+  int dir = 0;  // the step's direction, on each of its rows
   for (std::size_t i = 0; i < d.rows(); ++i) {
-    const int dir = i == 0 || p[i] == p[i - 1] ? 0 : (p[i] > p[i - 1] ? 1 : -1);
-    if (dir != 0)
+    if (i > 0 && p[i] != p[i - 1]) {
+      dir = p[i] > p[i - 1] ? 1 : -1;
       s += fmt::format("# fit done\n# step {} {:.0f} -> {:.0f} us at t_s {:.4f} (the ESC's edge); bus {:.2f} V\n",
                        dir > 0 ? "up" : "down", p[i - 1], p[i], t[i], v[i]);
+    }
     s += fmt::format("{:.4f},{:.0f},{:.1f},{:.2f},0,{}\n", t[i], p[i], f[i], v[i], dir);
   }
   return s;
