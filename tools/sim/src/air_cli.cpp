@@ -105,6 +105,20 @@ void addAirOptions(CLI::App* cmd, AirCliOptions& o) {
       ->capture_default_str();
   cmd->add_option("--motor", o.motor_parts, "seesaw/gimbal: M:PRESET makes motor M another part, "
                                             "e.g. 2:kv900_11x4.7 (repeatable)");
+  cmd->add_option("--rc", o.rc, std::string("an RC receiver on these pins: ") + kRcSpecSyntax +
+                                  "; no signal until a value comes (docs/sim.md, \"RC receiver input\")")
+      ->check([](const std::string& spec) -> std::string {
+        try {
+          parseRcSpec(spec, defaultEscBoardPins());
+          return {};
+        } catch (const std::invalid_argument& e) {
+          const std::string what = e.what();
+          return what.rfind("--rc ", 0) == 0 ? what.substr(5) : what;
+        }
+      });
+  cmd->add_option("--rc-script", o.rc_script, "the receiver's channel values over simulated time: CSV "
+                                              "t_s,ch1..ch8 (us), a row T,loss stops the signal")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--vibration", o.vibration_g, "seesaw/gimbal: rotor imbalance at the IMU, g at 10,000 rpm")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
@@ -136,6 +150,32 @@ std::unique_ptr<AirframeRig> makeAirframeRig(const std::string& elf, const std::
     made->onSample([log](const AirSample& row) { log->row(row); });
   }
   return made;
+}
+
+// --- RC input ---
+
+std::unique_ptr<RcOnBoard> makeRcInput(Board& board, const AirCliOptions& o, bool pty) {
+  if (o.rc.empty()) {
+    if (!o.rc_script.empty() || o.rc_pty)
+      throw std::invalid_argument(fmt::format("{} needs a receiver: add --rc ppm:PIN or --rc pwm:PIN,PIN,...",
+                                              o.rc_script.empty() ? "--rc-pty" : "--rc-script"));
+    return nullptr;
+  }
+  std::vector<RcScriptRow> rows;
+  if (!o.rc_script.empty()) rows = readRcScript(o.rc_script);  // errors before the board runs
+  auto rc = std::make_unique<RcOnBoard>(board, parseRcSpec(o.rc, defaultEscBoardPins()));
+  if (!rows.empty()) rc->play(std::move(rows));
+  if (pty || o.rc_pty) rc->openPty();
+  return rc;
+}
+
+std::string rcSummary(const RcOnBoard& rc) {
+  constexpr std::size_t kShown = 20;
+  const auto& a = rc.applied();
+  std::string s = fmt::format("rc: {}, {} changes applied, {} frames sent", rc.describe(), a.size(), rc.part().frames);
+  for (std::size_t i = 0; i < a.size() && i < kShown; ++i) s += "\n  rc " + a[i];
+  if (a.size() > kShown) s += fmt::format("\n  ... {} more", a.size() - kShown);
+  return s;
 }
 
 // --- a board without a rig ---
@@ -215,6 +255,10 @@ void runOnce(const RunOptions& r) {
   }
   std::unique_ptr<StillAirframe> still;
   if (!rig) still = std::make_unique<StillAirframe>(*board, r.rig, r.air);
+  const std::unique_ptr<RcOnBoard> rc = makeRcInput(*board, r.air, false);
+  if (rc && !rc->ptyPath().empty())
+    fmt::print(stderr, "sim run: RC receiver {}; live channel values: type 'ch 1500 1500 1000 1500' lines on {}\n",
+               rc->describe(), rc->ptyPath());
   if (!r.eeprom.empty()) board->setEeprom(hex::readIntelHexFile(r.eeprom, kEepromBytes));
   if (!r.quiet)
     board->addOutputListener([](uint8_t b) {
@@ -230,6 +274,7 @@ void runOnce(const RunOptions& r) {
              board->simulatedSeconds(), board->wallSeconds(), board->realtimeFactor(),
              rig ? rig->describe() : fmt::format("no rig, IMU {}", r.air.imu));
   for (const std::string& f : applied) fmt::print(stderr, "  fault applied: {}\n", f);
+  if (rc) fmt::print(stderr, "  {}\n", rcSummary(*rc));
   if (!r.air.log.empty()) fmt::print(stderr, "  truth log: {}\n", r.air.log);
 }
 
@@ -257,6 +302,8 @@ void addRunCommand(CLI::App& sim) {
   cmd->add_option("--send", r->send, "a line typed into UART0 at the start (repeatable; Enter = CR)");
   cmd->add_flag("--quiet", r->quiet, "do not copy the UART output to stdout");
   addAirOptions(cmd, r->air);
+  cmd->add_flag("--rc-pty", r->air.rc_pty, "with --rc: also open the live RC pseudo-terminal (sim console "
+                                           "always does)");
   cmd->callback([r] {
     try {
       runOnce(*r);

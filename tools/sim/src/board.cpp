@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 
 #include "hex/intel_hex.hpp"
+#include "sim/pin_change.hpp"
 #include "sim/twi.hpp"
 
 extern "C" {
@@ -217,6 +218,7 @@ void Board::load(const FlashImages& images) {
 
 void Board::wire() {
   twi_ = std::make_unique<Twi>(avr_);
+  pin_change_ = std::make_unique<PinChange>(avr_);
   for (int ch = 0; ch < kEscChannels; ++ch) {
     edge_params_[ch] = EdgeParam{this, ch};
     avr_irq_t* irq =
@@ -240,6 +242,7 @@ void Board::wire() {
 
 Board::~Board() {
   twi_.reset();  // its IRQs live in the core's pool: before avr_terminate
+  pin_change_.reset();
   if (avr_) {
     avr_terminate(avr_);
     std::free(avr_);

@@ -15,6 +15,8 @@
 //             bootloader (Intel HEX, e.g. Debian's STK500v2 for the Mega2560 at byte 0x3E000):
 //             then every reset() starts at the bootloader, as a board whose BOOTRST fuse is
 //             programmed (simavr ignores the fuses, so the harness sets the reset vector).
+//   PCINT     the chip's three pin-change interrupt groups (sim/pin_change.hpp), not simavr 1.6's
+//             one; inputs driven from outside (sim/pins.hpp, sim/rc_receiver.hpp) trigger them.
 //   TWI       the chip's TWI (sim/twi.hpp: status codes, TWINT, timing from TWBR/TWPS, its
 //             interrupt), not simavr 1.6's; I2C parts (sim/mpu6050.hpp) connect to twi().irq().
 // A periodic tick (default 1 ms simulated) lets a plant model advance in step with the CPU.
@@ -40,6 +42,7 @@ struct avr_irq_t;
 namespace sim {
 
 class Twi;
+class PinChange;
 
 // The board's facts come from the table the firmware is built from (hal/board.hpp).
 using hal::kCpuHz;
@@ -123,6 +126,7 @@ class Board {
 
   // --- TWI (I2C master) ---
   Twi& twi() { return *twi_; }
+  PinChange& pinChange() { return *pin_change_; }
 
   // --- ESC pins ---
   const EscPin& escPin(int channel) const { return esc_.at(channel); }
@@ -258,6 +262,7 @@ class Board {
   std::vector<avr_irq_t*> irqs_;
   uint32_t boot_address_ = 0;  // 0: no bootloader
   std::unique_ptr<Twi> twi_;
+  std::unique_ptr<PinChange> pin_change_;
 };
 
 }  // namespace sim
