@@ -36,6 +36,12 @@ std::vector<AirFault> parseFaults(const AirCliOptions& o) {
   return faults;
 }
 
+// "--OPTION TEXT: " in front of a parser's message once, as CLI11 reports check failures.
+std::string checkMessage(const std::invalid_argument& e, const std::string& option) {
+  const std::string what = e.what();
+  return what.rfind(option + " ", 0) == 0 ? what.substr(option.size() + 1) : what;
+}
+
 Mpu6050Params imuParams(const AirCliOptions& o) {
   Mpu6050Params p;
   p.seed = o.imu_seed;
@@ -94,8 +100,7 @@ void addAirOptions(CLI::App* cmd, AirCliOptions& o) {
           parseAirFault(spec);
           return {};
         } catch (const std::invalid_argument& e) {
-          const std::string what = e.what();  // CLI11 puts "--fault: " in front already
-          return what.rfind("--fault ", 0) == 0 ? what.substr(8) : what;
+          return checkMessage(e, "--fault");  // CLI11 puts "--fault: " in front already
         }
       });
   cmd->add_option("--log", o.log, "seesaw/gimbal: write the rig's true attitude, rates, motor forces "
@@ -105,6 +110,18 @@ void addAirOptions(CLI::App* cmd, AirCliOptions& o) {
       ->capture_default_str();
   cmd->add_option("--motor", o.motor_parts, "seesaw/gimbal: M:PRESET makes motor M another part, "
                                             "e.g. 2:kv900_11x4.7 (repeatable)");
+  cmd->add_option("--spin", o.spin, "gimbal: each motor's propeller direction, cw or ccw seen from above, motor 0 "
+                                    "first, e.g. cw,ccw,cw,ccw (default: the layout's, docs/sim.md)");
+  cmd->add_option("--imu-mount", o.imu_mount, std::string("the IMU's rotation against the airframe: ") + kImuMountSyntax)
+      ->check([](const std::string& spec) -> std::string {
+        try {
+          parseImuMount(spec);
+          return {};
+        } catch (const std::invalid_argument& e) {
+          return checkMessage(e, "--imu-mount");
+        }
+      })
+      ->capture_default_str();
   cmd->add_option("--rc", o.rc, std::string("an RC receiver on these pins: ") + kRcSpecSyntax +
                                   "; no signal until a value comes (docs/sim.md, \"RC receiver input\")")
       ->check([](const std::string& spec) -> std::string {
@@ -112,8 +129,7 @@ void addAirOptions(CLI::App* cmd, AirCliOptions& o) {
           parseRcSpec(spec, defaultEscBoardPins());
           return {};
         } catch (const std::invalid_argument& e) {
-          const std::string what = e.what();
-          return what.rfind("--rc ", 0) == 0 ? what.substr(5) : what;
+          return checkMessage(e, "--rc");
         }
       });
   cmd->add_option("--rc-script", o.rc_script, "the receiver's channel values over simulated time: CSV "
@@ -125,6 +141,25 @@ void addAirOptions(CLI::App* cmd, AirCliOptions& o) {
 }
 
 bool isAirRig(const std::string& rig) { return rig == "seesaw" || rig == "gimbal"; }
+
+std::vector<int> parseSpin(const std::string& text, int motors) {
+  std::vector<int> spin;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string word = text.substr(start, comma - start);
+    start = comma + 1;
+    if (word != "cw" && word != "ccw")
+      throw std::invalid_argument(fmt::format("--spin {}: '{}' is neither cw nor ccw; write one direction per motor, "
+                                              "seen from above, e.g. --spin cw,ccw,cw,ccw",
+                                              text, word));
+    spin.push_back(word == "ccw" ? 1 : -1);
+  }
+  if (static_cast<int>(spin.size()) != motors)
+    throw std::invalid_argument(fmt::format("--spin {}: {} directions for a rig with {} motors; write one per motor, "
+                                            "motor 0 first", text, spin.size(), motors));
+  return spin;
+}
 
 std::unique_ptr<AirframeRig> makeAirframeRig(const std::string& elf, const std::string& rig,
                                              const std::string& preset,
@@ -138,8 +173,15 @@ std::unique_ptr<AirframeRig> makeAirframeRig(const std::string& elf, const std::
   for (uint64_t i = s.size(); i < 4; ++i) s.push_back(i + 1);
   for (int i = 0; i < 4; ++i) a.motors[i] = motorForSeed(preset, s[i], 0.03);
   applyMotorParts(a.motors, o, s);
+  if (!o.spin.empty()) {
+    if (a.rig == AirRig::kSeesaw)
+      throw std::invalid_argument("--spin: the seesaw turns about its pivot only, where the propellers' directions "
+                                  "make no torque; use --spin with --rig gimbal");
+    a.gimbal.common.spin = parseSpin(o.spin, 4);
+  }
   a.imu = o.imu == "mpu6050";
   a.imu_params = imuParams(o);
+  a.imu_mount = parseImuMount(o.imu_mount);
   a.faults = parseFaults(o);
   a.log_period_s = o.log.empty() ? 0.0 : o.log_period_s;
   a.log_in_memory = false;
@@ -184,8 +226,8 @@ StillAirframe::StillAirframe(Board& board, const std::string& rig, const AirCliO
   if (!o.log.empty())
     throw std::invalid_argument(fmt::format("--log records a rig's attitude: use --rig seesaw or "
                                             "gimbal (the {} stands still)", rig));
-  if (!o.motor_parts.empty() || o.vibration_g > 0)
-    throw std::invalid_argument("--motor and --vibration need --rig seesaw or gimbal");
+  if (!o.motor_parts.empty() || o.vibration_g > 0 || !o.spin.empty())
+    throw std::invalid_argument("--motor, --vibration and --spin need --rig seesaw or gimbal");
   for (const AirFault& f : parseFaults(o)) {
     if (isMotorFault(f))
       throw std::invalid_argument(fmt::format("--fault {}: motor faults need --rig seesaw or gimbal", f.spec));
@@ -194,7 +236,8 @@ StillAirframe::StillAirframe(Board& board, const std::string& rig, const AirCliO
     pending_.push_back(f);
   }
   std::stable_sort(pending_.begin(), pending_.end(), [](auto& a, auto& b) { return a.at_s < b.at_s; });
-  if (o.imu == "mpu6050") imu_ = std::make_unique<ImuOnBoard>(board_, imuParams(o), levelAtRest());
+  if (o.imu == "mpu6050")
+    imu_ = std::make_unique<ImuOnBoard>(board_, imuParams(o), levelAtRest(), parseImuMount(o.imu_mount));
   std::weak_ptr<int> alive = alive_;
   board_.addResetListener([this, alive](uint64_t) {
     if (!alive.expired()) arm();  // a reset cancelled the cycle timer

@@ -24,6 +24,8 @@ struct AirCliOptions {
   double log_period_s = 0.01;
   std::vector<std::string> motor_parts;  // "M:PRESET": motor M is another part
   double vibration_g = 0.0;        // rotor imbalance at 10,000 rpm
+  std::string spin;                // gimbal: "cw,ccw,cw,ccw" per motor ("" = the layout's)
+  std::string imu_mount = "yaw0";  // the IMU's rotation against the airframe (sim/imu_on_board.hpp)
   std::string rc;                  // ppm:PIN | pwm:PIN,PIN,... ("" = no receiver)
   std::string rc_script;           // CSV of channel values over simulated time
   bool rc_pty = false;             // the live RC pty (sim console opens it whenever --rc is given)
@@ -31,6 +33,9 @@ struct AirCliOptions {
 
 // Adds the options above to a command.
 void addAirOptions(CLI::App* cmd, AirCliOptions& o);
+// "cw,ccw,cw,ccw": +1 (ccw) / -1 (cw) per motor, as many as `motors`. Throws
+// std::invalid_argument saying what to write.
+std::vector<int> parseSpin(const std::string& text, int motors);
 bool isAirRig(const std::string& rig);  // "seesaw" or "gimbal"
 
 // The seesaw or gimbal rig on a board running `elf` (with `eeprom` loaded if not empty), the
