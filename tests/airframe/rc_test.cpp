@@ -22,6 +22,8 @@
 #include "sim/board.hpp"
 #include "sim/console.hpp"
 #include "sim/pin_change.hpp"
+#include "sim/pin_names.hpp"
+#include "sim/ports.hpp"
 #include "sim/rc_input.hpp"
 
 extern "C" {
@@ -35,57 +37,13 @@ using RcValues = std::array<double, 8>;
 
 // --- pins and parsing ---
 
-TEST(BoardPins, NameTheMegaHeaderAsTheSilkscreenDoes) {
-  const struct {
-    const char* text;
-    char port;
-    int bit, arduino;
-    const char* label;
-  } rows[] = {
-      {"D49", 'L', 0, 49, "D49 (PL0)"}, {"49", 'L', 0, 49, "D49 (PL0)"}, {"A8", 'K', 0, 62, "A8 (PK0)"},
-      {"a15", 'K', 7, 69, "A15 (PK7)"}, {"PK3", 'K', 3, 65, "A11 (PK3)"}, {"D2", 'E', 4, 2, "D2 (PE4)"},
-      {"D19", 'D', 2, 19, "D19 (PD2)"}, {"D11", 'B', 5, 11, "D11 (PB5)"}, {"A0", 'F', 0, 54, "A0 (PF0)"},
-  };
-  for (const auto& r : rows) {
-    const sim::BoardPin p = sim::parseBoardPin(r.text, "--x");
-    EXPECT_EQ(p.port, r.port) << r.text;
-    EXPECT_EQ(p.bit, r.bit) << r.text;
-    EXPECT_EQ(p.arduino, r.arduino) << r.text;
-    EXPECT_EQ(p.label(), r.label) << r.text;
-  }
-}
-
-TEST(BoardPins, RefuseWhatIsNotOnTheHeaderAndPinsNamedTwice) {
-  const struct {
-    const char* text;
-    const char* says;
-  } rows[] = {
-      {"D70", "the Mega2560 has D0..D69"}, {"A16", "the Mega2560 has A0..A15"},
-      {"PE7", "not on the Mega2560's header"}, {"X3", "not a pin name"}, {"", "not a pin name"},
-  };
-  for (const auto& r : rows) {
-    try {
-      sim::parseBoardPin(r.text, "--x");
-      ADD_FAILURE() << r.text << " was accepted";
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find(r.says), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("D49, A8, PK0"), std::string::npos) << e.what();
-    }
-  }
-  try {
-    sim::parseBoardPins("A8,A9,PK0", "--rc");
-    ADD_FAILURE() << "a pin named twice was accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("A8 (PK0) is named twice"), std::string::npos) << e.what();
-  }
-}
-
 TEST(RcSpec, ReadsPpmAndPwmAndRefusesPinsTheBoardUses) {
-  const sim::RcSpec ppm = sim::parseRcSpec("ppm:D49", sim::defaultEscBoardPins());
+  const auto esc = sim::boardEscPins();
+  const sim::RcSpec ppm = sim::parseRcSpec("ppm:D49", &esc);
   EXPECT_EQ(ppm.signal, sim::RcSignal::kPpm);
   ASSERT_EQ(ppm.pins.size(), 1u);
   EXPECT_EQ(ppm.pins[0].arduino, 49);
-  const sim::RcSpec pwm = sim::parseRcSpec("pwm:A8,A9,A10,A11", sim::defaultEscBoardPins());
+  const sim::RcSpec pwm = sim::parseRcSpec("pwm:A8,A9,A10,A11", &esc);
   EXPECT_EQ(pwm.signal, sim::RcSignal::kPwm);
   EXPECT_EQ(pwm.pins.size(), 4u);
   const struct {
@@ -96,10 +54,12 @@ TEST(RcSpec, ReadsPpmAndPwmAndRefusesPinsTheBoardUses) {
       {"D49", "write ppm:PIN"},                      {"ppm:D6", "D6 (PH3) carries ESC 0"},
       {"pwm:A8,D20", "carries the TWI"},             {"ppm:D0", "carries UART0"},
       {"pwm:A8,A9,A10,A11,A12,A13,A14,A15,D49", "at most 8 channels"},
+      {"pwm:A8,A9,PK0", "D62 (PK0) is named twice"}, {"ppm:PE7", "PE7 is not on the Mega's headers"},
+      {"ppm:D70", "pin 'D70' is not a Mega 2560 pin"}, {"pwm:A8,", "pin '' is not a Mega 2560 pin"},
   };
   for (const auto& b : bad) {
     try {
-      sim::parseRcSpec(b.spec, sim::defaultEscBoardPins());
+      sim::parseRcSpec(b.spec, &esc);
       ADD_FAILURE() << b.spec << " was accepted";
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find(b.says), std::string::npos) << b.spec << ": " << e.what();
@@ -168,7 +128,7 @@ class RcProbe : public ::testing::Test {
   }
   void start(const std::string& spec) {
     board = std::make_unique<sim::Board>(RC_PROBE_ELF);
-    rc = std::make_unique<sim::RcOnBoard>(*board, sim::parseRcSpec(spec, sim::defaultEscBoardPins()));
+    rc = std::make_unique<sim::RcOnBoard>(*board, sim::parseRcSpec(spec, &board->escPins()));
     con = std::make_unique<sim::Console>(*board, "");
     con->onLine([this](const std::string& line) { lines.push_back({board->timeS(), line}); });
   }
@@ -210,7 +170,7 @@ class RcProbe : public ::testing::Test {
   // Edges seen on a pin (host side) from now on.
   uint64_t* countEdges(char port, uint8_t bit) {
     edge_count = 0;
-    avr_irq_register_notify(sim::pinIrq(board->avr(), port, bit), &RcProbe::onEdge, &edge_count);
+    avr_irq_register_notify(board->ports().pinIrq(port, bit), &RcProbe::onEdge, &edge_count);
     return &edge_count;
   }
   static void onEdge(avr_irq_t* irq, uint32_t value, void* param) {
@@ -345,7 +305,7 @@ TEST_F(RcProbe, TheReceiverGoesOnThroughABoardReset) {
 TEST(RcCommand, SaysWhatToWriteAndKeepsTheRestOfTheChannels) {
   if (std::string(RC_PROBE_ELF).empty()) GTEST_SKIP();
   sim::Board board(RC_PROBE_ELF);
-  sim::RcOnBoard rc(board, sim::parseRcSpec("pwm:A8,A9,A10", {}));
+  sim::RcOnBoard rc(board, sim::parseRcSpec("pwm:A8,A9,A10", nullptr));
   EXPECT_NE(rc.command("ch 1500 x").find("error: 'x' is not a number of microseconds"), std::string::npos);
   EXPECT_NE(rc.command("ch 1500 3000").find("error: ch2 3000 us is outside 500..2500 us"), std::string::npos);
   EXPECT_NE(rc.command("ch").find("error: no values"), std::string::npos);
@@ -373,7 +333,7 @@ TEST(RcCli, SimRunPlaysTheScriptAndRefusesAMalformedRowWithItsLine) {
                                      status);
   EXPECT_EQ(status, 0) << out;
   EXPECT_NE(out.find("pwm 1500.0 1500.0 1000.0 2000.0 - - - -"), std::string::npos) << out;
-  EXPECT_NE(out.find("rc: PWM on A8 (PK0), A9 (PK1), A10 (PK2), A11 (PK3), 2 changes applied"), std::string::npos)
+  EXPECT_NE(out.find("rc: PWM on D62 (PK0), D63 (PK1), D64 (PK2), D65 (PK3), 2 changes applied"), std::string::npos)
       << out;
   const std::string err = air::shell(fmt::format("{} sim run --elf {} --duration 0.2 --rc pwm:A8 --rc-script {}",
                                                  THRUSTCAL_BIN, RC_PROBE_ELF, bad),

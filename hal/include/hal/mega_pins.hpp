@@ -1,52 +1,55 @@
-// The Arduino Mega2560's header pins as data: digital pin n (D0..D69; A0..A15 are D54..D69) is
-// bit kMegaPinBits[n] of AVR port kMegaPinPorts[n]. The same map as the Arduino core's
-// variants/mega/pins_arduino.h (digital_pin_to_port_PGM, digital_pin_to_bit_mask_PGM), written
-// down here once so the simulator's pin options (--rc, --esc-pins) and their docs agree with
-// the silkscreen. Pure data: the firmware images do not need it, the host tools read it.
+// The Arduino Mega 2560's header pins: D0..D69 (A0..A15 are D54..D69) and the ATmega2560 port
+// pin each is wired to, as the board's schematic and the Arduino core's "mega" variant number
+// them. hal/board.hpp checks its tables against this one; the simulator names pins with it
+// (`sim console --esc-pins D3,D5,D6,D2`, sim/pin_names.hpp). docs/hardware.md has the same map.
 #pragma once
 #include <stdint.h>
 
-#include "hal/board.hpp"
-
 namespace hal {
 
-constexpr uint8_t kMegaDigitalPins = 70;     // D0..D69
-constexpr uint8_t kMegaFirstAnalogPin = 54;  // A0 = D54 ... A15 = D69
-// Port letter of D0, D1, ... D69.
-constexpr char kMegaPinPorts[] =
-    "EEEEGEHHHHBBBBJJHHDDDDAAAAAAAACCCCCCCCDGGGLLLLLLLLBBBBFFFFFFFFKKKKKKKK";
-// Bit in that port of D0, D1, ... D69.
-constexpr uint8_t kMegaPinBits[] = {
-    0, 1, 4, 5, 5, 3, 3, 4, 5, 6,  // D0..D9
-    4, 5, 6, 7, 1, 0, 1, 0, 3, 2,  // D10..D19
-    1, 0, 0, 1, 2, 3, 4, 5, 6, 7,  // D20..D29
-    7, 6, 5, 4, 3, 2, 1, 0, 7, 2,  // D30..D39
-    1, 0, 7, 6, 5, 4, 3, 2, 1, 0,  // D40..D49
-    3, 2, 1, 0, 0, 1, 2, 3, 4, 5,  // D50..D59 (D54 = A0)
-    6, 7, 0, 1, 2, 3, 4, 5, 6, 7,  // D60..D69 (D62 = A8)
+struct MegaPin {
+  uint8_t arduino;  // D number (0xFF: a port pin the Mega's headers do not carry)
+  char port;        // 'A'..'L'
+  uint8_t bit;      // 0..7
 };
-static_assert(sizeof kMegaPinPorts == kMegaDigitalPins + 1, "one port letter per header pin");
-static_assert(sizeof kMegaPinBits == kMegaDigitalPins, "one bit per header pin");
+
+constexpr uint8_t kMegaPinCount = 70;        // D0..D69
+constexpr uint8_t kMegaFirstAnalogPin = 54;  // A0 = D54 ... A15 = D69
+constexpr uint8_t kNotOnHeader = 0xFF;
+
+// clang-format off
+constexpr MegaPin kMegaPins[kMegaPinCount] = {
+    {0, 'E', 0},  {1, 'E', 1},  {2, 'E', 4},  {3, 'E', 5},  {4, 'G', 5},  {5, 'E', 3},   // D0 RX0, D1 TX0
+    {6, 'H', 3},  {7, 'H', 4},  {8, 'H', 5},  {9, 'H', 6},  {10, 'B', 4}, {11, 'B', 5},
+    {12, 'B', 6}, {13, 'B', 7}, {14, 'J', 1}, {15, 'J', 0}, {16, 'H', 1}, {17, 'H', 0},  // D13: the LED
+    {18, 'D', 3}, {19, 'D', 2}, {20, 'D', 1}, {21, 'D', 0},                              // D20 SDA, D21 SCL
+    {22, 'A', 0}, {23, 'A', 1}, {24, 'A', 2}, {25, 'A', 3}, {26, 'A', 4}, {27, 'A', 5},
+    {28, 'A', 6}, {29, 'A', 7}, {30, 'C', 7}, {31, 'C', 6}, {32, 'C', 5}, {33, 'C', 4},
+    {34, 'C', 3}, {35, 'C', 2}, {36, 'C', 1}, {37, 'C', 0}, {38, 'D', 7}, {39, 'G', 2},
+    {40, 'G', 1}, {41, 'G', 0}, {42, 'L', 7}, {43, 'L', 6}, {44, 'L', 5}, {45, 'L', 4},
+    {46, 'L', 3}, {47, 'L', 2}, {48, 'L', 1}, {49, 'L', 0}, {50, 'B', 3}, {51, 'B', 2},
+    {52, 'B', 1}, {53, 'B', 0},
+    {54, 'F', 0}, {55, 'F', 1}, {56, 'F', 2}, {57, 'F', 3}, {58, 'F', 4}, {59, 'F', 5},  // A0..A7
+    {60, 'F', 6}, {61, 'F', 7},
+    {62, 'K', 0}, {63, 'K', 1}, {64, 'K', 2}, {65, 'K', 3}, {66, 'K', 4}, {67, 'K', 5},  // A8..A15
+    {68, 'K', 6}, {69, 'K', 7},
+};
+// clang-format on
+
+// The header pin wired to (port, bit), or kNotOnHeader.
+constexpr uint8_t megaPinOf(char port, uint8_t bit, uint8_t i = 0) {
+  return i >= kMegaPinCount                                       ? kNotOnHeader
+         : kMegaPins[i].port == port && kMegaPins[i].bit == bit ? kMegaPins[i].arduino
+                                                                 : megaPinOf(port, bit, static_cast<uint8_t>(i + 1));
+}
 
 namespace board {
-// No two header pins share a port bit.
-constexpr bool megaPinsUnique() {
-  for (uint8_t i = 0; i < kMegaDigitalPins; ++i)
-    for (uint8_t j = static_cast<uint8_t>(i + 1); j < kMegaDigitalPins; ++j)
-      if (kMegaPinPorts[i] == kMegaPinPorts[j] && kMegaPinBits[i] == kMegaPinBits[j]) return false;
-  return true;
+constexpr bool megaPinsNumbered(uint8_t i = 0) {
+  return i >= kMegaPinCount || (kMegaPins[i].arduino == i && kMegaPins[i].bit < 8 && kMegaPins[i].port >= 'A' &&
+                                kMegaPins[i].port <= 'L' && kMegaPins[i].port != 'I' &&
+                                megaPinsNumbered(static_cast<uint8_t>(i + 1)));
 }
-static_assert(megaPinsUnique(), "the header pin map names a port bit twice");
-// The ESC table (board.hpp) names each output by its header pin and its port bit: they agree.
-constexpr bool escPinsOnTheHeader() {
-  for (uint8_t i = 0; i < kEscChannels; ++i) {
-    const uint8_t d = kEscPins[i].arduino_pin;
-    if (d >= kMegaDigitalPins || kMegaPinPorts[d] != kEscPins[i].port || kMegaPinBits[d] != kEscPins[i].bit)
-      return false;
-  }
-  return true;
-}
-static_assert(escPinsOnTheHeader(), "an ESC pin's Arduino number and its port bit disagree");
 }  // namespace board
+static_assert(board::megaPinsNumbered(), "row i is Di, on a port pin A..L (no I) bit 0..7");
 
 }  // namespace hal

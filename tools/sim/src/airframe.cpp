@@ -47,6 +47,7 @@ void AirframeRig::build() {
 
 void AirframeRig::wire() {
   board_.clearPlantWiring();
+  board_.setEscPins(o_.esc_pins);
   t0_s_ = board_.timeS();
   const int motors = rig_->motors();
   board_.addPulseListener([this, motors](int ch, double width_us, double t_s) {
@@ -193,7 +194,14 @@ std::string AirframeRig::describe() const {
                            o_.imu_params.unit_errors ? "" : " (ideal)",
                            turned ? ", mounted " + imuMountName(o_.imu_mount) : std::string())
              : std::string("no IMU");
-  return fmt::format("{}; motors {}; {}", rig, motors, imu);
+  std::string pins;
+  const auto table = boardEscPins();
+  for (int i = 0; i < rig_->motors(); ++i)
+    if (o_.esc_pins[i].port != table[i].port || o_.esc_pins[i].bit != table[i].bit)
+      pins = "; ESC pins";
+  if (!pins.empty())
+    for (int i = 0; i < rig_->motors(); ++i) pins += " " + megaPinName(o_.esc_pins[i]);
+  return fmt::format("{}; motors {}; {}{}", rig, motors, imu, pins);
 }
 
 }  // namespace sim

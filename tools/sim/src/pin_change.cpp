@@ -3,8 +3,9 @@
 #include "sim/pin_change.hpp"
 
 #include <stdexcept>
+#include <string>
 
-#include "sim/pins.hpp"
+#include "sim/io_regs.hpp"
 
 extern "C" {
 #include <simavr/avr_ioport.h>
@@ -47,18 +48,17 @@ avr_regbit_t regbit(uint16_t reg, uint8_t bit) {
   return r;
 }
 
-void takeWrite(avr_t* avr, uint16_t addr, avr_io_write_t handler, void* param) {
-  auto& io = avr->io[AVR_DATA_TO_IO(addr)];
-  if (io.w.c && io.w.param != param)
-    throw std::runtime_error("pin-change registers already handled by another part of the simulator");
-  io.w.c = handler;
-  io.w.param = param;
+avr_ioport_t* portB(avr_t* avr) {
+  for (avr_io_t* io = avr->io_port; io; io = io->next)
+    if (io->kind && std::string(io->kind) == "port" && reinterpret_cast<avr_ioport_t*>(io)->name == 'B')
+      return reinterpret_cast<avr_ioport_t*>(io);
+  throw std::runtime_error("this simavr core has no PORTB; the board must be an atmega2560");
 }
 
 }  // namespace
 
 PinChange::PinChange(avr_t* avr) : avr_(avr) {
-  avr_ioport_t* portb = ioPort(avr_, 'B');
+  avr_ioport_t* portb = portB(avr_);
   portb->r_pcint = 0;  // simavr raises PCINT0 itself no more: this class does
   vectors_[0] = &portb->pcint;
   avr_int_table_t& table = avr_->interrupts;
@@ -75,18 +75,15 @@ PinChange::PinChange(avr_t* avr) : avr_(avr) {
   }
   for (std::size_t i = 0; i < 24; ++i) {
     pins_[i] = PinParam{this, kPins[i].group, static_cast<uint8_t>(1u << kPins[i].mask_bit)};
-    pin_irqs_[i] = pinIrq(avr_, kPins[i].port, kPins[i].bit);
+    pin_irqs_[i] = avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(kPins[i].port), kPins[i].bit);
     avr_irq_register_notify(pin_irqs_[i], &PinChange::onPin, &pins_[i]);
   }
-  takeWrite(avr_, kPcifr, &PinChange::onFlagWrite, this);
-  takeWrite(avr_, kPcicr, &PinChange::onEnableWrite, this);
+  takeIoWrite(avr_, kPcifr, &PinChange::onFlagWrite, this);
+  takeIoWrite(avr_, kPcicr, &PinChange::onEnableWrite, this);
 }
 
 PinChange::~PinChange() {
-  for (uint16_t a : {kPcifr, kPcicr}) {
-    auto& io = avr_->io[AVR_DATA_TO_IO(a)];
-    if (io.w.param == this) io.w = {nullptr, nullptr};
-  }
+  for (uint16_t a : {kPcifr, kPcicr}) releaseIo(avr_, a, this);
   for (std::size_t i = 0; i < 24; ++i) avr_irq_unregister_notify(pin_irqs_[i], &PinChange::onPin, &pins_[i]);
   avr_int_table_t& table = avr_->interrupts;
   int kept = 0;
@@ -94,7 +91,7 @@ PinChange::~PinChange() {
     if (table.vector[i] != vectors_[1] && table.vector[i] != vectors_[2]) table.vector[kept++] = table.vector[i];
   table.vector_count = static_cast<uint8_t>(kept);
   for (int g = 0; g < 2; ++g) avr_free_irq(own_[g].irq, AVR_INT_IRQ_COUNT);  // their names
-  ioPort(avr_, 'B')->r_pcint = kPcmsk[0];
+  portB(avr_)->r_pcint = kPcmsk[0];
 }
 
 void PinChange::onPin(avr_irq_t* irq, uint32_t value, void* param) {
@@ -111,10 +108,11 @@ void PinChange::change(uint8_t group, uint8_t mask_bit) {
   avr_raise_interrupt(avr_, vectors_[group]);  // sets PCIFn; requests the interrupt if PCIEn is set
 }
 
-void PinChange::onFlagWrite(avr_t* avr, uint16_t, uint8_t value, void* param) {
+void PinChange::onFlagWrite(avr_t* avr, uint16_t addr, uint8_t value, void* param) {
   auto* self = static_cast<PinChange*>(param);
+  const uint8_t ones = flagsWrittenOne(avr, addr, value);  // SBI and CBI act on their bit only
   for (uint8_t g = 0; g < 3; ++g)
-    if (value & (1u << g)) avr_clear_interrupt(avr, self->vectors_[g]);  // write one to clear
+    if (ones & (1u << g)) avr_clear_interrupt(avr, self->vectors_[g]);  // write one to clear
   avr->data[kPcifr] &= kGroupBits;
 }
 

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sim/pin_names.hpp"
 #include "sim/pty_bridge.hpp"
 
 extern "C" {
@@ -67,7 +68,7 @@ bool parseChannels(const std::string& args, RcScriptRow& row, std::string& error
 
 RcOnBoard::RcOnBoard(Board& board, const RcSpec& spec) : board_(board), spec_(spec) {
   rc_receiver_init(board_.avr(), part_, spec_.signal, static_cast<int>(spec_.pins.size()));
-  rc_receiver_connect(part_, spec_.pins);
+  rc_receiver_connect(part_, board_.ports(), spec_.pins);
   std::weak_ptr<int> alive = alive_;
   board_.addResetListener([this, alive](uint64_t) {
     if (alive.expired()) return;
@@ -87,7 +88,7 @@ RcOnBoard::~RcOnBoard() {
 
 std::string RcOnBoard::describe() const {
   std::string pins;
-  for (const BoardPin& p : spec_.pins) pins += (pins.empty() ? "" : ", ") + p.label();
+  for (const hal::MegaPin& p : spec_.pins) pins += (pins.empty() ? "" : ", ") + megaPinName(p);
   return fmt::format("{} on {}", spec_.signal == RcSignal::kPpm ? "PPM" : "PWM", pins);
 }
 

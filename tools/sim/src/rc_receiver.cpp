@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "sim/board.hpp"
+#include "sim/ports.hpp"
 
 extern "C" {
 #include <simavr/sim_avr.h>
@@ -25,14 +26,11 @@ uint64_t usToCycles(double us) { return static_cast<uint64_t>(std::llround(us * 
 
 uint8_t idleLevel(const RcPart& p) { return p.signal == RcSignal::kPpm ? 1 : 0; }
 
-void drive(RcPart& p, int line, uint8_t level) {
+// Line `line` goes to `level` at `cycle` (<= now).
+void drive(RcPart& p, int line, uint8_t level, uint64_t cycle) {
   p.level[line] = level;
-  if (p.connected) {
-    const BoardPin& pin = p.pins[line];
-    const auto mask = static_cast<uint8_t>(1u << pin.bit);
-    setExternalLevels(p.avr, pin.port, mask, level ? mask : 0);
-  }
   avr_raise_irq(p.irq + line, level);
+  if (p.ports) p.ports->setInput(p.pins[line].port, p.pins[line].bit, level != 0, cycle);
 }
 
 void addEdge(RcPart& p, uint64_t cycle, int line, uint8_t level) {
@@ -75,7 +73,7 @@ uint64_t service(RcPart& p, uint64_t now) {
   for (;;) {
     while (p.edge_next < p.edge_count && p.edges[p.edge_next].cycle <= now) {
       const RcPart::Edge& e = p.edges[p.edge_next++];
-      drive(p, e.line, e.level);
+      drive(p, e.line, e.level, e.cycle);
     }
     const uint64_t frame_end = p.frame_start + p.frame_cycles;
     if (frame_end > now) return p.edge_next < p.edge_count ? p.edges[p.edge_next].cycle : frame_end;
@@ -105,15 +103,12 @@ void rc_receiver_init(avr_t* avr, RcPart& part, RcSignal signal, int lines) {
   avr_cycle_timer_register(avr, part.frame_cycles, onClock, &part);
 }
 
-void rc_receiver_connect(RcPart& part, const std::vector<BoardPin>& pins) {
+void rc_receiver_connect(RcPart& part, Ports& ports, const std::vector<hal::MegaPin>& pins) {
   if (static_cast<int>(pins.size()) != part.lines)
     throw std::invalid_argument(fmt::format("an RC receiver with {} lines wired to {} pins", part.lines, pins.size()));
-  for (int i = 0; i < part.lines; ++i) {
-    part.pins[i] = pins[i];
-    avr_connect_irq(part.irq + i, pinIrq(part.avr, pins[i].port, pins[i].bit));
-  }
-  part.connected = true;
-  for (int i = 0; i < part.lines; ++i) drive(part, i, part.level[i]);
+  std::copy(pins.begin(), pins.end(), part.pins.begin());
+  part.ports = &ports;
+  for (int i = 0; i < part.lines; ++i) drive(part, i, part.level[i], part.avr->cycle);
 }
 
 void rc_receiver_set(RcPart& part, const double* us, int count) {
@@ -131,13 +126,6 @@ void rc_receiver_loss(RcPart& part) { part.next.on = false; }
 
 void rc_receiver_rearm(RcPart& part) {
   avr_t* avr = part.avr;
-  // PINx was cleared with the other I/O registers; the lines still carry their levels.
-  for (int i = 0; part.connected && i < part.lines; ++i) {
-    const BoardPin& pin = part.pins[i];
-    const auto mask = static_cast<uint8_t>(1u << pin.bit);
-    setExternalLevels(avr, pin.port, mask, part.level[i] ? mask : 0);
-    restoreInputLevels(avr, pin.port, mask, part.level[i] ? mask : 0);
-  }
   const uint64_t next = service(part, avr->cycle);
   avr_cycle_timer_register(avr, next > avr->cycle ? next - avr->cycle : 1, onClock, &part);
 }
@@ -145,10 +133,7 @@ void rc_receiver_rearm(RcPart& part) {
 RcPart::~RcPart() {
   if (!avr) return;
   avr_cycle_timer_cancel(avr, onClock, this);
-  for (int i = 0; connected && i < lines; ++i) {
-    avr_unconnect_irq(irq + i, pinIrq(avr, pins[i].port, pins[i].bit));
-    clearExternalLevels(avr, pins[i].port, static_cast<uint8_t>(1u << pins[i].bit));
-  }
+  for (int i = 0; ports && i < lines; ++i) ports->releaseInput(pins[i].port, pins[i].bit);
   avr_free_irq(irq, static_cast<uint32_t>(lines));
 }
 

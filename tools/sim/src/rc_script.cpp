@@ -1,6 +1,7 @@
 // `--rc` and `--rc-script`: see sim/rc_input.hpp.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <string_view>
 
 #include "hal/board.hpp"
+#include "sim/pin_names.hpp"
 #include "sim/rc_input.hpp"
 
 namespace sim {
@@ -33,13 +35,38 @@ std::string lower(std::string_view s) {
 }
 
 // What else a pin carries on this board, or "".
-std::string pinTaken(const BoardPin& pin, const std::vector<BoardPin>& esc_pins) {
+std::string pinTaken(const hal::MegaPin& pin, const std::array<hal::MegaPin, hal::kEscChannels>* esc_pins) {
   if (pin.arduino == 0 || pin.arduino == 1) return "UART0 (the console)";
   if (pin.arduino == hal::kTwiPins.sda_arduino_pin || pin.arduino == hal::kTwiPins.scl_arduino_pin)
     return "the TWI (the IMU's bus)";
-  for (std::size_t i = 0; i < esc_pins.size(); ++i)
-    if (esc_pins[i].arduino == pin.arduino) return fmt::format("ESC {}", i);
+  for (std::size_t i = 0; esc_pins && i < esc_pins->size(); ++i)
+    if ((*esc_pins)[i].port == pin.port && (*esc_pins)[i].bit == pin.bit) return fmt::format("ESC {}", i);
   return "";
+}
+
+// "A8,A9,PK2": 1..8 header pins, none named twice.
+std::vector<hal::MegaPin> parseRcPins(const std::string& spec, const std::string& list) {
+  std::vector<hal::MegaPin> pins;
+  std::size_t start = 0;
+  while (start <= list.size()) {
+    const std::size_t comma = std::min(list.find(',', start), list.size());
+    hal::MegaPin pin{};
+    try {
+      pin = parseMegaPin(std::string(trim(std::string_view(list).substr(start, comma - start))));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("--rc {}: {}", spec, e.what()));
+    }
+    start = comma + 1;
+    if (pin.arduino == hal::kNotOnHeader)
+      throw std::invalid_argument(fmt::format("--rc {}: {} is not on the Mega's headers; a receiver is wired to a "
+                                              "header pin", spec, megaPinName(pin)));
+    for (const hal::MegaPin& p : pins)
+      if (p.port == pin.port && p.bit == pin.bit)
+        throw std::invalid_argument(fmt::format("--rc {}: {} is named twice; each channel needs its own pin", spec,
+                                                megaPinName(pin)));
+    pins.push_back(pin);
+  }
+  return pins;
 }
 
 struct Field {
@@ -120,13 +147,7 @@ RcScriptRow parseRow(const std::vector<Field>& f, int channels, double last_t, c
 
 }  // namespace
 
-std::vector<BoardPin> defaultEscBoardPins() {
-  std::vector<BoardPin> pins;
-  for (const hal::EscPin& e : hal::kEscPins) pins.push_back(parseBoardPin(fmt::format("D{}", e.arduino_pin), "ESC"));
-  return pins;
-}
-
-RcSpec parseRcSpec(const std::string& spec, const std::vector<BoardPin>& esc_pins) {
+RcSpec parseRcSpec(const std::string& spec, const std::array<hal::MegaPin, hal::kEscChannels>* esc_pins) {
   RcSpec r;
   r.text = spec;
   const std::size_t colon = spec.find(':');
@@ -134,18 +155,18 @@ RcSpec parseRcSpec(const std::string& spec, const std::vector<BoardPin>& esc_pin
   if (colon == std::string::npos || (kind != "ppm" && kind != "pwm"))
     throw std::invalid_argument(fmt::format("--rc {}: write {}", spec, kRcSpecSyntax));
   r.signal = kind == "ppm" ? RcSignal::kPpm : RcSignal::kPwm;
-  r.pins = parseBoardPins(spec.substr(colon + 1), "--rc");
+  r.pins = parseRcPins(spec, spec.substr(colon + 1));
   if (r.signal == RcSignal::kPpm && r.pins.size() != 1)
     throw std::invalid_argument(fmt::format("--rc {}: a PPM sum is one pin; write {}", spec, kRcSpecSyntax));
   if (r.pins.size() > static_cast<std::size_t>(kRcChannels))
     throw std::invalid_argument(fmt::format("--rc {}: {} pins, a receiver has at most {} channels", spec,
                                             r.pins.size(), kRcChannels));
-  for (const BoardPin& p : r.pins) {
+  for (const hal::MegaPin& p : r.pins) {
     const std::string taken = pinTaken(p, esc_pins);
     if (!taken.empty())
       throw std::invalid_argument(fmt::format("--rc {}: {} carries {} on this board; choose another pin "
                                               "(A8..A15 are free and have pin-change interrupts)",
-                                              spec, p.label(), taken));
+                                              spec, megaPinName(p), taken));
   }
   return r;
 }

@@ -6,10 +6,9 @@
 #include <stdexcept>
 
 #include "hal/board.hpp"
-#include "sim/pins.hpp"
+#include "sim/ports.hpp"
 
 extern "C" {
-#include <simavr/avr_extint.h>
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_twi.h>
 #include <simavr/sim_avr.h>
@@ -105,8 +104,8 @@ void Twi::afterReset() {
   bus_held_ = sda_low_;
   reg(kTwsr) = kNoState;
   reg(kTwdr) = 0xFF;
-  // The core's own peripherals reset after this call (extint turns its pin polling back on):
-  // the lines are set up again one cycle later.
+  // The core's own peripherals reset after this call: the lines are set up again one cycle
+  // later.
   if (pull_ups_) avr_cycle_timer_register(avr_, 1, &Twi::onAfterResetCycle, this);
 }
 
@@ -348,11 +347,7 @@ void Twi::applyLines() {
     clearExternalLevels(avr_, hal::kTwiPins.port, sda | scl);
     return;
   }
-  // Level-triggered INT0/INT1 share the pins; simavr would poll them every cycle while low.
-  if (hal::kTwiPins.port == 'D') {
-    avr_extint_set_strict_lvl_trig(avr_, hal::kTwiPins.sda_bit, 0);
-    avr_extint_set_strict_lvl_trig(avr_, hal::kTwiPins.scl_bit, 0);
-  }
+  // INT0/INT1 share the pins: sim::ExtInt follows their levels without polling them.
   setExternalLevels(avr_, hal::kTwiPins.port, sda | scl, static_cast<uint8_t>((sda_low_ ? 0 : sda) | scl));
   avr_ioport_state_t st{};
   avr_ioctl(avr_, AVR_IOCTL_IOPORT_GETSTATE(hal::kTwiPins.port), &st);

@@ -27,6 +27,7 @@
 #include "plant/sensors.hpp"
 #include "sim/board.hpp"
 #include "sim/imu_on_board.hpp"
+#include "sim/pin_names.hpp"
 
 namespace sim {
 
@@ -60,6 +61,9 @@ struct AirframeOptions {
                                 // rigs: each motor's propeller direction (plant/attitude_rig.hpp)
   // ESC output i -> motor i (the seesaw uses 0 and 1). Default: four kv1100_9x4.7.
   std::array<plant::ActuatorParams, 4> motors;
+  // The pins of ESC outputs 0..3: the board table (hal::kEscPins) unless a firmware drives its
+  // motors elsewhere (sim/pin_names.hpp: parseEscPins("D3,D5,D6,D2")).
+  std::array<hal::MegaPin, hal::kEscChannels> esc_pins = boardEscPins();
   bool imu = true;
   Mpu6050Params imu_params;
   ImuMount imu_mount;           // the chip's rotation against the airframe (default: aligned)

@@ -3,7 +3,7 @@
 // (`--rc-script FILE`, played in simulated time) and/or typed live on a second pseudo-terminal.
 // docs/sim.md, "RC receiver input".
 //
-//   sim::RcOnBoard rc(board, sim::parseRcSpec("pwm:A8,A9,A10,A11"));
+//   sim::RcOnBoard rc(board, sim::parseRcSpec("pwm:A8,A9,A10,A11", &board.escPins()));
 //   rc.play(sim::readRcScript("sticks.csv"));     // rows at their simulated times
 //   rc.command("ch 1500 1500 1000 1500");           // what a line on the live pty does
 //   std::string path = rc.openPty();                // "/dev/pts/7": type `ch ...` lines there
@@ -22,13 +22,14 @@ namespace sim {
 // `--rc ppm:PIN` or `--rc pwm:PIN,PIN,...` (1..8 pins, channel k on the k-th).
 struct RcSpec {
   RcSignal signal = RcSignal::kPpm;
-  std::vector<BoardPin> pins;
+  std::vector<hal::MegaPin> pins;
   std::string text;  // as written
 };
-// Throws std::invalid_argument saying what is wrong and what to write. Pins that carry something
-// else on this board (UART0 D0/D1, the TWI D20/D21, an ESC output in `esc_pins`) are refused.
-RcSpec parseRcSpec(const std::string& spec, const std::vector<BoardPin>& esc_pins = {});
-std::vector<BoardPin> defaultEscBoardPins();  // the board table's ESC pins (hal/board.hpp)
+// Pins as sim/pin_names.hpp reads them (D49, A8, PK0). Throws std::invalid_argument saying what
+// is wrong and what to write. Pins the Mega's headers do not carry, and pins that carry
+// something else on this board (UART0 D0/D1, the TWI D20/D21, an ESC output in `*esc_pins`
+// if given) are refused.
+RcSpec parseRcSpec(const std::string& spec, const std::array<hal::MegaPin, hal::kEscChannels>* esc_pins);
 extern const char* const kRcSpecSyntax;
 
 // One row of an RC script: at t_s, channels 1..count get us[0..count-1] (the rest keep theirs),
@@ -71,7 +72,7 @@ class RcOnBoard {
   const std::string& ptyPath() const { return pty_path_; }
 
   const RcPart& part() const { return part_; }
-  // "PPM on D49 (PL0)", "PWM on A8 (PK0), A9 (PK1)"
+  // "PPM on D49 (PL0)", "PWM on D62 (PK0), D63 (PK1)"
   std::string describe() const;
   // The rows applied so far and lines taken from the pty, "t=1.0000 s ch 1500 ..." each.
   const std::vector<std::string>& applied() const { return applied_; }

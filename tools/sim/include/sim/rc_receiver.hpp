@@ -1,9 +1,10 @@
 // An RC receiver's outputs wired to the board's pins, as a simavr part (one struct;
 // rc_receiver_init allocates its IRQs, rc_receiver_connect wires them to pins; the way simavr's
 // examples/parts are written). Every edge is put on the pin by a cycle timer at its cycle (no
-// work between edges): the pin's IRQ is raised, so PINx reads it and whatever listens to the
-// pin sees the edge (pin-change interrupts, sim/pin_change.hpp; external interrupts; a timer's
-// input capture). The levels are held as the pin's external level (sim/pins.hpp), so the
+// work between edges) through the board's ports (Ports::setInput: the pin's simavr IRQ is
+// raised with the edge's cycle), so PINx reads it and whatever listens to the pin sees the edge
+// at that cycle (pin-change interrupts, sim/pin_change.hpp; INT0-7, sim/ext_int.hpp; a timer's
+// input capture, sim/timers.hpp). The levels are held as the pins' external levels, so the
 // firmware's pull-ups do not override them.
 //
 // PPM sum, one pin (receivers' "CPPM" output), 8 channels, idle high:
@@ -42,12 +43,14 @@
 #include <string>
 #include <vector>
 
-#include "sim/pins.hpp"
+#include "hal/mega_pins.hpp"
 
 struct avr_t;
 struct avr_irq_t;
 
 namespace sim {
+
+class Ports;
 
 constexpr int kRcChannels = 8;
 constexpr double kRcChannelMinUs = 500.0;
@@ -74,8 +77,8 @@ struct RcPart {
   avr_irq_t* irq = nullptr;  // [i] line i's level: PPM line 0, PWM channel i on line i
   RcSignal signal = RcSignal::kPpm;
   int lines = 0;             // PPM 1, PWM the channels wired (1..8)
-  std::array<BoardPin, kRcChannels> pins{};
-  bool connected = false;
+  std::array<hal::MegaPin, kRcChannels> pins{};
+  Ports* ports = nullptr;    // set by rc_receiver_connect
   RcFrame next;              // what the next frame carries
   RcFrame frame;             // the frame under way
   struct Edge {
@@ -98,15 +101,16 @@ struct RcPart {
 // Allocates the part's IRQs and starts its frame clock now. `lines`: 1 for PPM, the number of
 // channels for PWM. Throws std::invalid_argument for a count out of range.
 void rc_receiver_init(avr_t* avr, RcPart& part, RcSignal signal, int lines);
-// Wires line i to pins[i] (as many pins as lines) and drives them at their idle level.
-void rc_receiver_connect(RcPart& part, const std::vector<BoardPin>& pins);
+// Wires line i to pins[i] (as many pins as lines) of the board's `ports` and drives them at
+// their idle level.
+void rc_receiver_connect(RcPart& part, Ports& ports, const std::vector<hal::MegaPin>& pins);
 // Channels 1..count (count <= 8) from the next frame on; the others keep their values.
 // Throws std::invalid_argument for a value outside 500..2500 us (nothing changes then).
 void rc_receiver_set(RcPart& part, const double* us, int count);
 // No signal from the next frame on (until the next rc_receiver_set()).
 void rc_receiver_loss(RcPart& part);
-// After a board reset: the AVR's reset cancelled the cycle timer and cleared PINx; the
-// receiver has its own supply, so it goes on where it was.
+// After a board reset: the AVR's reset cancelled the cycle timer; the receiver has its own
+// supply, so it goes on where it was (the pins kept their levels: Ports::afterReset).
 void rc_receiver_rearm(RcPart& part);
 
 }  // namespace sim
