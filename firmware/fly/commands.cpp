@@ -3,8 +3,10 @@
 // range-checks the arguments from the rows, refuses guarded rows without a checksum in strict
 // mode and prints `help` from them. docs/fly.md holds the help text a host test compares with
 // printHelp().
+#include "eeprom_console.hpp"
 #include "fly_app.hpp"
 #include "fly_view.hpp"
+#include "params.hpp"
 #include "shell.hpp"
 
 namespace fly {
@@ -14,7 +16,6 @@ using fw::sayLine;
 namespace {
 constexpr float kRadPerDeg = 3.14159265f / 180.0f;
 constexpr int8_t kMaxSetpointDeg = 30;
-constexpr uint16_t kMaxGain = 10000;        // mN m per rad (or per rad/s, rad s)
 constexpr uint16_t kMaxThrustG = 4 * 2500;  // four motors of the heaviest class flown
 }  // namespace
 
@@ -51,6 +52,19 @@ struct Commands {
   static void stream(App& app, const Args& a) { app.cmdStream(a[0] == 0); }  // on|off
   static void status(App& app, const Args&) { app.cmdStatus(); }
   static void strict(App& app, const Args& a) { app.cmdStrict(a[0] == 0); }  // on|off
+  static void paramList(App& app, const Args&) { Params::list(app); }
+  static void paramAction(App& app, const Args& a) {  // save|load|defaults
+    if (a[0] == 0) Params::save(app);
+    else if (a[0] == 1) Params::reload(app);
+    else Params::defaults(app);
+  }
+  static void paramGet(App& app, const Args& a) { Params::get(app, a.text[1]); }
+  static void paramSet(App& app, const Args& a) { Params::set(app, a.text[1], a.text[2]); }
+  static void eeprom(App& app, const Args& a) {  // crc|dump: reading only, the frames go on
+    if (app.refuseWhileArmed()) return;
+    if (a[0] == 0) fw::eepromCrc();
+    else fw::eepromDump(&FlyApp::serviceHook);
+  }
 };
 
 bool FlyApp::refuseWhileArmed() const {
@@ -249,6 +263,13 @@ const char kMinUs[] TC_FLASH = "MIN_US";
 const char kMaxUs[] TC_FLASH = "MAX_US";
 const char kDeg[] TC_FLASH = "DEG";
 const char kOnOff[] TC_FLASH = "on|off";
+const char kParamList[] TC_FLASH = "list";
+const char kParamActions[] TC_FLASH = "save|load|defaults";
+const char kParamGetWord[] TC_FLASH = "get";
+const char kParamSetWord[] TC_FLASH = "set";
+const char kParamNameArg[] TC_FLASH = "NAME";
+const char kParamValueArg[] TC_FLASH = "VALUE";
+const char kCrcDump[] TC_FLASH = "crc|dump";
 
 const fw::ArgSpec kSetpointArgs[] TC_FLASH = {{kRollDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg},
                                               {kPitchDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg}};
@@ -257,19 +278,27 @@ const fw::ArgSpec kGainArgs[] TC_FLASH = {
     {kKp, nullptr, 0, kMaxGain}, {kKi, nullptr, 0, kMaxGain}, {kKd, nullptr, 0, kMaxGain}};
 const fw::ArgSpec kModeArgs[] TC_FLASH = {{kModes, kModes, 0, 0}, {kSlot, nullptr, 0, kMotors - 1}};
 const fw::ArgSpec kLayoutArgs[] TC_FLASH = {{kLayouts, kLayouts, 0, 0}};
-const fw::ArgSpec kAirframeArgs[] TC_FLASH = {{kArmMm, nullptr, 50, 1000},
-                                              {kYawArmUm, nullptr, 1000, 100000}};
+const fw::ArgSpec kAirframeArgs[] TC_FLASH = {{kArmMm, nullptr, kMinArmMm, kMaxArmMm},
+                                              {kYawArmUm, nullptr, kMinYawArmUm, kMaxYawArmUm}};
 const fw::ArgSpec kHoverArgs[] TC_FLASH = {{kHoverUs, nullptr, tc::kThrottleMinUs + 1, tc::kThrottleMaxUs},
-                                           {kSlope, nullptr, 1, 20000}};
-const fw::ArgSpec kApArgs[] TC_FLASH = {{kExpo, nullptr, -10000, 10000},
-                                        {kSpinMin, nullptr, 0, 3000},
-                                        {kSpinMax, nullptr, 9000, 10000},
-                                        {kFullG, nullptr, 1, 20000}};
-const fw::ArgSpec kApVoltArgs[] TC_FLASH = {{kVmax, nullptr, 0, 26000}, {kVmin, nullptr, 0, 26000}};
+                                           {kSlope, nullptr, 1, kMaxSlopeMgPerUs}};
+const fw::ArgSpec kApArgs[] TC_FLASH = {{kExpo, nullptr, -kMaxApExpoE4, kMaxApExpoE4},
+                                        {kSpinMin, nullptr, 0, kMaxApSpinMinE4},
+                                        {kSpinMax, nullptr, kMinApSpinMaxE4, kMaxApSpinMaxE4},
+                                        {kFullG, nullptr, 1, kMaxApFullG}};
+const fw::ArgSpec kApVoltArgs[] TC_FLASH = {{kVmax, nullptr, 0, kMaxApVoltMv}, {kVmin, nullptr, 0, kMaxApVoltMv}};
 const fw::ArgSpec kApPwmArgs[] TC_FLASH = {{kMinUs, nullptr, hal::kPulseClampMinUs, hal::kPulseClampMaxUs},
                                            {kMaxUs, nullptr, hal::kPulseClampMinUs, hal::kPulseClampMaxUs}};
 const fw::ArgSpec kCrashArgs[] TC_FLASH = {{kDeg, nullptr, kMinCrashDeg, kMaxCrashDeg}};
 const fw::ArgSpec kOnOffArgs[] TC_FLASH = {{kOnOff, kOnOff, 0, 0}};
+const fw::ArgSpec kParamListArgs[] TC_FLASH = {{kParamList, kParamList, 0, 0}};
+const fw::ArgSpec kParamActionArgs[] TC_FLASH = {{kParamActions, kParamActions, 0, 0}};
+const fw::ArgSpec kParamGetArgs[] TC_FLASH = {{kParamGetWord, kParamGetWord, 0, 0},
+                                              {kParamNameArg, fw::kArgText, 0, 0}};
+const fw::ArgSpec kParamSetArgs[] TC_FLASH = {{kParamSetWord, kParamSetWord, 0, 0},
+                                              {kParamNameArg, fw::kArgText, 0, 0},
+                                              {kParamValueArg, fw::kArgText, 0, 0}};
+const fw::ArgSpec kEepromArgs[] TC_FLASH = {{kCrcDump, kCrcDump, 0, 0}};
 
 const char kHelpName[] TC_FLASH = "help";
 const char kArmName[] TC_FLASH = "arm";
@@ -291,6 +320,8 @@ const char kLevelName[] TC_FLASH = "level";
 const char kStreamName[] TC_FLASH = "stream";
 const char kStatusName[] TC_FLASH = "status";
 const char kStrictName[] TC_FLASH = "strict";
+const char kParamName[] TC_FLASH = "param";
+const char kEepromName[] TC_FLASH = "eeprom";
 
 const char kHelpHelp[] TC_FLASH = "this list";
 const char kArmHelp[] TC_FLASH = "start flying: level, still, IMU ready; spools up in 1 s";
@@ -319,7 +350,13 @@ const char kLevelHelp[] TC_FLASH = "the vehicle stands level: trim the accelerom
 const char kStreamHelp[] TC_FLASH =
     "CSV t_s,roll,pitch,roll_sp,pitch_sp (deg),p,q,r (deg/s),\nforce0..3 (g),pulse0..3 (us), 50 lines/s";
 const char kStatusHelp[] TC_FLASH = "state, IMU, attitude, settings, loop timing, motors";
-const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw need a checksum";
+const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw, param set, param\nsave|load|defaults need a checksum";
+const char kParamListHelp[] TC_FLASH = "every saved parameter: NAME VALUE  # unit, range";
+const char kParamActionHelp[] TC_FLASH =
+    "to the EEPROM | from it | the defaults (disarmed;\nthe defaults stay in RAM until param save)";
+const char kParamGetHelp[] TC_FLASH = "one parameter, its default and what it does";
+const char kParamSetHelp[] TC_FLASH = "in RAM, disarmed (armed: crash_deg only);\nparam save keeps it";
+const char kEepromHelp[] TC_FLASH = "EEPROM CRC-16 per slot and whole, or Intel HEX (disarmed)";
 
 // Every console command. kCmdGuarded: what strict mode refuses without a checksum, everything
 // that can start the motors or change what armed motors do.
@@ -341,8 +378,13 @@ const fw::Command<FlyApp> kCommands[] TC_FLASH = {
     {{kCrashName, kCrashArgs, 1, 1, 0, kCrashHelp}, &Commands::crash},
     {{kCalibrateName, nullptr, 0, 0, 0, kCalibrateHelp}, &Commands::calibrate},
     {{kLevelName, nullptr, 0, 0, 0, kLevelHelp}, &Commands::level},
+    {{kParamName, kParamListArgs, 1, 1, 0, kParamListHelp}, &Commands::paramList},
+    {{kParamName, kParamActionArgs, 1, 1, fw::kCmdGuarded, kParamActionHelp}, &Commands::paramAction},
+    {{kParamName, kParamGetArgs, 2, 2, 0, kParamGetHelp}, &Commands::paramGet},
+    {{kParamName, kParamSetArgs, 3, 3, fw::kCmdGuarded, kParamSetHelp}, &Commands::paramSet},
     {{kStreamName, kOnOffArgs, 1, 1, 0, kStreamHelp}, &Commands::stream},
     {{kStatusName, nullptr, 0, 0, 0, kStatusHelp}, &Commands::status},
+    {{kEepromName, kEepromArgs, 1, 1, 0, kEepromHelp}, &Commands::eeprom},
     {{kStrictName, kOnOffArgs, 1, 1, 0, kStrictHelp}, &Commands::strict},
 };
 

@@ -100,6 +100,10 @@ class AttitudeEstimator {
   // when an axis is beyond kMaxLevelTrimLsb. Takes effect at the next start().
   bool trimLevel(const GyroCalibration& calibration);
   int16_t levelTrimLsb(uint8_t axis) const { return trim_lsb_[axis]; }  // x, y, z
+  // A trim kept from before (the saved parameters), each axis within kMaxLevelTrimLsb.
+  void setLevelTrimLsb(const int16_t (&lsb)[3]) {
+    for (uint8_t i = 0; i < 3; ++i) trim_lsb_[i] = lsb[i];
+  }
 
   // From a finished calibration: its bias, and the attitude its mean accelerometer gives.
   void start(const GyroCalibration& calibration);

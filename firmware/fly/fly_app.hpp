@@ -30,7 +30,8 @@
 // AttitudeController, Mixer, OutputStage (with ArduPilotCurve), fw::ForceActuators, the
 // console's fw::LineReader and fw::LinkWatch; fly_rules.hpp holds the pure decisions. Files:
 // fly_app.cpp (start-up, the loop, frames, arming), commands.cpp (the command table and the
-// cmd methods), fly_view.cpp (every line printed).
+// cmd methods), fly_view.cpp (every line printed), params*.cpp (the saved parameters: their table,
+// the `param` commands, the EEPROM record).
 #pragma once
 #include <stdint.h>
 
@@ -143,6 +144,7 @@ class FlyApp {
 
  private:
   friend struct Commands;  // commands.cpp: the table's handlers, one call each to a cmd method
+  friend struct Params;    // params.cpp: the saved parameters read and write the settings
 
   // Commands (commands.cpp), arguments parsed and range-checked by the table.
   void cmdArm();

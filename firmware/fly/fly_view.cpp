@@ -1,6 +1,7 @@
 // fly's console view (fly_view.hpp): what the image prints, nothing it decides.
 #include "fly_view.hpp"
 
+#include "params.hpp"
 #include "slot_report.hpp"
 
 namespace fly {
@@ -525,6 +526,8 @@ void status(const FlyApp& app, void (*yield)()) {
   yield();
   gains(app);
   crashLimit(app);
+  yield();
+  Params::sayStatus(app);
   yield();
   statusIntegrators(app);
   yield();
