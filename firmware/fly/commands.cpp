@@ -113,7 +113,10 @@ void FlyApp::cmdThrust(uint16_t thrust_g) {
   view::thrust(*this);
 }
 
+// Gains change disarmed only: armed, a new gain steps the torque by its change times the present
+// error (the saved parameters' rule, params.hpp).
 void FlyApp::cmdGains(uint16_t kp, uint16_t ki, uint16_t kd) {
+  if (refuseWhileArmed()) return;
   AxisGains g;
   g.kp_nm_per_rad = kp * 0.001f;
   g.ki_nm_per_rad_s = ki * 0.001f;
@@ -123,6 +126,7 @@ void FlyApp::cmdGains(uint16_t kp, uint16_t ki, uint16_t kd) {
 }
 
 void FlyApp::cmdYawGains(uint16_t kp, uint16_t ki) {
+  if (refuseWhileArmed()) return;
   YawGains g;
   g.kp_nm_s_per_rad = kp * 0.001f;
   g.ki_nm_per_rad = ki * 0.001f;

@@ -196,7 +196,7 @@ TEST_F(FlyParams, ArmedOnlyTheCrashLimitChangesAndNothingIsSavedOrLoaded) {
   EXPECT_FLOAT_EQ(app_->controller().gains().kp_nm_per_rad, 0.8f);
   EXPECT_TRUE(contains(command("param set crash_deg 60"), "crash_deg 60  # deg, 10..90; unsaved (reset gives 45)"));
   EXPECT_EQ(app_->settings().crash_deg, 60);
-  for (const char* line : {"param save", "param load", "param defaults", "eeprom crc"})
+  for (const char* line : {"param save", "param load", "param defaults", "eeprom crc", "gains 900 0 146", "yaw 200 0"})
     EXPECT_TRUE(contains(command(line), "error: armed; send disarm first")) << line;
   EXPECT_TRUE(app_->armed());
   EXPECT_TRUE(contains(command("status"), "params: 1 unsaved")) << "arming with unsaved changes is allowed";
