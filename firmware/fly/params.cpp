@@ -15,10 +15,12 @@ tc::ParamTable table() {
   return t;
 }
 
-int32_t rounded(float x, float scale) {
+// Out of line: two dozen inlined float conversions cost ~1.5 KB of flash on the AVR.
+__attribute__((noinline)) int32_t rounded(float x, float scale) {
   const float v = x * scale;
   return static_cast<int32_t>(v < 0 ? v - 0.5f : v + 0.5f);
 }
+__attribute__((noinline)) float times(int32_t v, float scale) { return static_cast<float>(v) * scale; }
 
 // The accelerometer's trim: 0.1 mg in the table, LSB in the estimator (the table's step is
 // finer than the sensor's 0.244 mg, so LSB -> 0.1 mg -> LSB is exact).
@@ -70,8 +72,8 @@ void Params::capture(const FlyApp& app, ParamValues& v) {
 // long: one block per group, each the same calls as its setting command (commands.cpp)
 bool Params::apply(FlyApp& app, const ParamValues& v, uint8_t mask) {
   if (mask & (1u << kGroupGains)) {
-    const AxisGains g = {v[kParamRpKp] * 0.001f, v[kParamRpKi] * 0.001f, v[kParamRpKd] * 0.001f};
-    const YawGains y = {v[kParamYawKp] * 0.001f, v[kParamYawKi] * 0.001f};
+    const AxisGains g = {times(v[kParamRpKp], 0.001f), times(v[kParamRpKi], 0.001f), times(v[kParamRpKd], 0.001f)};
+    const YawGains y = {times(v[kParamYawKp], 0.001f), times(v[kParamYawKi], 0.001f)};
     app.controller_.setGains(g, y);
   }
   if (mask & (1u << kGroupCrash)) {
@@ -80,8 +82,8 @@ bool Params::apply(FlyApp& app, const ParamValues& v, uint8_t mask) {
   }
   if (mask & (1u << kGroupMixer)) {
     app.settings_.layout = static_cast<Layout>(v[kParamLayoutWord]);
-    app.settings_.arm_m = v[kParamArmMm] * 0.001f;
-    app.settings_.yaw_arm_m = v[kParamYawArmUm] * 0.000001f;
+    app.settings_.arm_m = times(v[kParamArmMm], 0.001f);
+    app.settings_.yaw_arm_m = times(v[kParamYawArmUm], 0.000001f);
     app.configureMixer();
   }
   bool mode_taken = true;
@@ -90,24 +92,24 @@ bool Params::apply(FlyApp& app, const ParamValues& v, uint8_t mask) {
   if (mask & (1u << kGroupPwm)) {
     PwmModeParams p;
     p.hover_us = static_cast<uint16_t>(v[kParamHoverUs]);
-    p.slope_g_per_us = v[kParamHoverSlope] * 0.001f;
+    p.slope_g_per_us = times(v[kParamHoverSlope], 0.001f);
     app.output_.setPwmParams(p);
   }
   if (mask & (1u << kGroupArduPilot)) {
     ArduPilotParams p;
-    p.expo = v[kParamApExpo] * 0.0001f;
-    p.spin_min = v[kParamApSpinMin] * 0.0001f;
-    p.spin_max = v[kParamApSpinMax] * 0.0001f;
+    p.expo = times(v[kParamApExpo], 0.0001f);
+    p.spin_min = times(v[kParamApSpinMin], 0.0001f);
+    p.spin_max = times(v[kParamApSpinMax], 0.0001f);
     p.full_thrust_g = static_cast<float>(v[kParamApFullG]);
-    p.bat_volt_min_v = v[kParamApVoltMin] * 0.001f;
-    p.bat_volt_max_v = v[kParamApVoltMax] * 0.001f;
+    p.bat_volt_min_v = times(v[kParamApVoltMin], 0.001f);
+    p.bat_volt_max_v = times(v[kParamApVoltMax], 0.001f);
     p.pwm_min_us = static_cast<uint16_t>(v[kParamApPwmMin]);
     p.pwm_max_us = static_cast<uint16_t>(v[kParamApPwmMax]);
     app.output_.setArduPilotParams(p);
   }
   if (mask & (1u << kGroupLevel)) {
     int16_t lsb[3];
-    for (uint8_t i = 0; i < 3; ++i) lsb[i] = static_cast<int16_t>(rounded(v[kParamLevelX + i], 1.0f / kDmgPerLsb));
+    for (uint8_t i = 0; i < 3; ++i) lsb[i] = static_cast<int16_t>(rounded(static_cast<float>(v[kParamLevelX + i]), 1.0f / kDmgPerLsb));
     app.estimator_.setLevelTrimLsb(lsb);
   }
   if (mask & ((1u << kGroupMixer) | (1u << kGroupMode))) app.schedule();  // the budget follows them
@@ -141,10 +143,16 @@ SavedState Params::onReset(ParamValues& v) {
   return s;
 }
 
+// Armed, a console line may start only early in the frame (fly_rules.hpp, consoleMayStart):
+// the EEPROM read and the capture each take a few hundred microseconds, so a frame that came
+// due meanwhile is served between them.
 uint8_t Params::unsaved(const FlyApp& app, ParamValues& now, ParamValues& reset, SavedState* state) {
+  serve();
   const SavedState s = onReset(reset);
   if (state != nullptr) *state = s;
+  serve();
   capture(app, now);
+  serve();
   uint8_t n = 0;
   for (uint8_t i = 0; i < kParamCount; ++i) n = static_cast<uint8_t>(n + (now[i] != reset[i]));
   return n;
