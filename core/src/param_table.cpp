@@ -5,29 +5,6 @@ namespace tc {
 
 namespace {
 
-// The '|'-separated words in flash: the index of `text` (RAM), or -1.
-int8_t wordIndex(const char* words, const char* text) {
-  int8_t index = 0;
-  const char* p = words;
-  for (;;) {
-    const char* t = text;
-    for (;;) {
-      const uint8_t c = flashByte(p);
-      if (c == '|' || c == 0) {
-        if (*t == '\0') return index;
-        break;
-      }
-      if (static_cast<uint8_t>(*t) != c) break;
-      ++p;
-      ++t;
-    }
-    while (flashByte(p) != '|' && flashByte(p) != 0) ++p;
-    if (flashByte(p) == 0) return -1;
-    ++p;
-    ++index;
-  }
-}
-
 uint8_t wordCount(const char* words) {
   uint8_t n = 1;
   for (const char* p = words; flashByte(p) != 0; ++p) n = static_cast<uint8_t>(n + (flashByte(p) == '|'));
@@ -147,7 +124,7 @@ uint8_t formatParamValue(const ParamDef& d, int32_t value, char* out) {
 
 ParamParse parseParamValue(const ParamDef& d, const char* text, int32_t& value) {
   if (d.words != nullptr) {
-    const int8_t index = wordIndex(d.words, text);
+    const int8_t index = flashWordIndex(d.words, text);
     if (index < 0) return ParamParse::kNotAWord;
     value = index;
     return ParamParse::kOk;

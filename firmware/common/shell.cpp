@@ -29,36 +29,13 @@ void readArg(const CommandSpec& spec, uint8_t index, ArgSpec& arg) {
   readBytes(&arg, &spec.args[index], sizeof arg);
 }
 
-// Index of `token` among the '|'-separated words (PROGMEM), or -1.
-int8_t wordIndex(const char* words, const char* token) {
-  int8_t index = 0;
-  const char* p = words;
-  for (;;) {
-    const char* t = token;
-    for (;;) {
-      const uint8_t c = tc::flashByte(p);
-      if (c == '|' || c == 0) {
-        if (*t == '\0') return index;
-        break;
-      }
-      if (static_cast<uint8_t>(*t) != c) break;
-      ++p;
-      ++t;
-    }
-    while (tc::flashByte(p) != '|' && tc::flashByte(p) != 0) ++p;  // rest of this word
-    if (tc::flashByte(p) == 0) return -1;
-    ++p;
-    ++index;
-  }
-}
-
 bool parseArg(const ArgSpec& arg, const char* token, int32_t& value) {
   if (arg.words == kArgText) {
     value = 0;
     return true;
   }
   if (arg.words != nullptr) {
-    const int8_t index = wordIndex(arg.words, token);
+    const int8_t index = tc::flashWordIndex(arg.words, token);
     if (index < 0) return false;
     value = index;
     return true;

@@ -11,11 +11,13 @@
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
-#include <simavr/sim_avr.h>
-
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
 #include <string>
 #include <vector>
 
+#include "eeprom_write_recorder.hpp"
 #include "sim/board.hpp"
 #include "sim/console.hpp"
 
@@ -26,28 +28,8 @@ std::string flyImage() {
   return std::string(env && *env ? env : THRUSTCAL_AVR_BUILD_DIR) + "/firmware/fly/fly.elf";
 }
 
-struct EepromWrite {
-  uint16_t addr;
-  uint8_t value;
-};
-
-// ATmega2560 data-space addresses (EECR 0x1F, EEDR 0x20, EEAR 0x21 in I/O space).
-constexpr avr_io_addr_t kEecr = 0x3F, kEedr = 0x40, kEearl = 0x41, kEearh = 0x42;
-constexpr uint8_t kEepeBit = 1u << 1;
-
-// Records every EEPE strobe while `recording` (simavr shares EECR with its EEPROM module).
-struct EepromWriteRecorder {
-  explicit EepromWriteRecorder(sim::Board& board) {
-    avr_register_io_write(board.avr(), kEecr, &EepromWriteRecorder::onEecr, this);
-  }
-  bool recording = false;
-  std::vector<EepromWrite> writes;
-  static void onEecr(avr_t* avr, avr_io_addr_t, uint8_t v, void* param) {
-    auto* self = static_cast<EepromWriteRecorder*>(param);
-    if (!self->recording || (v & kEepeBit) == 0) return;
-    self->writes.push_back({static_cast<uint16_t>(avr->data[kEearl] | (avr->data[kEearh] << 8)), avr->data[kEedr]});
-  }
-};
+using hil_power::EepromWrite;
+using hil_power::EepromWriteRecorder;
 
 std::vector<std::string> mustCommand(sim::Console& con, const std::string& line) {
   auto lines = con.command(line, 5.0);

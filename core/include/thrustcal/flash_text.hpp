@@ -5,6 +5,7 @@
 //   const char kName[] TC_FLASH  an array or table in flash
 //   tc::flashByte(p)            one byte of either
 //   tc::flashCopy(dst, p, n)    n bytes of either into RAM (a table row)
+//   tc::flashWordIndex(w, t)    which of the '|'-separated words in flash `w` the RAM text `t` is
 // A pointer into flash is a flash address on the AVR: print it with hal::Uart::printP, never
 // with a RAM string routine.
 #pragma once
@@ -38,5 +39,9 @@ inline void flashCopy(void* dst, const void* src, size_t length) {
   memcpy(dst, src, length);
 #endif
 }
+
+// The index of `text` (RAM) among the '|'-separated `words` (flash: "plus|x|seesaw"), or -1.
+// Whole words only, case-sensitive (the shell's word arguments, the parameters' words).
+int8_t flashWordIndex(const char* words, const char* text);
 
 }  // namespace tc

@@ -31,6 +31,7 @@
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/crc16.hpp"
 #include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/host_copies.hpp"
 #include "thrustcal/param_table.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -160,36 +161,25 @@ ParamsWrite writeParams(const ParamsRecord& rec, uint8_t avoid = kNoSlot) {
     w.sequence = now.sequence;
     return w;
   }
-  if (have && now.host != avoid) {
-    w.host = now.host;
-    w.copy = static_cast<uint8_t>(now.copy ^ 1u);
-  } else {
-    for (uint8_t h = kMotorSlots; h-- > 0;) {
-      if (h != avoid && isHostSlot<Storage>(h)) {
-        w.host = h;
-        break;
-      }
-    }
-    if (w.host == kNoSlot) {
-      w.status = ParamsWriteStatus::kNoRoom;
-      return w;
-    }
-    w.copy = 0;
+  HostCopy newest;
+  newest.host = now.host;
+  newest.copy = now.copy;
+  newest.sequence = now.sequence;
+  const HostCopy next = nextHostCopy<Storage>(have, newest, avoid);
+  if (next.host == kNoSlot) {
+    w.status = ParamsWriteStatus::kNoRoom;
+    return w;
   }
-  w.sequence = have ? static_cast<uint16_t>(now.sequence + 1) : 1;
+  w.host = next.host;
+  w.copy = next.copy;
+  w.sequence = next.sequence;
   uint8_t image[kParamsCopyBytes];
   serializeParams(rec, w.sequence, image);
   const uint16_t addr = params_detail::copyAddress(w.host, w.copy);
-  const uint16_t crc_at = static_cast<uint16_t>(kParamsHeaderBytes + rec.length);
-  for (uint16_t i = 0; i < crc_at; ++i) {
-    if (i == kParamsSeqOffset || i == kParamsSeqOffset + 1) continue;
-    Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
-  }
-  for (uint16_t i = kParamsSeqOffset; i < kParamsSeqOffset + 2; ++i)
-    Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
-  for (uint16_t i = crc_at; i < crc_at + 2; ++i) Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
+  const uint16_t length = static_cast<uint16_t>(kParamsHeaderBytes + rec.length + 2);
+  writeCopyInOrder<Storage>(addr, image, length, kParamsSeqOffset);
   bool ok = true;  // read back byte for byte (the image's CRC is right, so the copy is whole)
-  for (uint16_t i = 0; i < crc_at + 2; ++i) ok = ok && Storage::readByte(static_cast<uint16_t>(addr + i)) == image[i];
+  for (uint16_t i = 0; i < length; ++i) ok = ok && Storage::readByte(static_cast<uint16_t>(addr + i)) == image[i];
   w.status = ok ? ParamsWriteStatus::kWritten : ParamsWriteStatus::kVerifyFailed;
   return w;
 }

@@ -250,9 +250,14 @@ ParamFile parseParamFile(const ParamTableCopy& t, const std::string& text, const
 }
 
 std::string paramDocsTable(const ParamTableCopy& t) {
+  const auto cell = [](std::string text) {  // a '|' in a cell would end it
+    for (std::size_t at = 0; (at = text.find('|', at)) != std::string::npos; at += 2) text.insert(at, "\\");
+    return text;
+  };
   std::string out = "| name | range | unit | default | what it does |\n|---|---|---|---|---|\n";
   for (const tc::ParamDef& d : t.rows)
-    out += fmt::format("| `{}` | {} | {} | {} | {} |\n", d.name, rangeText(d), d.unit, valueText(d, d.def), d.help);
+    out += fmt::format("| `{}` | {} | {} | {} | {} |\n", d.name, cell(rangeText(d)), d.unit, valueText(d, d.def),
+                       cell(d.help));
   return out;
 }
 

@@ -102,9 +102,10 @@ void table(const std::string& image, const std::string& docs, bool check) {
   const std::string after = withParamDocsTable(before, md, docs);
   if (check) {
     if (after != before)
-      throw ParamError(fmt::format("{}: its parameter table is not {}'s; run thrustcal board params table --docs {}",
+      throw ParamError(fmt::format("{}: its parameter table differs from {}; run thrustcal board params table "
+                                   "--docs {}",
                                    docs, t.origin, docs));
-    std::printf("%s: the parameter table is %s's\n", docs.c_str(), t.origin.c_str());
+    std::printf("%s: the parameter table matches %s\n", docs.c_str(), t.origin.c_str());
     return;
   }
   if (after != before) writeText(docs, after);
