@@ -357,10 +357,10 @@ const char kStatusHelp[] TC_FLASH = "state, IMU, attitude, settings, loop timing
 const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw, param set, param\nsave|load|defaults need a checksum";
 const char kParamListHelp[] TC_FLASH = "every saved parameter: NAME VALUE  # unit, range";
 const char kParamActionHelp[] TC_FLASH =
-    "to the EEPROM | from it | the defaults (disarmed;\nthe defaults stay in RAM until param save)";
+    "to the EEPROM | from it | the defaults (not armed;\nthe defaults stay in RAM until param save)";
 const char kParamGetHelp[] TC_FLASH = "one parameter, its default and what it does";
-const char kParamSetHelp[] TC_FLASH = "in RAM, disarmed (armed: crash_deg only);\nparam save keeps it";
-const char kEepromHelp[] TC_FLASH = "EEPROM CRC-16 per slot and whole, or Intel HEX (disarmed)";
+const char kParamSetHelp[] TC_FLASH = "in RAM (armed: crash_deg only);\nparam save keeps it";
+const char kEepromHelp[] TC_FLASH = "EEPROM CRC-16 per slot and whole, or Intel HEX (not armed)";
 
 // Every console command. kCmdGuarded: what strict mode refuses without a checksum, everything
 // that can start the motors or change what armed motors do.
