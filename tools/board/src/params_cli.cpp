@@ -38,6 +38,7 @@ void requireReadable(const BoardParamState& s) {
 }
 
 void pull(const std::string& port, const std::string& file, const std::string& image) {
+  requirePort(port);
   const ParamTableCopy t = readParamTable(image);
   TransferOptions to;
   to.progress = info;
@@ -57,6 +58,7 @@ void pull(const std::string& port, const std::string& file, const std::string& i
 
 // long: read the file, the board, merge, store as fly would, write the one copy, verify
 void push(const std::string& port, const std::string& file, const std::string& image, double timeout_s) {
+  requirePort(port);
   const ParamTableCopy t = readParamTable(image);
   const std::string text = readText(file, "parameter file");
   parseParamFile(t, text, file, t.defaults());  // every line checked before the board is touched
