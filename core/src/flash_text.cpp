@@ -25,4 +25,19 @@ int8_t flashWordIndex(const char* words, const char* text) {
   }
 }
 
+uint8_t flashWordCopy(const char* words, uint8_t index, char* out, uint8_t size) {
+  const char* p = words;
+  for (uint8_t i = 0; i < index; ++p) {
+    if (flashByte(p) == 0) {
+      out[0] = '\0';
+      return 0;
+    }
+    if (flashByte(p) == '|') ++i;
+  }
+  uint8_t n = 0;
+  while (n + 1 < size && flashByte(p) != 0 && flashByte(p) != '|') out[n++] = static_cast<char>(flashByte(p++));
+  out[n] = '\0';
+  return n;
+}
+
 }  // namespace tc

@@ -11,17 +11,6 @@ uint8_t wordCount(const char* words) {
   return n;
 }
 
-// The word at `index` into `out` (kParamTextMax bytes); its length.
-uint8_t copyWord(const char* words, int32_t index, char* out) {
-  const char* p = words;
-  for (int32_t i = 0; i < index && flashByte(p) != 0; ++p)
-    if (flashByte(p) == '|') ++i;
-  uint8_t n = 0;
-  while (n + 1 < kParamTextMax && flashByte(p) != 0 && flashByte(p) != '|') out[n++] = static_cast<char>(flashByte(p++));
-  out[n] = '\0';
-  return n;
-}
-
 int32_t readLe(const uint8_t* p, uint8_t bytes, bool is_signed) {
   uint32_t v = 0;
   for (uint8_t i = bytes; i-- > 0;) v = (v << 8) | p[i];
@@ -104,7 +93,8 @@ int8_t findParam(const ParamDef* table, uint8_t rows, const char* name) {
 }
 
 uint8_t formatParamValue(const ParamDef& d, int32_t value, char* out) {
-  if (d.words != nullptr && value >= 0 && value < wordCount(d.words)) return copyWord(d.words, value, out);
+  if (d.words != nullptr && value >= 0 && value < wordCount(d.words))
+    return flashWordCopy(d.words, static_cast<uint8_t>(value), out, kParamTextMax);
   char digits[12];
   uint8_t n = 0;
   uint32_t mag = value < 0 ? 0u - static_cast<uint32_t>(value) : static_cast<uint32_t>(value);

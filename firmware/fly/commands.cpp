@@ -14,7 +14,6 @@ namespace fly {
 using fw::sayLine;
 
 namespace {
-constexpr float kRadPerDeg = 3.14159265f / 180.0f;
 constexpr int8_t kMaxSetpointDeg = 30;
 constexpr uint16_t kMaxThrustG = 4 * 2500;  // four motors of the heaviest class flown
 }  // namespace
@@ -65,6 +64,14 @@ struct Commands {
     if (a[0] == 0) fw::eepromCrc();
     else fw::eepromDump(&FlyApp::serviceHook);
   }
+  static void rc(App& app, const Args& a) {  // off|ppm|pwm [N]
+    app.cmdRc(static_cast<RcProtocol>(a[0]), a.has(1) ? static_cast<uint8_t>(a[1]) : app.rcSettings().pwm_channels);
+  }
+  static void rcmap(App& app, const Args& a) { app.cmdRcMap(static_cast<uint8_t>(a[0])); }
+  static void rates(App& app, const Args& a) {
+    app.cmdRates(static_cast<uint8_t>(a[0]), u16(a[1]), u16(a[2]));
+  }
+  static void fmode(App& app, const Args& a) { app.cmdFlightMode(static_cast<FlightMode>(a[0])); }
 };
 
 bool FlyApp::refuseWhileArmed() const {
@@ -73,20 +80,39 @@ bool FlyApp::refuseWhileArmed() const {
   return true;
 }
 
-void FlyApp::cmdArm() {
+ArmRefusal FlyApp::arm(ArmSource source) {
   const ArmRefusal why = armRefusal(armInputs());
+  if (why != ArmRefusal::kNone) return why;
+  const uint32_t now_ms = hal::Clock::millis();
+  controller_.reset();
+  restartLoopStats();
+  flight_.armed = true;
+  flight_.source = source;
+  flight_.armed_ms = now_ms;
+  flight_.mix_limits = 0;
+  link_.heard(now_ms);
+  if (source == ArmSource::kSticks) {
+    flyTheSticks();
+  } else {
+    updateOutputLimits();
+  }
+  return ArmRefusal::kNone;
+}
+
+void FlyApp::cmdArm() {
+  const ArmRefusal why = arm(ArmSource::kConsole);
   if (why != ArmRefusal::kNone) {
     view::armRefused(why, *this);
     return;
   }
-  const uint32_t now_ms = hal::Clock::millis();
-  controller_.reset();
-  updateOutputLimits();
-  flight_.armed = true;
-  flight_.armed_ms = now_ms;
-  flight_.mix_limits = 0;
-  link_.heard(now_ms);
   view::armed(*this);
+}
+
+// While the sticks fly, the setpoint and the thrust are theirs.
+bool FlyApp::refuseWhileSticksFly() const {
+  if (!flight_.armed || flight_.source != ArmSource::kSticks) return false;
+  sayLine(TC_FLASH_TEXT("error: the sticks fly (armed from the receiver); disarm first"));
+  return true;
 }
 
 void FlyApp::cmdDisarm() {
@@ -101,13 +127,16 @@ void FlyApp::cmdDisarm() {
 }
 
 void FlyApp::cmdSetpoint(int8_t roll_deg, int8_t pitch_deg) {
-  settings_.setpoint.roll_rad = roll_deg * kRadPerDeg;
-  settings_.setpoint.pitch_rad = pitch_deg * kRadPerDeg;
-  settings_.setpoint_q = fixedSetpoint(settings_.setpoint);
+  if (refuseWhileSticksFly()) return;
+  Setpoint& sp = command_.setpoint;
+  sp.roll_rad = roll_deg * kRadPerDeg;
+  sp.pitch_rad = pitch_deg * kRadPerDeg;
+  command_.setpoint_q = fixedSetpoint(sp);
   view::setpoint(*this);
 }
 
 void FlyApp::cmdThrust(uint16_t thrust_g) {
+  if (refuseWhileSticksFly()) return;
   settings_.thrust_g = thrust_g;
   if (flight_.armed) updateOutputLimits();
   view::thrust(*this);
@@ -117,20 +146,20 @@ void FlyApp::cmdThrust(uint16_t thrust_g) {
 // error (the saved parameters' rule, params.hpp).
 void FlyApp::cmdGains(uint16_t kp, uint16_t ki, uint16_t kd) {
   if (refuseWhileArmed()) return;
-  AxisGains g;
-  g.kp_nm_per_rad = kp * 0.001f;
-  g.ki_nm_per_rad_s = ki * 0.001f;
-  g.kd_nm_s_per_rad = kd * 0.001f;
-  controller_.setGains(g, controller_.yawGains());
+  ControllerSettings s = controller_.settings();
+  s.angle.kp_nm_per_rad = kp * 0.001f;
+  s.angle.ki_nm_per_rad_s = ki * 0.001f;
+  s.angle.kd_nm_s_per_rad = kd * 0.001f;
+  controller_.setSettings(s);
   view::gains(*this);
 }
 
 void FlyApp::cmdYawGains(uint16_t kp, uint16_t ki) {
   if (refuseWhileArmed()) return;
-  YawGains g;
-  g.kp_nm_s_per_rad = kp * 0.001f;
-  g.ki_nm_per_rad = ki * 0.001f;
-  controller_.setGains(controller_.gains(), g);
+  ControllerSettings s = controller_.settings();
+  s.yaw.kp_nm_s_per_rad = kp * 0.001f;
+  s.yaw.ki_nm_per_rad = ki * 0.001f;
+  controller_.setSettings(s);
   view::gains(*this);
 }
 
@@ -146,17 +175,19 @@ void FlyApp::cmdMode(OutputMode mode, uint8_t generic_slot) {
 
 void FlyApp::cmdLayout(Layout layout) {
   if (refuseWhileArmed()) return;
-  settings_.layout = layout;
-  configureMixer();
+  MixerSettings s = mixer_.settings();
+  s.layout = layout;
+  configureMixer(s);
   schedule();
   view::layout(*this);
 }
 
 void FlyApp::cmdAirframe(uint16_t arm_mm, uint16_t yaw_arm_um) {
   if (refuseWhileArmed()) return;
-  settings_.arm_m = arm_mm * 0.001f;
-  settings_.yaw_arm_m = yaw_arm_um * 0.000001f;
-  configureMixer();
+  MixerSettings s = mixer_.settings();
+  s.arm_m = arm_mm * 0.001f;
+  s.yaw_arm_m = yaw_arm_um * 0.000001f;
+  configureMixer(s);
   view::layout(*this);
 }
 
@@ -208,7 +239,7 @@ void FlyApp::cmdArduPilotPwm(uint16_t min_us, uint16_t max_us) {
 
 void FlyApp::cmdCrash(uint8_t deg) {
   settings_.crash_deg = deg;
-  settings_.crash_units = angleUnitsOfDegrees(deg);
+  command_.crash_units = angleUnitsOfDegrees(deg);
   view::crashLimit(*this);
 }
 
@@ -250,9 +281,7 @@ const char kThrustG[] TC_FLASH = "G";
 const char kKp[] TC_FLASH = "KP";
 const char kKi[] TC_FLASH = "KI";
 const char kKd[] TC_FLASH = "KD";
-const char kModes[] TC_FLASH = "force|generic|pwm|ardupilot";
 const char kSlot[] TC_FLASH = "N";
-const char kLayouts[] TC_FLASH = "plus|x|seesaw";
 const char kArmMm[] TC_FLASH = "ARM_MM";
 const char kYawArmUm[] TC_FLASH = "YAW_ARM_UM";
 const char kHoverUs[] TC_FLASH = "US";
@@ -274,14 +303,18 @@ const char kParamSetWord[] TC_FLASH = "set";
 const char kParamNameArg[] TC_FLASH = "NAME";
 const char kParamValueArg[] TC_FLASH = "VALUE";
 const char kCrcDump[] TC_FLASH = "crc|dump";
+const char kRcChannels[] TC_FLASH = "N";
+const char kAngleDeg[] TC_FLASH = "ANGLE_DEG";
+const char kRateDps[] TC_FLASH = "RATE_DPS";
+const char kYawDps[] TC_FLASH = "YAW_DPS";
 
 const fw::ArgSpec kSetpointArgs[] TC_FLASH = {{kRollDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg},
                                               {kPitchDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg}};
 const fw::ArgSpec kThrustArgs[] TC_FLASH = {{kThrustG, nullptr, 0, kMaxThrustG}};
 const fw::ArgSpec kGainArgs[] TC_FLASH = {
     {kKp, nullptr, 0, kMaxGain}, {kKi, nullptr, 0, kMaxGain}, {kKd, nullptr, 0, kMaxGain}};
-const fw::ArgSpec kModeArgs[] TC_FLASH = {{kModes, kModes, 0, 0}, {kSlot, nullptr, 0, kMotors - 1}};
-const fw::ArgSpec kLayoutArgs[] TC_FLASH = {{kLayouts, kLayouts, 0, 0}};
+const fw::ArgSpec kModeArgs[] TC_FLASH = {{kOutputModeWords, kOutputModeWords, 0, 0}, {kSlot, nullptr, 0, kMotors - 1}};
+const fw::ArgSpec kLayoutArgs[] TC_FLASH = {{kLayoutWords, kLayoutWords, 0, 0}};
 const fw::ArgSpec kAirframeArgs[] TC_FLASH = {{kArmMm, nullptr, kMinArmMm, kMaxArmMm},
                                               {kYawArmUm, nullptr, kMinYawArmUm, kMaxYawArmUm}};
 const fw::ArgSpec kHoverArgs[] TC_FLASH = {{kHoverUs, nullptr, tc::kThrottleMinUs + 1, tc::kThrottleMaxUs},
@@ -303,6 +336,13 @@ const fw::ArgSpec kParamSetArgs[] TC_FLASH = {{kParamSetWord, kParamSetWord, 0, 
                                               {kParamNameArg, fw::kArgText, 0, 0},
                                               {kParamValueArg, fw::kArgText, 0, 0}};
 const fw::ArgSpec kEepromArgs[] TC_FLASH = {{kCrcDump, kCrcDump, 0, 0}};
+const fw::ArgSpec kRcArgs[] TC_FLASH = {{kRcProtocolWords, kRcProtocolWords, 0, 0},
+                                        {kRcChannels, nullptr, kRcMinChannels, kRcMaxChannels}};
+const fw::ArgSpec kRcMapArgs[] TC_FLASH = {{kRcMapWords, kRcMapWords, 0, 0}};
+const fw::ArgSpec kRatesArgs[] TC_FLASH = {{kAngleDeg, nullptr, kMinStickAngleDeg, kMaxStickAngleDeg},
+                                           {kRateDps, nullptr, kMinStickRateDps, kMaxStickRateDps},
+                                           {kYawDps, nullptr, kMinStickRateDps, kMaxStickRateDps}};
+const fw::ArgSpec kFlightModeArgs[] TC_FLASH = {{kFlightModeWords, kFlightModeWords, 0, 0}};
 
 const char kHelpName[] TC_FLASH = "help";
 const char kArmName[] TC_FLASH = "arm";
@@ -326,6 +366,10 @@ const char kStatusName[] TC_FLASH = "status";
 const char kStrictName[] TC_FLASH = "strict";
 const char kParamName[] TC_FLASH = "param";
 const char kEepromName[] TC_FLASH = "eeprom";
+const char kRcName[] TC_FLASH = "rc";
+const char kRcMapName[] TC_FLASH = "rcmap";
+const char kRatesName[] TC_FLASH = "rates";
+const char kFmodeName[] TC_FLASH = "fmode";
 
 const char kHelpHelp[] TC_FLASH = "this list";
 const char kArmHelp[] TC_FLASH = "start flying: level, still, IMU ready; spools up in 1 s";
@@ -355,6 +399,13 @@ const char kStreamHelp[] TC_FLASH =
     "CSV t_s,roll,pitch,roll_sp,pitch_sp (deg),p,q,r (deg/s),\nforce0..3 (g),pulse0..3 (us), 50 lines/s";
 const char kStatusHelp[] TC_FLASH = "state, IMU, attitude, settings, loop timing, motors";
 const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw, param set, param\nsave|load|defaults need a checksum";
+const char kRcHelp[] TC_FLASH =
+    "receiver: PPM sum on A8 | one pulse per channel on\n"
+    "A8.. (N channels, default 5); sticks arm: throttle low,\n"
+    "yaw right 1 s; disarm: yaw left";
+const char kRcMapHelp[] TC_FLASH = "the first four channels' order (A roll, E pitch, T, R yaw)";
+const char kRatesHelp[] TC_FLASH = "full stick: angle (angle mode), roll/pitch rate, yaw rate";
+const char kFmodeHelp[] TC_FLASH = "sticks' mode without a switch on channel 5";
 const char kParamListHelp[] TC_FLASH = "every saved parameter: NAME VALUE  # unit, range";
 const char kParamActionHelp[] TC_FLASH =
     "to the EEPROM | from it | the defaults (not armed;\nthe defaults stay in RAM until param save)";
@@ -390,6 +441,10 @@ const fw::Command<FlyApp> kCommands[] TC_FLASH = {
     {{kStatusName, nullptr, 0, 0, 0, kStatusHelp}, &Commands::status},
     {{kEepromName, kEepromArgs, 1, 1, 0, kEepromHelp}, &Commands::eeprom},
     {{kStrictName, kOnOffArgs, 1, 1, 0, kStrictHelp}, &Commands::strict},
+    {{kRcName, kRcArgs, 1, 2, 0, kRcHelp}, &Commands::rc},
+    {{kRcMapName, kRcMapArgs, 1, 1, 0, kRcMapHelp}, &Commands::rcmap},
+    {{kRatesName, kRatesArgs, 3, 3, 0, kRatesHelp}, &Commands::rates},
+    {{kFmodeName, kFlightModeArgs, 1, 1, 0, kFmodeHelp}, &Commands::fmode},
 };
 
 }  // namespace

@@ -24,7 +24,7 @@ __attribute__((noinline)) float times(int32_t v, float scale) { return static_ca
 
 // The accelerometer's trim: 0.1 mg in the table, LSB in the estimator (the table's step is
 // finer than the sensor's 0.244 mg, so LSB -> 0.1 mg -> LSB is exact).
-constexpr float kDmgPerLsb = 10000.0f / mpu::kAccelLsbPerG;
+constexpr float kDmgPerLsb = 10000.0f / kAccelLsbPerG;
 
 // hal::Eeprom, with the frames served after every byte: on the chip a byte takes ~3.4 ms,
 // and a save of ~50 bytes would otherwise hold the loop (and its watchdog kick) for 170 ms.
@@ -36,27 +36,41 @@ struct ServedEeprom {
   }
 };
 
+// The receiver's map as the index of its word in kRcMapWords (0 when it is none of them).
+uint8_t rcMapIndex(const char (&map)[5]) {
+  char word[5];
+  for (uint8_t i = 0; tc::flashWordCopy(kRcMapWords, i, word, sizeof word) != 0; ++i) {
+    bool same = true;
+    for (uint8_t c = 0; c < 4; ++c) same = same && word[c] == map[c];
+    if (same) return i;
+  }
+  return 0;
+}
+
 }  // namespace
 
 void Params::serve() { FlyApp::serviceHook(); }
 
+// long: one line per parameter, each read from its stage's settings struct
 void Params::capture(const FlyApp& app, ParamValues& v) {
-  const AxisGains& g = app.controller_.gains();
-  const YawGains& y = app.controller_.yawGains();
-  v[kParamRpKp] = rounded(g.kp_nm_per_rad, 1000);
-  v[kParamRpKi] = rounded(g.ki_nm_per_rad_s, 1000);
-  v[kParamRpKd] = rounded(g.kd_nm_s_per_rad, 1000);
-  v[kParamYawKp] = rounded(y.kp_nm_s_per_rad, 1000);
-  v[kParamYawKi] = rounded(y.ki_nm_per_rad, 1000);
+  const ControllerSettings& c = app.controller_.settings();
+  v[kParamAngleKp] = rounded(c.angle.kp_nm_per_rad, 1000);
+  v[kParamAngleKi] = rounded(c.angle.ki_nm_per_rad_s, 1000);
+  v[kParamAngleKd] = rounded(c.angle.kd_nm_s_per_rad, 1000);
+  v[kParamRateKp] = rounded(c.rate.kp_nm_s_per_rad, 1000);
+  v[kParamRateKi] = rounded(c.rate.ki_nm_per_rad, 1000);
+  v[kParamYawKp] = rounded(c.yaw.kp_nm_s_per_rad, 1000);
+  v[kParamYawKi] = rounded(c.yaw.ki_nm_per_rad, 1000);
   v[kParamCrashDeg] = app.settings_.crash_deg;
-  v[kParamLayoutWord] = static_cast<int32_t>(app.settings_.layout);
-  v[kParamArmMm] = rounded(app.settings_.arm_m, 1000);
-  v[kParamYawArmUm] = rounded(app.settings_.yaw_arm_m, 1000000);
-  v[kParamMode] = static_cast<int32_t>(app.output_.mode());
-  v[kParamGenericSlot] = app.output_.genericSlot();
-  const PwmModeParams& pwm = app.output_.pwmParams();
-  v[kParamHoverUs] = pwm.hover_us;
-  v[kParamHoverSlope] = rounded(pwm.slope_g_per_us, 1000);
+  const MixerSettings& m = app.mixer_.settings();
+  v[kParamLayoutWord] = static_cast<int32_t>(m.layout);
+  v[kParamArmMm] = rounded(m.arm_m, 1000);
+  v[kParamYawArmUm] = rounded(m.yaw_arm_m, 1000000);
+  const OutputSettings& o = app.output_.settings();
+  v[kParamMode] = static_cast<int32_t>(o.mode);
+  v[kParamGenericSlot] = o.generic_slot;
+  v[kParamHoverUs] = o.pwm.hover_us;
+  v[kParamHoverSlope] = rounded(o.pwm.slope_g_per_us, 1000);
   const ArduPilotParams& ap = app.output_.arduPilot().params();
   v[kParamApExpo] = rounded(ap.expo, 10000);
   v[kParamApSpinMin] = rounded(ap.spin_min, 10000);
@@ -66,37 +80,50 @@ void Params::capture(const FlyApp& app, ParamValues& v) {
   v[kParamApVoltMax] = rounded(ap.bat_volt_max_v, 1000);
   v[kParamApPwmMin] = ap.pwm_min_us;
   v[kParamApPwmMax] = ap.pwm_max_us;
-  for (uint8_t i = 0; i < 3; ++i) v[kParamLevelX + i] = rounded(app.estimator_.levelTrimLsb(i), kDmgPerLsb);
+  for (uint8_t i = 0; i < 3; ++i) v[kParamLevelX + i] = rounded(app.estimator_.levelTrim().lsb[i], kDmgPerLsb);
+  const RcSettings& rc = app.rc_settings_;
+  v[kParamRcProtocol] = static_cast<int32_t>(rc.protocol);
+  v[kParamRcChannels] = rc.pwm_channels;
+  v[kParamRcMap] = rcMapIndex(rc.map);
+  v[kParamRcModeChannel] = rc.mode_channel < kRcMaxChannels ? rc.mode_channel + 1 : 0;
+  v[kParamFlightMode] = static_cast<int32_t>(rc.default_mode);
+  const StickSettings& st = app.stick_command_.settings();
+  v[kParamStickAngleDeg] = st.max_angle_deg;
+  v[kParamStickRateDps] = st.max_rate_dps;
+  v[kParamStickYawDps] = st.max_yaw_rate_dps;
 }
 
-// long: one block per group, each the same calls as its setting command (commands.cpp)
-bool Params::apply(FlyApp& app, const ParamValues& v, uint8_t mask) {
+// long: one block per group, each the same calls as its setting command (commands.cpp, fly_receiver.cpp)
+bool Params::apply(FlyApp& app, const ParamValues& v, uint16_t mask) {
   if (mask & (1u << kGroupGains)) {
-    const AxisGains g = {times(v[kParamRpKp], 0.001f), times(v[kParamRpKi], 0.001f), times(v[kParamRpKd], 0.001f)};
-    const YawGains y = {times(v[kParamYawKp], 0.001f), times(v[kParamYawKi], 0.001f)};
-    app.controller_.setGains(g, y);
+    ControllerSettings c = app.controller_.settings();  // a copy, not a default: no template in SRAM
+    c.angle = {times(v[kParamAngleKp], 0.001f), times(v[kParamAngleKi], 0.001f), times(v[kParamAngleKd], 0.001f)};
+    c.rate = {times(v[kParamRateKp], 0.001f), times(v[kParamRateKi], 0.001f)};
+    c.yaw = {times(v[kParamYawKp], 0.001f), times(v[kParamYawKi], 0.001f)};
+    app.controller_.setSettings(c);
   }
   if (mask & (1u << kGroupCrash)) {
     app.settings_.crash_deg = static_cast<uint8_t>(v[kParamCrashDeg]);
-    app.settings_.crash_units = angleUnitsOfDegrees(app.settings_.crash_deg);
+    app.command_.crash_units = angleUnitsOfDegrees(app.settings_.crash_deg);
   }
   if (mask & (1u << kGroupMixer)) {
-    app.settings_.layout = static_cast<Layout>(v[kParamLayoutWord]);
-    app.settings_.arm_m = times(v[kParamArmMm], 0.001f);
-    app.settings_.yaw_arm_m = times(v[kParamYawArmUm], 0.000001f);
-    app.configureMixer();
+    MixerSettings m = app.mixer_.settings();
+    m.layout = static_cast<Layout>(v[kParamLayoutWord]);
+    m.arm_m = times(v[kParamArmMm], 0.001f);
+    m.yaw_arm_m = times(v[kParamYawArmUm], 0.000001f);
+    app.configureMixer(m);
   }
   bool mode_taken = true;
   if (mask & (1u << kGroupMode))
     mode_taken = app.output_.setMode(static_cast<OutputMode>(v[kParamMode]), static_cast<uint8_t>(v[kParamGenericSlot]));
   if (mask & (1u << kGroupPwm)) {
-    PwmModeParams p;
+    PwmModeParams p = app.output_.pwmParams();
     p.hover_us = static_cast<uint16_t>(v[kParamHoverUs]);
     p.slope_g_per_us = times(v[kParamHoverSlope], 0.001f);
     app.output_.setPwmParams(p);
   }
   if (mask & (1u << kGroupArduPilot)) {
-    ArduPilotParams p;
+    ArduPilotParams p = app.output_.arduPilot().params();
     p.expo = times(v[kParamApExpo], 0.0001f);
     p.spin_min = times(v[kParamApSpinMin], 0.0001f);
     p.spin_max = times(v[kParamApSpinMax], 0.0001f);
@@ -108,9 +135,26 @@ bool Params::apply(FlyApp& app, const ParamValues& v, uint8_t mask) {
     app.output_.setArduPilotParams(p);
   }
   if (mask & (1u << kGroupLevel)) {
-    int16_t lsb[3];
-    for (uint8_t i = 0; i < 3; ++i) lsb[i] = static_cast<int16_t>(rounded(static_cast<float>(v[kParamLevelX + i]), 1.0f / kDmgPerLsb));
-    app.estimator_.setLevelTrimLsb(lsb);
+    LevelTrim trim = app.estimator_.levelTrim();
+    for (uint8_t i = 0; i < 3; ++i)
+      trim.lsb[i] = static_cast<int16_t>(rounded(static_cast<float>(v[kParamLevelX + i]), 1.0f / kDmgPerLsb));
+    app.estimator_.setLevelTrim(trim);  // within its limit: the table's range is that limit
+  }
+  if (mask & (1u << kGroupRc)) {
+    RcSettings& rc = app.rc_settings_;
+    rc.protocol = static_cast<RcProtocol>(v[kParamRcProtocol]);
+    rc.pwm_channels = static_cast<uint8_t>(v[kParamRcChannels]);
+    tc::flashWordCopy(kRcMapWords, static_cast<uint8_t>(v[kParamRcMap]), rc.map, sizeof rc.map);
+    rc.mode_channel = v[kParamRcModeChannel] == 0 ? 0xFF : static_cast<uint8_t>(v[kParamRcModeChannel] - 1);
+    rc.default_mode = static_cast<FlightMode>(v[kParamFlightMode]);
+    app.applyReceiverSettings();
+  }
+  if (mask & (1u << kGroupSticks)) {
+    StickSettings st = app.stick_command_.settings();
+    st.max_angle_deg = static_cast<uint8_t>(v[kParamStickAngleDeg]);
+    st.max_rate_dps = static_cast<uint16_t>(v[kParamStickRateDps]);
+    st.max_yaw_rate_dps = static_cast<uint16_t>(v[kParamStickYawDps]);
+    app.stick_command_.setSettings(st);
   }
   if (mask & ((1u << kGroupMixer) | (1u << kGroupMode))) app.schedule();  // the budget follows them
   return mode_taken;
@@ -212,7 +256,7 @@ void Params::set(FlyApp& app, const char* name, const char* text) {
     params_view::ruleBroken(check, v);
     return;
   }
-  if (!apply(app, v, static_cast<uint8_t>(1u << d.group))) {
+  if (!apply(app, v, static_cast<uint16_t>(1u << d.group))) {
     params_view::modeNotTaken(app, v);
     return;
   }

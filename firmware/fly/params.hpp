@@ -1,6 +1,8 @@
 // fly's saved parameters (issue 27): one table (params_table.cpp, in flash) of every setting a
-// user tunes once and keeps: the gains, the crash limit, the layout and airframe, the mode, the
-// pwm and ardupilot modes' settings, the accelerometer's level trim. From the table:
+// user tunes once and keeps: the gains of each flight mode, the crash limit, the layout and
+// airframe, the output mode and the pwm and ardupilot modes' settings, the accelerometer's level
+// trim, the receiver (protocol, channels, map, mode switch, default flight mode) and the sticks'
+// rates. From the table:
 //   - the console's `param list|get NAME|set NAME VALUE|save|load|defaults` (params.cpp);
 //   - the EEPROM record (thrustcal/param_store.hpp: two copies in a host slot, power-fail safe),
 //     loaded at start-up; an older layout, a copy that cannot be right, none saved or no room:
@@ -8,10 +10,11 @@
 //   - the docs' table and the host's parameter files (`thrustcal board params`), which read
 //     the table out of fly.hex (its ParamTable header).
 //
-// The values live where fly uses them (the controller, the mixer, the output stage, the
-// estimator, FlightSettings): capture() reads them from there, apply() writes a group back
-// through the same calls the setting commands make (`gains`, `mode`, `level` ...), so the
-// older commands and `param set` change the same thing and `param list` shows what flies.
+// The values live where fly uses them, in each stage's settings struct (ControllerSettings,
+// MixerSettings, OutputSettings, LevelTrim, FlightSettings, RcSettings, StickSettings):
+// capture() reads them from there, apply() writes a group back through the same calls the
+// setting commands make (`gains`, `mode`, `rc`, `rates` ...), so the commands and `param set`
+// change the same thing and `param list` shows what flies.
 //
 // Armed, only rows marked tc::kParamLive change (crash_deg: a lower limit can only disarm);
 // every other one could step a torque, a pulse or the attitude estimate and make the motors
@@ -33,16 +36,18 @@ constexpr uint8_t kParamLayout = 1;
 
 // Rows in table order (params_table.cpp).
 enum ParamId : uint8_t {
-  kParamRpKp,
-  kParamRpKi,
-  kParamRpKd,
-  kParamYawKp,
+  kParamAngleKp,  // angle mode, roll and pitch (ControllerSettings::angle)
+  kParamAngleKi,
+  kParamAngleKd,
+  kParamRateKp,  // rate mode, roll and pitch (ControllerSettings::rate)
+  kParamRateKi,
+  kParamYawKp,  // yaw, both modes (ControllerSettings::yaw)
   kParamYawKi,
-  kParamCrashDeg,
-  kParamLayoutWord,
+  kParamCrashDeg,  // FlightSettings
+  kParamLayoutWord,  // MixerSettings
   kParamArmMm,
   kParamYawArmUm,
-  kParamMode,
+  kParamMode,  // OutputSettings
   kParamGenericSlot,
   kParamHoverUs,
   kParamHoverSlope,
@@ -54,9 +59,17 @@ enum ParamId : uint8_t {
   kParamApVoltMax,
   kParamApPwmMin,
   kParamApPwmMax,
-  kParamLevelX,
+  kParamLevelX,  // LevelTrim
   kParamLevelY,
   kParamLevelZ,
+  kParamRcProtocol,  // RcSettings
+  kParamRcChannels,
+  kParamRcMap,
+  kParamRcModeChannel,
+  kParamFlightMode,
+  kParamStickAngleDeg,  // StickSettings
+  kParamStickRateDps,
+  kParamStickYawDps,
   kParamCount
 };
 
@@ -69,9 +82,11 @@ enum ParamGroup : uint8_t {
   kGroupPwm,
   kGroupArduPilot,
   kGroupLevel,
+  kGroupRc,
+  kGroupSticks,
   kGroupCount
 };
-constexpr uint8_t kAllGroups = (1u << kGroupCount) - 1u;
+constexpr uint16_t kAllGroups = (1u << kGroupCount) - 1u;
 
 // Ranges the table and the setting commands share (commands.cpp's argument specs).
 constexpr uint16_t kMaxGain = 10000;  // mN m per rad (or per rad/s, rad s)
@@ -82,6 +97,16 @@ constexpr int16_t kMaxApExpoE4 = 10000;
 constexpr uint16_t kMaxApSpinMinE4 = 3000, kMinApSpinMaxE4 = 9000, kMaxApSpinMaxE4 = 10000;
 constexpr uint16_t kMaxApFullG = 20000;
 constexpr uint16_t kMaxApVoltMv = 26000;
+constexpr uint8_t kMinStickAngleDeg = 5, kMaxStickAngleDeg = 60;
+constexpr uint16_t kMinStickRateDps = 10, kMaxStickRateDps = 1000;
+
+// The words of the settings that are one of a few (the table's rows and the setting commands'
+// arguments), each in its enum's order.
+extern const char kLayoutWords[] TC_FLASH;      // Layout
+extern const char kOutputModeWords[] TC_FLASH;  // OutputMode
+extern const char kRcProtocolWords[] TC_FLASH;  // RcProtocol
+extern const char kRcMapWords[] TC_FLASH;       // the channel orders `rcmap` offers
+extern const char kFlightModeWords[] TC_FLASH;  // FlightMode
 
 extern const tc::ParamDef kParamRows[kParamCount] TC_FLASH;
 extern const tc::ParamTable kParamTable TC_FLASH;
@@ -111,7 +136,7 @@ struct Params {
   static void capture(const FlyApp& app, ParamValues& v);
   // `v`'s rows of the groups in `mask` into fly (v already checked: tc::checkParams). False
   // when the mode cannot be taken (generic: slot N has no valid record): the mode is kept.
-  static bool apply(FlyApp& app, const ParamValues& v, uint8_t mask);
+  static bool apply(FlyApp& app, const ParamValues& v, uint16_t mask);
   // What a reset would give: the saved record if it can be flown, else the defaults.
   static SavedState onReset(ParamValues& v);
   // The values flying now and on reset; how many differ.

@@ -33,7 +33,7 @@ void sayRange(const tc::ParamDef& d) {
   sayValue(d, d.max);
 }
 
-// "rp_kp 800"
+// "angle_kp 800"
 void sayNameValue(const tc::ParamDef& d, int32_t value) {
   hal::Uart::printP(d.name);
   hal::Uart::write(' ');

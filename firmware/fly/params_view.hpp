@@ -8,7 +8,7 @@
 namespace fly {
 namespace params_view {
 
-// "rp_kp 800  # mN m/rad, 0..10000" (`param list`, a parameter file's line), then
+// "angle_kp 800  # mN m/rad, 0..10000" (`param list`, a parameter file's line), then
 // "; unsaved (reset gives 900)" when a reset would change it; `detailed` (`param get`) adds
 // the default and what it does.
 void row(uint8_t index, int32_t value, int32_t on_reset, bool detailed);

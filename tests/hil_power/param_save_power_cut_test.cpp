@@ -60,13 +60,13 @@ TEST(ParamSavePowerCut, EveryCutLeavesTheOldOrTheNewParametersWholeAndTheNewWinW
   sim::Board board(flyImage());
   sim::Console con(board, "fly> ");
   EXPECT_EQ(paramsLine(con.waitPrompt(5.0)), "params: none saved: the defaults (param set NAME VALUE, then param save)");
-  for (const char* l : {"param set rp_kp 900", "param set layout plus", "param set yaw_arm_um 15100"}) mustCommand(con, l);
-  EXPECT_NE(mustCommand(con, "param save")[0].find("param: saved 24 parameters (motor 3's slot, copy A, sequence 1)"),
+  for (const char* l : {"param set angle_kp 900", "param set layout plus", "param set yaw_arm_um 15100"}) mustCommand(con, l);
+  EXPECT_NE(mustCommand(con, "param save")[0].find("param: saved 34 parameters (motor 3's slot, copy A, sequence 1)"),
             std::string::npos);
   const std::vector<std::string> old_values = values(con);
   const std::vector<uint8_t> before = board.eeprom();
   // when: a second set is saved, its byte writes recorded
-  for (const char* l : {"param set rp_kp 1200", "param set level_x_mg -12.5", "param set ap_expo 0.7000",
+  for (const char* l : {"param set angle_kp 1200", "param set level_x_mg -12.5", "param set ap_expo 0.7000",
                         "param set mode pwm", "param set hover_us 1480", "param set crash_deg 30"})
     mustCommand(con, l);
   EepromWriteRecorder recorder(board);
@@ -91,8 +91,8 @@ TEST(ParamSavePowerCut, EveryCutLeavesTheOldOrTheNewParametersWholeAndTheNewWinW
     board.reset(sim::ResetKind::kPowerOn);
     const std::string line = paramsLine(con.waitPrompt(5.0));
     const bool is_new = k == writes.size();
-    EXPECT_EQ(line, is_new ? "params: 24 loaded from the EEPROM (motor 3's slot, copy B, sequence 2)"
-                           : "params: 24 loaded from the EEPROM (motor 3's slot, copy A, sequence 1)");
+    EXPECT_EQ(line, is_new ? "params: 34 loaded from the EEPROM (motor 3's slot, copy B, sequence 2)"
+                           : "params: 34 loaded from the EEPROM (motor 3's slot, copy A, sequence 1)");
     EXPECT_EQ(values(con), is_new ? new_values : old_values);
     olds += !is_new;
   }

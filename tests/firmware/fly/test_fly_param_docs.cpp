@@ -61,7 +61,7 @@ TEST(FlyParamDocs, TheTableInFlyHexIsTheOneCompiledHere) {
 
 TEST_F(Fly, AParameterFileHoldsTheLinesParamListPrintsAndReadsBackToTheSameValues) {
   bootReady();
-  command("param set rp_kp 900");
+  command("param set angle_kp 900");
   command("param set level_x_mg -3.5");
   command("param set layout seesaw");
   std::string listed;
@@ -89,11 +89,11 @@ TEST(FlyParamFile, EveryBadLineIsNamedWithItsNumberAndNothingIsTaken) {
   const board::ParamTableCopy t = compiled();
   const std::string text =
       "# a comment\n"
-      "rp_kp 20000\n"
+      "angle_kp 20000\n"
       "foo 1\n"
       "layout plus   # trailing comment\n"
       "layout x\n"
-      "rp_kd\n"
+      "angle_kd\n"
       "level_x_mg 1.25\n"
       "hover_us 900\n";
   try {
@@ -101,10 +101,10 @@ TEST(FlyParamFile, EveryBadLineIsNamedWithItsNumberAndNothingIsTaken) {
     FAIL() << "a bad file was taken";
   } catch (const board::ParamError& e) {
     const std::string what = e.what();
-    for (const char* says : {"bad.txt:2: rp_kp must be 0..10000 mN m/rad, got \"20000\"",
+    for (const char* says : {"bad.txt:2: angle_kp must be 0..10000 mN m/rad, got \"20000\"",
                              "bad.txt:3: no parameter \"foo\" in fly (host build)",
                              "bad.txt:5: layout given again (first on line 4)",
-                             "bad.txt:6: expected NAME VALUE, got \"rp_kd\"",
+                             "bad.txt:6: expected NAME VALUE, got \"angle_kd\"",
                              "bad.txt:7: level_x_mg takes a number with at most 1 decimals, -100.1..100.1 mg, got \"1.25\"",
                              "bad.txt:8: hover_us must be 0 (off) or 1001..2000 us, got \"900\"",
                              "6 errors; nothing written"})
@@ -115,11 +115,11 @@ TEST(FlyParamFile, EveryBadLineIsNamedWithItsNumberAndNothingIsTaken) {
 TEST(FlyParamFile, NamesItLeavesOutKeepTheBoardsValuesAndRulesSpanBoth) {
   const board::ParamTableCopy t = compiled();
   std::vector<int32_t> board_values = t.defaults();
-  board_values[fly::kParamRpKd] = 200;
+  board_values[fly::kParamAngleKd] = 200;
   board_values[fly::kParamApVoltMax] = 12600;
-  const board::ParamFile f = board::parseParamFile(t, "rp_kp 900\n", "ok.txt", board_values);
-  EXPECT_EQ(f.values[fly::kParamRpKp], 900);
-  EXPECT_EQ(f.values[fly::kParamRpKd], 200) << "kept from the board";
+  const board::ParamFile f = board::parseParamFile(t, "angle_kp 900\n", "ok.txt", board_values);
+  EXPECT_EQ(f.values[fly::kParamAngleKp], 900);
+  EXPECT_EQ(f.values[fly::kParamAngleKd], 200) << "kept from the board";
   EXPECT_EQ(f.givenCount(), 1u);
   try {
     board::parseParamFile(t, "\n\nap_volt_min_mv 13000\n", "rule.txt", board_values);
@@ -137,7 +137,7 @@ TEST(FlyParamFile, TheRecordStoredInAnImageIsWhatFlyReads) {
   std::vector<uint8_t> eeprom(4096, 0xFF);
   EXPECT_EQ(board::paramsInImage(t, eeprom).how, board::BoardParamState::How::kNone);
   std::vector<int32_t> v = t.defaults();
-  v[fly::kParamRpKp] = 950;
+  v[fly::kParamAngleKp] = 950;
   const tc::ParamsWrite w = board::storeParamsInImage(t, v, eeprom);
   ASSERT_EQ(w.status, tc::ParamsWriteStatus::kWritten);
   EXPECT_EQ(board::storeParamsInImage(t, v, eeprom).status, tc::ParamsWriteStatus::kUnchanged);

@@ -50,7 +50,7 @@ ParamTableCopy copyParamTable(const tc::ParamDef* rows, uint8_t count, uint8_t l
 // build/avr/firmware/fly/fly.hex of this source tree ($THRUSTCAL_AVR_BUILD_DIR first).
 std::string defaultFlyHex();
 
-// One row as `param list` prints it: "rp_kp 800  # mN m/rad, 0..10000".
+// One row as `param list` prints it: "angle_kp 800  # mN m/rad, 0..10000".
 std::string paramLine(const tc::ParamDef& d, int32_t value);
 // A whole parameter file: `comment` lines (each gets "# "), then one line per row.
 std::string formatParamFile(const ParamTableCopy& t, const std::vector<int32_t>& values,

@@ -1,0 +1,27 @@
+/* timer_pfc: the phase and frequency correct modes (OCRnx updated at BOTTOM): f = f_clk /
+ * (2 N TOP), high 2 OCRnx ticks.
+ *   D46 PL3 OC5A  Timer5 mode 8 (TOP = ICR5 = 2000), clk/1, OCR5A = 500
+ *   D11 PB5 OC1A  Timer1 mode 9 (TOP = OCR1A = 400), clk/1, COM1A = 01: toggles, 50 % at
+ *                 f_clk / (4 N OCR1A)
+ *   D12 PB6 OC1B  OCR1B = 100 */
+#include "probe.h"
+
+int main(void) {
+  DDRL = _BV(PL3);
+  DDRB = _BV(PB5) | _BV(PB6);
+
+  TCCR5A = _BV(COM5A1);
+  TCCR5B = _BV(WGM53);
+  ICR5 = 2000;
+  OCR5A = 500;
+  TCCR5B |= _BV(CS50);
+
+  TCCR1A = _BV(COM1A0) | _BV(COM1B1) | _BV(WGM10);
+  TCCR1B = _BV(WGM13);
+  OCR1A = 400;
+  OCR1B = 100;
+  TCCR1B |= _BV(CS10);
+
+  for (;;) {
+  }
+}
