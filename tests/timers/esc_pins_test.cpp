@@ -4,10 +4,12 @@
 
 #include <array>
 #include <cstdio>
+#include <fstream>
 #include <string>
 
 #include "pin_log.hpp"
 #include "sim/airframe.hpp"
+#include "sim/console.hpp"
 #include "sim/pin_names.hpp"
 
 namespace {
@@ -98,6 +100,37 @@ TEST(EscPins, CommandLineRefusesAPinNamedTwice) {
   const int status = pclose(p);
   EXPECT_NE(status, 0);
   EXPECT_NE(out.find("D2 (PE4) is named twice (ESC 0 and ESC 3)"), std::string::npos) << out;
+}
+
+}  // namespace
+
+namespace {
+
+// read_run's `rate` (hal::Esc::setFrameRate) on the chip-true timers: the frames go on at the
+// new rate with no gap. Writing TCNTn = TOP in mode 14 would miss TOP (the datasheet's warning)
+// and leave every ESC without a pulse for some 30 ms.
+TEST(EscPins, ReadRunChangesItsFrameRateWithoutAGap) {
+  const std::string elf = READ_RUN_ELF;
+  if (elf.empty() || !std::ifstream(elf).good()) GTEST_SKIP() << "no read_run image at '" << elf << "'";
+  sim::Board board(elf);
+  timers_test::PinLog log(board, {"D6", "D11"});
+  sim::Console console(board, "rr> ");
+  console.waitPrompt(3.0);
+  for (const int hz : {400, 50}) {
+    const auto lines = console.command("rate " + std::to_string(hz), 0.5);
+    board.runFor(0.1);
+    const double frame_cycles = 16e6 / hz;
+    for (const char* pin : {"D6", "D11"}) {
+      const auto periods = log.periods(pin);
+      ASSERT_FALSE(periods.empty()) << pin;
+      EXPECT_NEAR(periods.back(), frame_cycles, 1) << pin << " at " << hz << " Hz";
+    }
+  }
+  // no frame longer than the slowest one (50 Hz) and every pulse the 1000 us stop pulse
+  for (const char* pin : {"D6", "D11"}) {
+    for (int64_t p : log.periods(pin)) EXPECT_LE(p, 320000) << pin;
+    for (int64_t h : log.highs(pin)) EXPECT_EQ(h, 16000) << pin;
+  }
 }
 
 }  // namespace

@@ -12,14 +12,16 @@
  *   D6  PH3 OC4A  Timer4 mode 11 (TOP = OCR4A = 1000), clk/8, COM4A = 01: toggles at TOP
  *   D7  PH4 OC4B  OCR4B = 250
  *   D11 PB5 OC1A  Timer1 mode 1 (8 bit), clk/64, OCR1A = 64
- *   D13 PB7 OC0A  Timer0 mode 5 (TOP = OCR0A = 100), clk/8, COM0A = 01: toggles at TOP
+ *   D13 PB7 OC0A  Timer0 mode 5 (TOP = OCR0A = 100), clk/64, COM0A = 01: toggles at TOP
  *   D4  PG5 OC0B  OCR0B = 25
- *   D9  PH6 OC2B  Timer2 mode 1 (8 bit), clk/1, OCR2B = 100
- * Console: "n" prints how many main-loop passes ran ("loops N"). */
+ *   D9  PH6 OC2B  Timer2 mode 1 (8 bit), clk/8, OCR2B = 100
+ * Console: "n" prints how many main-loop passes ran ("loops N"). Built with -DNO_TIMERS it is the
+ * same loop with every timer off: the bench's baseline for what the PWM costs. */
 #include "probe.h"
 
 int main(void) {
   uart_init();
+#ifndef NO_TIMERS
   DDRE = _BV(PE3) | _BV(PE4) | _BV(PE5);
   DDRL = _BV(PL3) | _BV(PL4) | _BV(PL5);
   DDRH = _BV(PH3) | _BV(PH4) | _BV(PH6);
@@ -55,11 +57,12 @@ int main(void) {
   TCCR0A = _BV(COM0A0) | _BV(COM0B1) | _BV(WGM00);
   OCR0A = 100;
   OCR0B = 25;
-  TCCR0B = _BV(WGM02) | _BV(CS01);
+  TCCR0B = _BV(WGM02) | _BV(CS01) | _BV(CS00);
 
   TCCR2A = _BV(COM2B1) | _BV(WGM20);
   OCR2B = 100;
-  TCCR2B = _BV(CS20);
+  TCCR2B = _BV(CS21);
+#endif
 
   uint32_t loops = 0;
   for (;;) {

@@ -70,6 +70,9 @@ Section safetySection(const AvrPaths& paths);
 // in each of its modes: CPU load, loop period, IMU read to the ESC edge that carries it, flash
 // and static SRAM, stack never used.
 Section flySection(const AvrPaths& paths);
+// Issue 25 item 5 (sections_speed.cpp): simulated seconds per wall second for read_run, fly on
+// the gimbal and a firmware with phase-correct PWM on INT4/INT5 (target >= 5x real time).
+Section speedSection(const AvrPaths& paths);
 // Footprint rows: each image's stack never used after its deepest paths (simulated).
 void addStackHeadroom(const AvrPaths& paths, Table& table, nlohmann::json& json,
                       std::vector<TargetCheck>& targets);
