@@ -377,10 +377,15 @@ void runConsoleCommand(const ConsoleArgs& a) {
   board.setEeprom(image);
   if (!r.airframe) r.still = std::make_unique<StillAirframe>(board, which, a.air);
   if (r.airframe) fmt::print("rig: {}\n", r.airframe->describe());
+  const std::unique_ptr<RcOnBoard> rc = makeRcInput(board, a.air, true);
   PtyBridge pty(board);
   fmt::print("simulated board ({}, {} rig) on {}\n", fs::path(a.elf).filename().string(), which,
              pty.path());
   fmt::print("open it with:  screen {0} {1}   or   picocom -b {1} {0}\n", pty.path(), hal::kUartBaud);
+  if (rc)
+    fmt::print("RC receiver ({}) on {}: type 'ch 1500 1500 1000 1500 ...' (us, channels 1..8), 'loss', "
+               "'status'; no signal until then{}\n",
+               rc->describe(), rc->ptyPath(), a.air.rc_script.empty() ? "" : " or the script's first row");
   fmt::print("Ctrl-C here ends the simulation{}.\n",
              a.read_only || a.eeprom.empty() ? "" : " and saves the EEPROM to " + a.eeprom);
   std::fflush(stdout);
@@ -395,6 +400,7 @@ void runConsoleCommand(const ConsoleArgs& a) {
              board.simulatedSeconds(), a.speed, speedText(board.realtimeFactor()));
   for (const auto& f : r.airframe ? r.airframe->faultsApplied() : r.still->faultsApplied())
     fmt::print("fault applied: {}\n", f);
+  if (rc) fmt::print("{}\n", rcSummary(*rc));
   if (!a.air.log.empty()) fmt::print("truth log: {}\n", a.air.log);
 }
 
