@@ -113,22 +113,14 @@ template <class Storage>
 SettingsRead readSettings(BoardSettings& out) {
   SettingsRead r;
   out = BoardSettings();
-  for (uint8_t host = 0; host < kMotorSlots; ++host) {
-    if (!isHostSlot<Storage>(host)) continue;
-    for (uint8_t copy = 0; copy < 2; ++copy) {
-      BoardSettings s;
-      uint16_t seq = 0;
-      const DecodeStatus st = settings_detail::readCopy<Storage>(settings_detail::copyAddress(host, copy), s, seq);
-      if (st != DecodeStatus::kOk) continue;
-      if (r.status != DecodeStatus::kOk || sequenceNewer(seq, r.sequence)) {
-        r.status = DecodeStatus::kOk;
-        r.host = host;
-        r.copy = copy;
-        r.sequence = seq;
-        out = s;
-      }
-    }
-  }
+  HostCopy at;
+  uint8_t hosts = 0;
+  r.status = newestHostCopy<Storage>(out, at, hosts, [](uint8_t host, uint8_t copy, BoardSettings& s, uint16_t& seq) {
+    return settings_detail::readCopy<Storage>(settings_detail::copyAddress(host, copy), s, seq);
+  });
+  r.host = at.host;
+  r.copy = at.copy;
+  r.sequence = at.sequence;
   return r;
 }
 

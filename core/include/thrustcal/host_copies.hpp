@@ -16,6 +16,32 @@ struct HostCopy {
   uint16_t sequence = 0;
 };
 
+// The newest copy over both copies of every host slot that `read_copy(host, copy, value,
+// sequence)` decodes (DecodeStatus::kOk), into `out` (untouched when none) and `at`; `hosts`
+// counts the host slots seen (0: every slot holds a v1 record). kErased when no copy decodes.
+template <class Storage, class Value, class ReadCopy>
+DecodeStatus newestHostCopy(Value& out, HostCopy& at, uint8_t& hosts, ReadCopy read_copy) {
+  DecodeStatus status = DecodeStatus::kErased;
+  hosts = 0;
+  for (uint8_t host = 0; host < kMotorSlots; ++host) {
+    if (!isHostSlot<Storage>(host)) continue;
+    ++hosts;
+    for (uint8_t copy = 0; copy < 2; ++copy) {
+      Value v;
+      uint16_t seq = 0;
+      if (read_copy(host, copy, v, seq) != DecodeStatus::kOk) continue;
+      if (status != DecodeStatus::kOk || sequenceNewer(seq, at.sequence)) {
+        status = DecodeStatus::kOk;
+        at.host = host;
+        at.copy = copy;
+        at.sequence = seq;
+        out = v;
+      }
+    }
+  }
+  return status;
+}
+
 // Where the next write goes, given the newest valid copy `now` (`have`: there is one): the
 // other copy in its host unless that host is `avoid`; else copy A of the highest host other than
 // `avoid`. host kNoSlot: no room (every other slot holds a v1 record). The sequence is one past

@@ -126,23 +126,13 @@ DecodeStatus readCopy(uint16_t addr, ParamsRecord& out, uint16_t& sequence) {
 template <class Storage>
 ParamsRead readParams(ParamsRecord& out) {
   ParamsRead r;
-  for (uint8_t host = 0; host < kMotorSlots; ++host) {
-    if (!isHostSlot<Storage>(host)) continue;
-    ++r.hosts;
-    for (uint8_t copy = 0; copy < 2; ++copy) {
-      ParamsRecord rec;
-      uint16_t seq = 0;
-      if (params_detail::readCopy<Storage>(params_detail::copyAddress(host, copy), rec, seq) != DecodeStatus::kOk)
-        continue;
-      if (r.status != DecodeStatus::kOk || sequenceNewer(seq, r.sequence)) {
-        r.status = DecodeStatus::kOk;
-        r.host = host;
-        r.copy = copy;
-        r.sequence = seq;
-        out = rec;
-      }
-    }
-  }
+  HostCopy at;
+  r.status = newestHostCopy<Storage>(out, at, r.hosts, [](uint8_t host, uint8_t copy, ParamsRecord& rec, uint16_t& seq) {
+    return params_detail::readCopy<Storage>(params_detail::copyAddress(host, copy), rec, seq);
+  });
+  r.host = at.host;
+  r.copy = at.copy;
+  r.sequence = at.sequence;
   return r;
 }
 
