@@ -50,7 +50,8 @@ enum CommandFlag : uint8_t {
   // Can spin a motor or write the EEPROM: with strict mode on, the line must carry a valid
   // checksum (console protocol, docs/console.md).
   kCmdGuarded = 1u << 0,
-  // Hidden from `help` (aliases kept for old scripts).
+  // Hidden from `help`: aliases kept for old scripts, rows another row's help names (the
+  // help text stays only the usage line).
   kCmdHidden = 1u << 1,
   // With kCmdGuarded: a last argument of 0 is a stop (`f 0`, `f 2 0`), which never needs a
   // checksum; any other value is guarded.

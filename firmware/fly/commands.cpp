@@ -398,7 +398,7 @@ const char kLevelHelp[] TC_FLASH = "the vehicle stands level: trim the accelerom
 const char kStreamHelp[] TC_FLASH =
     "CSV t_s,roll,pitch,roll_sp,pitch_sp (deg),p,q,r (deg/s),\nforce0..3 (g),pulse0..3 (us), 50 lines/s";
 const char kStatusHelp[] TC_FLASH = "state, IMU, attitude, settings, loop timing, motors";
-const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw, param set, param\nsave|load|defaults need a checksum";
+const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw, param set|save|load|defaults need a checksum";
 const char kRcHelp[] TC_FLASH =
     "receiver: PPM sum on A8 | one pulse per channel on\n"
     "A8.. (N channels, default 5); sticks arm: throttle low,\n"
@@ -406,12 +406,12 @@ const char kRcHelp[] TC_FLASH =
 const char kRcMapHelp[] TC_FLASH = "the first four channels' order (A roll, E pitch, T, R yaw)";
 const char kRatesHelp[] TC_FLASH = "full stick: angle (angle mode), roll/pitch rate, yaw rate";
 const char kFmodeHelp[] TC_FLASH = "sticks' mode without a switch on channel 5";
-const char kParamListHelp[] TC_FLASH = "every saved parameter: NAME VALUE  # unit, range";
-const char kParamActionHelp[] TC_FLASH =
-    "to the EEPROM | from it | the defaults (not armed;\nthe defaults stay in RAM until param save)";
-const char kParamGetHelp[] TC_FLASH = "one parameter, its default and what it does";
-const char kParamSetHelp[] TC_FLASH = "in RAM (armed: crash_deg only);\nparam save keeps it";
-const char kEepromHelp[] TC_FLASH = "EEPROM CRC-16 per slot and whole, or Intel HEX (not armed)";
+// One help row for the five `param` commands and none for `eeprom` (thrustcal board's, docs/fly.md):
+// help is one blocking reply, and armed, a longer one drops the keep-alive lines sent while it
+// prints (the 64-byte receive ring fills) until the link failsafe disarms (thrustcal bench fly).
+const char kParamListHelp[] TC_FLASH =
+    "every saved parameter: NAME VALUE  # unit, range; also\nparam get NAME | set NAME VALUE | save|load|defaults";
+const char kHiddenHelp[] TC_FLASH = "";  // rows help does not list
 
 // Every console command. kCmdGuarded: what strict mode refuses without a checksum, everything
 // that can start the motors or change what armed motors do.
@@ -434,12 +434,12 @@ const fw::Command<FlyApp> kCommands[] TC_FLASH = {
     {{kCalibrateName, nullptr, 0, 0, 0, kCalibrateHelp}, &Commands::calibrate},
     {{kLevelName, nullptr, 0, 0, 0, kLevelHelp}, &Commands::level},
     {{kParamName, kParamListArgs, 1, 1, 0, kParamListHelp}, &Commands::paramList},
-    {{kParamName, kParamActionArgs, 1, 1, fw::kCmdGuarded, kParamActionHelp}, &Commands::paramAction},
-    {{kParamName, kParamGetArgs, 2, 2, 0, kParamGetHelp}, &Commands::paramGet},
-    {{kParamName, kParamSetArgs, 3, 3, fw::kCmdGuarded, kParamSetHelp}, &Commands::paramSet},
+    {{kParamName, kParamActionArgs, 1, 1, fw::kCmdGuarded | fw::kCmdHidden, kHiddenHelp}, &Commands::paramAction},
+    {{kParamName, kParamGetArgs, 2, 2, fw::kCmdHidden, kHiddenHelp}, &Commands::paramGet},
+    {{kParamName, kParamSetArgs, 3, 3, fw::kCmdGuarded | fw::kCmdHidden, kHiddenHelp}, &Commands::paramSet},
     {{kStreamName, kOnOffArgs, 1, 1, 0, kStreamHelp}, &Commands::stream},
     {{kStatusName, nullptr, 0, 0, 0, kStatusHelp}, &Commands::status},
-    {{kEepromName, kEepromArgs, 1, 1, 0, kEepromHelp}, &Commands::eeprom},
+    {{kEepromName, kEepromArgs, 1, 1, fw::kCmdHidden, kHiddenHelp}, &Commands::eeprom},
     {{kStrictName, kOnOffArgs, 1, 1, 0, kStrictHelp}, &Commands::strict},
     {{kRcName, kRcArgs, 1, 2, 0, kRcHelp}, &Commands::rc},
     {{kRcMapName, kRcMapArgs, 1, 1, 0, kRcMapHelp}, &Commands::rcmap},
