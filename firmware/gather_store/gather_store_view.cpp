@@ -123,6 +123,17 @@ void sayStoreSafety(const tc::StoreReport& report, uint8_t slot) {
                     "slot could keep the old calibration meanwhile (a power cut then leaves the "
                     "motor not calibrated, never flown wrong)"));
   }
+  if (report.params == tc::ParamsMove::kMoved) {
+    say(TC_FLASH_TEXT("# fly's saved parameters moved out of motor "));
+    fw::printUint(slot);
+    sayLine(TC_FLASH_TEXT("'s slot first (they live in a slot without a thesis record)"));
+  } else if (report.params == tc::ParamsMove::kDropped) {
+    say(TC_FLASH_TEXT("warning: fly's saved parameters lived in motor "));
+    fw::printUint(slot);
+    sayLine(TC_FLASH_TEXT("'s slot and no other slot is free of thesis records: they are gone (fly "
+                          "flies its defaults and says so; thrustcal board params push puts a "
+                          "file back once a slot is free)"));
+  }
 }
 
 

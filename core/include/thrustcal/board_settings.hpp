@@ -30,6 +30,7 @@
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/crc16.hpp"
 #include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/host_copies.hpp"
 #include "thrustcal/record_limits.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -112,22 +113,14 @@ template <class Storage>
 SettingsRead readSettings(BoardSettings& out) {
   SettingsRead r;
   out = BoardSettings();
-  for (uint8_t host = 0; host < kMotorSlots; ++host) {
-    if (!isHostSlot<Storage>(host)) continue;
-    for (uint8_t copy = 0; copy < 2; ++copy) {
-      BoardSettings s;
-      uint16_t seq = 0;
-      const DecodeStatus st = settings_detail::readCopy<Storage>(settings_detail::copyAddress(host, copy), s, seq);
-      if (st != DecodeStatus::kOk) continue;
-      if (r.status != DecodeStatus::kOk || sequenceNewer(seq, r.sequence)) {
-        r.status = DecodeStatus::kOk;
-        r.host = host;
-        r.copy = copy;
-        r.sequence = seq;
-        out = s;
-      }
-    }
-  }
+  HostCopy at;
+  uint8_t hosts = 0;
+  r.status = newestHostCopy<Storage>(out, at, hosts, [](uint8_t host, uint8_t copy, BoardSettings& s, uint16_t& seq) {
+    return settings_detail::readCopy<Storage>(settings_detail::copyAddress(host, copy), s, seq);
+  });
+  r.host = at.host;
+  r.copy = at.copy;
+  r.sequence = at.sequence;
   return r;
 }
 
@@ -147,34 +140,22 @@ SettingsWrite writeSettings(const BoardSettings& s, uint8_t avoid = kNoSlot) {
     w.sequence = now.sequence;
     return w;
   }
-  if (have && now.host != avoid && isHostSlot<Storage>(now.host)) {
-    w.host = now.host;
-    w.copy = static_cast<uint8_t>(now.copy ^ 1u);
-  } else {
-    for (uint8_t h = kMotorSlots; h-- > 0;) {
-      if (h != avoid && isHostSlot<Storage>(h)) {
-        w.host = h;
-        break;
-      }
-    }
-    if (w.host == kNoSlot) {
-      w.status = SettingsWriteStatus::kNoRoom;
-      return w;
-    }
-    w.copy = 0;
+  HostCopy newest;
+  newest.host = now.host;
+  newest.copy = now.copy;
+  newest.sequence = now.sequence;
+  const HostCopy next = nextHostCopy<Storage>(have, newest, avoid);
+  if (next.host == kNoSlot) {
+    w.status = SettingsWriteStatus::kNoRoom;
+    return w;
   }
-  w.sequence = have ? static_cast<uint16_t>(now.sequence + 1) : 1;
+  w.host = next.host;
+  w.copy = next.copy;
+  w.sequence = next.sequence;
   uint8_t image[kSettingsBytes];
   serializeSettings(s, w.sequence, image);
   const uint16_t addr = settings_detail::copyAddress(w.host, w.copy);
-  for (uint16_t i = 0; i < kSettingsCrcOffset; ++i) {
-    if (i == kSettingsSeqOffset || i == kSettingsSeqOffset + 1) continue;
-    Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
-  }
-  for (uint16_t i = kSettingsSeqOffset; i < kSettingsSeqOffset + 2; ++i)
-    Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
-  for (uint16_t i = kSettingsCrcOffset; i < kSettingsBytes; ++i)
-    Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
+  writeCopyInOrder<Storage>(addr, image, kSettingsBytes, kSettingsSeqOffset);
   BoardSettings back;
   uint16_t seq = 0;
   const bool ok = settings_detail::readCopy<Storage>(addr, back, seq) == DecodeStatus::kOk && seq == w.sequence;
