@@ -9,17 +9,19 @@
 
 #include <math.h>
 
+#include "thrustcal/flash_text.hpp"
+
 namespace tc {
 
 const char* stepFitWhyText(StepFitWhy why) {
   switch (why) {
-    case StepFitWhy::kOk: return "ok";
-    case StepFitWhy::kTooShort: return "log too short or the step too near its end";
-    case StepFitWhy::kNoStep: return "no step in the force (less than 8x the residual)";
-    case StepFitWhy::kAtBound: return "time constant at the search's bound (not a first-order lag)";
-    case StepFitWhy::kNoBench: return "bench response not identified";
+    case StepFitWhy::kOk: return TC_FLASH_TEXT("ok");
+    case StepFitWhy::kTooShort: return TC_FLASH_TEXT("log too short or the step too near its end");
+    case StepFitWhy::kNoStep: return TC_FLASH_TEXT("no step in the force (less than 8x the residual)");
+    case StepFitWhy::kAtBound: return TC_FLASH_TEXT("time constant at the search's bound (not a first-order lag)");
+    case StepFitWhy::kNoBench: return TC_FLASH_TEXT("bench response not identified");
   }
-  return "?";
+  return TC_FLASH_TEXT("?");
 }
 
 BenchResponse BenchStepFit::response() const {
@@ -48,7 +50,7 @@ constexpr float kTauMaxS = 1.5f;
 // The log seen through `stride`: sample j is the mean of blocks j*stride .. j*stride+stride-1,
 // its centre at (j + 0.5) * dt.
 struct Samples {
-  const StepLog* log;
+  const StepLog* slog;
   uint8_t stride;
   uint16_t count;
   float dt;
@@ -56,17 +58,17 @@ struct Samples {
   float at(uint16_t j) const {
     int32_t sum = 0;
     const uint16_t first = static_cast<uint16_t>(j * stride);
-    for (uint8_t i = 0; i < stride; ++i) sum += log->force_dg[first + i];
+    for (uint8_t i = 0; i < stride; ++i) sum += slog->force_dg[first + i];
     return static_cast<float>(sum) * 0.1f / static_cast<float>(stride) - mean;
   }
 };
 
-Samples makeSamples(const StepLog& log, uint8_t stride) {
+Samples makeSamples(const StepLog& slog, uint8_t stride) {
   Samples s;
-  s.log = &log;
+  s.slog = &slog;
   s.stride = stride == 0 ? 1 : stride;
-  s.count = static_cast<uint16_t>(log.blocks / s.stride);
-  s.dt = log.block_s * static_cast<float>(s.stride);
+  s.count = static_cast<uint16_t>(slog.blocks / s.stride);
+  s.dt = slog.block_s * static_cast<float>(s.stride);
   s.mean = 0.0f;
   float sum = 0.0f;
   for (uint16_t j = 0; j < s.count; ++j) sum += s.at(j);
@@ -126,13 +128,13 @@ struct StageChain {
 
 // The drive's deviation from a clean step after it, in units of the step: the bus sags under
 // the current surge of a step up (and rises on a step down), so (to - start) * V(t) reaches
-// its final value only as the surge decays. Zero without a voltage log.
+// its final value only as the surge decays. Zero without a voltage slog.
 struct DriveDip {
-  const StepLog* log = nullptr;
+  const StepLog* slog = nullptr;
   float per_mv = 0.0f;  // (to - start) / (drive_to - drive_from), per mV
   float end_mv = 0.0f;  // the bus at the log's end
   uint16_t values = 0;
-  explicit DriveDip(const StepLog& l) : log(&l) {
+  explicit DriveDip(const StepLog& l) : slog(&l) {
     if (l.vbat_mv == nullptr || l.blocks < 4 * kDynBlocksPerVbat) return;
     values = static_cast<uint16_t>(l.blocks / kDynBlocksPerVbat);
     const float before = static_cast<float>(l.vbat_mv[0]);
@@ -145,12 +147,12 @@ struct DriveDip {
   // At time t (s from the log's start, after the step): the voltage log interpolated.
   float at(float t) const {
     if (per_mv == 0.0f) return 0.0f;
-    const float pos = t / (log->block_s * kDynBlocksPerVbat) - 0.5f;
-    if (pos <= 0.0f) return per_mv * (static_cast<float>(log->vbat_mv[0]) - end_mv);
+    const float pos = t / (slog->block_s * kDynBlocksPerVbat) - 0.5f;
+    if (pos <= 0.0f) return per_mv * (static_cast<float>(slog->vbat_mv[0]) - end_mv);
     const uint16_t i = static_cast<uint16_t>(pos);
-    if (i + 1 >= values) return per_mv * (static_cast<float>(log->vbat_mv[values - 1]) - end_mv);
+    if (i + 1 >= values) return per_mv * (static_cast<float>(slog->vbat_mv[values - 1]) - end_mv);
     const float f = pos - static_cast<float>(i);
-    const float v = (1.0f - f) * static_cast<float>(log->vbat_mv[i]) + f * static_cast<float>(log->vbat_mv[i + 1]);
+    const float v = (1.0f - f) * static_cast<float>(slog->vbat_mv[i]) + f * static_cast<float>(slog->vbat_mv[i + 1]);
     return per_mv * (v - end_mv);
   }
 };
@@ -158,7 +160,7 @@ struct DriveDip {
 // The motor's normalised force response (0 before the step, 1 at the end): its speed a
 // first-order lag of tau behind the drive (a step plus the dip), force = speed^2 with
 // q = sqrt(to / from); then the bench. Returns the fit's SSE.
-float motorSse(const Samples& s, const StepLog& log, const BenchResponse& bench, const DriveDip& dip, float tau,
+float motorSse(const Samples& s, const StepLog& slog, const BenchResponse& bench, const DriveDip& dip, float tau,
                float q, float& c0, float& c1) {
   StageChain chain(bench, s.dt);
   LineSums sums;
@@ -168,7 +170,7 @@ float motorSse(const Samples& s, const StepLog& log, const BenchResponse& bench,
   float lag = 0.0f, last_dip = 0.0f;  // the dip through the same lag (trapezoidal)
   for (uint16_t j = 0; j < s.count; ++j) {
     const float t_log = (static_cast<float>(j) + 0.5f) * s.dt;
-    const float t = t_log - log.step_s;
+    const float t = t_log - slog.step_s;
     float phi = 0.0f;
     if (t > 0.0f) {
       e = e < 0.0f ? expf(-t / tau) : e * r;
@@ -179,6 +181,7 @@ float motorSse(const Samples& s, const StepLog& log, const BenchResponse& bench,
       phi = rise * (2.0f + (q - 1.0f) * rise) / (q + 1.0f);
     }
     sums.add(s.at(j), chain.push(phi));
+    if ((j & 63u) == 0 && slog.yield) slog.yield();
   }
   return sums.solve(s.mean, c0, c1);
 }
@@ -242,27 +245,27 @@ float levelMean(const Samples& s, uint16_t from, uint16_t to) {
 
 }  // namespace
 
-MotorStepFit fitMotorStep(const StepLog& log, const BenchResponse& bench, uint8_t stride) {
+MotorStepFit fitMotorStep(const StepLog& slog, const BenchResponse& bench, uint8_t stride) {
   MotorStepFit fit;
   if (!bench.isValid()) {
     fit.why = StepFitWhy::kNoBench;
     return fit;
   }
-  const Samples s = makeSamples(log, stride);
-  const float step_at = log.step_s / s.dt;
+  const Samples s = makeSamples(slog, stride);
+  const float step_at = slog.step_s / s.dt;
   if (s.count < kMinSamples || step_at < 5.0f || step_at > static_cast<float>(s.count) - 20.0f) return fit;
   // First guess of sqrt(to / from) from the levels before the step and at the log's end.
   const float before = levelMean(s, 0, static_cast<uint16_t>(step_at - 1.0f));
   const float after = levelMean(s, static_cast<uint16_t>(s.count - s.count / 8), s.count);
   float q = (before > 1.0f && after > 1.0f) ? sqrtf(after / before) : 1.0f;
-  const DriveDip dip(log);
+  const DriveDip dip(slog);
   float c0 = 0, c1 = 0, sse = 0;
   float lo = logf(kTauMinS), hi = logf(kTauMaxS);
   float x = 0;
   for (int pass = 0; pass < 3; ++pass) {
-    x = brentMinimize([&](float lt) { return motorSse(s, log, bench, dip, expf(lt), q, c0, c1); }, lo, hi, 1e-3f,
+    x = brentMinimize([&](float lt) { return motorSse(s, slog, bench, dip, expf(lt), q, c0, c1); }, lo, hi, 1e-3f,
                       sse);
-    motorSse(s, log, bench, dip, expf(x), q, c0, c1);
+    motorSse(s, slog, bench, dip, expf(x), q, c0, c1);
     const float to = c0 + c1;
     const float q_new = (c0 > 1.0f && to > 1.0f) ? sqrtf(to / c0) : 1.0f;
     if (fabsf(q_new - q) < 1e-3f * q) break;
@@ -319,6 +322,7 @@ float benchSse(const Samples& s, uint8_t n, float tau, float step_s, float& c0, 
     sums.add(s.at(j), (g_end - g_prev) / dx);
     g_prev = g_end;
     x = x_end;
+    if ((j & 63u) == 0 && s.slog->yield) s.slog->yield();
   }
   return sums.solve(s.mean, c0, c1);
 }
@@ -393,11 +397,11 @@ Point2 nelderMead(F f, float x0, float y0, float dx, float dy, uint8_t evals) {
 
 }  // namespace
 
-BenchStepFit fitBenchStep(const StepLog& log) {
+BenchStepFit fitBenchStep(const StepLog& slog) {
   BenchStepFit fit;
   uint8_t stride = 1;
-  while (log.blocks / stride > 320) ++stride;
-  const Samples s = makeSamples(log, stride);
+  while (slog.blocks / stride > 320) ++stride;
+  const Samples s = makeSamples(slog, stride);
   if (s.count < kMinSamples) return fit;
   const float before = levelMean(s, 0, 5);
   const float after = levelMean(s, static_cast<uint16_t>(s.count - s.count / 8), s.count);

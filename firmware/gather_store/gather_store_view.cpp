@@ -252,6 +252,13 @@ void showModelV2(uint8_t slot, const tc::RecordV2Read& r, const tc::ModelV2& mod
     say(TC_FLASH_TEXT(" us"));
   }
   fw::newline();
+  say(TC_FLASH_TEXT("dynamics: "));
+  if (model.dynamics.isPresent()) {
+    printDynamics(model.dynamics);
+    fw::newline();
+  } else {
+    sayLine(TC_FLASH_TEXT("not measured (dyn measures them)"));
+  }
 }
 
 void showRecordV1(uint8_t slot, tc::DecodeStatus status, const tc::Plausibility& why,

@@ -33,6 +33,9 @@ struct StepLog {
   const uint16_t* vbat_mv = nullptr;
   uint16_t from_us = 0, to_us = 0;
   float start_us = 0.0f;
+  // Called every 64 samples of every pass over the log (null: none): a fit takes a few hundred
+  // passes, ~1 s on the ATmega2560, and gather_store kicks its watchdog from here.
+  void (*yield)() = nullptr;
 };
 
 enum class StepFitWhy : uint8_t {
@@ -42,6 +45,7 @@ enum class StepFitWhy : uint8_t {
   kAtBound,       // the time constant ran to the search's bound: not a first-order response
   kNoBench,       // the bench response is not identified (`dyn cell` first)
 };
+// In flash on the AVR (TC_FLASH_TEXT).
 const char* stepFitWhyText(StepFitWhy why);
 
 struct MotorStepFit {
