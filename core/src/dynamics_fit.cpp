@@ -54,12 +54,13 @@ struct Samples {
   uint8_t stride;
   uint16_t count;
   float dt;
-  float mean;  // of all samples (the sums below are taken about it, for float precision)
+  float mean;   // of all samples (the sums below are taken about it, for float precision)
+  float scale;  // grams per summed decigram
   float at(uint16_t j) const {
     int32_t sum = 0;
-    const uint16_t first = static_cast<uint16_t>(j * stride);
-    for (uint8_t i = 0; i < stride; ++i) sum += slog->force_dg[first + i];
-    return static_cast<float>(sum) * 0.1f / static_cast<float>(stride) - mean;
+    const int16_t* p = slog->force_dg + j * stride;
+    for (uint8_t i = 0; i < stride; ++i) sum += p[i];
+    return static_cast<float>(sum) * scale - mean;
   }
 };
 
@@ -69,6 +70,7 @@ Samples makeSamples(const StepLog& slog, uint8_t stride) {
   s.stride = stride == 0 ? 1 : stride;
   s.count = static_cast<uint16_t>(slog.blocks / s.stride);
   s.dt = slog.block_s * static_cast<float>(s.stride);
+  s.scale = 0.1f / static_cast<float>(s.stride);
   s.mean = 0.0f;
   float sum = 0.0f;
   for (uint16_t j = 0; j < s.count; ++j) sum += s.at(j);
@@ -76,22 +78,43 @@ Samples makeSamples(const StepLog& slog, uint8_t stride) {
   return s;
 }
 
-// Least squares of y = c0 + c1 * psi from sums about the samples' mean.
+// Least squares of y = c0 + c1 * psi from sums about the samples' mean. A clean step's residual
+// is 1e-5 of the sums it is the difference of, near float's own precision: the samples are summed
+// in chunks of kChunk and the chunks added with Kahan's compensation, so rounding stays well
+// below the residual and the search sees the model's changes, not the sums' noise.
 struct LineSums {
-  float n = 0, sp = 0, spp = 0, sy = 0, syp = 0, syy = 0;
+  static constexpr uint8_t kChunk = 32;
+  enum { kN, kP, kPP, kY, kYP, kYY, kCount };
+  float chunk[kCount] = {};
+  float total[kCount] = {};
+  float carry[kCount] = {};
+  uint8_t in_chunk = 0;
   void add(float y, float psi) {
-    n += 1.0f;
-    sp += psi;
-    spp += psi * psi;
-    sy += y;
-    syp += y * psi;
-    syy += y * y;
+    chunk[kN] += 1.0f;
+    chunk[kP] += psi;
+    chunk[kPP] += psi * psi;
+    chunk[kY] += y;
+    chunk[kYP] += y * psi;
+    chunk[kYY] += y * y;
+    if (++in_chunk == kChunk) fold();
+  }
+  void fold() {
+    for (uint8_t i = 0; i < kCount; ++i) {
+      const float v = chunk[i] - carry[i];
+      const float t = total[i] + v;
+      carry[i] = (t - total[i]) - v;
+      total[i] = t;
+      chunk[i] = 0.0f;
+    }
+    in_chunk = 0;
   }
   // SSE of the best line; c0, c1 in grams (the samples' mean added back).
-  float solve(float mean, float& c0, float& c1) const {
-    const float pp = spp - sp * sp / n;
-    const float yp = syp - sp * sy / n;
-    const float yy = syy - sy * sy / n;
+  float solve(float mean, float& c0, float& c1) {
+    fold();
+    const float n = total[kN], sp = total[kP], sy = total[kY];
+    const float pp = total[kPP] - sp * sp / n;
+    const float yp = total[kYP] - sp * sy / n;
+    const float yy = total[kYY] - sy * sy / n;
     if (!(pp > 1e-9f)) {
       c1 = 0.0f;
       c0 = mean + sy / n;
@@ -133,6 +156,7 @@ struct DriveDip {
   const StepLog* slog = nullptr;
   float per_mv = 0.0f;  // (to - start) / (drive_to - drive_from), per mV
   float end_mv = 0.0f;  // the bus at the log's end
+  float per_value = 0.0f;  // voltage values per second
   uint16_t values = 0;
   explicit DriveDip(const StepLog& l) : slog(&l) {
     if (l.vbat_mv == nullptr || l.blocks < 4 * kDynBlocksPerVbat) return;
@@ -143,11 +167,12 @@ struct DriveDip {
     const float from = static_cast<float>(l.from_us) - l.start_us;
     const float step = to * end_mv - from * before;
     if (to > 0.0f && from > 0.0f && fabsf(step) > 1.0f) per_mv = to / step;
+    per_value = 1.0f / (l.block_s * kDynBlocksPerVbat);
   }
   // At time t (s from the log's start, after the step): the voltage log interpolated.
   float at(float t) const {
     if (per_mv == 0.0f) return 0.0f;
-    const float pos = t / (slog->block_s * kDynBlocksPerVbat) - 0.5f;
+    const float pos = t * per_value - 0.5f;
     if (pos <= 0.0f) return per_mv * (static_cast<float>(slog->vbat_mv[0]) - end_mv);
     const uint16_t i = static_cast<uint16_t>(pos);
     if (i + 1 >= values) return per_mv * (static_cast<float>(slog->vbat_mv[values - 1]) - end_mv);
@@ -236,6 +261,19 @@ float brentMinimize(F f, float lo, float hi, float tol, float& best_f) {
   return x;
 }
 
+// The area between 1 and the normalised response after the step (seconds): the mean delay of
+// everything between the pulse and the reading, if it settles within the log.
+float meanDelay(const Samples& s, float step_s, float before, float after) {
+  if (fabsf(after - before) < 1e-3f) return 0.0f;
+  const float inv = 1.0f / (after - before);
+  float area = 0.0f;
+  for (uint16_t j = 0; j < s.count; ++j) {
+    const float t = (static_cast<float>(j) + 0.5f) * s.dt - step_s;
+    if (t > 0.0f) area += 1.0f - (s.at(j) + s.mean - before) * inv;
+  }
+  return area * s.dt;
+}
+
 // Mean of samples [from, to).
 float levelMean(const Samples& s, uint16_t from, uint16_t to) {
   float sum = 0.0f;
@@ -259,18 +297,22 @@ MotorStepFit fitMotorStep(const StepLog& slog, const BenchResponse& bench, uint8
   const float after = levelMean(s, static_cast<uint16_t>(s.count - s.count / 8), s.count);
   float q = (before > 1.0f && after > 1.0f) ? sqrtf(after / before) : 1.0f;
   const DriveDip dip(slog);
-  float c0 = 0, c1 = 0, sse = 0;
+  // The search starts around the response's mean delay less the bench's (the area between the
+  // normalised response and 1), and only refines when sqrt(to / from) moved.
   float lo = logf(kTauMinS), hi = logf(kTauMaxS);
+  const float delay = meanDelay(s, slog.step_s, before, after) - bench.delayS();
+  if (delay > 2.0f * kTauMinS && delay < 0.5f * kTauMaxS) lo = logf(0.5f * delay), hi = logf(2.0f * delay);
+  float c0 = 0, c1 = 0, sse = 0;
   float x = 0;
   for (int pass = 0; pass < 3; ++pass) {
-    x = brentMinimize([&](float lt) { return motorSse(s, slog, bench, dip, expf(lt), q, c0, c1); }, lo, hi, 1e-3f,
+    x = brentMinimize([&](float lt) { return motorSse(s, slog, bench, dip, expf(lt), q, c0, c1); }, lo, hi, 2e-3f,
                       sse);
     motorSse(s, slog, bench, dip, expf(x), q, c0, c1);
     const float to = c0 + c1;
     const float q_new = (c0 > 1.0f && to > 1.0f) ? sqrtf(to / c0) : 1.0f;
-    if (fabsf(q_new - q) < 1e-3f * q) break;
+    if (fabsf(q_new - q) < 2e-3f * q) break;
     q = q_new;
-    lo = x - 0.3f, hi = x + 0.3f;  // the next pass only refines
+    lo = x - 0.2f, hi = x + 0.2f;  // the next pass only refines
   }
   fit.tau_s = expf(x);
   fit.from_g = c0;
@@ -441,70 +483,6 @@ BenchStepFit fitBenchStep(const StepLog& slog) {
     fit.why = StepFitWhy::kOk;
   }
   return fit;
-}
-
-bool DynamicsLawFit::add(float force_g, float tau_up_s, float tau_down_s) {
-  if (count_ >= kDynMaxPoints || !(force_g > 0.0f) || !(tau_up_s > 0.0f) || !(tau_down_s > 0.0f)) return false;
-  force_g_[count_] = force_g;
-  tau_up_s_[count_] = tau_up_s;
-  tau_down_s_[count_] = tau_down_s;
-  ++count_;
-  return true;
-}
-
-namespace {
-
-// 1/tau = a + b sqrt(F) by least squares (b = 0 with one point or one force); values at lo, hi.
-void lawEnds(const float* force_g, const float* tau_s, uint8_t n, float s_lo, float s_hi, float& tau_lo,
-             float& tau_hi) {
-  float ss = 0, sy = 0, sss = 0, ssy = 0;
-  for (uint8_t i = 0; i < n; ++i) {
-    const float sq = sqrtf(force_g[i]), y = 1.0f / tau_s[i];
-    ss += sq, sy += y, sss += sq * sq, ssy += sq * y;
-  }
-  const float fn = static_cast<float>(n);
-  const float den = fn * sss - ss * ss;
-  float b = 0.0f;
-  if (n >= 2 && den > 1e-6f * fn * sss) b = (fn * ssy - ss * sy) / den;
-  const float a = (sy - b * ss) / fn;
-  tau_lo = 1.0f / (a + b * s_lo);
-  tau_hi = 1.0f / (a + b * s_hi);
-}
-
-bool tauStorable(float tau_s) {
-  return tau_s >= kDynTauMin01ms * 1e-4f && tau_s <= kDynTauMax01ms * 1e-4f;
-}
-
-}  // namespace
-
-bool DynamicsLawFit::build(MotorDynamics& out) const {
-  out.clear();
-  if (count_ == 0) return false;
-  float lo = force_g_[0], hi = force_g_[0];
-  for (uint8_t i = 1; i < count_; ++i) {
-    if (force_g_[i] < lo) lo = force_g_[i];
-    if (force_g_[i] > hi) hi = force_g_[i];
-  }
-  MotorDynamics d;
-  d.points = count_;
-  d.lo_dg = static_cast<uint16_t>(lo * 10.0f + 0.5f);
-  d.hi_dg = static_cast<uint16_t>(hi * 10.0f + 0.5f);
-  float up_lo, up_hi, down_lo, down_hi;
-  const float s_lo = sqrtf(static_cast<float>(d.lo_dg) * 0.1f), s_hi = sqrtf(static_cast<float>(d.hi_dg) * 0.1f);
-  lawEnds(force_g_, tau_up_s_, count_, s_lo, s_hi, up_lo, up_hi);
-  lawEnds(force_g_, tau_down_s_, count_, s_lo, s_hi, down_lo, down_hi);
-  if (!tauStorable(up_lo) || !tauStorable(up_hi) || !tauStorable(down_lo) || !tauStorable(down_hi)) return false;
-  d.up_lo_01ms = secondsTo01ms(up_lo);
-  d.up_hi_01ms = secondsTo01ms(up_hi);
-  d.down_lo_01ms = secondsTo01ms(down_lo);
-  d.down_hi_01ms = secondsTo01ms(down_hi);
-  if (d.lo_dg == d.hi_dg) {
-    d.up_hi_01ms = d.up_lo_01ms;
-    d.down_hi_01ms = d.down_lo_01ms;
-  }
-  if (!d.isValid()) return false;
-  out = d;
-  return true;
 }
 
 }  // namespace tc

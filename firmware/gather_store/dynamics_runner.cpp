@@ -22,7 +22,8 @@ using fw::sayLine;
 namespace {
 
 constexpr uint8_t kDynPoints = 5;                // operating points of a session
-constexpr uint16_t kDynFirstSettleMs = 1500;     // from a standing motor to the first point
+constexpr uint16_t kDynFirstSettleMs = 3000;     // from a standing motor to the first point (and the
+                                                 // pack's polarisation after it)
 constexpr uint16_t kDynSettleMs = 700;           // from one point's lower level to the next
 constexpr uint16_t kCellQuietBlocks = 100;       // dyn cell: the level and noise before the step
 constexpr uint16_t kCellTimeoutMs = 20000;       // dyn cell: waiting for the weight to move
@@ -32,12 +33,23 @@ constexpr uint8_t kFitStride = 2;                // blocks averaged per fit samp
 
 void kickWatchdog() { hal::Watchdog::kick(); }
 
-// The ESC takes a pulse written now at the falling edge of the next frame's pulse.
-uint32_t edgeAfterWrite(uint32_t now_us, uint16_t pwm_us) {
+uint32_t framePeriodUs() {
   const uint16_t hz = hal::Esc::frameRateHz();
-  const uint32_t period_us = hz ? 1000000ul / hz : 20000ul;
+  return hz ? 1000000ul / hz : 20000ul;
+}
+
+// A pulse written now reaches the ESC at the falling edge of the next frame's pulse (the
+// compare registers are double-buffered), unless this frame's pulse is still high or the frame
+// is about to end: then when it takes effect depends on the timer's buffering, so a step waits
+// for the next block (about 2 ms) instead. True: writing now is unambiguous.
+bool mayWritePulseNow(uint16_t pulse_now_us) {
   const uint32_t in_frame = hal::Esc::frameTimeUs();
-  return now_us + (period_us - in_frame) + pwm_us;
+  return in_frame > pulse_now_us + 100u && in_frame + 200u < framePeriodUs();
+}
+
+// From a write now to the falling edge of the next frame's pulse.
+uint16_t edgeAfterWriteUs(uint16_t pwm_us) {
+  return static_cast<uint16_t>(framePeriodUs() - hal::Esc::frameTimeUs() + pwm_us);
 }
 
 // Rotates a[0..n) left by k: the oldest block of a ring first.
@@ -100,14 +112,21 @@ bool GatherStoreApp::recordStep(DynLog& log, uint16_t to_us, DynRecording& rec) 
   uint16_t vbat_sum = 0;
   rec.start_us = hal::Clock::micros();
   for (uint16_t b = 0; b < kDynLogBlocks; ++b) {
-    if (b == kDynPreBlocks) {
+    if (b >= kDynPreBlocks && rec.step_block == 0 && mayWritePulseNow(rec.from_us)) {
       hal::Esc::writePulse(sweep_settings_.slot, to_us);
-      rec.edge_us = edgeAfterWrite(hal::Clock::micros(), to_us);
+      rec.edge_after_us = edgeAfterWriteUs(to_us);
+      rec.step_block = b;
     }
     uint16_t sum_q4, vbat_counts;
     if (!readDynBlock(sum_q4, vbat_counts) || !storeDynBlock(log, b, sum_q4, vbat_counts, vbat_sum)) return false;
   }
   rec.end_us = hal::Clock::micros();
+  rec.edge_us = rec.start_us + static_cast<uint32_t>(rec.stepS() * 1e6f);
+  if (rec.step_block == 0) {  // no safe moment in 330 blocks: cannot happen with frames <= 20 ms
+    stopMotor();
+    sayLine(TC_FLASH_TEXT("error: the ESC frame never left room to write the step's pulse; motor stopped"));
+    return false;
+  }
   return true;
 }
 
@@ -168,7 +187,7 @@ tc::StepLog GatherStoreApp::stepLog(const DynLog& log, const DynRecording& rec) 
   l.force_dg = log.force_dg;
   l.blocks = kDynLogBlocks;
   l.block_s = rec.blockS();
-  l.step_s = static_cast<float>(rec.edge_us - rec.start_us) * 1e-6f;
+  l.step_s = rec.stepS();
   l.vbat_mv = log.vbat_mv;
   l.from_us = rec.from_us;
   l.to_us = rec.to_us;
@@ -210,12 +229,12 @@ void GatherStoreApp::cmdDyn() {
   if (!view::dynMayRun(cell_.isTared(), board_settings_.bench,
                        tc::readModelV2<hal::Eeprom>(slot, model_, limits).status, slot))
     return;
-  // The operating points: 15..75 % of the model's force, each stepped from 0.9 F to 1.1 F and back.
+  // The operating points: 20..80 % of the model's force, each stepped from 0.9 F to 1.1 F and back.
   tc::BusVoltageFilter bus;
   bus.reset(battery_.millivoltsFromCounts(medianBatteryCounts()));
   uint16_t lo_us[kDynPoints], hi_us[kDynPoints];
   for (uint8_t i = 0; i < kDynPoints; ++i) {
-    const uint32_t f_dg = static_cast<uint32_t>(model_.maxForceDg()) * (15u * (i + 1u)) / 100u;
+    const uint32_t f_dg = static_cast<uint32_t>(model_.maxForceDg()) * (5u + 15u * (i + 1u)) / 100u;
     lo_us[i] = tc::forceToPwmV2(model_, static_cast<uint16_t>(f_dg * 9u / 10u), bus).pwm_us;
     hi_us[i] = tc::forceToPwmV2(model_, static_cast<uint16_t>(f_dg * 11u / 10u), bus).pwm_us;
     if (hi_us[i] < lo_us[i] + 4u) hi_us[i] = static_cast<uint16_t>(lo_us[i] + 4u);

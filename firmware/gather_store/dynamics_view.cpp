@@ -176,7 +176,7 @@ void sayDynPlan(uint8_t slot, uint16_t max_force_dg, const tc::BenchResponse& be
                 uint16_t hi_us) {
   say(TC_FLASH_TEXT("# dyn motor "));
   fw::printUint(slot);
-  say(TC_FLASH_TEXT(": 5 operating points at 15..75 % of "));
+  say(TC_FLASH_TEXT(": 5 operating points at 20..80 % of "));
   fw::printFixed(max_force_dg, 1);
   say(TC_FLASH_TEXT(" g ("));
   fw::printUint(lo_us);

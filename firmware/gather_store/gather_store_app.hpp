@@ -159,12 +159,17 @@ class Scratch {
 static_assert(sizeof(DynLog) <= sizeof(tc::CurveBuilder<kMaxSweepSamples>), "a step log must not grow the scratch space");
 
 // One recorded step log: when it ran (Clock::micros), where its step is.
+// The step's instant is kept on the log's own grid (the block it was written before, and the
+// rest of that ESC frame plus the new width), so it and the blocks share one time base.
 struct DynRecording {
   uint32_t start_us = 0;  // the first conversion
   uint32_t end_us = 0;    // after the last
-  uint32_t edge_us = 0;   // the ESC's falling edge that carried the new pulse (0: no step)
+  uint16_t step_block = 0;       // the pulse was written as this block began (0: no step)
+  uint16_t edge_after_us = 0;    // from that write to the ESC's falling edge that carried it
+  uint32_t edge_us = 0;   // that edge on Clock::micros (0: no step)
   uint16_t from_us = 0, to_us = 0;
   float blockS() const { return static_cast<float>(end_us - start_us) * 1e-6f / kDynLogBlocks; }
+  float stepS() const { return static_cast<float>(step_block) * blockS() + static_cast<float>(edge_after_us) * 1e-6f; }
 };
 
 // Why a sweep ended.
