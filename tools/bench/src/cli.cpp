@@ -178,6 +178,10 @@ void registerCommands(CLI::App& app) {
       "fly, the 400 Hz attitude loop, on the virtual airframe in each mode: CPU load, loop period, IMU "
       "read to ESC edge, flash/SRAM, stack never used (simavr)",
       [](const Options& o) { return std::vector<Section>{flySection(o.paths)}; });
+  add(*bench, o, "dynamics",
+      "each motor's spin-up and spin-down time constants as gather_store's dyn measures them in simavr, "
+      "against the plant's own (stock motors and swap parts)",
+      [](const Options& o) { return std::vector<Section>{dynamicsSection(o.paths, o.quick)}; });
   addReport(*bench);
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
@@ -190,6 +194,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(runtimeSection(o.paths));
         all.push_back(safetySection(o.paths));
         all.push_back(flySection(o.paths));
+        all.push_back(dynamicsSection(o.paths, o.quick));
         return all;
       });
 }
