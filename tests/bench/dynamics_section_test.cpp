@@ -1,4 +1,4 @@
-// Benchmark 8 (issue 26 item 1) on the real gather_store image (THRUSTCAL_AVR_BUILD_DIR) in
+// Benchmark 9 (issue 26 item 1) on the real gather_store image (THRUSTCAL_AVR_BUILD_DIR) in
 // simavr, quick: the KV900 part (the swap's most different motor) through `dyn cell` and `dyn`.
 // One session, several assertions. Skipped when the AVR tree has not been built.
 #include <gtest/gtest.h>

@@ -143,7 +143,7 @@ void addReport(CLI::App& bench) {
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime, "
-               "safety, fly; each figure next to its target");
+               "safety, fly, speed; each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -178,6 +178,10 @@ void registerCommands(CLI::App& app) {
       "fly, the 400 Hz attitude loop, on the virtual airframe in each mode: CPU load, loop period, IMU "
       "read to ESC edge, flash/SRAM, stack never used (simavr)",
       [](const Options& o) { return std::vector<Section>{flySection(o.paths)}; });
+  add(*bench, o, "speed",
+      "simulated seconds per wall second: read_run, fly on the gimbal, and a firmware with "
+      "phase-correct PWM on INT4/INT5 (as MultiWii 2.4 on a Mega)",
+      [](const Options& o) { return std::vector<Section>{speedSection(o.paths)}; });
   add(*bench, o, "dynamics",
       "each motor's spin-up and spin-down time constants as gather_store's dyn measures them in simavr, "
       "against the plant's own (stock motors and swap parts)",
@@ -194,6 +198,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(runtimeSection(o.paths));
         all.push_back(safetySection(o.paths));
         all.push_back(flySection(o.paths));
+        all.push_back(speedSection(o.paths));
         all.push_back(dynamicsSection(o.paths, o.quick));
         return all;
       });

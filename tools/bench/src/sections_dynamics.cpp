@@ -1,4 +1,4 @@
-// Benchmark 8 (issue 26 item 1): each motor's dynamics as gather_store measures them in simavr
+// Benchmark 9 (issue 26 item 1): each motor's dynamics as gather_store measures them in simavr
 // (`dyn cell` once, then `dyn` per part: sim/dynamics_session.hpp), every step's time constant
 // beside the plant's own for the same pulses at the step's bus voltage (what `thrustcal plant
 // step` prints), for the four stock motors of the swap experiment and each part that can replace
@@ -22,7 +22,7 @@ namespace bench {
 #ifndef THRUSTCAL_BENCH_HAVE_SIM
 
 Section dynamicsSection(const AvrPaths&, bool) {
-  return unavailableSection("dynamics", "8. Dynamics",
+  return unavailableSection("dynamics", "9. Dynamics",
                             "tools/sim (thrustcal_sim) is not part of this build: no gather_store session");
 }
 
@@ -63,9 +63,9 @@ Section dynamicsSection(const AvrPaths& paths, bool quick) {  // long: one table
   s.key = "dynamics";
   const std::string elf = paths.elf("gather_store");
   if (!std::filesystem::exists(elf))
-    return unavailableSection("dynamics", "8. Dynamics",
+    return unavailableSection("dynamics", "9. Dynamics",
                               elf + " not found: build the AVR tree (--target gather_store) or pass --avr-build DIR");
-  Table t("8. Dynamics: gather_store's dyn in simavr against the plant's own time constants (spin-up / spin-down)",
+  Table t("9. Dynamics: gather_store's dyn in simavr against the plant's own time constants (spin-up / spin-down)",
           {"part", "seed", "force g", "up ms (plant)", "error", "down ms (plant)", "error"});
   nlohmann::json points = nlohmann::json::array(), sessions = nlohmann::json::array();
   std::vector<uint8_t> eeprom;
@@ -124,10 +124,10 @@ Section dynamicsSection(const AvrPaths& paths, bool quick) {  // long: one table
             {"usable_steps", usable},
             {"steps", steps},
             {"session_s_max", longest_s}};
-  s.targets.push_back({"8. dynamics: every time constant vs the plant's (stock motors and swap parts)",
+  s.targets.push_back({"9. dynamics: every time constant vs the plant's (stock motors and swap parts)",
                        fmt::format("worst {:.1f} % over {} steps ({} usable)", worst_pct, steps, usable),
                        fmt::format("within {:.0f} %", kTauTargetPct), worst_pct <= kTauTargetPct && usable == steps});
-  s.targets.push_back({"8. dynamics: the dyn session for one motor", fmt::format("{:.1f} s simulated", longest_s),
+  s.targets.push_back({"9. dynamics: the dyn session for one motor", fmt::format("{:.1f} s simulated", longest_s),
                        fmt::format("<= {:.0f} s", kSessionTargetS), longest_s <= kSessionTargetS});
   return s;
 }

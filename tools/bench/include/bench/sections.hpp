@@ -70,6 +70,9 @@ Section safetySection(const AvrPaths& paths);
 // in each of its modes: CPU load, loop period, IMU read to the ESC edge that carries it, flash
 // and static SRAM, stack never used.
 Section flySection(const AvrPaths& paths);
+// Issue 25 item 5 (sections_speed.cpp): simulated seconds per wall second for read_run, fly on
+// the gimbal and a firmware with phase-correct PWM on INT4/INT5 (target >= 5x real time).
+Section speedSection(const AvrPaths& paths);
 // Issue 26 item 1 (sections_dynamics.cpp): gather_store's dyn in simavr on the stock motors and
 // the swap parts, each time constant against the plant's own. quick: the KV900 part alone, a coarser calibration sweep.
 Section dynamicsSection(const AvrPaths& paths, bool quick);
