@@ -47,10 +47,14 @@ bool mayWritePulseNow(uint16_t pulse_now_us) {
   return in_frame > pulse_now_us + 100u && in_frame + 200u < framePeriodUs();
 }
 
-// From a write now to the falling edge of the next frame's pulse.
-uint16_t edgeAfterWriteUs(uint16_t pwm_us) {
+
+}  // namespace
+
+uint16_t escEdgeAfterWriteUs(uint16_t pwm_us) {
   return static_cast<uint16_t>(framePeriodUs() - hal::Esc::frameTimeUs() + pwm_us);
 }
+
+namespace {
 
 // Rotates a[0..n) left by k: the oldest block of a ring first.
 template <class T>
@@ -114,7 +118,7 @@ bool GatherStoreApp::recordStep(DynLog& log, uint16_t to_us, DynRecording& rec) 
   for (uint16_t b = 0; b < kDynLogBlocks; ++b) {
     if (b >= kDynPreBlocks && rec.step_block == 0 && mayWritePulseNow(rec.from_us)) {
       hal::Esc::writePulse(sweep_settings_.slot, to_us);
-      rec.edge_after_us = edgeAfterWriteUs(to_us);
+      rec.edge_after_us = escEdgeAfterWriteUs(to_us);
       rec.step_block = b;
     }
     uint16_t sum_q4, vbat_counts;

@@ -62,6 +62,7 @@
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/dynamics_fit.hpp"
+#include "thrustcal/sweep_lag.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_curve.hpp"
 #include "thrustcal/limits.hpp"
@@ -190,7 +191,12 @@ struct SweepResult {
   tc::BuildReport report;
   tc::ThesisCurve curve;         // start_mv = average battery of the first 40 us bin
   tc::SagTable sag;
+  bool lag_corrected = false;    // a fixed-settle sweep corrected with the slot's dynamics
 };
+
+// From writing a pulse now to the ESC's falling edge that carries it: the rest of this frame
+// and the new width (the compare registers are double-buffered). dynamics_runner.cpp.
+uint16_t escEdgeAfterWriteUs(uint16_t pwm_us);
 
 class GatherStoreApp {
  public:
@@ -253,6 +259,12 @@ class GatherStoreApp {
   // One step: pulse, settle, force and battery medians, checks. False: aborted (the motor
   // is already at 1000 us and the reason printed).
   bool measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv);
+  // A fixed-settle sweep of a slot whose record holds dynamics, with the bench's response in the
+  // settings: its readings are corrected for the lag (issue 26 item 2). Prints a line when on.
+  void startLagCorrection(uint8_t slot);
+  // A step's sample into the curve, the sag table and the v2 fitter (corrected one step late).
+  void keepSample(const tc::SweepPointV2& raw, uint32_t start_us);
+  void addToBuilders(const tc::SweepPointV2& p);
   // Builds the curve and the sag table from the samples and prints the summary.
   void finishSweep(uint8_t slot, uint32_t elapsed_ms);
   bool waitOrAbort(uint16_t ms);  // false: a key arrived (motor already stopped)
@@ -314,6 +326,11 @@ class GatherStoreApp {
   tc::SagBuilder sag_builder_;
   tc::ModelV2Fitter<kMaxV2Samples> fitter_;  // the sweep's samples for model v2
   tc::ModelV2 model_;            // store v2 / show: the model fitted, refined or read
+  // The lag correction of the sweep running (sweep_lag.hpp), the dynamics it uses (kept for
+  // store v2), the last step's ESC edge and the centre of its force reading (Clock::micros).
+  tc::SweepLagCorrector lag_;
+  tc::MotorDynamics lag_dynamics_;
+  uint32_t step_edge_us_ = 0, step_read_us_ = 0;
 };
 
 }  // namespace gs

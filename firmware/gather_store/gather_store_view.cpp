@@ -290,5 +290,12 @@ void showRecordV1(uint8_t slot, tc::DecodeStatus status, const tc::Plausibility&
   }
 }
 
+void sayLagCorrected(int16_t largest_dg) {
+  say(TC_FLASH_TEXT("# lag correction: largest shift of a reading "));
+  fw::printFixed(largest_dg, 1);
+  sayLine(TC_FLASH_TEXT(" g (the curve and model v2 use the corrected readings; the rows above are as read)"));
+}
+
 }  // namespace view
+
 }  // namespace gs

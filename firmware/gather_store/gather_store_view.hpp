@@ -33,6 +33,8 @@ void printCsvRow(uint16_t pwm_us, int16_t force_dg, uint16_t vbat_mv, uint32_t t
                  uint8_t slot);
 void sayProgress(uint16_t done, uint16_t planned, int16_t max_force_dg);
 void saySweepSummary(const SweepResult& sweep, uint32_t elapsed_ms);
+// "# lag correction: largest shift of a reading X g"
+void sayLagCorrected(int16_t largest_dg);
 
 // What a refusal to store says; the facts the message needs.
 struct RefusalFacts {
