@@ -161,7 +161,7 @@ void registerCommands(CLI::App& app) {
   add(*bench, o, "calibration",
       "simulated sweep time and stored-curve error of gather_store in simavr: thesis 200 ms steps "
       "vs a v2 sweep",
-      [](const Options& o) { return std::vector<Section>{calibrationSection(o.paths)}; });
+      [](const Options& o) { return std::vector<Section>{calibrationSection(o.paths, !o.quick)}; });
   add(*bench, o, "liftoff",
       "read_run in simavr on the tethered quad for a simulated minute on a draining pack: thesis "
       "vs v2 records",
@@ -193,7 +193,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(accuracySection(accuracyConfig(o)));
         all.push_back(computeSection(o.paths));
         all.push_back(footprintSection(o.paths));
-        all.push_back(calibrationSection(o.paths));
+        all.push_back(calibrationSection(o.paths, !o.quick));
         all.push_back(liftoffSection(o.paths, o.quick));
         all.push_back(runtimeSection(o.paths));
         all.push_back(safetySection(o.paths));

@@ -58,7 +58,9 @@ std::string shownPath(const std::string& path);
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
 Section footprintSection(const AvrPaths& paths);
-Section calibrationSection(const AvrPaths& paths);
+// fast_sweeps: also 200 ms and 100 ms sweeps, as read and corrected with each motor's measured
+// dynamics (issue 26 item 2; several minutes more of simavr).
+Section calibrationSection(const AvrPaths& paths, bool fast_sweeps = false);
 // quick: 10 s hold instead of 60 s.
 Section liftoffSection(const AvrPaths& paths, bool quick);
 // read_run's CPU load, frame cycles and loop period in simavr at 50 and 400 Hz.
