@@ -143,7 +143,7 @@ DynSessionResult runDynSession(const DynSessionOptions& o) {  // long: the sessi
         step.truth_s = plant::stepTimeConstant_s(o.motor, step.bus_v, step.from_us, step.to_us);
       r.steps.push_back(step);
       progress(l.substr(2));
-    } else if (!l.empty() && l[0] != '#' && !std::isdigit(static_cast<unsigned char>(l[0])) && l != "dyn" &&
+    } else if (!l.empty() && l[0] != '#' && !std::isdigit(static_cast<unsigned char>(l[0])) && l.rfind("gs>", 0) != 0 &&
                l.rfind("t_s,", 0) != 0) {
       r.summary.push_back(l);
     }
