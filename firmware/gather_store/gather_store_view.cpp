@@ -263,6 +263,13 @@ void showModelV2(uint8_t slot, const tc::RecordV2Read& r, const tc::ModelV2& mod
     say(TC_FLASH_TEXT(" us"));
   }
   fw::newline();
+  say(TC_FLASH_TEXT("dynamics: "));
+  if (model.dynamics.isPresent()) {
+    printDynamics(model.dynamics);
+    fw::newline();
+  } else {
+    sayLine(TC_FLASH_TEXT("not measured (dyn measures them)"));
+  }
 }
 
 void showRecordV1(uint8_t slot, tc::DecodeStatus status, const tc::Plausibility& why,
@@ -294,5 +301,12 @@ void showRecordV1(uint8_t slot, tc::DecodeStatus status, const tc::Plausibility&
   }
 }
 
+void sayLagCorrected(int16_t largest_dg) {
+  say(TC_FLASH_TEXT("# lag correction: largest shift of a reading "));
+  fw::printFixed(largest_dg, 1);
+  sayLine(TC_FLASH_TEXT(" g (the curve and model v2 use the corrected readings; the rows above are as read)"));
+}
+
 }  // namespace view
+
 }  // namespace gs

@@ -74,7 +74,7 @@ uint8_t findHost(uint8_t owner) {
 template <class Storage>
 bool writeSpare(uint8_t owner, uint8_t host, const ModelV2& model, uint16_t sequence,
                 const RecordLimits& limits) {
-  uint8_t image[kRecordV2Bytes];
+  uint8_t image[kRecordV2MaxBytes];
   serializeModelV2(model, sequence, image, spareMagic(owner));
   const uint16_t addr = spareAddressV2(owner, host);
   uint16_t changed = 0;

@@ -640,6 +640,7 @@ void registerCommands(CLI::App& app) {
   addRunCommand(*sim);
   addImuCommand(*sim);
   addSwapCommand(*sim);
+  addDynCommand(*sim);
 }
 
 }  // namespace sim
