@@ -3,15 +3,21 @@
 // angle-mode PID on PWM), flies the gimbal in the X layout with the rig's motors on its pins and
 // its propellers' directions, its sticks from an RC script: nothing spins before the arming
 // sequence, a roll stick of +10 degrees tilts the rig to +10 degrees, and losing the signal
-// stops the motors.
+// stops the motors. Then the same firmware as a peer in the swap, from its profile file.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
 #include <string>
 
 #include "sim/air_cli.hpp"
 #include "sim/airframe.hpp"
+#include "sim/peer_profile.hpp"
 #include "sim/rc_input.hpp"
+#include "sim/swap.hpp"
+#include "sim/swap_report.hpp"
 
 namespace {
 
@@ -68,6 +74,121 @@ TEST(PeerOnGimbal, ArmsOnTheSticksFollowsARollStepAndStopsOnLoss) {
   EXPECT_LT(std::fabs(rig.truth().rate_dps[2]), 20.0) << "the yaw loop pushes the wrong way";
   EXPECT_NE(out.find("failsafe"), std::string::npos) << out;
   EXPECT_LT(maxPulse(rows, 4.9, 5.0), 1001.0) << "the motors ran on after the signal was lost";
+}
+
+}  // namespace
+
+namespace {
+
+std::string peerProfileText(const std::string& elf) {
+  return "# peer_quad: the tests' MultiWii-like peer (tests/airframe/peer_quad)\n"
+         "name peer_quad\n"
+         "elf " + elf + "\n"
+         "layout x\n"
+         "esc-pins D2,D6,D3,D5   # rig motors 0..3 = its front-left, rear-left, rear-right, front-right\n"
+         "spin cw,ccw,cw,ccw\n"
+         "imu-mount yaw0\n"
+         "rc pwm:A8,A9,A10,A11\n"
+         "channels throttle,roll,pitch,yaw\n"
+         "neutral throttle=1000\n"
+         "boot-s 0.3\n"
+         "arm throttle=1000,yaw=2000 hold 1.2\n"
+         "armed-text armed\n"
+         "hover throttle=1450\n"
+         "deg-us roll 10\n"
+         "deg-us pitch 10\n";
+}
+
+TEST(PeerProfile, ReadsAProfileAndNamesTheLineOfAMistake) {
+  const sim::PeerProfile p = sim::parsePeerProfile(peerProfileText("/x/peer.elf"), "/p/peer.txt");
+  EXPECT_EQ(p.name, "peer_quad");
+  EXPECT_EQ(p.esc_pins[0].arduino, 2);
+  EXPECT_EQ(p.spin, (std::vector<int>{-1, 1, -1, 1}));
+  EXPECT_EQ(p.channelValues(p.arm), (std::vector<double>{1000, 1500, 1500, 2000}));
+  EXPECT_EQ(p.channelValues(p.hover), (std::vector<double>{1450, 1500, 1500, 1500}));
+  EXPECT_EQ(sim::parsePeerProfile("elf peer.elf\n" + peerProfileText("x").substr(0, 0) +
+                                      peerProfileText("x").substr(peerProfileText("x").find("layout")) +
+                                      "name n\n",
+                                  "/p/q.txt")
+                .elf,
+            "/p/peer.elf");  // relative to the profile's folder
+  const struct {
+    std::string edit, says;
+  } bad[] = {
+      {"deg-us roll 12\n", "peer.txt:17: 'deg-us roll' is given twice"},
+      {"arm throttle=1000,yaw=2000\n", "peer.txt:17: 'arm' is given twice"},
+      {"boot 1\n", "peer.txt:17: unknown key 'boot'"},
+      {"rc pwm:A8,A9\n", "'rc' is given twice"},
+  };
+  for (const auto& b : bad) {
+    try {
+      sim::parsePeerProfile(peerProfileText("e") + b.edit, "peer.txt");
+      ADD_FAILURE() << b.edit << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(b.says), std::string::npos) << b.edit << ": " << e.what();
+    }
+  }
+  std::string no_arm = peerProfileText("e");
+  no_arm.erase(no_arm.find("arm throttle"), no_arm.find("armed-text") - no_arm.find("arm throttle"));
+  EXPECT_THROW(sim::parsePeerProfile(no_arm, "peer.txt"), std::invalid_argument);
+  std::string rudder = peerProfileText("e");
+  rudder.replace(rudder.find("hover throttle=1450"), 19, "hover throttle=1450,rudder=1500");
+  try {
+    sim::parsePeerProfile(rudder, "peer.txt");
+    ADD_FAILURE() << "a stick named rudder was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("peer.txt:14: 'rudder=1500' is not STICK=US"), std::string::npos) << e.what();
+  }
+  std::string esc_rc = peerProfileText("e");
+  esc_rc.replace(esc_rc.find("pwm:A8"), 6, "pwm:D2");
+  try {
+    sim::parsePeerProfile(esc_rc, "peer.txt");
+    ADD_FAILURE() << "a receiver pin on an ESC pin was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("both a receiver pin and an ESC pin"), std::string::npos) << e.what();
+  }
+}
+
+// The swap with the peer alone (nothing calibrated): stock and a propeller 8 % weaker in slot 1,
+// roll and pitch, one IMU unit: four flights whose runs carry mode peer:peer_quad.
+TEST(PeerInSwap, TheProfileFliesTheGimbalWithEachPartAndItsRunsJoinRuns) {
+  if (std::string(PEER_QUAD_ELF).empty()) GTEST_SKIP() << "avr-gcc not found: no peer_quad image";
+  const std::string dir = std::string(AIR_TEST_TMP) + "/peer_swap";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream(dir + "/peer_quad.txt") << peerProfileText(PEER_QUAD_ELF);
+  }
+  sim::swap::SwapOptions o;
+  o.peer = std::make_shared<const sim::PeerProfile>(sim::readPeerProfile(dir + "/peer_quad.txt"));
+  o.modes.clear();
+  o.rigs = {sim::AirRig::kGimbal};
+  o.parts = {"prop-8pct"};
+  o.imu_seeds = {1};
+  o.settle_s = 0.5;
+  o.window_s = 2.0;
+  o.out_dir = dir;
+  o.jobs = 2;
+  o.progress = [](const std::string&) {};
+  const sim::swap::SwapResult r = sim::swap::runSwap(o);
+  ASSERT_EQ(r.runs.size(), 4u);
+  const nlohmann::json j = r.toJson();
+  for (const auto& run : j["runs"]) {
+    EXPECT_EQ(run["mode"], "peer:peer_quad");
+    EXPECT_EQ(run["gains"], "own");
+    EXPECT_EQ(run["rig"], "gimbal");
+    // Within the IMU unit's zero-g offset: the peer levels on its accelerometer, uncalibrated.
+    EXPECT_NEAR(run["final_deg"].get<double>(), 10.0, 2.5) << run.dump();
+    EXPECT_NEAR(run["y0_deg"].get<double>(), 0.0, 2.5) << run.dump();
+    EXPECT_LT(run["peak_deg"].get<double>(), 18.0) << run.dump();  // its own gains overshoot, but it holds
+    ASSERT_TRUE(run["rise_s"].is_number()) << run.dump();
+    EXPECT_GT(run["rise_s"].get<double>(), 0.02);
+    EXPECT_LT(run["rise_s"].get<double>(), 0.8);
+    EXPECT_TRUE(std::filesystem::exists(run["csv"].get<std::string>()));
+  }
+  EXPECT_EQ(j["setup"]["peer"]["name"], "peer_quad");
+  EXPECT_TRUE(r.targets.empty());  // the targets are fly's force mode's
+  const std::string table = sim::swap::formatTable(r);
+  EXPECT_NE(table.find("peer:peer_quad prop-8pct"), std::string::npos) << table;
 }
 
 }  // namespace
