@@ -106,6 +106,12 @@ TEST(PeerProfile, ReadsAProfileAndNamesTheLineOfAMistake) {
   EXPECT_EQ(p.spin, (std::vector<int>{-1, 1, -1, 1}));
   EXPECT_EQ(p.channelValues(p.arm), (std::vector<double>{1000, 1500, 1500, 2000}));
   EXPECT_EQ(p.channelValues(p.hover), (std::vector<double>{1450, 1500, 1500, 1500}));
+  EXPECT_TRUE(p.calibrate.empty());
+  const sim::PeerProfile c = sim::parsePeerProfile(
+      peerProfileText("e") + "calibrate throttle=2000,yaw=1000,pitch=1000 hold 1 wait 1.5\n", "peer.txt");
+  EXPECT_EQ(c.channelValues(c.calibrate), (std::vector<double>{2000, 1500, 1000, 1000}));
+  EXPECT_DOUBLE_EQ(c.calibrate_hold_s, 1.0);
+  EXPECT_DOUBLE_EQ(c.calibrate_wait_s, 1.5);
   EXPECT_EQ(sim::parsePeerProfile("elf peer.elf\n" + peerProfileText("x").substr(0, 0) +
                                       peerProfileText("x").substr(peerProfileText("x").find("layout")) +
                                       "name n\n",
@@ -118,6 +124,7 @@ TEST(PeerProfile, ReadsAProfileAndNamesTheLineOfAMistake) {
       {"deg-us roll 12\n", "peer.txt:17: 'deg-us roll' is given twice"},
       {"arm throttle=1000,yaw=2000\n", "peer.txt:17: 'arm' is given twice"},
       {"boot 1\n", "peer.txt:17: unknown key 'boot'"},
+      {"calibrate throttle=2000 hold 1\n", "peer.txt:17: write the calibration sticks"},
       {"rc pwm:A8,A9\n", "'rc' is given twice"},
   };
   for (const auto& b : bad) {

@@ -108,6 +108,16 @@ void take(PeerProfile& p, const std::string& key, const std::string& value, cons
     p.arm = sticks(trim(value.substr(0, hold)));
     p.arm_hold_s = number(trim(value.substr(hold + 6)), "hold");
     if (p.arm_hold_s <= 0 || p.arm_hold_s > 10) throw std::invalid_argument("hold is 0..10 s");
+  } else if (key == "calibrate") {
+    const std::size_t hold = value.find(" hold "), wait = value.find(" wait ");
+    if (hold == std::string::npos || wait == std::string::npos || wait < hold)
+      throw std::invalid_argument("write the calibration sticks, how long they are held and the wait after, e.g. "
+                                  "calibrate throttle=2000,yaw=1000,pitch=1000 hold 1 wait 1.5");
+    p.calibrate = sticks(trim(value.substr(0, hold)));
+    p.calibrate_hold_s = number(trim(value.substr(hold + 6, wait - hold - 6)), "hold");
+    p.calibrate_wait_s = number(trim(value.substr(wait + 6)), "wait");
+    if (p.calibrate_hold_s <= 0 || p.calibrate_hold_s > 10 || p.calibrate_wait_s < 0 || p.calibrate_wait_s > 10)
+      throw std::invalid_argument("hold is 0..10 s and wait 0..10 s");
   } else if (key == "armed-text") {
     p.armed_text = value;
   } else if (key == "hover") {
@@ -128,8 +138,8 @@ void take(PeerProfile& p, const std::string& key, const std::string& value, cons
     (axis == "roll" ? p.roll_us_per_deg : p.pitch_us_per_deg) = v;
   } else {
     throw std::invalid_argument(fmt::format(
-        "unknown key '{}'; the keys: name elf layout esc-pins spin imu-mount rc channels neutral eeprom boot-s arm "
-        "armed-text hover deg-us",
+        "unknown key '{}'; the keys: name elf layout esc-pins spin imu-mount rc channels neutral eeprom boot-s "
+        "calibrate arm armed-text hover deg-us",
         key));
   }
 }
@@ -151,7 +161,7 @@ void checkComplete(const PeerProfile& p, const std::set<std::string>& seen) {
       if (pin.port == esc.port && pin.bit == esc.bit)
         throw std::invalid_argument(fmt::format("{}: {} is both a receiver pin and an ESC pin", p.file,
                                                 megaPinName(pin)));
-  for (const auto* set : {&p.neutral, &p.arm, &p.hover})
+  for (const auto* set : {&p.neutral, &p.calibrate, &p.arm, &p.hover})
     for (const auto& [stick, us] : *set)
       if (std::find(p.channels.begin(), p.channels.end(), stick) == p.channels.end())
         throw std::invalid_argument(fmt::format("{}: {} is on no channel (channels {})", p.file, stick,

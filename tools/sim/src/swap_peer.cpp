@@ -32,7 +32,8 @@ RcScriptRow row(const PeerProfile& p, double t_s, const std::map<std::string, do
   return r;
 }
 
-// The sticks over the flight: neutral from power-up, arming at boot_s, neutral, hover, the step.
+// The sticks over the flight: neutral from power-up, at boot_s the calibration sticks (if any)
+// and the wait after them, arming, neutral, hover, the step.
 struct Sticks {
   std::vector<RcScriptRow> rows;
   double t_hover = 0, t_step = 0;
@@ -40,7 +41,9 @@ struct Sticks {
 
 Sticks sticksOf(const PeerProfile& p, const SwapOptions& o, const RunSpec& r) {
   Sticks s;
-  const double t_arm = p.boot_s, t_neutral = t_arm + p.arm_hold_s;
+  const bool calibrates = !p.calibrate.empty();
+  const double t_arm = p.boot_s + (calibrates ? p.calibrate_hold_s + p.calibrate_wait_s : 0.0);
+  const double t_neutral = t_arm + p.arm_hold_s;
   s.t_hover = t_neutral + kBackToNeutralS;
   s.t_step = s.t_hover + kSpoolS + o.settle_s;
   std::map<std::string, double> step = p.hover;
@@ -51,8 +54,11 @@ Sticks sticksOf(const PeerProfile& p, const SwapOptions& o, const RunSpec& r) {
   if (step[r.axis] < kRcChannelMinUs || step[r.axis] > kRcChannelMaxUs)
     throw std::runtime_error(fmt::format("{}: a {}-degree {} step needs {:.0f} us on its stick; check deg-us in {}",
                                          runId(r), o.step_deg, r.axis, step[r.axis], p.file));
-  s.rows = {row(p, 0.0, {}), row(p, t_arm, p.arm), row(p, t_neutral, {}), row(p, s.t_hover, p.hover),
-            row(p, s.t_step, step)};
+  s.rows = {row(p, 0.0, {})};
+  if (calibrates)
+    s.rows.insert(s.rows.end(), {row(p, p.boot_s, p.calibrate), row(p, p.boot_s + p.calibrate_hold_s, {})});
+  s.rows.insert(s.rows.end(),
+                {row(p, t_arm, p.arm), row(p, t_neutral, {}), row(p, s.t_hover, p.hover), row(p, s.t_step, step)});
   return s;
 }
 

@@ -15,6 +15,9 @@
 //   neutral throttle=1000              sticks at rest: named ones as given, the others 1500 us
 //   eeprom MultiWii.eep.hex            optional: its EEPROM image (Intel HEX), else erased
 //   boot-s 3                           simulated seconds from power-up before the sticks move
+//   calibrate throttle=2000,yaw=1000,pitch=1000 hold 1 wait 1.5   optional: sticks that make it
+//                                      calibrate (its accelerometer), held HOLD s, then neutral
+//                                      for WAIT s before the arming sticks
 //   arm throttle=1000,yaw=2000 hold 1.5    the arming sticks, held HOLD s, then neutral again
 //   armed-text armed                   optional: what it prints on UART0 once armed
 //   hover throttle=1450                the sticks of level flight (after arming)
@@ -46,6 +49,8 @@ struct PeerProfile {
   std::vector<std::string> channels;  // ch1.. : "throttle", "roll", "pitch", "yaw", "aux1".."aux4"
   std::map<std::string, double> neutral, arm, hover;  // stick -> us (neutral: given ones only)
   double arm_hold_s = 1.0;
+  std::map<std::string, double> calibrate;  // empty: no calibration sticks
+  double calibrate_hold_s = 0, calibrate_wait_s = 0;
   std::string armed_text;
   std::string eeprom;  // resolved path, "" = erased
   double boot_s = 1.0;
