@@ -156,7 +156,59 @@ static float pid(struct Axis* a, float sp, float rate, float dt, uint8_t integra
   return 1.5f * err + 1.0f * a->integ - 0.25f * rate;
 }
 
-int main(void) {
+/* The receiver's latest pulses into rc[]; returns 1 while a channel has been silent 200 ms. */
+static uint8_t takeSticks(uint16_t* rc, uint16_t* age) {
+  cli();
+  const uint8_t got = fresh_;
+  fresh_ = 0;
+  for (uint8_t i = 0; i < 4; ++i)
+    if (got & (1u << i)) rc[i] = width_[i];
+  sei();
+  uint8_t lost = 0;
+  for (uint8_t i = 0; i < 4; ++i) {
+    if (got & (1u << i)) age[i] = 0;
+    else if (age[i] < 0xFFFF) ++age[i];
+    if (age[i] > 80) lost = 1; /* 200 ms */
+  }
+  return lost;
+}
+
+static struct Axis roll_, pitch_;
+static float gx_, gy_, gz_; /* deg/s */
+static uint8_t started_;
+
+/* Reads the IMU and updates the angles; returns 0 if the read failed. */
+static uint8_t attitude(float dt) {
+  uint8_t b[14];
+  if (!readRegs(0x3B, b, 14)) return 0;
+  const float ax = word(b), ay = word(b + 2), az = word(b + 4);
+  gx_ = word(b + 8) / 16.4f, gy_ = word(b + 10) / 16.4f, gz_ = word(b + 12) / 16.4f;
+  const float acc_roll = atan2f(ay, az) * RAD2DEG, acc_pitch = atan2f(-ax, az) * RAD2DEG;
+  if (!started_) {
+    roll_.angle = acc_roll, pitch_.angle = acc_pitch, started_ = 1;
+  } else {
+    const float k = 0.995f; /* 0.5 s at 2.5 ms */
+    roll_.angle = k * (roll_.angle + gx_ * dt) + (1 - k) * acc_roll;
+    pitch_.angle = k * (pitch_.angle + gy_ * dt) + (1 - k) * acc_pitch;
+  }
+  return 1;
+}
+
+/* The motors' pulses while armed: angle-mode PID and the QUADX mix. */
+static void mixed(const uint16_t* rc, float dt, uint16_t* out) {
+  const uint8_t integrate = rc[CH_THROTTLE] > 1300;
+  const float sp_roll = clampf(((float)rc[CH_ROLL] - 1500) / 10.0f, -25, 25);
+  const float sp_pitch = clampf(((float)rc[CH_PITCH] - 1500) / 10.0f, -25, 25);
+  const float r = pid(&roll_, sp_roll, gx_, dt, integrate);
+  const float p = pid(&pitch_, sp_pitch, gy_, dt, integrate);
+  const float y = -0.6f * gz_;
+  const float t = rc[CH_THROTTLE];
+  /* rear-right, front-right, rear-left, front-left; FL and RR clockwise */
+  const float mix[4] = {t - r + p + y, t - r - p - y, t + r + p - y, t + r - p + y};
+  for (uint8_t i = 0; i < 4; ++i) out[i] = (uint16_t)clampf(mix[i], 1150, 1950);
+}
+
+static void setup(void) {
   MCUSR = 0;
   wdt_enable(WDTO_120MS);
   UCSR0A = (1 << U2X0);
@@ -177,50 +229,26 @@ int main(void) {
   writeReg(0x1A, 0x03); /* DLPF 42 Hz */
   writeReg(0x1B, 0x18); /* +-2000 dps */
   writeReg(0x1C, 0x10); /* +-8 g */
+}
 
-  struct Axis roll = {0, 0}, pitch = {0, 0};
+int main(void) {
+  setup();
   uint16_t rc[4] = {1000, 1500, 1500, 1500};
   uint16_t age[4] = {0xFFFF, 0xFFFF, 0xFFFF, 0xFFFF}; /* loops since each channel's pulse */
-  uint8_t armed = 0, failsafe = 1, started = 0;
+  uint8_t armed = 0, failsafe = 1;
   uint16_t stick_loops = 0, print_loops = 0;
   uint16_t last = TCNT5;
+  const float dt = LOOP_TICKS * 0.5e-6f;
   for (;;) {
     while ((uint16_t)(TCNT5 - last) < LOOP_TICKS) {
     }
     last += LOOP_TICKS;
     wdt_reset();
-    const float dt = LOOP_TICKS * 0.5e-6f;
-
-    cli();
-    const uint8_t got = fresh_;
-    fresh_ = 0;
-    for (uint8_t i = 0; i < 4; ++i)
-      if (got & (1u << i)) rc[i] = width_[i];
-    sei();
-    uint8_t lost = 0;
-    for (uint8_t i = 0; i < 4; ++i) {
-      if (got & (1u << i)) age[i] = 0;
-      else if (age[i] < 0xFFFF) ++age[i];
-      if (age[i] > 80) lost = 1; /* 200 ms */
-    }
+    const uint8_t lost = takeSticks(rc, age);
     if (lost && !failsafe) print("failsafe\r\n");
-    if (lost && armed) armed = 0;
+    if (lost) armed = 0;
     failsafe = lost;
-
-    uint8_t b[14];
-    const uint8_t imu_ok = readRegs(0x3B, b, 14);
-    const float ax = word(b), ay = word(b + 2), az = word(b + 4);
-    const float gx = word(b + 8) / 16.4f, gy = word(b + 10) / 16.4f, gz = word(b + 12) / 16.4f;
-    if (imu_ok) {
-      const float acc_roll = atan2f(ay, az) * RAD2DEG, acc_pitch = atan2f(-ax, az) * RAD2DEG;
-      if (!started) {
-        roll.angle = acc_roll, pitch.angle = acc_pitch, started = 1;
-      } else {
-        const float k = 0.995f; /* 0.5 s at 2.5 ms */
-        roll.angle = k * (roll.angle + gx * dt) + (1 - k) * acc_roll;
-        pitch.angle = k * (pitch.angle + gy * dt) + (1 - k) * acc_pitch;
-      }
-    }
+    const uint8_t imu_ok = attitude(dt);
 
     const uint8_t low = !failsafe && rc[CH_THROTTLE] < 1100;
     const uint8_t want_arm = low && rc[CH_YAW] > 1900 && !armed && imu_ok;
@@ -228,32 +256,21 @@ int main(void) {
     stick_loops = (want_arm || want_disarm) ? stick_loops + 1 : 0;
     if (stick_loops >= 400) { /* 1 s */
       armed = want_arm;
-      roll.integ = pitch.integ = 0;
+      roll_.integ = pitch_.integ = 0;
       print(armed ? "armed\r\n" : "disarmed\r\n");
       stick_loops = 0;
     }
 
     uint16_t out[4] = {1000, 1000, 1000, 1000};
-    if (armed && imu_ok) {
-      const uint8_t integrate = rc[CH_THROTTLE] > 1300;
-      const float sp_roll = clampf(((float)rc[CH_ROLL] - 1500) / 10.0f, -25, 25);
-      const float sp_pitch = clampf(((float)rc[CH_PITCH] - 1500) / 10.0f, -25, 25);
-      const float r = pid(&roll, sp_roll, gx, dt, integrate);
-      const float p = pid(&pitch, sp_pitch, gy, dt, integrate);
-      const float y = -0.6f * gz;
-      const float t = rc[CH_THROTTLE];
-      /* rear-right, front-right, rear-left, front-left; FL and RR clockwise */
-      const float mix[4] = {t - r + p + y, t - r - p - y, t + r + p - y, t + r - p + y};
-      for (uint8_t i = 0; i < 4; ++i) out[i] = (uint16_t)clampf(mix[i], 1150, 1950);
-    }
+    if (armed && imu_ok) mixed(rc, dt, out);
     writeMotors(out);
 
     if (armed && ++print_loops >= 200) {
       print_loops = 0;
       print("att ");
-      printInt(lroundf(roll.angle * 100));
+      printInt(lroundf(roll_.angle * 100));
       put(' ');
-      printInt(lroundf(pitch.angle * 100));
+      printInt(lroundf(pitch_.angle * 100));
       print("\r\n");
     }
   }

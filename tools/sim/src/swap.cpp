@@ -230,10 +230,14 @@ SwapResult runSwap(const SwapOptions& o) {
   if (!o.modes.empty()) res.calibration = calibrate(o);  // a peer alone has no records
   res.dynamics = measureDynamics(o);
   const std::vector<RunSpec> runs = plan(o);
-  progress(fmt::format(
-      "{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s){}", runs.size(),
-      o.rigs.size(), o.modes.size(), o.parts.size(), o.gains.size(), o.imu_seeds.size(),
-      o.peer ? ", the peer " + o.peer->name + " on the gimbal" : ""));
+  const std::string peer = o.peer ? "the peer " + o.peer->name + " on the gimbal" : "";
+  if (o.modes.empty())
+    progress(fmt::format("{} flights: {}, stock and {} part(s), {} IMU unit(s)", runs.size(), peer, o.parts.size(),
+                         o.imu_seeds.size()));
+  else
+    progress(fmt::format("{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s){}",
+                         runs.size(), o.rigs.size(), o.modes.size(), o.parts.size(), o.gains.size(),
+                         o.imu_seeds.size(), peer.empty() ? "" : ", " + peer));
   res.runs = flyAll(o, res.calibration, runs, progress);
   res.targets = swapTargets(res.runs, o.parts);
   riseChanges(res.dynamics.parts, res.runs);

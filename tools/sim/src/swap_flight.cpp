@@ -223,15 +223,20 @@ RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, c
   mustSay(con, r.axis == "roll" ? fmt::format("sp {} 0", o.step_deg) : fmt::format("sp 0 {}", o.step_deg), r);
   flyFor(rig, t_step + o.window_s - rig.board().timeS());
   res.integrator_mnm = integratorOf(con, r);
+  finishRun(res, rig, t_step, settle_s, o, csv_path, wall0);
+  return res;
+}
+
+void finishRun(RunResult& res, AirframeRig& rig, double t_step, double settle_s, const SwapOptions& o,
+               const std::string& csv_path, std::chrono::steady_clock::time_point wall0) {
   const std::vector<AirSample> rows = windowOf(rig.samples(), t_step, settle_s, o.window_s);
   measure(res, rows, t_step, o);
   if (!csv_path.empty()) {
-    writeSeries(csv_path, rows, t_step, r, o.step_deg);
+    writeSeries(csv_path, rows, t_step, res.spec, o.step_deg);
     res.csv_path = csv_path;
   }
   res.simulated_s = rig.board().timeS();
   res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  return res;
 }
 
 }  // namespace sim::swap

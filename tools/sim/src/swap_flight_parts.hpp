@@ -1,6 +1,7 @@
 // What fly's flights and a peer's share in the swap experiment (sim/src/swap_flight.cpp): the
 // rig with the run's motors, the log's window around the step, its figures, its time series.
 #pragma once
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -19,5 +20,9 @@ std::vector<AirSample> windowOf(const std::vector<AirSample>& log, double t_step
 void measure(RunResult& res, const std::vector<AirSample>& rows, double t_step, const SwapOptions& o);
 void writeSeries(const std::string& path, const std::vector<AirSample>& rows, double t_step, const RunSpec& r,
                  double sp_deg);
+// After the window: the figures from the log (`settle_s` of level flight before the step), the
+// time series written to `csv_path` ("" = none), the simulated and wall times.
+void finishRun(RunResult& res, AirframeRig& rig, double t_step, double settle_s, const SwapOptions& o,
+               const std::string& csv_path, std::chrono::steady_clock::time_point wall0);
 
 }  // namespace sim::swap

@@ -111,15 +111,7 @@ RunResult flyPeerRun(const SwapOptions& o, const RunSpec& r, const std::string& 
   checkArmed(rig, p, r, sticks.t_step);
   rig.run(o.window_s);
   res.integrator_mnm = std::numeric_limits<double>::quiet_NaN();  // not ours to read
-  const double t_step = sticks.t_step;
-  const std::vector<AirSample> rows = windowOf(rig.samples(), t_step, o.settle_s, o.window_s);
-  measure(res, rows, t_step, o);
-  if (!csv_path.empty()) {
-    writeSeries(csv_path, rows, t_step, r, o.step_deg);
-    res.csv_path = csv_path;
-  }
-  res.simulated_s = rig.board().timeS();
-  res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  finishRun(res, rig, sticks.t_step, o.settle_s, o, csv_path, wall0);
   return res;
 }
 
