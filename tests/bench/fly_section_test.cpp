@@ -75,9 +75,9 @@ void whereTheCyclesGoAddsUpToTheCpuLoad(const nlohmann::json& j) {
     EXPECT_GT(parts.value("ISR: TWI", 0.0), 0.0) << "the IMU read is interrupt-driven";
   }
   // each mode's own output path is where it shows
-  EXPECT_GT(j["breakdown"]["force_thesis"].value("tc::forceToPwmWith<...>", 0.0), 0.0);
+  EXPECT_GT(j["breakdown"]["force_thesis"].value("tc::forceToPwmWithDg<...>", 0.0), 0.0);
   EXPECT_GT(j["breakdown"]["force_v2"].value("tc::V2Frame::fly", 0.0), 0.0);
-  EXPECT_GT(j["breakdown"]["ardupilot"].value("fly::ArduPilotCurve::pulseUsQ4", 0.0), 0.0);
+  EXPECT_GT(j["breakdown"]["ardupilot"].value("fly::ArduPilotCurve::pulseUsDg", 0.0), 0.0);
   EXPECT_FALSE(j["breakdown"]["pwm"].contains("tc::V2Frame::fly"));
 }
 

@@ -432,7 +432,7 @@ BootResult bootAndFly(const std::vector<uint8_t>& image, const std::vector<int>&
   sim::Console con(board, "rr> ");
   r.report = con.waitPrompt(5.0);
   static const std::regex status_re(
-      R"(^motor 0: (\d+) g, (\d+) us, battery (\d+)\.(\d{3}) V filtered)");
+      R"(^motor 0: (\d+\.\d) g, (\d+) us, battery (\d+)\.(\d{3}) V filtered)");  // force in decigrams
   for (int g : forces_g) {
     FlownCommand f;
     f.grams = g;
@@ -670,7 +670,7 @@ std::pair<std::vector<std::string>, V1Status> bootAndCommand(const std::vector<u
     con.send("");
     board.runFor(0.3);
   }
-  static const std::regex status_re(R"(^motor 0: \d+ g, (\d+) us, battery (\d+)\.(\d{3}) V (filtered|compensated))");
+  static const std::regex status_re(R"(^motor 0: \d+\.\d g, (\d+) us, battery (\d+)\.(\d{3}) V (filtered|compensated))");
   for (const auto& l : con.command("status", 2.0)) {
     std::smatch m;
     if (std::regex_search(l, m, status_re)) {
