@@ -118,6 +118,20 @@ void take(PeerProfile& p, const std::string& key, const std::string& value, cons
     p.calibrate_wait_s = number(trim(value.substr(wait + 6)), "wait");
     if (p.calibrate_hold_s <= 0 || p.calibrate_hold_s > 10 || p.calibrate_wait_s < 0 || p.calibrate_wait_s > 10)
       throw std::invalid_argument("hold is 0..10 s and wait 0..10 s");
+  } else if (key == "uart-hex") {
+    std::istringstream in(value);
+    for (std::string byte; in >> byte;) {
+      std::size_t used = 0;
+      unsigned long v = 0;
+      try {
+        v = std::stoul(byte, &used, 16);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != byte.size() || byte.size() > 2 || v > 0xFF)
+        throw std::invalid_argument(fmt::format("'{}' is not a byte in hex; write e.g. uart-hex 24 4D 3C 00 FA FA", byte));
+      p.uart_bytes.push_back(static_cast<char>(v));
+    }
   } else if (key == "armed-text") {
     p.armed_text = value;
   } else if (key == "hover") {
@@ -139,7 +153,7 @@ void take(PeerProfile& p, const std::string& key, const std::string& value, cons
   } else {
     throw std::invalid_argument(fmt::format(
         "unknown key '{}'; the keys: name elf layout esc-pins spin imu-mount rc channels neutral eeprom boot-s "
-        "calibrate arm armed-text hover deg-us",
+        "uart-hex calibrate arm armed-text hover deg-us",
         key));
   }
 }
