@@ -3,6 +3,7 @@
 #include "fly_view.hpp"
 
 #include "fly_view_parts.hpp"
+#include "params.hpp"
 #include "slot_report.hpp"
 
 namespace fly {
@@ -160,6 +161,8 @@ void status(const FlyApp& app, void (*yield)()) {
   yield();
   gains(app);
   crashLimit(app);
+  yield();
+  Params::sayStatus(app);
   yield();
   statusIntegrators(app);
   yield();

@@ -241,6 +241,7 @@ void armInMode(sim::AirframeRig& rig, sim::Console& con, const FlyMode& mode) {
   command(con, "layout plus");
   command(con, "thrust 1200");
   for (const std::string& line : mode.setup) command(con, line);
+  sim::flyDisarmedPaths(con);  // `param save`'s stack counts in the figure flyDeepestPaths reads
   const std::vector<std::string> armed = con.command("arm");
   if (armed.empty() || armed[0].rfind("armed:", 0) != 0)
     throw std::runtime_error(fmt::format("fly bench: `arm` refused in mode {}:\n{}", mode.key, con.tail()));

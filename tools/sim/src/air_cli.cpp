@@ -281,6 +281,7 @@ uint64_t StillAirframe::onFaultTime(avr_t*, uint64_t, void* param) {
     if (f.kind == AirFault::Kind::kImuFreeze) self->imu_->chip().setFrozen(true);
     if (f.kind == AirFault::Kind::kSdaLow) self->board_.twi().holdSdaLow(f.release_clocks);
     self->applied_.push_back(fmt::format("t={:.4f} s {}", self->board_.timeS(), f.spec));
+    if (self->fault_listener_) self->fault_listener_(self->applied_.back());
   }
   self->arm();
   return 0;
@@ -325,16 +326,17 @@ void runOnce(const RunOptions& r) {
     board->addOutputListener([](uint8_t b) {
       if (b != '\r') std::fputc(b, stdout);
     });
+  const auto say_fault = [](const std::string& f) { fmt::print(stderr, "fault applied: {}\n", f); };
+  if (rig) rig->onFaultApplied(say_fault);
+  if (still) still->onFaultApplied(say_fault);
   for (const std::string& line : r.send) board->sendText(line + "\r");
   std::signal(SIGINT, onRunSignal);
   const double end = r.duration_s;
   while (board->timeS() < end && !g_run_stop) board->runFor(std::min(0.05, end - board->timeS()));
   std::fflush(stdout);
-  const auto& applied = rig ? rig->faultsApplied() : still->faultsApplied();
   fmt::print(stderr, "sim run: {:.3f} s simulated in {:.2f} s wall ({}); {}\n",
              board->simulatedSeconds(), board->wallSeconds(), speedText(board->realtimeFactor()),
              rig ? rig->describe() : fmt::format("no rig, IMU {}", r.air.imu));
-  for (const std::string& f : applied) fmt::print(stderr, "  fault applied: {}\n", f);
   if (rc) fmt::print(stderr, "  {}\n", rcSummary(*rc));
   if (!r.air.log.empty()) fmt::print(stderr, "  truth log: {}\n", r.air.log);
 }

@@ -137,6 +137,18 @@ void AirframeRig::apply(const AirFault& f) {
     case AirFault::Kind::kPropLoss: rig_->loseThrust(f.motor, f.share); break;
   }
   applied_.push_back(fmt::format("t={:.4f} s {}", rig_->time_s() + t0_s_, f.spec));
+  if (fault_listener_) fault_listener_(applied_.back());
+}
+
+void AirframeRig::levelNow() {
+  advanceTo(board_.timeS());
+  if (plant::Seesaw* s = seesaw()) {
+    s->setAngle(0.0, 0.0);
+    return;
+  }
+  plant::Gimbal* g = gimbal();
+  const double yaw_rad = truth().yaw_deg * M_PI / 180.0;  // keep the heading: a turn about z only
+  g->setState({std::cos(yaw_rad / 2), 0.0, 0.0, std::sin(yaw_rad / 2)}, {0.0, 0.0, 0.0});
 }
 
 void AirframeRig::logRow() {

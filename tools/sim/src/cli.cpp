@@ -12,6 +12,8 @@
 #include <memory>
 
 #include "sim/air_cli.hpp"
+#include "sim/console_stdin.hpp"
+#include "sim/eeprom_motors.hpp"
 #include "sim/board.hpp"
 #include "hex/intel_hex.hpp"
 #include "sim/pty_bridge.hpp"
@@ -162,7 +164,8 @@ void runGatherCommand(const GatherArgs& a) {
   const GatherResult r = runGather(opt);
   if (!a.eeprom.empty()) {
     hex::writeIntelHexFile(a.eeprom, r.eeprom);
-    stderrProgress(fmt::format("EEPROM saved: {}", a.eeprom));
+    recordGatheredMotors(a.eeprom, opt.preset, opt.variation, opt.slots, opt.seeds);
+    stderrProgress(fmt::format("EEPROM saved: {} (its motors: {})", a.eeprom, eepromMotorsPath(a.eeprom)));
   }
   nlohmann::json j = r.toJson();
   j["scenario"] = "gather";
@@ -312,6 +315,7 @@ struct ConsoleArgs {
   bool read_only = false;
   int slot = 0;
   AirCliOptions air;
+  bool seeds_given = false, preset_given = false;  // typed on the command line
 };
 
 void declareConsoleOptions(CLI::App* cmd, ConsoleArgs& a) {
@@ -346,6 +350,18 @@ struct ConsoleRig {
   Board* board = nullptr;
 };
 
+// The flight rigs' four motors: those the EEPROM's records were made for unless --seeds or
+// --preset say otherwise (sim/eeprom_motors.hpp); said either way.
+void chooseMotors(ConsoleArgs& a) {
+  const ConsoleMotors m = chooseConsoleMotors(a.eeprom, a.seeds, a.seeds_given, a.preset, a.preset_given);
+  a.seeds.assign(4, 0);
+  for (int i = 0; i < 4; ++i) a.seeds[i] = m.motors[i].seed;
+  a.preset = m.motors[0].preset;
+  for (int i = 1; i < 4; ++i)  // another preset in a slot: that motor is another part
+    if (m.motors[i].preset != a.preset) a.air.motor_parts.push_back(fmt::format("{}:{}", i, m.motors[i].preset));
+  for (const std::string& note : m.notes) fmt::print("{}\n", note);
+}
+
 ConsoleRig makeConsoleRig(const ConsoleArgs& a, const std::string& which) {
   ConsoleRig r;
   if (isAirRig(which)) {
@@ -367,11 +383,12 @@ ConsoleRig makeConsoleRig(const ConsoleArgs& a, const std::string& which) {
   return r;
 }
 
-void runConsoleCommand(const ConsoleArgs& a) {
+void runConsoleCommand(ConsoleArgs a) {
   std::string which = a.rig;
   if (which == "auto")
     which = fs::path(a.elf).filename().string().find("gather") != std::string::npos ? "bench" : "quad";
   const auto image = loadEepromOrErased(a.eeprom, false);
+  if (which != "bench") chooseMotors(a);
   ConsoleRig r = makeConsoleRig(a, which);
   Board& board = *r.board;
   board.setEeprom(image);
@@ -389,17 +406,27 @@ void runConsoleCommand(const ConsoleArgs& a) {
   fmt::print("Ctrl-C here ends the simulation{}.\n",
              a.read_only || a.eeprom.empty() ? "" : " and saves the EEPROM to " + a.eeprom);
   std::fflush(stdout);
+  // Each fault is said when it is applied; simulator commands come from this terminal.
+  const auto say_fault = [](const std::string& f) {
+    fmt::print("fault applied: {}\n", f);
+    std::fflush(stdout);
+  };
+  if (r.airframe) r.airframe->onFaultApplied(say_fault);
+  if (r.still) r.still->onFaultApplied(say_fault);
+  if (r.airframe) fmt::print("{}\n", ConsoleStdin::kHelp);
+  std::fflush(stdout);
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
-  pty.run(a.speed, a.duration, g_stop);
+  {
+    ConsoleStdin keys(pty, r.airframe.get());
+    pty.run(a.speed, a.duration, g_stop);
+  }
   if (!a.read_only && !a.eeprom.empty()) {
     hex::writeIntelHexFile(a.eeprom, board.eeprom());
     fmt::print("EEPROM saved: {}\n", a.eeprom);
   }
   fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {})\n",
              board.simulatedSeconds(), a.speed, speedText(board.realtimeFactor()));
-  for (const auto& f : r.airframe ? r.airframe->faultsApplied() : r.still->faultsApplied())
-    fmt::print("fault applied: {}\n", f);
   if (rc) fmt::print("{}\n", rcSummary(*rc));
   if (!a.air.log.empty()) fmt::print("truth log: {}\n", a.air.log);
 }
@@ -417,7 +444,11 @@ void addConsole(CLI::App& sim) {
                   hal::kUartBaud));
   auto a = std::make_shared<ConsoleArgs>();
   declareConsoleOptions(cmd, *a);
-  cmd->callback([a] { guarded([&] { runConsoleCommand(*a); }); });
+  cmd->callback([a, cmd] {
+    a->seeds_given = cmd->count("--seeds") > 0;
+    a->preset_given = cmd->count("--preset") > 0;
+    guarded([&] { runConsoleCommand(*a); });
+  });
 }
 
 // What `sim board` reads from its command line.
@@ -640,6 +671,7 @@ void registerCommands(CLI::App& app) {
   addRunCommand(*sim);
   addImuCommand(*sim);
   addSwapCommand(*sim);
+  addDynCommand(*sim);
 }
 
 }  // namespace sim

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -64,6 +65,8 @@ class StillAirframe {
   ~StillAirframe();
   ImuOnBoard* imu() { return imu_.get(); }
   const std::vector<std::string>& faultsApplied() const { return applied_; }
+  // Hears each fault as it is applied (in the simulation's thread).
+  void onFaultApplied(std::function<void(const std::string&)> listener) { fault_listener_ = std::move(listener); }
 
  private:
   static uint64_t onFaultTime(avr_t* avr, uint64_t when, void* param);
@@ -73,6 +76,7 @@ class StillAirframe {
   std::unique_ptr<ImuOnBoard> imu_;
   std::vector<AirFault> pending_;  // by time
   std::vector<std::string> applied_;
+  std::function<void(const std::string&)> fault_listener_;
   std::shared_ptr<int> alive_ = std::make_shared<int>(0);
 };
 

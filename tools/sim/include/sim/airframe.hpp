@@ -107,8 +107,14 @@ class AirframeRig {
 
   // Adds a fault (it happens when simulated time reaches its at_s; at once if that is past).
   void schedule(const AirFault& fault);
-  // The faults applied so far, "t=2.000 s imu-nack@2" each.
+  // The faults applied so far, "t=2.000 s imu-nack@2" each; the listener hears each as it is
+  // applied (in the simulation's thread).
   const std::vector<std::string>& faultsApplied() const { return applied_; }
+  void onFaultApplied(std::function<void(const std::string&)> listener) { fault_listener_ = std::move(listener); }
+
+  // Puts the rig level and still now (roll, pitch and the rates 0; the gimbal keeps its yaw): a
+  // person setting the airframe back on its stand after a disarm, so it can arm again.
+  void levelNow();
 
   // The log (AirframeOptions::log_period_s): rows kept, and/or streamed to a listener.
   const std::vector<AirSample>& samples() const { return samples_; }
@@ -138,6 +144,7 @@ class AirframeRig {
   uint64_t log_rows_ = 0;       // rows so far: the next is due at log_rows_ * log_period_s
   std::vector<AirSample> samples_;
   std::function<void(const AirSample&)> sample_listener_;
+  std::function<void(const std::string&)> fault_listener_;
 };
 
 }  // namespace sim
