@@ -112,6 +112,8 @@ TEST(PeerProfile, ReadsAProfileAndNamesTheLineOfAMistake) {
   EXPECT_EQ(c.channelValues(c.calibrate), (std::vector<double>{2000, 1500, 1000, 1000}));
   EXPECT_DOUBLE_EQ(c.calibrate_hold_s, 1.0);
   EXPECT_DOUBLE_EQ(c.calibrate_wait_s, 1.5);
+  EXPECT_EQ(sim::parsePeerProfile(peerProfileText("e") + "uart-hex 24 4d 3C 00 FA fa\n", "peer.txt").uart_bytes,
+            std::string("$M<\x00\xFA\xFA", 6));
   EXPECT_EQ(sim::parsePeerProfile("elf peer.elf\n" + peerProfileText("x").substr(0, 0) +
                                       peerProfileText("x").substr(peerProfileText("x").find("layout")) +
                                       "name n\n",
@@ -125,6 +127,7 @@ TEST(PeerProfile, ReadsAProfileAndNamesTheLineOfAMistake) {
       {"arm throttle=1000,yaw=2000\n", "peer.txt:17: 'arm' is given twice"},
       {"boot 1\n", "peer.txt:17: unknown key 'boot'"},
       {"calibrate throttle=2000 hold 1\n", "peer.txt:17: write the calibration sticks"},
+      {"uart-hex 24 4D 3C0\n", "peer.txt:17: '3C0' is not a byte in hex"},
       {"rc pwm:A8,A9\n", "'rc' is given twice"},
   };
   for (const auto& b : bad) {

@@ -74,6 +74,38 @@ std::string resolved(const std::string& path, const std::string& file) {
   return p.is_absolute() ? p.string() : (fs::path(file).parent_path() / p).lexically_normal().string();
 }
 
+// "throttle=2000,yaw=1000 hold 1 wait 1.5"
+void takeCalibrate(PeerProfile& p, const std::string& value) {
+  const std::size_t hold = value.find(" hold "), wait = value.find(" wait ");
+  if (hold == std::string::npos || wait == std::string::npos || wait < hold)
+    throw std::invalid_argument("write the calibration sticks, how long they are held and the wait after, e.g. "
+                                "calibrate throttle=2000,yaw=1000,pitch=1000 hold 1 wait 1.5");
+  p.calibrate = sticks(trim(value.substr(0, hold)));
+  p.calibrate_hold_s = number(trim(value.substr(hold + 6, wait - hold - 6)), "hold");
+  p.calibrate_wait_s = number(trim(value.substr(wait + 6)), "wait");
+  if (p.calibrate_hold_s <= 0 || p.calibrate_hold_s > 10 || p.calibrate_wait_s < 0 || p.calibrate_wait_s > 10)
+    throw std::invalid_argument("hold is 0..10 s and wait 0..10 s");
+}
+
+// "24 4D 3C 00 FA FA": the bytes.
+std::string hexBytes(const std::string& value) {
+  std::string out;
+  std::istringstream in(value);
+  for (std::string byte; in >> byte;) {
+    std::size_t used = 0;
+    unsigned long v = 0;
+    try {
+      v = std::stoul(byte, &used, 16);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != byte.size() || byte.size() > 2 || v > 0xFF)
+      throw std::invalid_argument(fmt::format("'{}' is not a byte in hex; write e.g. uart-hex 24 4D 3C 00 FA FA", byte));
+    out.push_back(static_cast<char>(v));
+  }
+  return out;
+}
+
 // One `KEY VALUE` line into the profile.
 void take(PeerProfile& p, const std::string& key, const std::string& value, const std::string& file) {
   if (key == "name") {
@@ -109,15 +141,9 @@ void take(PeerProfile& p, const std::string& key, const std::string& value, cons
     p.arm_hold_s = number(trim(value.substr(hold + 6)), "hold");
     if (p.arm_hold_s <= 0 || p.arm_hold_s > 10) throw std::invalid_argument("hold is 0..10 s");
   } else if (key == "calibrate") {
-    const std::size_t hold = value.find(" hold "), wait = value.find(" wait ");
-    if (hold == std::string::npos || wait == std::string::npos || wait < hold)
-      throw std::invalid_argument("write the calibration sticks, how long they are held and the wait after, e.g. "
-                                  "calibrate throttle=2000,yaw=1000,pitch=1000 hold 1 wait 1.5");
-    p.calibrate = sticks(trim(value.substr(0, hold)));
-    p.calibrate_hold_s = number(trim(value.substr(hold + 6, wait - hold - 6)), "hold");
-    p.calibrate_wait_s = number(trim(value.substr(wait + 6)), "wait");
-    if (p.calibrate_hold_s <= 0 || p.calibrate_hold_s > 10 || p.calibrate_wait_s < 0 || p.calibrate_wait_s > 10)
-      throw std::invalid_argument("hold is 0..10 s and wait 0..10 s");
+    takeCalibrate(p, value);
+  } else if (key == "uart-hex") {
+    p.uart_bytes = hexBytes(value);
   } else if (key == "armed-text") {
     p.armed_text = value;
   } else if (key == "hover") {
@@ -139,7 +165,7 @@ void take(PeerProfile& p, const std::string& key, const std::string& value, cons
   } else {
     throw std::invalid_argument(fmt::format(
         "unknown key '{}'; the keys: name elf layout esc-pins spin imu-mount rc channels neutral eeprom boot-s "
-        "calibrate arm armed-text hover deg-us",
+        "uart-hex calibrate arm armed-text hover deg-us",
         key));
   }
 }

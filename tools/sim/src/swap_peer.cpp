@@ -107,6 +107,10 @@ RunResult flyPeerRun(const SwapOptions& o, const RunSpec& r, const std::string& 
   RcOnBoard rc(rig.board(), parseRcSpec(p.rc.text, &p.esc_pins));
   const Sticks sticks = sticksOf(p, o, r);
   rc.play(sticks.rows);
+  if (!p.uart_bytes.empty()) {
+    rig.run(p.boot_s - rig.board().timeS());
+    rig.board().sendText(p.uart_bytes);
+  }
   rig.run(sticks.t_step - rig.board().timeS());
   checkArmed(rig, p, r, sticks.t_step);
   rig.run(o.window_s);

@@ -15,6 +15,8 @@
 //   neutral throttle=1000              sticks at rest: named ones as given, the others 1500 us
 //   eeprom MultiWii.eep.hex            optional: its EEPROM image (Intel HEX), else erased
 //   boot-s 3                           simulated seconds from power-up before the sticks move
+//   uart-hex 24 4D 3C 00 FA FA         optional: bytes sent on UART0 at boot-s (MSP frames, console
+//                                      lines), before any stick moves
 //   calibrate throttle=2000,yaw=1000,pitch=1000 hold 1 wait 1.5   optional: sticks that make it
 //                                      calibrate (its accelerometer), held HOLD s, then neutral
 //                                      for WAIT s before the arming sticks
@@ -53,6 +55,7 @@ struct PeerProfile {
   double calibrate_hold_s = 0, calibrate_wait_s = 0;
   std::string armed_text;
   std::string eeprom;  // resolved path, "" = erased
+  std::string uart_bytes;  // uart-hex: sent on UART0 at boot_s
   double boot_s = 1.0;
   double roll_us_per_deg = 0, pitch_us_per_deg = 0;
   std::string file;  // where it was read from
