@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The main job: installs what is missing, builds the firmware images and the host tool, then
+# The main job: installs what is missing, builds the firmware images and the host tool (nothing
+# else: no test is built), then
 # runs the virtual bench with the REAL firmware images in simavr:
 #   1. calibrates four varied simulated KV1100 + APC 9x4.7 motors with gather_store
 #      (curve 1 on a full 3S LiPo, curve 2 on a 10 V bench supply), EEPROM saved as Intel HEX;
@@ -17,9 +18,11 @@ set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
 cd "$THRUSTCAL_ROOT"
 
-ensure_packages
-build_avr
-build_host
+# Only what the demo runs: the three images it flies and the thrustcal tool, in the plain tree
+# (build/host; no tests, no instrumentation: tools/test.sh builds those in build/checked).
+ensure_packages "${THRUSTCAL_DEMO_PACKAGES[@]}"
+build_avr gather_store read_run fly
+build_plain thrustcal
 say "firmware images (avr-size)"
 print_firmware_sizes
 

@@ -9,12 +9,9 @@ set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
 cd "$THRUSTCAL_ROOT"
 
-ensure_packages
+ensure_packages "${THRUSTCAL_DEMO_PACKAGES[@]}"
 build_avr
-say "configuring the host tree (build/host)"
-cmake --preset host >/dev/null
-say "building thrustcal"
-cmake --build --preset host -j "$JOBS" --target thrustcal
+build_plain thrustcal
 tc=build/host/tools/thrustcal/thrustcal
 
 say "running every benchmark (simulated; minutes)"

@@ -178,7 +178,7 @@ std::string resultsMarkdown(const nlohmann::json& bench) {
 std::string measuredTable(const nlohmann::json& b) {
   return "| what | figure | reproduce |\n|---|---|---|\n" + hangRow(b) + floodRow(b) + footprintRows(b) +
          computeAndRuntimeRows(b) + flyRow(b) + calibrationRow(b) +
-         "| console fuzz | 10,000+ lines per image, every rule held | `ctest --test-dir build/host -R "
+         "| console fuzz | 10,000+ lines per image, every rule held | `ctest --test-dir build/checked -R "
          "ConsoleFuzz` |\n";
 }
 
