@@ -45,6 +45,7 @@ FACTS = [
     ('a UART baud rate', r'\bconstexpr\s+[\w:]+\s+k\w*Baud\s*=\s*\d', 'hal/include/hal/board.hpp'),
     ('the ESC pin table', r'\bEscPin\s+kEscPins\[\]\s*=', 'hal/include/hal/board.hpp'),
     ('an ESC pin as a (port, bit) literal', r"\{\s*'[A-L]'\s*,\s*[0-7]\s*\}", None),
+    ('the stack paint byte', r'\bconstexpr\s+[\w:]+\s+kStackPaint\w*\s*=', 'hal/include/hal/board.hpp'),
     ('the timer driver\'s pulse clamp', r'\bconstexpr\s+[\w:]+\s+kPulseClamp(Min|Max)Us\s*=',
      'hal/include/hal/board.hpp'),
     # Protocol facts (core).
@@ -53,6 +54,8 @@ FACTS = [
     ('a bare throttle-range default', r'\buint16_t\s+pwm_(min|max)_us\s*=\s*(1000|2000)\s*;', None),
     ('gather_store\'s setting ranges', r'\bconstexpr\s+[\w:]+\s+kSweep(Pwm|Step|Settle)\w*\s*=',
      'core/include/thrustcal/sweep_limits.hpp'),
+    ('a motor slot\'s EEPROM bytes (1024)', r'\bconstexpr\s+[\w:]+\s+k\w*(Slot|Record)\w*Bytes\s*=\s*1024\b',
+     'core/include/thrustcal/eeprom_codec.hpp'),
     ('the flash-text macros', r'#\s*define\s+TC_FLASH', 'core/include/thrustcal/flash_text.hpp'),
 ]
 SOURCES = ('.cpp', '.hpp', '.h', '.c', '.inc')
