@@ -1,6 +1,7 @@
-// Real data: Bitcraze's Crazyflie 2.1 thrust-stand logs (../shared/data). The force follows
-// pwm * vbat; the `voltage` effect must lower the error against a PWM-only curve, and a direct fit
-// equals the ladder that adds its effects one by one.
+// Real data: Bitcraze's Crazyflie 2.1 thrust-stand logs (THRUSTCAL_LAB_CF_DIR: IMRCLab's
+// crazyflie-system-id, data/bitcraze2021). The force follows pwm * vbat; the `voltage` effect
+// must lower the error against a PWM-only curve, and a direct fit equals the ladder that adds its
+// effects one by one.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// `thrustcal sim swap --json FILE` (sim/swap.hpp): runs[] and targets[] as DESIGN.md fixes them
+// `thrustcal sim swap --json FILE` (sim/swap.hpp): runs[] and targets[] as docs/architecture.md fixes them
 // ("Interfaces other people script against"), with what made them beside.
 #include <cmath>
 
