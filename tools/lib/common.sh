@@ -61,7 +61,7 @@ build_avr() {
 #   plain   build/host     tools/demo.sh, tools/results.sh: optimised, no instrumentation
 #   checked build/checked  tools/test.sh: core/ line coverage, ASan + UBSan on every object
 THRUSTCAL_PLAIN_FLAGS=(-DTHRUSTCAL_TREE=plain -DCMAKE_BUILD_TYPE=RelWithDebInfo
-  -DTHRUSTCAL_SANITIZE=OFF -DTHRUSTCAL_COVERAGE=OFF -DTHRUSTCAL_FUZZ=OFF)
+  "-DTHRUSTCAL_HOST_OPT=-O2 -g1" -DTHRUSTCAL_SANITIZE=OFF -DTHRUSTCAL_COVERAGE=OFF -DTHRUSTCAL_FUZZ=OFF)
 THRUSTCAL_CHECKED_FLAGS=(-DTHRUSTCAL_TREE=checked -DCMAKE_BUILD_TYPE=RelWithDebInfo
   -DTHRUSTCAL_SANITIZE=ON -DTHRUSTCAL_COVERAGE=ON -DTHRUSTCAL_FUZZ=OFF -DTHRUSTCAL_TESTS=ON)
 
