@@ -91,7 +91,10 @@ nlohmann::json SwapResult::toJson() const {
                             {"target", t.target},
                             {"figure", t.figure},
                             {"wanted", t.wanted},
-                            {"met", t.met}});
+                            {"met", t.met},
+                            {"what", t.what},
+                            {"part", t.part},
+                            {"rig", t.rig}});
   nlohmann::json dyn = nlohmann::json::array();
   for (const Dynamics& d : dynamics.parts)
     dyn.push_back({{"part", d.part},

@@ -70,6 +70,17 @@ Section safetySection(const AvrPaths& paths);
 // in each of its modes: CPU load, loop period, IMU read to the ESC edge that carries it, flash
 // and static SRAM, stack never used.
 Section flySection(const AvrPaths& paths);
+// Issue 19 item 3 (sections_swap.cpp): the swap experiment's full run (sim/swap.hpp): targets,
+// figures per rig, axis and gains, the motors' time constants. out_dir holds the calibration
+// cache and the series (empty: <source>/build/bench/swap); quick: one IMU unit, PD gains only;
+// reduced: `bench drift`'s run, the gimbal, force mode, PD, the KV900 part, IMU unit 1.
+struct SwapBenchOptions {
+  std::string out_dir;
+  int jobs = 1;
+  bool quick = false;
+  bool reduced = false;
+};
+Section swapSection(const AvrPaths& paths, const SwapBenchOptions& options);
 // Footprint rows: each image's stack never used after its deepest paths (simulated).
 void addStackHeadroom(const AvrPaths& paths, Table& table, nlohmann::json& json,
                       std::vector<TargetCheck>& targets);

@@ -148,6 +148,7 @@ struct RunResult {
 struct Target {
   std::string target, figure, wanted;
   bool met = false;
+  std::string what, part, rig;  // "overshoot vs stock", the swapped part, "seesaw" | "gimbal"
 };
 
 struct SwapResult {
