@@ -182,14 +182,4 @@ std::string measuredTable(const nlohmann::json& b) {
          "ConsoleFuzz` |\n";
 }
 
-std::string withMeasuredTable(const std::string& readme, const std::string& table) {
-  const std::size_t begin = readme.find(kMeasuredBegin);
-  const std::size_t end = readme.find(kMeasuredEnd);
-  if (begin == std::string::npos || end == std::string::npos || end < begin)
-    throw std::runtime_error(fmt::format("README has no \"{}\" ... \"{}\" markers around its measured table",
-                                         kMeasuredBegin, kMeasuredEnd));
-  const std::size_t from = begin + std::string(kMeasuredBegin).size();
-  return readme.substr(0, from) + "\n" + table + readme.substr(end);
-}
-
 }  // namespace bench
