@@ -63,7 +63,7 @@ void ForceActuators::loadSlot(uint8_t index, SlotReport report) {
       m.model.clear();
     }
   }
-  m.force_g = 0;
+  m.force_dg = 0;
   m.pwm_us = tc::kStopPwmUs;
   m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
   if (report != nullptr) report(index, m, v2, v1);
@@ -91,14 +91,14 @@ bool ForceActuators::setModelSource(uint8_t index, uint8_t slot) {
   return true;
 }
 
-uint16_t ForceActuators::maxForceG(uint8_t index) const {
+uint16_t ForceActuators::maxForceDg(uint8_t index) const {
   const Motor& source = motors_[motors_[index].source];
   if (!source.isArmable()) return 0;
-  if (source.model.holdsV2()) return static_cast<uint16_t>(source.model.v2().max_force_dg / 10u);
+  if (source.model.holdsV2()) return source.model.v2().max_force_dg;
   const tc::ThesisRun& thesis = source.model.v1();
   const uint16_t first = thesis.first.maxGrams();
   const uint16_t second = thesis.hasSecondCurve() ? thesis.second.maxGrams() : first;
-  return second < first ? second : first;
+  return static_cast<uint16_t>(10u * (second < first ? second : first));
 }
 
 void ForceActuators::restartFilters() {
@@ -119,20 +119,20 @@ uint8_t ForceActuators::armableCount() const {
 
 bool ForceActuators::isRunning() const {
   for (uint8_t i = 0; i < kMotors; ++i) {
-    if (motors_[i].force_g > 0) return true;
+    if (motors_[i].force_dg > 0) return true;
   }
   return false;
 }
 
-void ForceActuators::setForce(uint8_t index, uint16_t force_g) {
-  if (isArmable(index)) motors_[index].force_g = force_g;
+void ForceActuators::setForceDg(uint8_t index, uint16_t force_dg) {
+  if (isArmable(index)) motors_[index].force_dg = force_dg < kMaxForceDg ? force_dg : kMaxForceDg;
 }
 
 void ForceActuators::stopAll() {
   uint16_t pulses_us[kMotors];
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
-    m.force_g = 0;
+    m.force_dg = 0;
     m.pwm_us = tc::kStopPwmUs;
     m.flags = isArmable(i) ? tc::kStopped : tc::kNotCalibrated;
     pulses_us[i] = tc::kStopPwmUs;
@@ -160,12 +160,18 @@ void ForceActuators::frame() {
 void ForceActuators::sampleBattery() { battery_.sample(v2_.count != 0); }
 
 void ForceActuators::output() {
+  computePulses();
+  writePulses();
+}
+
+void ForceActuators::computePulses() {
   if (v2_.count != 0) flyV2Motors();
+  for (uint8_t i = 0; i < kMotors; ++i) flyMotor(motors_[i]);
+}
+
+void ForceActuators::writePulses() {
   uint16_t pulses_us[kMotors];
-  for (uint8_t i = 0; i < kMotors; ++i) {
-    flyMotor(motors_[i]);
-    pulses_us[i] = motors_[i].pwm_us;
-  }
+  for (uint8_t i = 0; i < kMotors; ++i) pulses_us[i] = motors_[i].pwm_us;
   hal::Esc::writeAll(pulses_us);  // the four outputs back to back
 }
 
@@ -175,7 +181,7 @@ void ForceActuators::output() {
 void ForceActuators::flyV2Motors() {
   for (uint8_t i = 0; i < kMotors; ++i) {
     const Motor& m = motors_[i];
-    if (m.lane != kNoLane) v2_.lane[m.lane].force_dg = static_cast<uint16_t>(m.force_g * 10u);  // <= 5000
+    if (m.lane != kNoLane) v2_.lane[m.lane].force_dg = m.force_dg;
   }
   v2_.fly(battery_.frameMv(), battery_.frameSane() ? 0 : tc::kVoltageInvalid);
 }
@@ -185,7 +191,7 @@ void ForceActuators::flyV2Motors() {
 void ForceActuators::flyMotor(Motor& m) {
   const Motor& source = motors_[m.source];
   if (!source.isArmable()) {
-    m.force_g = 0;
+    m.force_dg = 0;
     m.pwm_us = tc::kStopPwmUs;
     m.flags = tc::kNotCalibrated;
     m.vbat_mv = battery_.medianMv();
@@ -202,7 +208,7 @@ void ForceActuators::flyMotor(Motor& m) {
   // was last sent.
   const tc::ThesisRun& thesis = source.model.v1();
   m.vbat_mv = battery_.monitor().compensatedMillivolts(battery_.medianMv(), m.pwm_us, thesis.sag);
-  const tc::ForcePwmResult result = tc::forceToPwm<hal::Eeprom>(thesis, m.force_g, m.vbat_mv);
+  const tc::ForcePwmResult result = tc::forceToPwmDg<hal::Eeprom>(thesis, m.force_dg, m.vbat_mv);
   m.pwm_us = result.pwm_us;
   m.flags = result.flags;
 }

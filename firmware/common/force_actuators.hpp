@@ -1,5 +1,5 @@
 // The force API: four calibrated motors as flight code sees them. Load the slots once, then
-// command each motor's force in grams and call frame() once per ESC frame; every motor gets
+// command each motor's force in decigrams (0.1 g) and call frame() once per ESC frame; every motor gets
 // the pulse that produces its force on *this* motor at the present battery voltage, through
 // the model its EEPROM slot holds (thesis option 2.1 for a v1 record, model v2 for a v2 one).
 // read_run flies it from console commands, fly from its attitude controller; a user's own
@@ -9,13 +9,15 @@
 //   motors.loadSettings();                    // the battery divider (EEPROM)
 //   motors.loadSlots(&printSlot);             // the four records, once (thesis H.2)
 //   ... every frame:
-//   motors.setForce(i, force_g);              // armable motors only (isArmable(i))
+//   motors.setForceDg(i, force_dg);           // decigrams; armable motors only (isArmable(i))
 //   motors.frame();                           // battery, models, four pulses written at once
 //   motors.stopAll();                         // 0 g and the stop pulse on every ESC, now
 // frame() is sampleBattery() then output(): a loop may read the battery less often than it flies
 // (fly reads it every eighth of its 400 Hz frames). setModelSource(i, s) lets motor i fly slot
 // s's record (fly's generic mode: one motor's record for all four, what an uncalibrated
-// aircraft flies); maxForceG(i) is the most its model makes (a mixer's saturation limit).
+// aircraft flies); maxForceDg(i) is the most its model makes (a mixer's saturation limit).
+// Forces are decigrams throughout: model v2 flies them as they come, the thesis model between
+// its per-gram curve points on the straight line (tc::forceToPwmDg); nothing rounds to grams.
 //
 // Safety rules kept here: a motor whose model's record did not load whole and plausible is never
 // armed (held at the stop pulse, every force to it ignored); the per-frame path is integer only.
@@ -52,7 +54,7 @@ struct Motor {
                                     // setModelSource chose another)
   uint8_t lane = kNoLane;           // flying a v2 model: its lane in the frame
   tc::Plausibility why;             // record kBadContent: the plausibility rule it broke
-  uint16_t force_g = 0;             // the force command: the one place it is kept
+  uint16_t force_dg = 0;            // the force command in decigrams: the one place it is kept
   uint16_t pwm_us = tc::kStopPwmUs; // last pulse written to the ESC
   uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
                                     // v2 the bus filter's value
@@ -103,9 +105,10 @@ class ForceActuators {
   // divider); load the settings and the slots again after it.
   void restartFilters();
 
-  // Motor `index`'s force command, 0..tc::kRecordMaxForceG. Ignored for a motor that is not
-  // armable (it stays at the stop pulse).
-  void setForce(uint8_t index, uint16_t force_g);
+  static constexpr uint16_t kMaxForceDg = 10u * tc::kRecordMaxForceG;
+  // Motor `index`'s force command in decigrams, 0..kMaxForceDg (more is taken as kMaxForceDg).
+  // Ignored for a motor that is not armable (it stays at the stop pulse).
+  void setForceDg(uint8_t index, uint16_t force_dg);
   // 0 g and the stop pulse on every ESC at once (not waiting for the next frame).
   void stopAll();
   // One ESC frame: sampleBattery(), then output().
@@ -113,16 +116,19 @@ class ForceActuators {
   // The battery's readings of a frame (four conversions: the median, the v2 bus reading).
   void sampleBattery();
   // Each motor's pulse from its force through its model at the last readings, the four pulses
-  // written back to back.
+  // written back to back: computePulses() then writePulses().
   void output();
+  // The two halves of output(), for a loop that times its computation up to the write (fly).
+  void computePulses();
+  void writePulses();
 
   // Motor `index` flies the model of slot `slot` from now on (slot == index: its own again,
   // whatever it holds). Only while no motor runs; false (nothing changed) then, for an index or
   // slot outside 0..3, or when another slot is not armable.
   bool setModelSource(uint8_t index, uint8_t slot);
-  // The heaviest force motor `index`'s model makes, in grams (v1: the lighter of its curves'
+  // The heaviest force motor `index`'s model makes, in decigrams (v1: the lighter of its curves'
   // heaviest gram; v2: its last knot); 0 when it is not armable.
-  uint16_t maxForceG(uint8_t index) const;
+  uint16_t maxForceDg(uint8_t index) const;
   // The v2 bus filter's constant follows the frame rate (its time constant stays the same).
   void setFrameRate(uint16_t frame_hz);
 
@@ -130,7 +136,7 @@ class ForceActuators {
   // Motor `index` can fly: the slot whose model it flies holds a valid record.
   bool isArmable(uint8_t index) const { return motors_[motors_[index].source].isArmable(); }
   uint8_t armableCount() const;  // calibrated slots
-  bool isRunning() const;  // any motor commanded above 0 g
+  bool isRunning() const;  // any motor commanded above 0
   const tc::BoardSettings& boardSettings() const { return board_settings_; }
   tc::BoardSettings& boardSettings() { return board_settings_; }
   const BatteryInput& battery() const { return battery_; }

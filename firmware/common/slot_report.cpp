@@ -177,7 +177,7 @@ void motorStatus(const ForceActuators& motors, uint8_t i) {
     sayLine(TC_FLASH_TEXT(" us"));
     return;
   }
-  fw::printUint(m.force_g);
+  fw::printFixed(m.force_dg, 1);
   say(TC_FLASH_TEXT(" g, "));
   fw::printUint(m.pwm_us);
   say(TC_FLASH_TEXT(" us, battery "));

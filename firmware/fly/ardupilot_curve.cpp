@@ -62,8 +62,8 @@ void ArduPilotCurve::derive() {
   const float span_us = static_cast<float>(p_.pwm_max_us) - static_cast<float>(p_.pwm_min_us);
   p0_ = static_cast<float>(p_.pwm_min_us) + span_us * p_.spin_min;
   p1_ = span_us * (p_.spin_max - p_.spin_min);
-  // pulseUsQ4's: thrust 1 at full thrust x lift_max; pulse = p0 + p1 u / v
-  max_force_q4_ = roundToInt32(p_.full_thrust_g * lift_max_ * 16.0f);
+  // pulseUsDg's: thrust 1 at full thrust x lift_max; pulse = p0 + p1 u / v (pulses in 1/16 us)
+  max_force_dg_ = roundToInt32(p_.full_thrust_g * lift_max_ * kDgPerGram);
   p0_x16_ = roundToInt32(p0_ * 16.0f);
   p_top_x16_ = roundToInt32((p0_ + p1_) * 16.0f);
   pulse_per_u_ = gainOf(p1_ * battery_scale * (16.0f / 32768.0f));
@@ -80,7 +80,7 @@ float ArduPilotCurve::throttleAtFullVoltage(float force_g) const {
 }
 
 // Nodes evenly spaced in sqrt(2 e u + 1 - e) (in u when e is near 0), each node's force rounded
-// to 1/16 g and its u worked out again at that force, so a node is exact where it lies.
+// to a decigram and its u worked out again at that force, so a node is exact where it lies.
 void ArduPilotCurve::buildTable() {
   table_ok_ = false;
   if (!ready()) return;
@@ -92,11 +92,11 @@ void ArduPilotCurve::buildTable() {
     const float w = w0 + (w1 - w0) * t;
     const float u = near_linear ? t : clamp((w * w - (1.0f - e)) / (2.0f * e), 0.0f, 1.0f);
     Node& n = table_[i];
-    n.force_q4 = roundToInt32((e * u * u + (1.0f - e) * u) * p_.full_thrust_g * 16.0f);
-    n.u_q15 = static_cast<uint16_t>(roundToInt32(throttleAtFullVoltage(n.force_q4 / 16.0f) * 32768.0f));
+    n.force_dg = roundToInt32((e * u * u + (1.0f - e) * u) * p_.full_thrust_g * kDgPerGram);
+    n.u_q15 = static_cast<uint16_t>(roundToInt32(throttleAtFullVoltage(gramsOf(n.force_dg)) * 32768.0f));
   }
   for (uint8_t i = 0; i < kTableSegments; ++i) {
-    const int32_t df = table_[i + 1].force_q4 - table_[i].force_q4;
+    const int32_t df = table_[i + 1].force_dg - table_[i].force_dg;
     const float du = static_cast<float>(table_[i + 1].u_q15) - static_cast<float>(table_[i].u_q15);
     table_[i].slope = df > 0 ? gainOf(du / static_cast<float>(df)) : Gain();
   }
@@ -110,11 +110,11 @@ void ArduPilotCurve::buildTable() {
 float ArduPilotCurve::tableErrorUs() const {
   float worst_u = 0;
   for (uint8_t i = 0; i < kTableSegments; ++i) {
-    const int32_t from = table_[i].force_q4, width = table_[i + 1].force_q4 - from;
+    const int32_t from = table_[i].force_dg, width = table_[i + 1].force_dg - from;
     for (int32_t k = 1; k <= 3; ++k) {
       const int32_t f = from + width * k / 4;
       const float u_table = tableThrottleQ15(f) / 32768.0f;
-      const float error = fabsf(u_table - throttleAtFullVoltage(f / 16.0f));
+      const float error = fabsf(u_table - throttleAtFullVoltage(gramsOf(f)));
       if (error > worst_u) worst_u = error;
     }
   }
@@ -123,23 +123,23 @@ float ArduPilotCurve::tableErrorUs() const {
   return worst_u * p1_ / lowest_ratio + 1.0f / 16.0f;  // + the pulse's own 1/16 us
 }
 
-int32_t ArduPilotCurve::tableThrottleQ15(int32_t force_q4) const {
-  uint8_t lo = 0, hi = kTableSegments;  // table_[lo].force_q4 <= force_q4 < table_[hi].force_q4
+int32_t ArduPilotCurve::tableThrottleQ15(int32_t force_dg) const {
+  uint8_t lo = 0, hi = kTableSegments;  // table_[lo].force_dg <= force_dg < table_[hi].force_dg
   while (hi - lo > 1) {
     const uint8_t mid = static_cast<uint8_t>((lo + hi) / 2);
-    if (table_[mid].force_q4 <= force_q4) {
+    if (table_[mid].force_dg <= force_dg) {
       lo = mid;
     } else {
       hi = mid;
     }
   }
   const Node& n = table_[lo];
-  return n.u_q15 + applyGain(force_q4 - n.force_q4, n.slope);
+  return n.u_q15 + applyGain(force_dg - n.force_dg, n.slope);
 }
 
-uint16_t ArduPilotCurve::pulseUsQ4(int32_t force_q4) const {
-  if (!table_ok_) return pulseUs(force_q4 * (1.0f / 16.0f));
-  const int32_t f = force_q4 < 0 ? 0 : (force_q4 > max_force_q4_ ? max_force_q4_ : force_q4);
+uint16_t ArduPilotCurve::pulseUsDg(int32_t force_dg) const {
+  if (!table_ok_) return pulseUs(gramsOf(force_dg));
+  const int32_t f = force_dg < 0 ? 0 : (force_dg > max_force_dg_ ? max_force_dg_ : force_dg);
   int32_t pulse_x16 = p0_x16_ + applyGain(tableThrottleQ15(f), pulse_per_u_);
   if (pulse_x16 > p_top_x16_) pulse_x16 = p_top_x16_;  // y <= 1
   return pulse_x16 > 0 ? static_cast<uint16_t>(pulse_x16 >> 4) : 0;  // truncated, as output_to_pwm

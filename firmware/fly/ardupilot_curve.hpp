@@ -13,21 +13,23 @@
 // file names them; the full thrust (grams at the top pulse on a full battery) is what the fit
 // prints next to them (or (take-off weight / motors) / MOT_THST_HOVER).
 // pulseUs is that arithmetic in float (one square root and a few products per motor), the
-// reference; the frame path is pulseUsQ4, integer, from a table made with the parameters:
+// reference; the frame path is pulseUsDg, integer, from a table made with the parameters:
 //   the throttle at full voltage for a force, u = y v, solves e u^2 + (1 - e) u = F / full thrust
 //   (lift_max cancels), so it depends on the parameters only. The table holds u at kTableNodes
-//   forces (1/16 g), spaced evenly in sqrt(2 e u + 1 - e) (the interpolation's error is then
+//   forces (decigrams), spaced evenly in sqrt(2 e u + 1 - e) (the interpolation's error is then
 //   the same in every segment, (sqrt(1 + e) - sqrt(1 - e))^2 / (4 |e| segments^2) in u), each
 //   segment's slope as a gain; a force is found by bisection and interpolated, then
 //   pulse = PWM_MIN + span (SPIN_MIN + (SPIN_MAX - SPIN_MIN) min(u / v, 1)) with the per-reading
 //   gain. Within |e| <= kTableMaxExpo the table is within kTableMaxErrorUs of the float
 //   arithmetic at every force and voltage (the tests sweep e and measure it: tableErrorUs);
-//   beyond (an expo near +-1) pulseUsQ4 flies the float path.
+//   beyond (an expo near +-1) pulseUsDg flies the float path.
+// Part of fly's output stage (output_stage.hpp).
 // Whatever depends only on the voltage is worked out once per battery reading (updateBattery).
 #pragma once
 #include <stdint.h>
 
 #include "fixed_point.hpp"
+#include "flight_types.hpp"
 #include "thrustcal/record_limits.hpp"
 
 namespace fly {
@@ -59,10 +61,10 @@ class ArduPilotCurve {
   float maxForceG() const { return p_.full_thrust_g * lift_max_; }
   // The pulse ArduPilot sends for `force_g` on one motor (float: the reference).
   uint16_t pulseUs(float force_g) const;
-  // The same for a force in 1/16 g, from the table (the frame path); within a microsecond of
+  // The same for a force in decigrams, from the table (the frame path); within a microsecond of
   // pulseUs.
-  uint16_t pulseUsQ4(int32_t force_q4) const;
-  // Whether pulseUsQ4 flies the table (false: the parameters need the float path).
+  uint16_t pulseUsDg(ForceDg force_dg) const;
+  // Whether pulseUsDg flies the table (false: the parameters need the float path).
   bool usesTable() const { return table_ok_; }
 
   static constexpr uint8_t kTableSegments = 40;
@@ -74,16 +76,16 @@ class ArduPilotCurve {
 
  private:
   struct Node {
-    int32_t force_q4;  // at this node
+    ForceDg force_dg;  // at this node
     uint16_t u_q15;    // the throttle at full voltage there, 1/32768
-    Gain slope;        // to the next node: u_q15 per 1/16 g
+    Gain slope;        // to the next node: u_q15 per decigram
   };
 
   void derive();
   float ratioFor(float vbat_v) const;
   void buildTable();
   float throttleAtFullVoltage(float force_g) const;
-  int32_t tableThrottleQ15(int32_t force_q4) const;
+  int32_t tableThrottleQ15(ForceDg force_dg) const;
 
   ArduPilotParams p_;
   float expo_ = 0.65f;     // clamped
@@ -97,10 +99,10 @@ class ArduPilotCurve {
   // Per-reading constants of pulseUs: thrust = F * thrust_per_g_; y = (c_ + sqrt(a_ + b_ thrust)) d_
   // (linear branch when e == 0: y = lin_ thrust); pulse = p0_ + p1_ y.
   float thrust_per_g_ = 0, a_ = 0, b_ = 0, c_ = 0, d_ = 0, lin_ = 0, p0_ = 0, p1_ = 0;
-  // pulseUsQ4: the table, and per reading the force that makes thrust 1 and u's pulse gain.
+  // pulseUsDg: the table, and per reading the force that makes thrust 1 and u's pulse gain.
   Node table_[kTableSegments + 1];
   bool table_ok_ = false;
-  int32_t max_force_q4_ = 0;    // full thrust x lift_max
+  ForceDg max_force_dg_ = 0;    // full thrust x lift_max
   int32_t p0_x16_ = 0;          // PWM_MIN + span SPIN_MIN, 1/16 us
   int32_t p_top_x16_ = 0;       // the pulse at y = 1
   Gain pulse_per_u_;            // 1/16 us per u_q15: span (SPIN_MAX - SPIN_MIN) / v

@@ -12,7 +12,6 @@ namespace fly {
 using fw::sayLine;
 
 namespace {
-constexpr float kRadPerDeg = 3.14159265f / 180.0f;
 constexpr int8_t kMaxSetpointDeg = 30;
 constexpr uint16_t kMaxGain = 10000;        // mN m per rad (or per rad/s, rad s)
 constexpr uint16_t kMaxThrustG = 4 * 2500;  // four motors of the heaviest class flown
@@ -51,6 +50,14 @@ struct Commands {
   static void stream(App& app, const Args& a) { app.cmdStream(a[0] == 0); }  // on|off
   static void status(App& app, const Args&) { app.cmdStatus(); }
   static void strict(App& app, const Args& a) { app.cmdStrict(a[0] == 0); }  // on|off
+  static void rc(App& app, const Args& a) {  // off|ppm|pwm [N]
+    app.cmdRc(static_cast<RcProtocol>(a[0]), a.has(1) ? static_cast<uint8_t>(a[1]) : app.rcSettings().pwm_channels);
+  }
+  static void rcmap(App& app, const Args& a) { app.cmdRcMap(static_cast<uint8_t>(a[0])); }
+  static void rates(App& app, const Args& a) {
+    app.cmdRates(static_cast<uint8_t>(a[0]), u16(a[1]), u16(a[2]));
+  }
+  static void fmode(App& app, const Args& a) { app.cmdFlightMode(static_cast<FlightMode>(a[0])); }
 };
 
 bool FlyApp::refuseWhileArmed() const {
@@ -59,20 +66,39 @@ bool FlyApp::refuseWhileArmed() const {
   return true;
 }
 
-void FlyApp::cmdArm() {
+ArmRefusal FlyApp::arm(ArmSource source) {
   const ArmRefusal why = armRefusal(armInputs());
+  if (why != ArmRefusal::kNone) return why;
+  const uint32_t now_ms = hal::Clock::millis();
+  controller_.reset();
+  restartLoopStats();
+  flight_.armed = true;
+  flight_.source = source;
+  flight_.armed_ms = now_ms;
+  flight_.mix_limits = 0;
+  link_.heard(now_ms);
+  if (source == ArmSource::kSticks) {
+    flyTheSticks();
+  } else {
+    updateOutputLimits();
+  }
+  return ArmRefusal::kNone;
+}
+
+void FlyApp::cmdArm() {
+  const ArmRefusal why = arm(ArmSource::kConsole);
   if (why != ArmRefusal::kNone) {
     view::armRefused(why, *this);
     return;
   }
-  const uint32_t now_ms = hal::Clock::millis();
-  controller_.reset();
-  updateOutputLimits();
-  flight_.armed = true;
-  flight_.armed_ms = now_ms;
-  flight_.mix_limits = 0;
-  link_.heard(now_ms);
   view::armed(*this);
+}
+
+// While the sticks fly, the setpoint and the thrust are theirs.
+bool FlyApp::refuseWhileSticksFly() const {
+  if (!flight_.armed || flight_.source != ArmSource::kSticks) return false;
+  sayLine(TC_FLASH_TEXT("error: the sticks fly (armed from the receiver); disarm first"));
+  return true;
 }
 
 void FlyApp::cmdDisarm() {
@@ -87,32 +113,35 @@ void FlyApp::cmdDisarm() {
 }
 
 void FlyApp::cmdSetpoint(int8_t roll_deg, int8_t pitch_deg) {
-  settings_.setpoint.roll_rad = roll_deg * kRadPerDeg;
-  settings_.setpoint.pitch_rad = pitch_deg * kRadPerDeg;
-  settings_.setpoint_q = fixedSetpoint(settings_.setpoint);
+  if (refuseWhileSticksFly()) return;
+  Setpoint& sp = command_.setpoint;
+  sp.roll_rad = roll_deg * kRadPerDeg;
+  sp.pitch_rad = pitch_deg * kRadPerDeg;
+  command_.setpoint_q = fixedSetpoint(sp);
   view::setpoint(*this);
 }
 
 void FlyApp::cmdThrust(uint16_t thrust_g) {
+  if (refuseWhileSticksFly()) return;
   settings_.thrust_g = thrust_g;
   if (flight_.armed) updateOutputLimits();
   view::thrust(*this);
 }
 
 void FlyApp::cmdGains(uint16_t kp, uint16_t ki, uint16_t kd) {
-  AxisGains g;
-  g.kp_nm_per_rad = kp * 0.001f;
-  g.ki_nm_per_rad_s = ki * 0.001f;
-  g.kd_nm_s_per_rad = kd * 0.001f;
-  controller_.setGains(g, controller_.yawGains());
+  ControllerSettings s = controller_.settings();
+  s.angle.kp_nm_per_rad = kp * 0.001f;
+  s.angle.ki_nm_per_rad_s = ki * 0.001f;
+  s.angle.kd_nm_s_per_rad = kd * 0.001f;
+  controller_.setSettings(s);
   view::gains(*this);
 }
 
 void FlyApp::cmdYawGains(uint16_t kp, uint16_t ki) {
-  YawGains g;
-  g.kp_nm_s_per_rad = kp * 0.001f;
-  g.ki_nm_per_rad = ki * 0.001f;
-  controller_.setGains(controller_.gains(), g);
+  ControllerSettings s = controller_.settings();
+  s.yaw.kp_nm_s_per_rad = kp * 0.001f;
+  s.yaw.ki_nm_per_rad = ki * 0.001f;
+  controller_.setSettings(s);
   view::gains(*this);
 }
 
@@ -128,17 +157,19 @@ void FlyApp::cmdMode(OutputMode mode, uint8_t generic_slot) {
 
 void FlyApp::cmdLayout(Layout layout) {
   if (refuseWhileArmed()) return;
-  settings_.layout = layout;
-  configureMixer();
+  MixerSettings s = mixer_.settings();
+  s.layout = layout;
+  configureMixer(s);
   schedule();
   view::layout(*this);
 }
 
 void FlyApp::cmdAirframe(uint16_t arm_mm, uint16_t yaw_arm_um) {
   if (refuseWhileArmed()) return;
-  settings_.arm_m = arm_mm * 0.001f;
-  settings_.yaw_arm_m = yaw_arm_um * 0.000001f;
-  configureMixer();
+  MixerSettings s = mixer_.settings();
+  s.arm_m = arm_mm * 0.001f;
+  s.yaw_arm_m = yaw_arm_um * 0.000001f;
+  configureMixer(s);
   view::layout(*this);
 }
 
@@ -190,7 +221,7 @@ void FlyApp::cmdArduPilotPwm(uint16_t min_us, uint16_t max_us) {
 
 void FlyApp::cmdCrash(uint8_t deg) {
   settings_.crash_deg = deg;
-  settings_.crash_units = angleUnitsOfDegrees(deg);
+  command_.crash_units = angleUnitsOfDegrees(deg);
   view::crashLimit(*this);
 }
 
@@ -249,6 +280,13 @@ const char kMinUs[] TC_FLASH = "MIN_US";
 const char kMaxUs[] TC_FLASH = "MAX_US";
 const char kDeg[] TC_FLASH = "DEG";
 const char kOnOff[] TC_FLASH = "on|off";
+const char kRcProtocols[] TC_FLASH = "off|ppm|pwm";
+const char kRcChannels[] TC_FLASH = "N";
+const char kRcMapWords[] TC_FLASH = "AETR|TAER|AERT|EATR|ERTA";
+const char kAngleDeg[] TC_FLASH = "ANGLE_DEG";
+const char kRateDps[] TC_FLASH = "RATE_DPS";
+const char kYawDps[] TC_FLASH = "YAW_DPS";
+const char kFlightModes[] TC_FLASH = "angle|rate";
 
 const fw::ArgSpec kSetpointArgs[] TC_FLASH = {{kRollDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg},
                                               {kPitchDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg}};
@@ -270,6 +308,12 @@ const fw::ArgSpec kApPwmArgs[] TC_FLASH = {{kMinUs, nullptr, hal::kPulseClampMin
                                            {kMaxUs, nullptr, hal::kPulseClampMinUs, hal::kPulseClampMaxUs}};
 const fw::ArgSpec kCrashArgs[] TC_FLASH = {{kDeg, nullptr, kMinCrashDeg, kMaxCrashDeg}};
 const fw::ArgSpec kOnOffArgs[] TC_FLASH = {{kOnOff, kOnOff, 0, 0}};
+const fw::ArgSpec kRcArgs[] TC_FLASH = {{kRcProtocols, kRcProtocols, 0, 0},
+                                        {kRcChannels, nullptr, kRcMinChannels, kRcMaxChannels}};
+const fw::ArgSpec kRcMapArgs[] TC_FLASH = {{kRcMapWords, kRcMapWords, 0, 0}};
+const fw::ArgSpec kRatesArgs[] TC_FLASH = {{kAngleDeg, nullptr, 5, 60}, {kRateDps, nullptr, 10, 1000},
+                                           {kYawDps, nullptr, 10, 1000}};
+const fw::ArgSpec kFlightModeArgs[] TC_FLASH = {{kFlightModes, kFlightModes, 0, 0}};
 
 const char kHelpName[] TC_FLASH = "help";
 const char kArmName[] TC_FLASH = "arm";
@@ -291,6 +335,10 @@ const char kLevelName[] TC_FLASH = "level";
 const char kStreamName[] TC_FLASH = "stream";
 const char kStatusName[] TC_FLASH = "status";
 const char kStrictName[] TC_FLASH = "strict";
+const char kRcName[] TC_FLASH = "rc";
+const char kRcMapName[] TC_FLASH = "rcmap";
+const char kRatesName[] TC_FLASH = "rates";
+const char kFmodeName[] TC_FLASH = "fmode";
 
 const char kHelpHelp[] TC_FLASH = "this list";
 const char kArmHelp[] TC_FLASH = "start flying: level, still, IMU ready; spools up in 1 s";
@@ -320,6 +368,13 @@ const char kStreamHelp[] TC_FLASH =
     "CSV t_s,roll,pitch,roll_sp,pitch_sp (deg),p,q,r (deg/s),\nforce0..3 (g),pulse0..3 (us), 50 lines/s";
 const char kStatusHelp[] TC_FLASH = "state, IMU, attitude, settings, loop timing, motors";
 const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw need a checksum";
+const char kRcHelp[] TC_FLASH =
+    "receiver: PPM sum on A8 | one pulse per channel on\n"
+    "A8.. (N channels, default 5); sticks arm: throttle low,\n"
+    "yaw right 1 s; disarm: yaw left";
+const char kRcMapHelp[] TC_FLASH = "the first four channels' order (A roll, E pitch, T, R yaw)";
+const char kRatesHelp[] TC_FLASH = "full stick: angle (angle mode), roll/pitch rate, yaw rate";
+const char kFmodeHelp[] TC_FLASH = "sticks' mode without a switch on channel 5";
 
 // Every console command. kCmdGuarded: what strict mode refuses without a checksum, everything
 // that can start the motors or change what armed motors do.
@@ -344,6 +399,10 @@ const fw::Command<FlyApp> kCommands[] TC_FLASH = {
     {{kStreamName, kOnOffArgs, 1, 1, 0, kStreamHelp}, &Commands::stream},
     {{kStatusName, nullptr, 0, 0, 0, kStatusHelp}, &Commands::status},
     {{kStrictName, kOnOffArgs, 1, 1, 0, kStrictHelp}, &Commands::strict},
+    {{kRcName, kRcArgs, 1, 2, 0, kRcHelp}, &Commands::rc},
+    {{kRcMapName, kRcMapArgs, 1, 1, 0, kRcMapHelp}, &Commands::rcmap},
+    {{kRatesName, kRatesArgs, 3, 3, 0, kRatesHelp}, &Commands::rates},
+    {{kFmodeName, kFlightModeArgs, 1, 1, 0, kFmodeHelp}, &Commands::fmode},
 };
 
 }  // namespace

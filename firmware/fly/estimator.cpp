@@ -6,12 +6,10 @@
 namespace fly {
 
 namespace {
-constexpr float kPi = 3.14159265f;
 constexpr float kHalfPi = 1.57079633f;
 // |a|^2 within (1 g +-15 %)^2, in LSB^2, the bounds rounded inwards; integers, so the host and
 // the AVR (whose double is a float) agree to the LSB.
-constexpr uint32_t kLsbPerG = 4096;
-static_assert(mpu::kAccelLsbPerG == kLsbPerG, "+-8 g");
+constexpr uint32_t kLsbPerG = kAccelLsbPerG;
 constexpr uint32_t kAccelMinTenths = 85 * kLsbPerG / 10;   // 0.85 g in 1/10 LSB
 constexpr uint32_t kAccelMaxTenths = 115 * kLsbPerG / 10;  // 1.15 g
 constexpr uint32_t kAccelMin2 = (kAccelMinTenths * kAccelMinTenths + 99) / 100;
@@ -29,12 +27,12 @@ int32_t coupling(int32_t r, int32_t angle) {
   const int32_t product = static_cast<int32_t>(saturated16((r + 8) >> 4)) * saturated16((angle + 512) >> 10);
   return applyGain(product, kCouplingGain);
 }
+// A frame's rate (rate units) as the angle it turns (angle units): the loop rate's one appearance.
+constexpr Gain kAnglePerRateFrame = gainOf(kRadPerRateUnit * kFramePeriodS / kRadPerAngleUnit);
 int32_t heldAngle(int32_t angle) {
   return angle > kMaxAngleUnits ? kMaxAngleUnits : (angle < -kMaxAngleUnits ? -kMaxAngleUnits : angle);
 }
 }  // namespace
-
-int32_t angleUnits(float rad) { return roundToInt32(rad * (1.0f / kRadPerAngleUnit)); }
 
 uint32_t squaredNormLsb2(const ImuSample& s) {
   uint32_t sum = 0;
@@ -112,36 +110,44 @@ void AttitudeEstimator::start(const GyroCalibration& c) {
     bias_q4_[i] = roundToInt32(c.biasLsb(i) * 16.0f);
     q_.rate[i] = 0;
   }
-  const float ax = c.accelMeanLsb(0) - trim_lsb_[0], ay = c.accelMeanLsb(1) - trim_lsb_[1];
-  const float az = c.accelMeanLsb(2) - trim_lsb_[2];
+  const float ax = c.accelMeanLsb(0) - trim_.lsb[0], ay = c.accelMeanLsb(1) - trim_.lsb[1];
+  const float az = c.accelMeanLsb(2) - trim_.lsb[2];
   q_.roll = angleUnits(atan2Approx(ay, az));
   q_.pitch = angleUnits(atan2Approx(-ax, sqrtf(ay * ay + az * az)));
   started_ = true;
 }
 
 bool AttitudeEstimator::trimLevel(const GyroCalibration& c) {
-  int16_t trim[3];
+  LevelTrim trim;
   for (uint8_t i = 0; i < 3; ++i) {
-    const float off = c.accelMeanLsb(i) - (i == 2 ? mpu::kAccelLsbPerG : 0.0f);  // level: (0, 0, 1 g)
+    const float off = c.accelMeanLsb(i) - (i == 2 ? kAccelLsbPerG : 0);  // level: (0, 0, 1 g)
     if (off > kMaxLevelTrimLsb || off < -kMaxLevelTrimLsb) return false;
-    trim[i] = static_cast<int16_t>(off < 0 ? off - 0.5f : off + 0.5f);
+    trim.lsb[i] = static_cast<int16_t>(off < 0 ? off - 0.5f : off + 0.5f);
   }
-  for (uint8_t i = 0; i < 3; ++i) trim_lsb_[i] = trim[i];
+  trim_ = trim;
   return true;
 }
 
-// Integer only: the rates are the angles' increments per frame.
+bool AttitudeEstimator::setLevelTrim(const LevelTrim& trim) {
+  for (uint8_t i = 0; i < 3; ++i) {
+    if (trim.lsb[i] > kMaxLevelTrimLsb || trim.lsb[i] < -kMaxLevelTrimLsb) return false;
+  }
+  trim_ = trim;
+  return true;
+}
+
+// Integer only: the Euler rates times the frames passed, to angle units by one constant gain.
 void AttitudeEstimator::propagate(const ImuSample& s, uint8_t frames) {
   int32_t* w = q_.rate;
   for (uint8_t i = 0; i < 3; ++i) w[i] = s.gyro[i] * 16L - bias_q4_[i];
-  int32_t roll_step = w[0] + coupling(w[2], q_.pitch);
-  int32_t pitch_step = w[1] - coupling(w[2], q_.roll);
+  int32_t roll_rate = w[0] + coupling(w[2], q_.pitch);
+  int32_t pitch_rate = w[1] - coupling(w[2], q_.roll);
   if (frames != 1) {
-    roll_step *= frames;
-    pitch_step *= frames;
+    roll_rate *= frames;
+    pitch_rate *= frames;
   }
-  q_.roll = heldAngle(q_.roll + roll_step);
-  q_.pitch = heldAngle(q_.pitch + pitch_step);
+  q_.roll = heldAngle(q_.roll + applyGain(roll_rate, kAnglePerRateFrame));
+  q_.pitch = heldAngle(q_.pitch + applyGain(pitch_rate, kAnglePerRateFrame));
 }
 
 Attitude AttitudeEstimator::attitude() const {
@@ -170,8 +176,8 @@ void AttitudeEstimator::correctRoll(const ImuSample& s, float interval_s) {
     ++untrusted_;
     return;
   }
-  const float y = static_cast<float>(s.accel[1] - trim_lsb_[1]);
-  q_.roll = blend(q_.roll, atan2Approx(y, static_cast<float>(s.accel[2] - trim_lsb_[2])), interval_s);
+  const float y = static_cast<float>(s.accel[1] - trim_.lsb[1]);
+  q_.roll = blend(q_.roll, atan2Approx(y, static_cast<float>(s.accel[2] - trim_.lsb[2])), interval_s);
 }
 
 void AttitudeEstimator::correctPitch(const ImuSample& s, float interval_s) {
@@ -179,9 +185,9 @@ void AttitudeEstimator::correctPitch(const ImuSample& s, float interval_s) {
     ++untrusted_;
     return;
   }
-  const float x = static_cast<float>(s.accel[0] - trim_lsb_[0]);
-  const float y = static_cast<float>(s.accel[1] - trim_lsb_[1]);
-  const float z = static_cast<float>(s.accel[2] - trim_lsb_[2]);
+  const float x = static_cast<float>(s.accel[0] - trim_.lsb[0]);
+  const float y = static_cast<float>(s.accel[1] - trim_.lsb[1]);
+  const float z = static_cast<float>(s.accel[2] - trim_.lsb[2]);
   q_.pitch = blend(q_.pitch, atan2Approx(-x, sqrtf(y * y + z * z)), interval_s);
 }
 

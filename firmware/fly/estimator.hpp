@@ -24,12 +24,13 @@
 // subtracted before every tilt the accelerometer gives. Refused beyond kMaxLevelTrimLsb on any
 // axis (the vehicle is not level, or the sensor is off its datasheet), so a trim never hides a
 // real tilt of more.
+// A stage of fly's loop: ImuSample in, AttitudeQ out (flight_types.hpp, where the units are);
+// it depends on no other stage.
 #pragma once
 #include <stdint.h>
 
 #include "fixed_point.hpp"
-#include "fly_rules.hpp"
-#include "mpu6050.hpp"
+#include "flight_types.hpp"
 
 namespace fly {
 
@@ -38,8 +39,8 @@ float atan2Approx(float y, float x);
 
 class GyroCalibration {
  public:
-  static constexpr uint16_t kSamples = 400;
-  static constexpr int16_t kStillSpreadLsb = 33;  // 2 deg/s at 16.4 LSB per deg/s
+  static constexpr uint16_t kSamples = framesIn(1000);  // one sample per frame: 1 s
+  static constexpr int16_t kStillSpreadLsb = static_cast<int16_t>(2.0f * kGyroLsbPerDps + 0.5f);  // 2 deg/s
 
   void restart();
   // Adds one sample; true once kSamples still samples are in (then bias and accelMean hold).
@@ -63,43 +64,27 @@ class GyroCalibration {
   float accel_mean_lsb_[3] = {0, 0, 0};
 };
 
-struct Attitude {
-  float roll_rad = 0;
-  float pitch_rad = 0;
-  float rate_rad_s[3] = {0, 0, 0};  // p, q, r about body x, y, z
-};
-
-// The frame path's units (see the top).
-constexpr float kRadPerRateUnit = 3.14159265f / 180.0f / mpu::kGyroLsbPerDps / 16.0f;
-constexpr float kRadPerAngleUnit = kRadPerRateUnit * kFramePeriodS;
-// Angles are held within +-100 rad (a board turned over and over while disarmed), far beyond
-// any attitude flown, so an integral never wraps.
-constexpr int32_t kMaxAngleUnits = static_cast<int32_t>(100.0f / kRadPerAngleUnit);
-
-struct AttitudeQ {
-  int32_t roll = 0;                // angle units
-  int32_t pitch = 0;
-  int32_t rate[3] = {0, 0, 0};     // rate units: p, q, r
-};
-
-// Radians to angle units, rounded and saturated (settings, slow jobs).
-int32_t angleUnits(float rad);
-// Whole degrees (0..255) to angle units, rounded: constant limits such as the crash limit.
-constexpr int32_t angleUnitsOfDegrees(uint8_t deg) {
-  return static_cast<int32_t>(deg * (3.14159265f / 180.0f) / kRadPerAngleUnit + 0.5f);
-}
 // |a|^2 in LSB^2, exactly.
 uint32_t squaredNormLsb2(const ImuSample& s);
+
+// The accelerometer's level trim (`level`): subtracted from every sample's x, y, z before a tilt
+// is taken from it. A setting (fly's parameters keep it).
+struct LevelTrim {
+  int16_t lsb[3] = {0, 0, 0};  // x, y, z in accelerometer counts
+};
 
 class AttitudeEstimator {
  public:
   static constexpr float kTimeConstantS = 0.5f;
-  static constexpr int16_t kMaxLevelTrimLsb = 410;  // 100 mg at 4096 LSB/g: 5.7 deg on x, y
+  static constexpr int16_t kMaxLevelTrimLsb = (kAccelLsbPerG + 5) / 10;  // 100 mg (410 LSB): 5.7 deg on x, y
 
   // The level trim from a finished calibration taken level and still; false (the trim kept)
   // when an axis is beyond kMaxLevelTrimLsb. Takes effect at the next start().
   bool trimLevel(const GyroCalibration& calibration);
-  int16_t levelTrimLsb(uint8_t axis) const { return trim_lsb_[axis]; }  // x, y, z
+  // A trim from elsewhere (saved settings): false (the trim kept) beyond kMaxLevelTrimLsb.
+  bool setLevelTrim(const LevelTrim& trim);
+  const LevelTrim& levelTrim() const { return trim_; }
+  int16_t levelTrimLsb(uint8_t axis) const { return trim_.lsb[axis]; }  // x, y, z
 
   // From a finished calibration: its bias, and the attitude its mean accelerometer gives.
   void start(const GyroCalibration& calibration);
@@ -121,7 +106,7 @@ class AttitudeEstimator {
 
   AttitudeQ q_;
   int32_t bias_q4_[3] = {0, 0, 0};  // the bias in 1/16 LSB: rate units
-  int16_t trim_lsb_[3] = {0, 0, 0};  // the accelerometer's level trim, x, y, z
+  LevelTrim trim_;                  // the accelerometer's level trim
   Gain blend_gain_;                 // k of the last interval_s
   float blend_interval_s_ = -1.0f;
   bool started_ = false;

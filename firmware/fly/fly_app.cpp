@@ -12,7 +12,6 @@ namespace fly {
 FlyApp* FlyApp::active_ = nullptr;
 
 namespace {
-constexpr float kDegPerRad = 180.0f / 3.14159265f;
 constexpr uint16_t kImuStartMaxMs = 1000;
 constexpr uint16_t kCalibrationMaxMs = 5000;
 
@@ -34,8 +33,8 @@ void FlyApp::start() {
   starting_ = true;
   active_ = this;
   hal::Uart::setWaitHook(&FlyApp::serviceHook);
-  motors_.setFrameRate(kFrameHz);  // the v2 bus filter's constant for one reading per frame
-  configureMixer();
+  motors_.setFrameRate(kLoopHz);  // the v2 bus filter's constant for one reading per frame
+  configureMixer(mixer_.settings());
   output_.setMode(OutputMode::kForce, 0);
   gyro_cal_.restart();
   imu_.begin();
@@ -74,9 +73,9 @@ void FlyApp::runUntil(bool (FlyApp::*done)() const, uint16_t max_ms) {
   }
 }
 
-void FlyApp::configureMixer() {
-  mixer_.configure(settings_.layout, settings_.arm_m, settings_.yaw_arm_m);
-  controller_.setForceScale(mixer_.q4PerNmXy(), mixer_.q4PerNmZ());
+void FlyApp::configureMixer(const MixerSettings& s) {
+  mixer_.configure(s);
+  controller_.setForceScale(mixer_.dgPerNmXy(), mixer_.dgPerNmZ());
 }
 
 // The read starts as late in the frame as the mode's computation allows.
@@ -84,9 +83,15 @@ void FlyApp::schedule() {
   const uint8_t mask = mixer_.motorMask();
   stats_.budget_us = computeBudgetUs(output_.mode(), output_.thesisMotors(mask), mixer_.motorCount());
   stats_.phase_us = readPhaseUs(stats_.budget_us);
+  restartLoopStats();
+  hal::Esc::setPhaseHook(stats_.phase_us, &FlyApp::phaseHook);
+}
+
+// The flight's worst computation and margin count from here (each arm, a new schedule).
+void FlyApp::restartLoopStats() {
   stats_.compute_max_us = 0;
   stats_.margin_min_us = 0xFFFF;
-  hal::Esc::setPhaseHook(stats_.phase_us, &FlyApp::phaseHook);
+  stats_.late = 0;
 }
 
 bool FlyApp::escsReady() const { return hal::Clock::millis() - start_ms_ >= tc::kArmMs; }
@@ -131,14 +136,16 @@ void FlyApp::serviceHook() {
 }
 
 void FlyApp::service() {
-  if (in_service_ || !imu_.frameDue()) return;
+  if (in_service_) return;
   in_service_ = true;
   ImuFrame f;
-  const uint16_t t0_us = hal::Esc::frameTimeUs();  // the computation counts from here
-  if (imu_.poll(f)) {
-    frame(f, t0_us);
+  if (imu_.frameDue() && imu_.poll(f)) {
+    // The computation counts from the read's end (taken by the TWI's interrupt), however late
+    // the loop saw it: what thrustcal bench fly measures from outside.
+    frame(f, f.has_sample ? hal::Twi::endFrameTimeUs() : hal::Esc::frameTimeUs());
     hal::Watchdog::kick();  // a frame came round: the only kick while flying
   }
+  pollReceiver(hal::Clock::millis());  // after the pulses: its setpoint is the next frame's
   in_service_ = false;
 }
 
@@ -172,6 +179,7 @@ void FlyApp::printNotes() {
   if (notes & kNoteImuRunning) view::imuRunningAgain();
   if (notes & kNoteLevel) view::levelResult(*this);
   if (notes & kNoteCalibrated) view::calibrationResult(*this);
+  if (notes & kNoteStickArm) view::stickArm(*this);
   if (notes & kNoteDisarmed) view::disarmed(*this);
   if ((notes & kNoteStream) && streaming_) view::streamRow(row_);
   if ((notes & ~kNoteStream) != 0 && !streaming_) prompt();
@@ -213,20 +221,22 @@ void FlyApp::frame(const ImuFrame& f, uint16_t t0_us) {
   checkFailsafes(hal::Clock::millis());
 }
 
-// The fast path, from the estimate to the written pulses (integer, but for the collective while
-// it spools up); then the integrators and the timing.
+// The fast path, from the estimate to the written pulses (integer only, the spool-up too); then
+// the integrators and the timing.
 void FlyApp::flyFrame(uint8_t frames, uint16_t t0_us) {
   const uint32_t since_arm_ms = hal::Clock::millis() - flight_.armed_ms;
   const bool spooled = since_arm_ms >= kSpoolMs;
-  const TorqueQ4 torque = controller_.torqueQ4(estimator_.fixed(), settings_.setpoint_q);
-  const ForceQ4 collective =
-      spooled ? flight_.collective : toQ4(gramsOf(flight_.collective) * spoolFraction(since_arm_ms));
-  flight_.mix_limits = mixer_.mixQ4(collective, torque, flight_.min, flight_.max, flight_.force);
-  output_.write(flight_.force, mixer_.motorMask());
+  const TorqueDg torque = controller_.torqueDg(estimator_.fixed(), command_.setpoint_q);
+  const ForceLimits& l = flight_.limits;
+  const ForceDg collective = spooled ? l.collective : spooledForce(l.collective, since_arm_ms);
+  flight_.mix_limits = mixer_.mixDg(collective, torque, l.min, l.max, flight_.force);
+  output_.compute(flight_.force, mixer_.motorMask());
+  // The computation ends where the write begins (thrustcal bench fly measures the same span).
+  const uint16_t t1_us = hal::Esc::frameTimeUs();
+  output_.commit();
 
   // The read started at the phase: pulses written before the frame's end (at or after the
   // phase) meet the next rising edge; written after it (before the phase), the one after.
-  const uint16_t t1_us = hal::Esc::frameTimeUs();
   const uint16_t compute_us =
       static_cast<uint16_t>(t1_us >= t0_us ? t1_us - t0_us : t1_us + kFrameUs - t0_us);
   if (compute_us > stats_.compute_max_us) stats_.compute_max_us = compute_us;
@@ -235,8 +245,8 @@ void FlyApp::flyFrame(uint8_t frames, uint16_t t0_us) {
   } else if (kFrameUs - t1_us < stats_.margin_min_us) {
     stats_.margin_min_us = static_cast<uint16_t>(kFrameUs - t1_us);
   }
-  if (spooled && controller_.integrating())
-    controller_.integrate(estimator_.attitude(), settings_.setpoint, frames * kFramePeriodS, flight_.mix_limits);
+  if (spooled && controller_.integrating(command_.setpoint.mode))
+    controller_.integrate(estimator_.attitude(), command_.setpoint, frames * kFramePeriodS, flight_.mix_limits);
 }
 
 // After the pulses: each slow job on its own frame of a cycle of eight (fly_rules.hpp).
@@ -268,15 +278,18 @@ void FlyApp::slowJob(const ImuFrame& f) {
 void FlyApp::checkFailsafes(uint32_t now_ms) {
   if (!flight_.armed) return;
   const AttitudeQ& q = estimator_.fixed();
-  if (crashedUnits(q.roll, q.pitch, settings_.crash_units)) {
+  if (crashedUnits(q.roll, q.pitch, command_.crash_units)) {
     const Attitude a = estimator_.attitude();
     const float roll = a.roll_rad < 0 ? -a.roll_rad : a.roll_rad;
     const float pitch = a.pitch_rad < 0 ? -a.pitch_rad : a.pitch_rad;
     flight_.cause_deg = (roll > pitch ? a.roll_rad : a.pitch_rad) * kDegPerRad;
     disarm(DisarmCause::kCrash);
-  } else if (link_.lost(now_ms)) {
+  } else if (flight_.source == ArmSource::kConsole && link_.lost(now_ms)) {
     ++link_.trips;
     disarm(DisarmCause::kLink);
+  } else if (flight_.source == ArmSource::kSticks && now_ms - receiver_.last_frame_ms >= kRcLossMs) {
+    if (receiver_.trips != 0xFFFF) ++receiver_.trips;
+    disarm(DisarmCause::kRcLost);
   }
 }
 
@@ -290,12 +303,12 @@ void FlyApp::imuFaulted() {
   said_fault_ = imu_.fault();
 }
 
+// The mode's range and collective; while the sticks fly, the throttle's share of the range.
 void FlyApp::updateOutputLimits() {
-  flight_.collective = toQ4(output_.collectivePerMotorG(settings_.thrust_g, mixer_.motorCount()));
-  float min_g, max_g;
-  output_.forceRangeG(mixer_.motorMask(), min_g, max_g);
-  flight_.min = toQ4(min_g);
-  flight_.max = toQ4(max_g);
+  flight_.limits = output_.forceLimits(settings_.thrust_g, mixer_.motorMask(), mixer_.motorCount());
+  if (flight_.armed && flight_.source == ArmSource::kSticks)
+    flight_.limits.collective =
+        (flight_.limits.max * StickCommand::throttleShareQ10(receiver_.sticks.throttle_us) + 512) >> 10;
 }
 
 void FlyApp::disarm(DisarmCause cause) {
@@ -303,7 +316,7 @@ void FlyApp::disarm(DisarmCause cause) {
   flight_.armed = false;
   flight_.last_cause = cause;
   if (flight_.disarms != 0xFFFF) ++flight_.disarms;
-  for (ForceQ4& f : flight_.force) f = 0;
+  flight_.force = Forces();
   notes_ |= kNoteDisarmed;
 }
 
@@ -312,11 +325,11 @@ void FlyApp::takeStreamRow(uint32_t now_ms) {
   row_.t_ms = now_ms;
   row_.roll_cdeg = centi(a.roll_rad, 100.0f * kDegPerRad);
   row_.pitch_cdeg = centi(a.pitch_rad, 100.0f * kDegPerRad);
-  row_.roll_sp_cdeg = centi(settings_.setpoint.roll_rad, 100.0f * kDegPerRad);
-  row_.pitch_sp_cdeg = centi(settings_.setpoint.pitch_rad, 100.0f * kDegPerRad);
+  row_.roll_sp_cdeg = centi(command_.setpoint.roll_rad, 100.0f * kDegPerRad);
+  row_.pitch_sp_cdeg = centi(command_.setpoint.pitch_rad, 100.0f * kDegPerRad);
   for (uint8_t i = 0; i < 3; ++i) row_.rate_ddps[i] = centi(a.rate_rad_s[i], 10.0f * kDegPerRad);
   for (uint8_t i = 0; i < kMotors; ++i) {
-    const int32_t g = roundedGrams(flight_.force[i]);
+    const int32_t g = roundedGrams(flight_.force.dg[i]);
     row_.force_g[i] = g <= 0 ? 0 : static_cast<uint16_t>(g);
     row_.pulse_us[i] = output_.pulseUs(i);
   }

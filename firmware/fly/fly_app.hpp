@@ -26,60 +26,81 @@
 //  - a pass of the main loop handles at most one line; a reply that fills the transmit ring
 //    runs service() from the UART's wait hook, so frames stay on time.
 //
-// Parts, one job each: Mpu6050 (the IMU), GyroCalibration and AttitudeEstimator (estimator.hpp),
-// AttitudeController, Mixer, OutputStage (with ArduPilotCurve), fw::ForceActuators, the
-// console's fw::LineReader and fw::LinkWatch; fly_rules.hpp holds the pure decisions. Files:
+// Parts, one job each: the loop's stages side by side, each on the flight types of
+// flight_types.hpp and on no other stage: Mpu6050 (the IMU), GyroCalibration and
+// AttitudeEstimator (estimator.hpp), AttitudeController, Mixer, OutputStage (with
+// ArduPilotCurve, on fw::ForceActuators); the console's fw::LineReader and fw::LinkWatch;
+// fly_rules.hpp holds the pure decisions. Each stage's tunables are a plain settings struct
+// (ControllerSettings, MixerSettings, OutputSettings, LevelTrim, FlightSettings). Files:
 // fly_app.cpp (start-up, the loop, frames, arming), commands.cpp (the command table and the
-// cmd methods), fly_view.cpp (every line printed).
+// cmd methods), fly_view.cpp and fly_status_view.cpp (every line printed).
 #pragma once
 #include <stdint.h>
 
 #include "console.hpp"
 #include "controller.hpp"
 #include "estimator.hpp"
+#include "flight_types.hpp"
 #include "fly_rules.hpp"
 #include "force_actuators.hpp"
 #include "mixer.hpp"
 #include "mpu6050.hpp"
 #include "output_stage.hpp"
+#include "rc_input.hpp"
 
 namespace fly {
 
-constexpr uint8_t kMotors = fw::ForceActuators::kMotors;
 // Received bytes one loop pass handles at most: one longest line and its CR LF.
 constexpr uint8_t kRxBytesPerPass = fw::kLineMax + 2;
 
-// What the user set (commands.cpp).
+// The flight's own settings (commands.cpp; fly's parameters point at them). The stages keep
+// theirs: ControllerSettings, MixerSettings, OutputSettings, LevelTrim.
 struct FlightSettings {
-  Setpoint setpoint;
-  SetpointQ setpoint_q;  // the same in the estimator's units (the frame path)
   float thrust_g = 0;  // collective: the total over the layout's motors
   uint8_t crash_deg = kDefaultCrashDeg;
-  int32_t crash_units = angleUnitsOfDegrees(kDefaultCrashDeg);  // the same in angle units
-  Layout layout = Layout::kX;
-  float arm_m = kDefaultArmM;
-  float yaw_arm_m = kDefaultYawArmM;
+};
+
+// What the flight flies now: the setpoint (console or receiver), in both units.
+struct FlightCommand {
+  Setpoint setpoint;
+  SetpointQ setpoint_q;  // the same in the frame path's units
+  int32_t crash_units = angleUnitsOfDegrees(kDefaultCrashDeg);  // the crash limit in angle units
 };
 
 // The flight's state: armed or not, why it last disarmed, the last frame's output.
 struct FlightState {
   bool armed = false;
+  ArmSource source = ArmSource::kConsole;
   uint32_t armed_ms = 0;
   DisarmCause last_cause = DisarmCause::kNone;
   float cause_deg = 0;  // kCrash: the angle that crossed the limit
   uint16_t disarms = 0;
   uint8_t mix_limits = 0;
-  ForceQ4 force[kMotors] = {0, 0, 0, 0};
+  Forces force;
   // The output's limits, worked out at arming, on a new thrust and at each battery reading.
-  ForceQ4 collective = 0;  // per motor, at full spool
-  ForceQ4 min = 0, max = 0;
+  ForceLimits limits;
 };
 
-// The loop's timing, as frameTimeUs() sees it (status; thrustcal bench measures it in simavr).
+// The receiver as the app sees it (fly_receiver.cpp).
+struct ReceiverState {
+  Sticks sticks;                 // the last valid frame's
+  bool seen = false;             // a valid frame came since `rc` was set
+  uint32_t last_frame_ms = 0;    // when the last valid frame came
+  uint32_t last_edge_ms = 0;     // when edges were last drained (a gap resets the decoder)
+  StickGesture gesture = StickGesture::kNone;  // held since gesture_ms
+  uint32_t gesture_ms = 0;
+  bool gesture_used = false;     // the held gesture did what it does; release to repeat
+  ArmRefusal refused = ArmRefusal::kNone;  // the sticks' last arming attempt
+  uint16_t trips = 0;            // receiver failsafes (saturates)
+  uint16_t lost_edges = 0;       // hal::Rc::lostEdges() as last seen
+};
+
+// The loop's timing, as frameTimeUs() sees it (status; thrustcal bench measures the same spans in
+// simavr). The figures count from the last arm (or mode change), spool-up included.
 struct LoopStats {
   uint16_t phase_us = 0;            // where in the frame the read starts
   uint16_t budget_us = 0;           // the computation it leaves room for
-  uint16_t compute_max_us = 0;      // from the loop seeing the read's end to the written pulses
+  uint16_t compute_max_us = 0;      // from the read's end to the pulses' write
   uint16_t margin_min_us = 0xFFFF;  // from the written pulses to the next rising edge
   uint16_t late = 0;                // pulses written after the frame they were meant for had ended
 };
@@ -119,6 +140,7 @@ class FlyApp {
   bool armed() const { return flight_.armed; }
   const FlightState& flight() const { return flight_; }
   const FlightSettings& settings() const { return settings_; }
+  const FlightCommand& command() const { return command_; }
   Attitude attitude() const { return estimator_.attitude(); }
   const AttitudeEstimator& estimator() const { return estimator_; }
   const AttitudeController& controller() const { return controller_; }
@@ -131,6 +153,10 @@ class FlyApp {
   const LoopStats& loopStats() const { return stats_; }
   const fw::LineReader& console() const { return line_; }
   const LinkWatch& link() const { return link_; }
+  const RcDecoder& rc() const { return rc_; }
+  const RcSettings& rcSettings() const { return rc_settings_; }
+  const StickCommand& stickCommand() const { return stick_command_; }
+  const ReceiverState& receiver() const { return receiver_; }
   uint32_t frames() const { return frame_; }
   bool imuReady() const;
   bool escsReady() const;
@@ -164,7 +190,14 @@ class FlyApp {
   void cmdStream(bool on);
   void cmdStatus();
   void cmdStrict(bool on);
+  void cmdRc(RcProtocol protocol, uint8_t pwm_channels);
+  void cmdRcMap(uint8_t which);
+  void cmdRates(uint8_t angle_deg, uint16_t rate_dps, uint16_t yaw_dps);
+  void cmdFlightMode(FlightMode mode);
   bool refuseWhileArmed() const;  // prints the refusal when armed
+  bool refuseWhileSticksFly() const;
+  // Arms from `source` when every check passes (armRefusal); the refusal otherwise.
+  ArmRefusal arm(ArmSource source);
 
   void handleLine(char* line);
   void handleInput();
@@ -182,11 +215,19 @@ class FlyApp {
   void flyFrame(uint8_t frames, uint16_t t0_us);
   void slowJob(const ImuFrame& f);
   void checkFailsafes(uint32_t now_ms);
+  // The receiver (fly_receiver.cpp): its edges drained, frames to sticks, gestures, setpoint.
+  void pollReceiver(uint32_t now_ms);
+  void onReceiverFrame(uint32_t now_ms);
+  void stickGestures(uint32_t now_ms);
+  void flyTheSticks();
+  // The receiver's settings (rc_settings_) to the decoder and the pins (`rc`, saved settings).
+  void applyReceiverSettings();
   void imuFaulted();
   void takeStreamRow(uint32_t now_ms);
   void disarm(DisarmCause cause);
   void schedule();  // the read's phase from the mode's budget
-  void configureMixer();  // the layout and airframe to the mixer, its scale to the controller
+  void restartLoopStats();
+  void configureMixer(const MixerSettings& s);  // the airframe to the mixer, its scale to the controller
   void updateOutputLimits();
 
   fw::ForceActuators motors_;
@@ -198,7 +239,12 @@ class FlyApp {
   OutputStage output_;
   fw::LineReader line_;
   LinkWatch link_;
+  RcDecoder rc_;
+  RcSettings rc_settings_;
+  StickCommand stick_command_;
+  ReceiverState receiver_;
   FlightSettings settings_;
+  FlightCommand command_;
   FlightState flight_;
   LoopStats stats_;
   StreamRow row_;
@@ -220,6 +266,7 @@ class FlyApp {
   static constexpr uint8_t kNoteStream = 0x08;
   static constexpr uint8_t kNoteImuRunning = 0x10;
   static constexpr uint8_t kNoteLevel = 0x20;
+  static constexpr uint8_t kNoteStickArm = 0x40;  // the sticks armed, or were refused (receiver_.refused)
   uint8_t notes_ = 0;
   static FlyApp* active_;  // the instance the hooks serve
 };

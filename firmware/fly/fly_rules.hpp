@@ -6,20 +6,16 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "flight_types.hpp"
 #include "link_watch.hpp"
 
 namespace fly {
 
 // ---- the frame ----
-constexpr uint16_t kFrameHz = 400;  // the loop and the ESC frames (hal::Esc at 400 Hz)
-constexpr uint16_t kFrameUs = 1000000u / kFrameHz;
-constexpr float kFramePeriodS = 1.0f / kFrameHz;
-static_assert(1000000u % kFrameHz == 0, "a whole number of microseconds per frame");
-
-// What runs after the pulses are written: each job once in a cycle of eight frames (50 times a
-// second), on its own frame, so no frame carries two: the battery (four ADC conversions and the
-// median), the mode's use of it (ardupilot: its voltage filter and lift_max), a stream row, the
-// accelerometer's roll correction, its pitch correction.
+// What runs after the pulses are written: each job once in a cycle of frames (kSlowJobHz times
+// a second), on its own frame, so no frame carries two: the battery (four ADC conversions and
+// the median), the mode's use of it (ardupilot: its voltage filter and lift_max), a stream row,
+// the accelerometer's roll correction, its pitch correction.
 enum class SlowJob : uint8_t {
   kNone,
   kBattery,
@@ -28,7 +24,9 @@ enum class SlowJob : uint8_t {
   kRollCorrection,
   kPitchCorrection
 };
-constexpr uint8_t kSlowCycleFrames = 8;
+constexpr uint16_t kSlowJobHz = 50;
+constexpr uint8_t kSlowCycleFrames = static_cast<uint8_t>(kLoopHz / kSlowJobHz);
+static_assert(kLoopHz % kSlowJobHz == 0 && kSlowCycleFrames >= 8, "five jobs on frames of their own");
 inline SlowJob slowJob(uint32_t frame) {
   switch (frame % kSlowCycleFrames) {
     case 0:
@@ -71,7 +69,6 @@ inline uint16_t readPhaseUs(uint16_t budget_us) {
 // ardupilot the margin is what the 1 ms target leaves (760 + 220 is 980 us), not a choice; it
 // is ~8 % of its computation, the others have more. Thesis records keep 500 + 260 + 4 x 225 = 1660 us as before: their
 // computation alone takes up to 1042 us, they cannot meet 1 ms.
-enum class OutputMode : uint8_t { kForce, kGeneric, kPwm, kArduPilot };
 constexpr uint16_t kControlBudgetUs = 500;         // taking the sample, estimator, controller, mixer
 constexpr uint16_t kForceApiBudgetUs = 260;        // forces to grams, the v2 frame, the pulses
 constexpr uint16_t kThesisMotorBudgetUs = 225;     // option 2.1 on one motor, EEPROM steps
@@ -145,14 +142,22 @@ inline ArmRefusal armRefusal(const ArmInputs& in) {
   return ArmRefusal::kNone;
 }
 
-// The collective's share 0..1 at `since_arm_ms` (a linear spool-up; the integrators stay at 0
-// until it is complete).
-inline float spoolFraction(uint32_t since_arm_ms) {
-  return since_arm_ms >= kSpoolMs ? 1.0f : static_cast<float>(since_arm_ms) / kSpoolMs;
+// The collective at `since_arm_ms` after arming: a linear spool-up from 0 over kSpoolMs (the
+// integrators stay at 0 until it is complete). Integer, in the frame path: the share in 1/1024
+// by a product (kSpoolMs is 1000: 1049 / 1024 per ms, exact at both ends), no division.
+static_assert(kSpoolMs == 1000, "the share's product is for 1000 ms");
+inline ForceDg spooledForce(ForceDg full, uint32_t since_arm_ms) {
+  if (since_arm_ms >= kSpoolMs) return full;
+  const int32_t share_q10 = static_cast<int32_t>((since_arm_ms * 1049u) >> 10);  // 0..1023
+  return (full * share_q10 + 512) >> 10;
 }
 
 // ---- disarming ----
-enum class DisarmCause : uint8_t { kNone, kCommand, kCrash, kImu, kLink };
+enum class DisarmCause : uint8_t { kNone, kCommand, kCrash, kImu, kLink, kRcLost, kSticks };
+
+// Who armed: the console's `arm` (its link failsafe applies: tc::kFailsafeMs without a line) or
+// the receiver's sticks (its failsafe applies: kRcLossMs without a valid frame, rc_input.hpp).
+enum class ArmSource : uint8_t { kConsole, kSticks };
 
 constexpr uint8_t kDefaultCrashDeg = 45;
 constexpr uint8_t kMinCrashDeg = 10;
@@ -165,13 +170,6 @@ inline bool crashed(float roll_rad, float pitch_rad, float limit_rad) {
 inline bool crashedUnits(int32_t roll, int32_t pitch, int32_t limit) {
   return roll > limit || roll < -limit || pitch > limit || pitch < -limit;
 }
-
-// The IMU failed: this many reads in a row ended badly (no answer, a time-out, the bus lost) or
-// brought no new sample (DATA_RDY clear: frozen data). 8 frames are 20 ms at 400 Hz.
-constexpr uint8_t kImuMaxBadReads = 8;
-constexpr uint8_t kImuMaxStaleReads = 8;
-inline bool imuReadsFailed(uint8_t bad_in_a_row) { return bad_in_a_row >= kImuMaxBadReads; }
-inline bool imuFrozen(uint8_t stale_in_a_row) { return stale_in_a_row >= kImuMaxStaleReads; }
 
 // While armed, kFailsafeMs without a complete valid line (fw::LinkWatch) disarms.
 using fw::LinkWatch;

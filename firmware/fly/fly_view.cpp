@@ -1,130 +1,16 @@
-// fly's console view (fly_view.hpp): what the image prints, nothing it decides.
+// fly's console view (fly_view.hpp): what the image prints, nothing it decides. `status` and the
+// stream rows are in fly_status_view.cpp; the words and numbers both use in fly_view_parts.cpp.
 #include "fly_view.hpp"
 
+#include "fly_view_parts.hpp"
 #include "slot_report.hpp"
 
 namespace fly {
 namespace view {
 
-namespace {
-
 using fw::newline;
 using fw::say;
 using fw::sayLine;
-
-constexpr float kDegPerRad = 180.0f / 3.14159265f;
-
-// Numbers: 16 bits where they fit (printFixed16, no 32-bit division: status runs beside the
-// frames, which only get the CPU back between lines or when the transmit ring is full).
-void sayFixed(int32_t value, uint8_t decimals) {
-  if (value >= -32768 && value <= 32767) {
-    fw::printFixed16(static_cast<int16_t>(value), decimals);
-  } else {
-    fw::printFixed(value, decimals);
-  }
-}
-void sayCount(uint32_t value) { sayFixed(value > 0x7FFFFFFFu ? 0x7FFFFFFF : static_cast<int32_t>(value), 0); }
-// A float with `decimals` decimals, rounded.
-void sayFloat(float v, uint8_t decimals) {
-  float scale = 1.0f;
-  for (uint8_t i = 0; i < decimals; ++i) scale *= 10.0f;
-  const float x = v * scale;
-  const float limit = 2.0e9f;
-  sayFixed(static_cast<int32_t>(x > limit ? limit : (x < -limit ? -limit : x + (x < 0 ? -0.5f : 0.5f))),
-           decimals);
-}
-void sayDeg(float rad) { sayFloat(rad * kDegPerRad, 1); }
-void sayMilli(float v) { sayCount(static_cast<uint32_t>(v * 1000.0f + 0.5f)); }
-
-const char* faultText(ImuFault fault) {
-  switch (fault) {
-    case ImuFault::kNoAnswer:
-      return TC_FLASH_TEXT("no answer at its address (wiring: SDA D20, SCL D21, 3.3 V, pull-ups)");
-    case ImuFault::kWrongId:
-      return TC_FLASH_TEXT("WHO_AM_I is not 0x68 (not an MPU-6050?): read 0x");
-    case ImuFault::kBusStuck:
-      return TC_FLASH_TEXT("the bus is stuck (a line held low)");
-    case ImuFault::kBadConfig:
-      return TC_FLASH_TEXT("its settings did not read back");
-    case ImuFault::kFrozen:
-      return TC_FLASH_TEXT("frozen data (no new sample in ");
-    case ImuFault::kNone:
-      break;
-  }
-  return TC_FLASH_TEXT("none");
-}
-
-void sayFault(const Mpu6050& imu) {
-  say(faultText(imu.fault()));
-  if (imu.fault() == ImuFault::kWrongId) fw::printHex2(imu.whoAmI());
-  if (imu.fault() == ImuFault::kFrozen) {
-    sayCount(kImuMaxStaleReads);
-    say(TC_FLASH_TEXT(" reads)"));
-  }
-  if (imu.fault() != ImuFault::kBusStuck) return;
-  if (imu.lastStatus() == Mpu6050::kTimedOut) {
-    say(TC_FLASH_TEXT(": a transfer never ended"));
-  } else {
-    say(TC_FLASH_TEXT(", TWI status 0x"));
-    fw::printHex2(imu.lastStatus());
-  }
-}
-
-const char* modeName(OutputMode mode) {
-  switch (mode) {
-    case OutputMode::kGeneric:
-      return TC_FLASH_TEXT("generic");
-    case OutputMode::kPwm:
-      return TC_FLASH_TEXT("pwm");
-    case OutputMode::kArduPilot:
-      return TC_FLASH_TEXT("ardupilot");
-    case OutputMode::kForce:
-      break;
-  }
-  return TC_FLASH_TEXT("force");
-}
-
-const char* layoutName(Layout layout) {
-  switch (layout) {
-    case Layout::kPlus:
-      return TC_FLASH_TEXT("plus");
-    case Layout::kSeesaw:
-      return TC_FLASH_TEXT("seesaw");
-    case Layout::kX:
-      break;
-  }
-  return TC_FLASH_TEXT("x");
-}
-
-void sayMs(uint32_t ms) {
-  sayCount(ms);
-  say(TC_FLASH_TEXT(" ms"));
-}
-
-void sayFrameLayout(const FlyApp& app) {
-  say(TC_FLASH_TEXT("IMU read at "));
-  sayCount(app.loopStats().phase_us);
-  say(TC_FLASH_TEXT(" us of each "));
-  sayCount(kFrameUs);
-  say(TC_FLASH_TEXT(" us frame, computation budget "));
-  sayCount(app.loopStats().budget_us);
-  say(TC_FLASH_TEXT(" us"));
-}
-
-// "motor N" and the first motor of the layout that cannot fly in this mode.
-void sayUnflyableMotor(const FlyApp& app) {
-  for (uint8_t i = 0; i < kMotors; ++i) {
-    if (!app.mixer().flies(i) || app.motors().isArmable(i)) continue;
-    const fw::Motor& source = app.motors().motor(app.motors().motor(i).source);
-    fw::sayMotor(i);
-    say(TC_FLASH_TEXT(" is "));
-    fw::sayRecordStatus(source);
-    say(TC_FLASH_TEXT("; calibrate it with gather_store, or fly mode generic N"));
-    return;
-  }
-}
-
-}  // namespace
 
 void banner() {
   newline();
@@ -161,7 +47,7 @@ void imuRunningAgain() {
 
 void calibrating() {
   say(TC_FLASH_TEXT("imu: measuring the gyro bias: keep the vehicle still ("));
-  sayMs(static_cast<uint32_t>(GyroCalibration::kSamples) * 1000u / kFrameHz);  // 32 bits: 400 000
+  sayMs(static_cast<uint32_t>(GyroCalibration::kSamples) * 1000u / kLoopHz);  // 32 bits
   sayLine(TC_FLASH_TEXT(")"));
 }
 
@@ -176,7 +62,7 @@ void calibrationResult(const FlyApp& app) {
   say(TC_FLASH_TEXT("imu: gyro bias"));
   for (uint8_t i = 0; i < 3; ++i) {
     hal::Uart::write(' ');
-    sayFloat(c.biasLsb(i) / mpu::kGyroLsbPerDps, 2);
+    sayFloat(c.biasLsb(i) / kGyroLsbPerDps, 2);
   }
   say(TC_FLASH_TEXT(" deg/s; roll "));
   sayDeg(app.attitude().roll_rad);
@@ -191,7 +77,7 @@ void sayMilliG(const float lsb[3]) {
     hal::Uart::write(' ');
     hal::Uart::write(static_cast<char>('x' + i));
     hal::Uart::write(' ');
-    sayFloat(lsb[i] * (1000.0f / mpu::kAccelLsbPerG), 1);
+    sayFloat(lsb[i] * (1000.0f / static_cast<float>(kAccelLsbPerG)), 1);
   }
 }
 
@@ -205,11 +91,11 @@ void levelResult(const FlyApp& app) {
     return;
   }
   const GyroCalibration& c = app.gyroCalibration();
-  for (uint8_t i = 0; i < 3; ++i) lsb[i] = c.accelMeanLsb(i) - (i == 2 ? mpu::kAccelLsbPerG : 0.0f);
+  for (uint8_t i = 0; i < 3; ++i) lsb[i] = c.accelMeanLsb(i) - (i == 2 ? static_cast<float>(kAccelLsbPerG) : 0.0f);
   say(TC_FLASH_TEXT("error: level refused: off level the accelerometer reads"));
   sayMilliG(lsb);
   say(TC_FLASH_TEXT(" mg, over "));
-  sayFloat(AttitudeEstimator::kMaxLevelTrimLsb * (1000.0f / mpu::kAccelLsbPerG), 0);
+  sayFloat(AttitudeEstimator::kMaxLevelTrimLsb * (1000.0f / static_cast<float>(kAccelLsbPerG)), 0);
   sayLine(TC_FLASH_TEXT(" mg: stand the vehicle level and try again (trim kept)"));
 }
 
@@ -265,10 +151,19 @@ void armRefused(ArmRefusal why, const FlyApp& app) {
 }
 
 void armed(const FlyApp& app) {
+  const bool sticks = app.flight().source == ArmSource::kSticks;
   say(TC_FLASH_TEXT("armed: mode "));
   say(modeName(app.output().mode()));
   say(TC_FLASH_TEXT(", layout "));
   say(layoutName(app.mixer().layout()));
+  if (sticks) {
+    say(TC_FLASH_TEXT(", from the sticks; spooling up for "));
+    sayMs(kSpoolMs);
+    say(TC_FLASH_TEXT("; the receiver's failsafe: "));
+    sayMs(kRcLossMs);
+    sayLine(TC_FLASH_TEXT(" without a frame"));
+    return;
+  }
   say(TC_FLASH_TEXT(", thrust "));
   sayCount(static_cast<uint32_t>(app.settings().thrust_g));
   say(TC_FLASH_TEXT(" g; spooling up for "));
@@ -276,6 +171,16 @@ void armed(const FlyApp& app) {
   say(TC_FLASH_TEXT("; send a line at least every "));
   sayMs(tc::kFailsafeMs);
   newline();
+}
+
+void stickArm(const FlyApp& app) {
+  const ArmRefusal why = app.receiver().refused;
+  if (why == ArmRefusal::kNone) {
+    armed(app);
+    return;
+  }
+  say(TC_FLASH_TEXT("sticks: "));
+  armRefused(why, app);
 }
 
 void disarmed(const FlyApp& app) {
@@ -299,6 +204,14 @@ void disarmed(const FlyApp& app) {
       sayMs(tc::kFailsafeMs);
       say(TC_FLASH_TEXT(")"));
       break;
+    case DisarmCause::kRcLost:
+      say(TC_FLASH_TEXT("receiver lost (no valid frame for "));
+      sayMs(kRcLossMs);
+      say(TC_FLASH_TEXT(")"));
+      break;
+    case DisarmCause::kSticks:
+      say(TC_FLASH_TEXT("sticks (throttle low, yaw left)"));
+      break;
     default:
       say(TC_FLASH_TEXT("command"));
       break;
@@ -308,9 +221,9 @@ void disarmed(const FlyApp& app) {
 
 void setpoint(const FlyApp& app) {
   say(TC_FLASH_TEXT("setpoint: roll "));
-  sayDeg(app.settings().setpoint.roll_rad);
+  sayDeg(app.command().setpoint.roll_rad);
   say(TC_FLASH_TEXT(" pitch "));
-  sayDeg(app.settings().setpoint.pitch_rad);
+  sayDeg(app.command().setpoint.pitch_rad);
   sayLine(TC_FLASH_TEXT(" deg"));
 }
 
@@ -326,8 +239,8 @@ void thrust(const FlyApp& app) {
 }
 
 void gains(const FlyApp& app) {
-  const AxisGains& g = app.controller().gains();
-  const YawGains& y = app.controller().yawGains();
+  const AxisGains& g = app.controller().settings().angle;
+  const YawGains& y = app.controller().settings().yaw;
   say(TC_FLASH_TEXT("gains: roll/pitch kp "));
   sayMilli(g.kp_nm_per_rad);
   say(TC_FLASH_TEXT(" ki "));
@@ -367,9 +280,9 @@ void layout(const FlyApp& app) {
   say(TC_FLASH_TEXT("layout: "));
   say(layoutName(app.mixer().layout()));
   say(TC_FLASH_TEXT(", arm "));
-  sayMilli(app.settings().arm_m);
+  sayMilli(app.mixer().settings().arm_m);
   say(TC_FLASH_TEXT(" mm, yaw arm "));
-  sayCount(static_cast<uint32_t>(app.settings().yaw_arm_m * 1.0e6f + 0.5f));
+  sayCount(static_cast<uint32_t>(app.mixer().settings().yaw_arm_m * 1.0e6f + 0.5f));
   say(TC_FLASH_TEXT(" um, motors "));
   say(app.mixer().layout() == Layout::kSeesaw ? TC_FLASH_TEXT("0 (left) and 1 (right)")
                                               : TC_FLASH_TEXT("0..3"));
@@ -413,191 +326,66 @@ void crashLimit(const FlyApp& app) {
 }
 
 namespace {
-
-void statusState(const FlyApp& app) {
-  say(app.flight().armed ? TC_FLASH_TEXT("state: armed") : TC_FLASH_TEXT("state: disarmed"));
-  say(TC_FLASH_TEXT(", disarms "));
-  sayCount(app.flight().disarms);
-  say(TC_FLASH_TEXT(", mode "));
-  say(modeName(app.output().mode()));
-  say(TC_FLASH_TEXT(", layout "));
-  say(layoutName(app.mixer().layout()));
-  newline();
-}
-
-void statusImu(const FlyApp& app) {
-  const Mpu6050& imu = app.imu();
-  say(TC_FLASH_TEXT("imu: "));
-  if (imu.fault() != ImuFault::kNone) {
-    say(TC_FLASH_TEXT("fault: "));
-    sayFault(imu);
-  } else {
-    say(imu.running() ? TC_FLASH_TEXT("running") : TC_FLASH_TEXT("starting"));
+const char* protocolName(RcProtocol p) {
+  switch (p) {
+    case RcProtocol::kPpm:
+      return TC_FLASH_TEXT("ppm (a PPM sum on A8)");
+    case RcProtocol::kPwm:
+      return TC_FLASH_TEXT("pwm (a pulse per channel from A8)");
+    case RcProtocol::kOff:
+      break;
   }
-  say(TC_FLASH_TEXT("; reads "));
-  sayCount(imu.readsOk());
-  say(TC_FLASH_TEXT(", bad in a row "));
-  sayCount(imu.badReads());
-  say(TC_FLASH_TEXT(", stale "));
-  sayCount(imu.staleReads());
-  say(TC_FLASH_TEXT(", faults "));
-  sayCount(imu.faults());
-  say(TC_FLASH_TEXT(", bus recoveries "));
-  sayCount(imu.recoveries());
-  say(app.gyroCalibration().done() ? TC_FLASH_TEXT(", gyro calibrated")
-                                   : TC_FLASH_TEXT(", gyro not calibrated"));
-  newline();
+  return TC_FLASH_TEXT("off");
 }
+}  // namespace
 
-void statusAttitude(const FlyApp& app) {
-  const Attitude a = app.attitude();
-  say(TC_FLASH_TEXT("attitude: roll "));
-  sayDeg(a.roll_rad);
-  say(TC_FLASH_TEXT(" pitch "));
-  sayDeg(a.pitch_rad);
-  say(TC_FLASH_TEXT(" deg, rates"));
-  for (uint8_t i = 0; i < 3; ++i) {
-    hal::Uart::write(' ');
-    sayDeg(a.rate_rad_s[i]);
+void receiver(const FlyApp& app) {
+  const RcSettings& s = app.rcSettings();
+  const StickSettings& k = app.stickCommand().settings();
+  say(TC_FLASH_TEXT("rc: "));
+  say(protocolName(s.protocol));
+  if (s.protocol == RcProtocol::kPwm) {
+    say(TC_FLASH_TEXT(", "));
+    sayCount(s.pwm_channels);
+    say(TC_FLASH_TEXT(" channels"));
   }
+  say(TC_FLASH_TEXT(", map "));
+  hal::Uart::print(s.map);
+  say(TC_FLASH_TEXT(", channel 5 angle|rate (without it "));
+  say(s.default_mode == FlightMode::kRate ? TC_FLASH_TEXT("rate") : TC_FLASH_TEXT("angle"));
+  say(TC_FLASH_TEXT("); full stick "));
+  sayCount(k.max_angle_deg);
+  say(TC_FLASH_TEXT(" deg, "));
+  sayCount(k.max_rate_dps);
+  say(TC_FLASH_TEXT(" deg/s, yaw "));
+  sayCount(k.max_yaw_rate_dps);
   sayLine(TC_FLASH_TEXT(" deg/s"));
 }
 
-void statusLoop(const FlyApp& app) {
-  const LoopStats& s = app.loopStats();
-  say(TC_FLASH_TEXT("loop: "));
-  sayFrameLayout(app);
-  say(TC_FLASH_TEXT("; armed: computation at most "));
-  sayCount(s.compute_max_us);
-  say(TC_FLASH_TEXT(" us, pulses written at least "));
-  sayCount(s.margin_min_us == 0xFFFF ? 0 : s.margin_min_us);
-  say(TC_FLASH_TEXT(" us before the edge, late "));
-  sayCount(s.late);
-  say(TC_FLASH_TEXT(", frames skipped "));
-  sayCount(app.imu().skippedFrames());
-  newline();
-}
-
-// What the integrators hold now (the mismatch they absorb; 0 without integral gains).
-void statusIntegrators(const FlyApp& app) {
-  say(TC_FLASH_TEXT("integrators: roll "));
-  sayFloat(app.controller().integralNm(0) * 1000.0f, 1);
-  say(TC_FLASH_TEXT(" pitch "));
-  sayFloat(app.controller().integralNm(1) * 1000.0f, 1);
-  say(TC_FLASH_TEXT(" yaw "));
-  sayFloat(app.controller().integralNm(2) * 1000.0f, 1);
-  sayLine(TC_FLASH_TEXT(" mN m"));
-}
-
-// "motor N: F g, P us; slot S (model v2)" and what keeps it from flying.
-void statusMotor(const FlyApp& app, uint8_t i) {
-  const fw::Motor& m = app.motors().motor(i);
-  fw::sayMotor(i);
-  say(TC_FLASH_TEXT(": "));
-  sayFixed(roundedGrams(app.flight().force[i]), 0);
-  say(TC_FLASH_TEXT(" g, "));
-  sayCount(app.output().pulseUs(i));
-  say(TC_FLASH_TEXT(" us; slot "));
-  sayCount(m.source);
-  say(TC_FLASH_TEXT(" "));
-  if (app.motors().isArmable(i)) {
-    say(app.motors().motor(m.source).fliesV2() ? TC_FLASH_TEXT("(model v2)")
-                                               : TC_FLASH_TEXT("(thesis record)"));
-  } else {
-    fw::sayRecordStatus(app.motors().motor(m.source));
-  }
-  if (!app.mixer().flies(i)) say(TC_FLASH_TEXT(", not in this layout"));
-  newline();
-}
-
-}  // namespace
-
-// `yield` (not null) between the lines: the frames run there.
-void status(const FlyApp& app, void (*yield)()) {
-  statusState(app);
-  yield();
-  statusImu(app);
-  yield();
-  statusAttitude(app);
-  yield();
-  setpoint(app);
-  thrust(app);
-  yield();
-  gains(app);
-  crashLimit(app);
-  yield();
-  statusIntegrators(app);
-  yield();
-  statusLoop(app);
-  for (uint8_t i = 0; i < kMotors; ++i) {
-    yield();
-    statusMotor(app, i);
-  }
-  yield();
-  say(TC_FLASH_TEXT("battery "));
-  fw::sayVolts(app.motors().batteryMv());
-  say(TC_FLASH_TEXT(" raw; link failsafe trips "));
-  sayCount(app.link().trips);
-  newline();
-  fw::printHealth(app.console(), yield);  // frames go on during the stack scan
-}
-
-void streamHeader() {
-  sayLine(
-      TC_FLASH_TEXT("t_s,roll_deg,pitch_deg,roll_sp_deg,pitch_sp_deg,p_dps,q_dps,r_dps,"
-                    "force0_g,force1_g,force2_g,force3_g,pulse0_us,pulse1_us,pulse2_us,pulse3_us"));
-}
-
-// Every number 16 bits (printFixed16: no 32-bit division); the time as seconds and milliseconds.
-void streamRow(const StreamRow& row) {
-  const uint32_t seconds = row.t_ms / 1000u;
-  if (seconds <= 32767u) {
-    fw::printFixed16(static_cast<int16_t>(seconds), 0);
-  } else {
-    sayCount(seconds);
-  }
-  hal::Uart::write('.');
-  const uint16_t ms = static_cast<uint16_t>(row.t_ms - seconds * 1000u);
-  if (ms < 100) hal::Uart::write('0');
-  if (ms < 10) hal::Uart::write('0');
-  fw::printFixed16(static_cast<int16_t>(ms), 0);
-  const int16_t cdeg[4] = {row.roll_cdeg, row.pitch_cdeg, row.roll_sp_cdeg, row.pitch_sp_cdeg};
-  for (int16_t v : cdeg) {
-    hal::Uart::write(',');
-    fw::printFixed16(v, 2);
-  }
-  for (int16_t v : row.rate_ddps) {
-    hal::Uart::write(',');
-    fw::printFixed16(v, 1);
-  }
-  for (uint16_t v : row.force_g) {
-    hal::Uart::write(',');
-    fw::printFixed16(static_cast<int16_t>(v), 0);
-  }
-  for (uint16_t v : row.pulse_us) {
-    hal::Uart::write(',');
-    fw::printFixed16(static_cast<int16_t>(v), 0);
-  }
-  newline();
-}
-
 void helpFooter() {
-  say(TC_FLASH_TEXT("arming: a complete arm line, level within "));
+  say(TC_FLASH_TEXT("arming: a complete arm line (or the sticks held "));
+  sayMs(kStickHoldMs);
+  sayLine(TC_FLASH_TEXT("), level within"));
   sayCount(static_cast<uint32_t>(kArmLevelDeg));
   say(TC_FLASH_TEXT(" deg, rates below "));
   sayCount(static_cast<uint32_t>(kArmStillDps));
-  sayLine(TC_FLASH_TEXT(" deg/s,"));
-  sayLine(TC_FLASH_TEXT("IMU running and calibrated, ESCs armed, the layout's motors flyable"));
-  say(TC_FLASH_TEXT("disarms: roll or pitch beyond the crash limit, an IMU fault, "));
-  sayMs(tc::kFailsafeMs);
+  sayLine(TC_FLASH_TEXT(" deg/s, IMU running and calibrated, ESCs armed,"));
+  sayLine(TC_FLASH_TEXT("the layout's motors flyable"));
+  say(TC_FLASH_TEXT("disarms: roll or pitch beyond the crash limit, an IMU fault; armed by a"));
   newline();
-  sayLine(TC_FLASH_TEXT("without a line (an empty line will do; with strict on a checksummed"));
-  sayLine(TC_FLASH_TEXT("one, e.g. *00)"));
+  say(TC_FLASH_TEXT("line: "));
+  sayMs(tc::kFailsafeMs);
+  sayLine(TC_FLASH_TEXT(" without a line (an empty line will do; with strict on a"));
+  say(TC_FLASH_TEXT("checksummed one, e.g. *00); armed by the sticks: "));
+  sayMs(kRcLossMs);
+  sayLine(TC_FLASH_TEXT(" without a valid"));
+  sayLine(TC_FLASH_TEXT("receiver frame"));
   say(TC_FLASH_TEXT("lines: CR, LF or CRLF, at most "));
   sayCount(fw::kLineMax);
   sayLine(TC_FLASH_TEXT(" characters; optional checksum *HH = XOR"));
   sayLine(TC_FLASH_TEXT("of the line before '*'; a damaged line is rejected whole (docs/console.md)"));
 }
+
 
 }  // namespace view
 }  // namespace fly

@@ -20,6 +20,10 @@ void calibrationResult(const FlyApp& app);
 void levelResult(const FlyApp& app);
 void armRefused(ArmRefusal why, const FlyApp& app);
 void armed(const FlyApp& app);
+// What the sticks' arming gesture did: armed, or why not.
+void stickArm(const FlyApp& app);
+// `rc`, `rcmap`, `rates`, `fmode`: the receiver's settings now.
+void receiver(const FlyApp& app);
 void disarmed(const FlyApp& app);
 // Replies to the setting commands: what is set now.
 void setpoint(const FlyApp& app);

@@ -15,7 +15,7 @@ fly::FlyApp app;  // the motors, the IMU, the controller and the console live he
 }  // namespace
 
 int main() {
-  hal::Esc::init(fly::kFrameHz);  // first: the ESCs see the stop pulse from power-on, 400 frames/s
+  hal::Esc::init(fly::kLoopHz);  // first: the ESCs see the stop pulse from power-on, a frame per loop
   hal::Clock::init();
   hal::Uart::init(hal::kUartBaud);
   hal::Adc::init();

@@ -11,7 +11,7 @@ constexpr float kGramsPerNewton = 1000.0f / 9.80665f;
 constexpr uint8_t kQuad = 4;
 
 // The lowest and highest of the flown motors' values (motors 0..n-1).
-void bounds(const ForceQ4 (&v)[4], uint8_t n, ForceQ4& lo, ForceQ4& hi) {
+void bounds(const ForceDg (&v)[4], uint8_t n, ForceDg& lo, ForceDg& hi) {
   lo = v[0];
   hi = v[0];
   for (uint8_t i = 1; i < n; ++i) {
@@ -20,8 +20,8 @@ void bounds(const ForceQ4 (&v)[4], uint8_t n, ForceQ4& lo, ForceQ4& hi) {
   }
 }
 
-// A float already in 1/16 g, rounded.
-ForceQ4 rounded(float q4) { return static_cast<ForceQ4>(q4 < 0 ? q4 - 0.5f : q4 + 0.5f); }
+// A float already in decigrams, rounded.
+ForceDg rounded(float dg) { return static_cast<ForceDg>(dg < 0 ? dg - 0.5f : dg + 0.5f); }
 
 // num / den for 0 <= num < den (the saturation path's two ratios are strictly below 1) as a
 // 16-bit mantissa and a shift: f = floor(num * 2^s / den) in [2^15, 2^16), exact, by restoring
@@ -33,7 +33,7 @@ struct Fraction {
   uint16_t f = 0;
   uint8_t s = 16;  // 16..47; f 0: the ratio is below 2^-32 (or num <= 0), nothing of it is left
 };
-Fraction fraction(ForceQ4 num, ForceQ4 den) {
+Fraction fraction(ForceDg num, ForceDg den) {
   Fraction out;
   if (num <= 0 || den <= num) return out;
   const uint32_t d = static_cast<uint32_t>(den);
@@ -59,28 +59,29 @@ Fraction fraction(ForceQ4 num, ForceQ4 den) {
 
 // floor(a * f / 2^s): a = hi * 2^16 + lo, two 16 x 16 products (the AVR's MUL) give
 // floor(a * f / 2^16) exactly, then an arithmetic shift (a floor of a floor).
-ForceQ4 floorScaled(ForceQ4 a, const Fraction& q) {
+ForceDg floorScaled(ForceDg a, const Fraction& q) {
   const int32_t hi = static_cast<int32_t>(static_cast<int16_t>(a >> 16)) * q.f;
   const uint32_t lo = static_cast<uint32_t>(static_cast<uint16_t>(a)) * q.f;
   return shiftRight(hi + static_cast<int32_t>(lo >> 16), static_cast<uint8_t>(q.s - 16));
 }
 
 // a * f / 2^s towards zero: a share that never exceeds the exact one in magnitude.
-ForceQ4 truncScaled(ForceQ4 a, const Fraction& q) { return a < 0 ? -floorScaled(-a, q) : floorScaled(a, q); }
+ForceDg truncScaled(ForceDg a, const Fraction& q) { return a < 0 ? -floorScaled(-a, q) : floorScaled(a, q); }
 
 }  // namespace
 
-void Mixer::configure(Layout layout, float arm_m, float yaw_arm_m) {
-  layout_ = layout;
-  const float lever_m = layout == Layout::kX ? 2.0f * 1.41421356f * arm_m : 2.0f * arm_m;
-  q4_per_nm_xy_ = kQ4PerGram * kGramsPerNewton / lever_m;
-  q4_per_nm_z_ = kQ4PerGram * kGramsPerNewton / (4.0f * yaw_arm_m);
+void Mixer::configure(const MixerSettings& settings) {
+  settings_ = settings;
+  const float arm_m = settings.arm_m;
+  const float lever_m = settings.layout == Layout::kX ? 2.0f * 1.41421356f * arm_m : 2.0f * arm_m;
+  dg_per_nm_xy_ = kDgPerGram * kGramsPerNewton / lever_m;
+  dg_per_nm_z_ = kDgPerGram * kGramsPerNewton / (4.0f * settings.yaw_arm_m);
 }
 
 // Roll and pitch per motor, written out per layout (mixer.hpp's signs): no table, no branch per
 // term. Yaw is -z, +z, -z, +z on both quad layouts (counter-clockwise motors 0 and 2).
-void Mixer::rollPitch(ForceQ4 x, ForceQ4 y, ForceQ4 (&rp)[4]) const {
-  switch (layout_) {
+void Mixer::rollPitch(ForceDg x, ForceDg y, ForceDg (&rp)[4]) const {
+  switch (layout()) {
     case Layout::kPlus:
       rp[0] = -y;
       rp[1] = x;
@@ -102,29 +103,27 @@ void Mixer::rollPitch(ForceQ4 x, ForceQ4 y, ForceQ4 (&rp)[4]) const {
   }
 }
 
-uint8_t Mixer::mix(ForceQ4 collective, const Torque& torque, ForceQ4 min, ForceQ4 max,
-                   ForceQ4 (&force)[4]) const {
-  TorqueQ4 t;
-  t.x = rounded(torque.x_nm * q4_per_nm_xy_);
-  t.y = rounded(torque.y_nm * q4_per_nm_xy_);
-  t.z = rounded(torque.z_nm * q4_per_nm_z_);
-  return mixQ4(collective, t, min, max, force);
+uint8_t Mixer::mix(ForceDg collective, const Torque& torque, ForceDg min, ForceDg max, Forces& force) const {
+  TorqueDg t;
+  t.x = rounded(torque.x_nm * dg_per_nm_xy_);
+  t.y = rounded(torque.y_nm * dg_per_nm_xy_);
+  t.z = rounded(torque.z_nm * dg_per_nm_z_);
+  return mixDg(collective, t, min, max, force);
 }
 
-uint8_t Mixer::mixQ4(ForceQ4 collective, const TorqueQ4& torque, ForceQ4 min, ForceQ4 max,
-                     ForceQ4 (&force)[4]) const {
+uint8_t Mixer::mixDg(ForceDg collective, const TorqueDg& torque, ForceDg min, ForceDg max, Forces& force) const {
   const uint8_t n = motorCount();
-  const ForceQ4 z = layout_ == Layout::kSeesaw ? 0 : torque.z;
-  ForceQ4 rp[4];
+  const ForceDg z = layout() == Layout::kSeesaw ? 0 : torque.z;
+  ForceDg rp[4];
   rollPitch(torque.x, torque.y, rp);
-  ForceQ4 e[4];
+  ForceDg e[4];
   for (uint8_t i = 0; i < kQuad; ++i) e[i] = (i & 1u) ? rp[i] + z : rp[i] - z;
-  ForceQ4 lo, hi;
+  ForceDg lo, hi;
   bounds(e, n, lo, hi);
-  const ForceQ4 range = max > min ? max - min : 0;
+  const ForceDg range = max > min ? max - min : 0;
   uint8_t limits = 0;
   if (hi - lo > range) limits = fit(rp, z, range, e, lo, hi);
-  ForceQ4 c = collective;
+  ForceDg c = collective;
   if (c < min - lo) {
     c = min - lo;
     limits |= kMixCollectiveLimited;
@@ -132,19 +131,19 @@ uint8_t Mixer::mixQ4(ForceQ4 collective, const TorqueQ4& torque, ForceQ4 min, Fo
     c = max - hi;
     limits |= kMixCollectiveLimited;
   }
-  for (uint8_t i = 0; i < kQuad; ++i) force[i] = i < n ? c + e[i] : 0;
+  for (uint8_t i = 0; i < kQuad; ++i) force.dg[i] = i < n ? c + e[i] : 0;
   return limits;
 }
 
 // The spread of roll, pitch and yaw exceeds the motors' range: roll and pitch keep what they
 // can (all of it when they fit alone), yaw the rest. The spread is convex in the yaw share, so
 // the share (range - rp spread) / (spread - rp spread) fits.
-uint8_t Mixer::fit(const ForceQ4 (&rp)[4], ForceQ4 z, ForceQ4 range, ForceQ4 (&e)[4], ForceQ4& lo,
-                   ForceQ4& hi) const {
+uint8_t Mixer::fit(const ForceDg (&rp)[4], ForceDg z, ForceDg range, ForceDg (&e)[4], ForceDg& lo,
+                   ForceDg& hi) const {
   const uint8_t n = motorCount();
-  const ForceQ4 full_spread = hi - lo;
+  const ForceDg full_spread = hi - lo;
   bounds(rp, n, lo, hi);
-  const ForceQ4 rp_spread = hi - lo;
+  const ForceDg rp_spread = hi - lo;
   if (rp_spread > range) {  // roll and pitch alone do not fit: scale them, no yaw
     // Each floored with a floored fraction: floor(hi f) - floor(lo f) < (hi - lo) f + 1 <=
     // range + 1, so the scaled spread is at most the range (an integer).
@@ -155,7 +154,7 @@ uint8_t Mixer::fit(const ForceQ4 (&rp)[4], ForceQ4 z, ForceQ4 range, ForceQ4 (&e
   }
   // Towards zero: the share lies between 0 and the exact share, where the (convex) spread is at
   // most the range at both ends, so it is at most the range.
-  const ForceQ4 share_z = truncScaled(z, fraction(range - rp_spread, full_spread - rp_spread));
+  const ForceDg share_z = truncScaled(z, fraction(range - rp_spread, full_spread - rp_spread));
   for (uint8_t i = 0; i < kQuad; ++i) e[i] = (i & 1u) ? rp[i] + share_z : rp[i] - share_z;
   bounds(e, n, lo, hi);
   return kMixYawLimited;

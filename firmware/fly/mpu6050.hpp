@@ -16,10 +16,11 @@
 // kImuMaxStaleReads stale reads in a row are a fault, as is a wrong WHO_AM_I or settings that
 // did not stick. A faulted driver starts again after a second (the gyro bias it had stays
 // valid: same chip). fly disarms on any fault.
+// A stage of fly's loop: it hands out ImuSample (flight_types.hpp) and depends on no other stage.
 #pragma once
 #include <stdint.h>
 
-#include "fly_rules.hpp"
+#include "flight_types.hpp"
 #include "hal/hal.hpp"
 
 namespace fly {
@@ -42,20 +43,19 @@ constexpr uint8_t kGyro2000Dps = 0x18;  // GYRO_CONFIG FS_SEL 3
 constexpr uint8_t kAccel8G = 0x10;      // ACCEL_CONFIG AFS_SEL 2
 constexpr uint8_t kDataRdy = 0x01;      // INT_ENABLE / INT_STATUS
 
-constexpr float kGyroLsbPerDps = 16.4f;
-constexpr float kAccelLsbPerG = 4096.0f;
-constexpr uint8_t kSampleBytes = 15;    // INT_STATUS, accel XYZ, TEMP, gyro XYZ
-constexpr uint16_t kResetFrames = 40;   // 100 ms after DEVICE_RESET
-constexpr uint16_t kRetryFrames = 400;  // 1 s after a fault
+constexpr uint8_t kSampleBytes = 15;                  // INT_STATUS, accel XYZ, TEMP, gyro XYZ
+constexpr uint16_t kResetFrames = framesIn(100);      // after DEVICE_RESET
+constexpr uint16_t kRetryFrames = framesIn(1000);     // after a fault
+static_assert(kGyro2000Dps == 0x18 && kAccel8G == 0x10, "the full scales flight_types.hpp's units are");
+static_assert(kDivider1kHz == 0 && kImuSampleHz == 1000, "1 kHz samples with the low-pass on");
 }  // namespace mpu
 
-// One sample in the IMU's axes (x forward, y left, z up, as mounted: docs/fly.md), raw counts.
-struct ImuSample {
-  int16_t accel[3] = {0, 0, 0};
-  int16_t temp = 0;
-  int16_t gyro[3] = {0, 0, 0};
-  bool fresh = false;  // DATA_RDY: a new sample since the last read
-};
+// The IMU failed: this many reads in a row ended badly (no answer, a time-out, the bus lost) or
+// brought no new sample (DATA_RDY clear: frozen data), 20 ms of frames.
+constexpr uint8_t kImuMaxBadReads = static_cast<uint8_t>(framesIn(20));
+constexpr uint8_t kImuMaxStaleReads = static_cast<uint8_t>(framesIn(20));
+inline bool imuReadsFailed(uint8_t bad_in_a_row) { return bad_in_a_row >= kImuMaxBadReads; }
+inline bool imuFrozen(uint8_t stale_in_a_row) { return stale_in_a_row >= kImuMaxStaleReads; }
 
 // The 15 bytes of a burst from INT_STATUS (big-endian two's complement).
 ImuSample decodeSample(const uint8_t (&bytes)[mpu::kSampleBytes]);

@@ -6,11 +6,12 @@
 namespace fly {
 
 namespace {
-constexpr uint8_t kMotors = fw::ForceActuators::kMotors;
-uint16_t grams(ForceQ4 force) {
-  const int32_t g = roundedGrams(force);
-  return g <= 0 ? 0 : (g >= tc::kRecordMaxForceG ? tc::kRecordMaxForceG : static_cast<uint16_t>(g));
+uint16_t forceApiDg(ForceDg force) {
+  return force <= 0 ? 0
+                    : (force >= fw::ForceActuators::kMaxForceDg ? fw::ForceActuators::kMaxForceDg
+                                                                : static_cast<uint16_t>(force));
 }
+constexpr int32_t kThrottleRangeUs = tc::kThrottleMaxUs - tc::kThrottleMinUs;
 }  // namespace
 
 bool OutputStage::setMode(OutputMode mode, uint8_t generic_slot) {
@@ -20,19 +21,27 @@ bool OutputStage::setMode(OutputMode mode, uint8_t generic_slot) {
   motors_.stopAll();
   for (uint8_t i = 0; i < kMotors; ++i)
     motors_.setModelSource(i, mode == OutputMode::kGeneric ? generic_slot : i);
-  mode_ = mode;
-  generic_slot_ = generic_slot;
+  settings_.mode = mode;
+  settings_.generic_slot = generic_slot;
   if (mode == OutputMode::kArduPilot) batteryRead(0);  // the filter from now, not from 1
   return true;
 }
 
+void OutputStage::setPwmParams(const PwmModeParams& p) {
+  settings_.pwm = p;
+  const bool valid = p.slope_g_per_us > 0;
+  us_per_dg_q16_ = valid ? roundToInt32(65536.0f / (p.slope_g_per_us * kDgPerGram)) : 0;
+  pwm_range_dg_ = valid ? forceDgOf(kThrottleRangeUs * p.slope_g_per_us) : 0;
+}
+
 void OutputStage::setArduPilotParams(const ArduPilotParams& p) {
+  settings_.ardupilot = p;
   ardupilot_.setParams(p);
   batteryRead(0);
 }
 
 bool OutputStage::motorsReady(uint8_t mask) const {
-  if (mode_ == OutputMode::kPwm || mode_ == OutputMode::kArduPilot) return true;  // no record flown
+  if (mode() == OutputMode::kPwm || mode() == OutputMode::kArduPilot) return true;  // no record flown
   for (uint8_t i = 0; i < kMotors; ++i) {
     if (((mask >> i) & 1u) && !motors_.isArmable(i)) return false;
   }
@@ -40,42 +49,40 @@ bool OutputStage::motorsReady(uint8_t mask) const {
 }
 
 bool OutputStage::settingsReady() const {
-  if (mode_ == OutputMode::kPwm) return pwm_.hover_us > tc::kThrottleMinUs && pwm_.slope_g_per_us > 0;
-  if (mode_ == OutputMode::kArduPilot) return ardupilot_.ready();
+  if (mode() == OutputMode::kPwm) return settings_.pwm.hover_us > tc::kThrottleMinUs && settings_.pwm.slope_g_per_us > 0;
+  if (mode() == OutputMode::kArduPilot) return ardupilot_.ready();
   return true;
 }
 
-float OutputStage::collectivePerMotorG(float thrust_g, uint8_t motors) const {
-  if (mode_ == OutputMode::kPwm) {
-    return static_cast<float>(pwm_.hover_us - tc::kThrottleMinUs) * pwm_.slope_g_per_us;
-  }
-  return motors == 0 ? 0.0f : thrust_g / motors;
-}
-
-void OutputStage::forceRangeG(uint8_t mask, float& min_g, float& max_g) const {
-  switch (mode_) {
+ForceLimits OutputStage::forceLimits(float thrust_g, uint8_t mask, uint8_t motors) const {
+  ForceLimits l;
+  switch (mode()) {
     case OutputMode::kPwm:
-      min_g = 0;
-      max_g = static_cast<float>(tc::kThrottleMaxUs - tc::kThrottleMinUs) * pwm_.slope_g_per_us;
-      return;
+      l.collective =
+          forceDgOf(static_cast<float>(settings_.pwm.hover_us - tc::kThrottleMinUs) * settings_.pwm.slope_g_per_us);
+      l.min = 0;
+      l.max = pwm_range_dg_;
+      return l;
     case OutputMode::kArduPilot:
-      min_g = 0;  // ArduPilot's zero thrust is MOT_SPIN_MIN: the motors keep turning
-      max_g = ardupilot_.maxForceG();
-      return;
+      l.min = 0;  // ArduPilot's zero thrust is MOT_SPIN_MIN: the motors keep turning
+      l.max = forceDgOf(ardupilot_.maxForceG());
+      break;
     default: {
-      uint16_t lightest = tc::kRecordMaxForceG;
+      uint16_t lightest = fw::ForceActuators::kMaxForceDg;
       for (uint8_t i = 0; i < kMotors; ++i) {
-        if (((mask >> i) & 1u) && motors_.maxForceG(i) < lightest) lightest = motors_.maxForceG(i);
+        if (((mask >> i) & 1u) && motors_.maxForceDg(i) < lightest) lightest = motors_.maxForceDg(i);
       }
-      min_g = kIdleForceG;
-      max_g = lightest;
-      return;
+      l.min = forceDgOf(kIdleForceG);
+      l.max = lightest;
+      break;
     }
   }
+  l.collective = motors == 0 ? 0 : forceDgOf(thrust_g / motors);
+  return l;
 }
 
 uint8_t OutputStage::thesisMotors(uint8_t mask) const {
-  if (mode_ == OutputMode::kPwm || mode_ == OutputMode::kArduPilot) return 0;
+  if (mode() == OutputMode::kPwm || mode() == OutputMode::kArduPilot) return 0;
   uint8_t n = 0;
   for (uint8_t i = 0; i < kMotors; ++i) {
     const fw::Motor& m = motors_.motor(i);
@@ -84,32 +91,34 @@ uint8_t OutputStage::thesisMotors(uint8_t mask) const {
   return n;
 }
 
-// 1000 us + F / slope: (Q4 * Q12) >> 16 microseconds, rounded.
-uint16_t OutputStage::pwmModePulse(ForceQ4 force) const {
-  const int32_t above_us = (force * us_per_g_q12_ + (1L << 15)) >> 16;
-  const int32_t range_us = tc::kThrottleMaxUs - tc::kThrottleMinUs;
-  return static_cast<uint16_t>(tc::kThrottleMinUs +
-                               (above_us <= 0 ? 0 : (above_us >= range_us ? range_us : above_us)));
+// 1000 us + F / slope: (dg * Q16) >> 16 microseconds, rounded.
+uint16_t OutputStage::pwmModePulse(ForceDg force) const {
+  if (force <= 0) return tc::kThrottleMinUs;
+  if (force >= pwm_range_dg_) return tc::kThrottleMaxUs;
+  const int32_t above_us = (force * us_per_dg_q16_ + (1L << 15)) >> 16;
+  return static_cast<uint16_t>(tc::kThrottleMinUs + (above_us >= kThrottleRangeUs ? kThrottleRangeUs : above_us));
 }
 
-void OutputStage::write(const ForceQ4 (&force)[4], uint8_t mask) {
-  if (mode_ == OutputMode::kForce || mode_ == OutputMode::kGeneric) {
-    for (uint8_t i = 0; i < kMotors; ++i) motors_.setForce(i, ((mask >> i) & 1u) ? grams(force[i]) : 0);
-    motors_.output();
+void OutputStage::compute(const Forces& force, uint8_t mask) {
+  if (mode() == OutputMode::kForce || mode() == OutputMode::kGeneric) {
+    for (uint8_t i = 0; i < kMotors; ++i) motors_.setForceDg(i, ((mask >> i) & 1u) ? forceApiDg(force.dg[i]) : 0);
+    motors_.computePulses();
     for (uint8_t i = 0; i < kMotors; ++i) pulse_us_[i] = motors_.motor(i).pwm_us;
     return;
   }
   for (uint8_t i = 0; i < kMotors; ++i) {
     if (!((mask >> i) & 1u)) {
       pulse_us_[i] = tc::kStopPwmUs;
-    } else if (mode_ == OutputMode::kPwm) {
-      pulse_us_[i] = pwmModePulse(force[i]);
+    } else if (mode() == OutputMode::kPwm) {
+      pulse_us_[i] = pwmModePulse(force.dg[i]);
     } else {
-      pulse_us_[i] = ardupilot_.pulseUsQ4(force[i]);
+      pulse_us_[i] = ardupilot_.pulseUsDg(force.dg[i]);
     }
   }
-  hal::Esc::writeAll(pulse_us_);
 }
+
+// The pulses compute() worked out, all four at once (the force API's motors keep theirs).
+void OutputStage::commit() { hal::Esc::writeAll(pulse_us_); }
 
 void OutputStage::stop() {
   motors_.stopAll();

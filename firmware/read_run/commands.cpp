@@ -55,7 +55,7 @@ void ReadRunApp::cmdForceAll(uint16_t force_g) {
   }
   for (uint8_t i = 0; i < kMotors; ++i) {
     if (motors_.isArmable(i)) {
-      motors_.setForce(i, force_g);
+      motors_.setForceDg(i, static_cast<uint16_t>(force_g * 10u));  // G <= tc::kRecordMaxForceG
     } else {
       view::heldMotor(i, motors_.motor(i));
     }
@@ -64,7 +64,7 @@ void ReadRunApp::cmdForceAll(uint16_t force_g) {
 
 void ReadRunApp::cmdForceOne(uint8_t index, uint16_t force_g) {
   if (!requireArmable(index)) return;
-  motors_.setForce(index, force_g);
+  motors_.setForceDg(index, static_cast<uint16_t>(force_g * 10u));
 }
 
 void ReadRunApp::cmdStop() {
@@ -115,7 +115,7 @@ void ReadRunApp::cmdRate(uint16_t frame_hz) {
     return;
   }
   setFrameRate(frame_hz);
-  scheduleFrames(hal::Clock::millis());
+  scheduleFrames();  // the phase hook after the new rate (hal::Esc::setPhaseHook)
   fw::say(TC_FLASH_TEXT("frame rate "));
   fw::printUint(frame_hz);
   sayLine(TC_FLASH_TEXT(" Hz"));

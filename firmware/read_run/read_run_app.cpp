@@ -31,8 +31,8 @@ void ReadRunApp::arm() {
   }
   setFrameRate(frame_hz);
   const uint32_t start_ms = hal::Clock::millis();
-  scheduleFrames(start_ms);
   active_ = this;
+  scheduleFrames();
   hal::Uart::setWaitHook(&ReadRunApp::serviceHook);
   for (;;) {
     const uint32_t now_ms = hal::Clock::millis();
@@ -77,7 +77,7 @@ void ReadRunApp::service() {
   in_service_ = true;
   hal::Watchdog::kick();  // the loop (or a wait inside it) came round
   const uint32_t now_ms = hal::Clock::millis();
-  if (frames_.due(now_ms)) frame(now_ms);
+  if (frames_due_ != frames_served_) frame(now_ms);
   checkFailsafe(now_ms);
   in_service_ = false;
 }
@@ -173,7 +173,7 @@ void ReadRunApp::updateLiftoff(uint32_t now_ms) {
     return;
   }
   if (liftoff_.entersHold(step)) notes_ |= kNoteHold;
-  for (uint8_t i = 0; i < kMotors; ++i) motors_.setForce(i, step.force_g);
+  for (uint8_t i = 0; i < kMotors; ++i) motors_.setForceDg(i, step.force_dg);
 }
 
 void ReadRunApp::abortLiftoff(int16_t key) {

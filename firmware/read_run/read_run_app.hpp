@@ -2,8 +2,9 @@
 //
 // Flow (main.cpp): hardware init -> banner -> loadCalibration() (H.2: the four EEPROM
 // records, read once into per-motor structs) -> arm() (1000 us for 2 s) -> runOnce() forever,
-// sleeping until the next interrupt between passes. Every ESC frame each motor's force command
-// (grams) becomes a PWM through the model its slot holds:
+// sleeping until the next interrupt between passes. Every ESC frame (its phase hook,
+// kFramePhaseUs after the rising edge) each motor's force command (decigrams: the console's
+// grams, the lift-off's ramp) becomes a PWM through the model its slot holds:
 //  - layout v1 (the thesis record, the baseline): the Force-PWM controller (H.3, option 2.1)
 //    at the median battery reading, sag-compensated with that motor's offsets and last PWM
 //    (sec. 6.2);
@@ -106,6 +107,7 @@ class ReadRunApp {
   uint16_t frameHz() const { return frame_hz_; }
   const Liftoff& liftoff() const { return liftoff_; }
   uint32_t failsafeTrips() const { return link_.trips; }
+  uint16_t framesSkipped() const { return frames_skipped_; }
   const fw::LineReader& console() const { return line_; }
 
   // `help`: every row of the command table (usage, help text, ranges), then the console rules
@@ -143,7 +145,9 @@ class ReadRunApp {
   void abortLiftoff(int16_t key);
   void updateLiftoff(uint32_t now_ms);
 
-  void scheduleFrames(uint32_t now_ms);
+  // The frames begin (again): the phase hook on the ESC frame at this rate.
+  void scheduleFrames();
+  static void phaseHook();
   void setFrameRate(uint16_t frame_hz);  // filter constant and stream pace follow it
   void frame(uint32_t now_ms);
   void prompt();
@@ -152,7 +156,10 @@ class ReadRunApp {
   Liftoff liftoff_;
   LinkWatch link_;        // last keep-alive (lift-off: last line end), failsafe trips
   StreamPace stream_;
-  FrameClock frames_;     // ESC frame schedule (run_rules.hpp)
+  // ESC frames: the phase hook counts them (interrupt), service() serves them.
+  volatile uint8_t frames_due_ = 0;
+  uint8_t frames_served_ = 0;
+  uint16_t frames_skipped_ = 0;  // frames the loop was too late for (saturates)
   uint16_t frame_hz_ = hal::kEscDefaultFrameHz;
   fw::LineReader line_;
   Mode mode_ = Mode::kBoot;
@@ -169,7 +176,7 @@ class ReadRunApp {
   uint8_t notes_ = 0;
   uint16_t note_force_g_ = 0;   // lift-off progress: force at that frame
   uint32_t note_ms_ = 0;        // time of the frame the notes are about
-  static ReadRunApp* active_;   // the instance the UART wait hook serves
+  static ReadRunApp* active_;   // the instance the UART wait hook and the phase hook serve
 };
 
 }  // namespace rr

@@ -34,46 +34,29 @@ struct StreamPace {
 };
 
 // The lift-off sequence (thesis sec. 7.4) at `elapsed_ms` after its command: a linear ramp
-// 0 -> force_g over ramp_ms, then force_g for hold_ms, then done (stop).
+// 0 -> force_g over ramp_ms (in decigrams: the force API's resolution), then force_g for
+// hold_ms, then done (stop).
 enum class LiftoffPhase : uint8_t { kRamp, kHold, kDone };
 struct LiftoffStep {
   LiftoffPhase phase;
-  uint16_t force_g;  // every motor's command in this phase (0 when done)
+  uint16_t force_dg;  // every motor's command in this phase (0 when done)
 };
 inline LiftoffStep liftoffStep(uint32_t elapsed_ms, uint16_t force_g, uint16_t ramp_ms,
                                uint16_t hold_ms) {
+  const uint32_t force_dg = 10u * force_g;  // force_g <= tc::kRecordMaxForceG: fits 16 bits
   if (elapsed_ms < ramp_ms) {
-    return {LiftoffPhase::kRamp,
-            static_cast<uint16_t>(static_cast<uint32_t>(force_g) * elapsed_ms / ramp_ms)};
+    return {LiftoffPhase::kRamp, static_cast<uint16_t>(force_dg * elapsed_ms / ramp_ms)};
   }
-  if (elapsed_ms < static_cast<uint32_t>(ramp_ms) + hold_ms) return {LiftoffPhase::kHold, force_g};
+  if (elapsed_ms < static_cast<uint32_t>(ramp_ms) + hold_ms)
+    return {LiftoffPhase::kHold, static_cast<uint16_t>(force_dg)};
   return {LiftoffPhase::kDone, 0};
 }
 
-// The ESC frame schedule on a 1 ms clock: period 1000/hz ms as whole ms plus a remainder, so
-// 400 Hz averages exactly 2.5 ms. A schedule that fell behind (a long print) restarts from now.
-struct FrameClock {
-  uint32_t next_ms = 0;
-  uint16_t rem = 0;
-
-  void restart(uint32_t now_ms) {
-    next_ms = now_ms;
-    rem = 0;
-  }
-  bool due(uint32_t now_ms) const { return static_cast<int32_t>(now_ms - next_ms) >= 0; }
-  // Called when a frame is served at now_ms: schedules the next one.
-  void advance(uint32_t now_ms, uint16_t frame_hz) {
-    next_ms += 1000u / frame_hz;
-    rem = static_cast<uint16_t>(rem + 1000u % frame_hz);
-    if (rem >= frame_hz) {
-      rem = static_cast<uint16_t>(rem - frame_hz);
-      ++next_ms;
-    }
-    if (due(now_ms)) {
-      next_ms = now_ms + 1000u / frame_hz;
-      rem = 0;
-    }
-  }
-};
+// The ESC frame's phase (hal::Esc::setPhaseHook): the frame's work (battery, each motor's model,
+// the four compare registers) starts this long after each rising edge, so its pulses go out on
+// the next edge: one frame per ESC frame, on the ESC's own clock at every rate (50..400 Hz),
+// the same way fly's frames are (docs/read_run.md). Four thesis records take ~0.5 ms, far
+// inside the shortest frame (2.5 ms).
+constexpr uint16_t kFramePhaseUs = 100;
 
 }  // namespace rr

@@ -123,13 +123,16 @@ bool Esc::setFrameRate(uint16_t frame_hz) {
   ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
     // Clock off, new TOP, clock on. Stopping the clock is also what makes simavr 1.6 re-read
     // ICRn: it reconfigures a timer only when its clock source or mode changes. The counters
-    // restart at TOP so the next tick is BOTTOM and the new frame begins with a full pulse.
+    // restart one tick below TOP, so the second tick is BOTTOM and the new frame begins with a
+    // full pulse. Not at TOP itself: a TCNTn write blocks the compare match of the next tick,
+    // TOP's too in mode 14, and the counter would run on to 0xFFFF (datasheet, "Using the
+    // Output Compare Unit"): some 30 ms without a pulse.
     TCCR4B = _BV(WGM43) | _BV(WGM42);
     TCCR1B = _BV(WGM13) | _BV(WGM12);
     ICR4 = top;
     ICR1 = top;
-    TCNT4 = top;
-    TCNT1 = top;
+    TCNT4 = top - 1;
+    TCNT1 = top - 1;
     TCCR4B = _BV(WGM43) | _BV(WGM42) | _BV(CS41);
     TCCR1B = _BV(WGM13) | _BV(WGM12) | _BV(CS11);
   }

@@ -40,11 +40,13 @@ volatile uint8_t g_read_length = 0;  // 0: a register write
 volatile uint8_t g_sent = 0;         // bytes written after SLA+W (register, value)
 volatile uint8_t g_received = 0;
 volatile uint8_t g_rx[hal::Twi::kMaxRead];
+volatile uint16_t g_end_ticks = 0;  // TCNT1 (the ESC frame's counter, 0.5 us) at the last end
 
 // The interrupt's helpers are inlined: a call from an interrupt makes it save every
 // call-clobbered register, 16 interrupts a read.
 inline __attribute__((always_inline)) void finish(Result result) {
   TWCR = _BV(TWINT) | _BV(TWEN) | _BV(TWSTO);  // STOP; no TWIE: nothing follows
+  g_end_ticks = TCNT1;  // interrupts are off here: one consistent 16-bit read
   g_state = result;
 }
 
@@ -127,6 +129,7 @@ ISR(TWI_vect) {
       break;
     case 0x38:  // arbitration lost: the bus is someone else's; let go without a STOP
       TWCR = _BV(TWINT) | _BV(TWEN);
+      g_end_ticks = TCNT1;
       g_state = Result::kLost;
       break;
     default:  // 0x00 bus error (the datasheet's recovery is a STOP) or a status out of place
@@ -158,6 +161,13 @@ bool Twi::startRead(uint8_t address, uint8_t reg, uint8_t length) {
 Twi::Result Twi::result() { return g_state; }
 
 uint8_t Twi::lastStatus() { return g_last_status; }
+
+static_assert(hal::board::escUsesTimer(1), "Esc::frameTimeUs's clock is Timer1 (esc_phase.cpp)");
+uint16_t Twi::endFrameTimeUs() {
+  uint16_t ticks;
+  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) { ticks = g_end_ticks; }
+  return static_cast<uint16_t>(ticks / 2u);
+}
 
 uint8_t Twi::readData(uint8_t* dst, uint8_t length) {
   uint8_t n = g_received < length ? g_received : length;

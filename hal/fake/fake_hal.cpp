@@ -61,12 +61,19 @@ struct FakeState {
   uint32_t twi_recoveries = 0;
   uint32_t twi_scl_hz = 0;
   hal::Twi::Result twi_result = hal::Twi::Result::kIdle;
+  uint16_t twi_end_frame_us = 0;
   uint8_t twi_status = 0xF8;
   uint8_t twi_rx[hal::Twi::kMaxRead] = {};
   uint8_t twi_received = 0;
 
   uint8_t eeprom[hal::Eeprom::kSize];
   uint32_t eeprom_writes = 0;
+
+  // RC
+  uint8_t rc_mask = 0;
+  uint8_t rc_level = 0xFF;  // the port's pins now (pull-ups: idle high)
+  std::deque<hal::Rc::Edge> rc_queue;
+  uint16_t rc_lost = 0;
 
   std::deque<int16_t> rx;  // bytes and hal::Uart::kRxDamaged marks
   std::vector<ScheduledInput> scheduled;  // in the order they were fed
@@ -244,6 +251,7 @@ namespace {
 hal::Twi::Result endTransfer(hal::Twi::Result result, uint8_t status) {
   state().twi_result = result;
   state().twi_status = status;
+  state().twi_end_frame_us = hal::Esc::frameTimeUs();
   return result;
 }
 
@@ -299,6 +307,7 @@ bool Twi::startRead(uint8_t address, uint8_t reg, uint8_t length) {
 
 Twi::Result Twi::result() { return state().twi_result; }
 uint8_t Twi::lastStatus() { return state().twi_status; }
+uint16_t Twi::endFrameTimeUs() { return state().twi_end_frame_us; }
 
 uint8_t Twi::readData(uint8_t* dst, uint8_t length) {
   auto& s = state();
@@ -476,4 +485,72 @@ void setTickHook(std::function<void(uint32_t now_ms)> hook) { state().tick_hook 
 
 void setTimeLimitMs(uint32_t limit_ms) { state().time_limit_ms = limit_ms; }
 
+
+void rcEdge(uint8_t pins, uint16_t ticks) {
+  auto& s = state();
+  s.rc_level = pins;
+  if (s.rc_mask == 0) return;
+  if (s.rc_queue.size() >= hal::Rc::kQueueEdges - 1) {  // as the chip's ring: one slot kept free
+    if (s.rc_lost != 0xFFFF) ++s.rc_lost;
+    return;
+  }
+  s.rc_queue.push_back({static_cast<uint8_t>(pins & s.rc_mask), ticks});
+}
+
+uint16_t rcPpmFrame(uint16_t from_ticks, const std::vector<uint16_t>& channels_us, uint32_t frame_us) {
+  constexpr uint32_t kSeparatorUs = 400;
+  const uint8_t others = static_cast<uint8_t>(state().rc_level & ~1u);
+  uint32_t t = from_ticks;
+  uint32_t used_us = 0;
+  for (uint16_t ch : channels_us) {  // each channel: a separator's start to the next one's
+    rcEdge(others, static_cast<uint16_t>(t));
+    rcEdge(static_cast<uint8_t>(others | 1u), static_cast<uint16_t>(t + 2 * kSeparatorUs));
+    t += 2u * ch;
+    used_us += ch;
+  }
+  rcEdge(others, static_cast<uint16_t>(t));  // the last separator, then the sync gap
+  rcEdge(static_cast<uint8_t>(others | 1u), static_cast<uint16_t>(t + 2 * kSeparatorUs));
+  const uint32_t gap_us = frame_us > used_us ? frame_us - used_us : 3000;
+  return static_cast<uint16_t>(t + 2u * gap_us);
+}
+
+uint16_t rcPwmFrame(uint16_t from_ticks, const std::vector<uint16_t>& channels_us) {
+  uint32_t t = from_ticks;
+  uint8_t level = state().rc_level;
+  for (std::size_t i = 0; i < channels_us.size() && i < 8; ++i) {
+    const uint8_t bit = static_cast<uint8_t>(1u << i);
+    level = static_cast<uint8_t>(level | bit);
+    rcEdge(level, static_cast<uint16_t>(t));
+    t += 2u * channels_us[i];
+    level = static_cast<uint8_t>(level & ~bit);
+    rcEdge(level, static_cast<uint16_t>(t));
+    t += 2u * 50;  // 50 us to the next channel's pulse
+  }
+  return static_cast<uint16_t>(t);
+}
+
+uint8_t rcMask() { return state().rc_mask; }
+std::size_t rcQueued() { return state().rc_queue.size(); }
+
 }  // namespace hal::fake
+
+namespace hal {
+
+void Rc::init(uint8_t mask) {
+  auto& s = state();
+  s.rc_mask = mask;
+  s.rc_queue.clear();
+  s.rc_lost = 0;
+}
+
+bool Rc::nextEdge(Edge& edge) {
+  auto& s = state();
+  if (s.rc_queue.empty()) return false;
+  edge = s.rc_queue.front();
+  s.rc_queue.pop_front();
+  return true;
+}
+
+uint16_t Rc::lostEdges() { return state().rc_lost; }
+
+}  // namespace hal

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <climits>
+#include <cmath>
 #include <cstdint>
 
 #include "thrustcal/force_pwm.hpp"
@@ -58,6 +59,66 @@ TEST(ForcePwm, InterpolatesLinearlyInVoltageBetweenTheTwoCurvesOption21) {
       {300, 11250, 1474, 0, "heaviest gram"},
   };
   expectRows(twoCurves(), rows, sizeof rows / sizeof rows[0]);
+}
+
+// Decigrams (the force API's unit): between two grams each curve's straight line, then option 2.1
+// rounded once; at whole grams the rows above.
+TEST(ForcePwm, DecigramsFollowEachCurvesStraightLineBetweenGramsRoundedOnce) {
+  const MotorCalibration cal = twoCurves();
+  struct DgRow {
+    uint16_t force_dg, vbat_mv, pwm_us;
+    uint8_t flags;
+    const char* what;
+  };
+  const DgRow rows[] = {
+      {1000, 11500, 1249, 0, "a whole gram: as forceToPwm"},
+      {1005, 12000, 1200, 0, "c1 1199.5 at V1 rounds away from zero"},
+      {1004, 12000, 1199, 0, "c1 1199.4"},
+      {1004, 11500, 1249, 0, "1249.4"},
+      {1006, 11500, 1250, 0, "1249.6"},
+      {1005, 11000, 1300, 0, "c2 1299.5"},
+      {5, 12000, 1100, 0, "below the first gram: the first gram's pulse"},
+      {3005, 12000, 1399, tc::kSaturated, "beyond the heaviest gram"},
+      {0, 12000, 1000, tc::kStopped, "0 dg stops"},
+  };
+  for (const DgRow& r : rows) {
+    const tc::ForcePwmResult result = tc::forceToPwmDg(cal, r.force_dg, r.vbat_mv);
+    EXPECT_EQ(result.pwm_us, r.pwm_us) << r.what;
+    EXPECT_EQ(result.flags, r.flags) << r.what;
+  }
+}
+
+// Against option 2.1 in double precision on the curves' straight lines, every decigram of a
+// curved record at voltages around and between the curves', where the exact value is not within
+// 1e-6 us of a half (there the two roundings may differ only by the double's own error).
+TEST(ForcePwm, DecigramsAreOption21OnTheStraightLinesInDoublePrecision) {
+  MotorCalibration cal;
+  for (tc::ForceCurveBase* c : {static_cast<tc::ForceCurveBase*>(&cal.first), static_cast<tc::ForceCurveBase*>(&cal.second)}) {
+    const bool first = c == &cal.first;
+    c->start_mv = first ? 12400 : 10900;
+    c->pwm_at_1g_us = first ? 1110 : 1125;
+    for (uint16_t i = 0; i < c->stepCount(); ++i)  // steps 3, 2, ..., down to 0 and 1: a curve
+      c->steps()[i] = i + 1u < 400 ? static_cast<uint8_t>((first ? 3 : 4) * 60 / (i + 60)) : tc::kUnreachable;
+    ASSERT_TRUE(c->finalize());
+  }
+  long compared = 0;
+  for (uint16_t mv : {9000, 10900, 11337, 12400, 13100}) {
+    for (uint16_t dg = 10; dg <= 3990; ++dg) {
+      const double g = dg / 10.0;
+      const auto line = [&](const tc::ForceCurveBase& c) {
+        const uint16_t lo = static_cast<uint16_t>(g);
+        const double frac = g - lo;
+        return c.pwmForGrams(lo) + frac * (c.pwmForGrams(static_cast<uint16_t>(lo + 1)) - c.pwmForGrams(lo));
+      };
+      const double c1 = line(cal.first), c2 = line(cal.second);
+      const double exact = c1 + (mv - 12400.0) * (c2 - c1) / (10900.0 - 12400.0);
+      if (std::fabs(exact - std::floor(exact) - 0.5) < 1e-6) continue;
+      const long want = std::lround(exact);
+      ASSERT_EQ(tc::forceToPwmDg(cal, dg, mv).pwm_us, want) << dg << " dg at " << mv << " mV";
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 19000);
 }
 
 TEST(ForcePwm, ZeroForceStopsTheMotor) {

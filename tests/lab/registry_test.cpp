@@ -1,7 +1,7 @@
 // The effect registry is complete and consistent: every effect has a name, documentation and
 // parameters with ranges; names are unique; the catalogue, `lab effects` and docs/lab.md list
 // exactly the registry (`lab effects`: cli_test.cpp); a fit's parameters are the ones the registry documents, in its ranges;
-// what suggests an effect and the advice the diagnosis gives are the registry's, and analysis.cpp names no effect.
+// what suggests an effect and the advice the diagnosis gives are the registry's, and the diagnosis's sources name no effect.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -174,18 +174,20 @@ TEST(LabRegistry, TheDiagnosisTakesItsSuggestionAndAdviceFromTheRegistry) {
 }
 
 TEST(LabRegistry, AnalysisNamesNoEffect) {
-  // a new effect is its file and its registry line: the diagnosis's source names none of them
-  std::ifstream f(THRUSTCAL_SOURCE_DIR "/tools/lab/src/analysis.cpp");
-  ASSERT_TRUE(f);
-  std::string src((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  // --holdout voltage is a kind of hold-out (runs grouped by voltage), not the effect
-  const auto a = src.find("Holdout parseHoldout("), b = src.find("\n}\n", a);
-  ASSERT_NE(a, std::string::npos);
-  src.erase(a, b - a);
-  for (const EffectDef* e : lab::effects::registry()) {
-    if (e->role == Role::kExpression) continue;
-    EXPECT_EQ(src.find("\"" + e->name + "\""), std::string::npos) << "analysis.cpp names \"" << e->name << "\"";
-    EXPECT_EQ(src.find("`" + e->name + "`"), std::string::npos) << "analysis.cpp names `" << e->name << "`";
+  // a new effect is its file and its registry line: the diagnosis's sources (the ranking, the
+  // verdict, the ladder) name none of them
+  for (const char* file : {"analysis.cpp", "verdict.cpp", "ladder.cpp"}) {
+    std::ifstream f(std::string(THRUSTCAL_SOURCE_DIR "/tools/lab/src/") + file);
+    ASSERT_TRUE(f) << file;
+    std::string src((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    // --holdout voltage is a kind of hold-out (runs grouped by voltage), not the effect
+    const auto a = src.find("Holdout parseHoldout(");
+    if (a != std::string::npos) src.erase(a, src.find("\n}\n", a) - a);
+    for (const EffectDef* e : lab::effects::registry()) {
+      if (e->role == Role::kExpression) continue;
+      EXPECT_EQ(src.find("\"" + e->name + "\""), std::string::npos) << file << " names \"" << e->name << "\"";
+      EXPECT_EQ(src.find("`" + e->name + "`"), std::string::npos) << file << " names `" << e->name << "`";
+    }
   }
 }
 

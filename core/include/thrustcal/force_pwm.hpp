@@ -47,6 +47,9 @@ struct ForcePwmResult {
 
 ForcePwmResult forceToPwm(const MotorCalibration& cal, uint16_t force_g, uint16_t vbat_mv,
                           const ForcePwmLimits& limits = ForcePwmLimits());
+// The same for a force in decigrams (0.1 g): between two grams the curves' straight line.
+ForcePwmResult forceToPwmDg(const MotorCalibration& cal, uint16_t force_dg, uint16_t vbat_mv,
+                            const ForcePwmLimits& limits = ForcePwmLimits());
 
 namespace force_pwm_detail {
 
@@ -95,21 +98,43 @@ inline uint16_t clampPwm(int32_t pwm_us, const ForcePwmLimits& limits, uint8_t& 
 
 }  // namespace force_pwm_detail
 
-// Option 2.1 over any form of the thesis record: `cal` has isCalibrated(), hasSecondCurve() and
-// curves `first` / `second` with start_mv and maxGrams(); pwmFor(curve, grams) is the curve's
-// PWM at a gram (1..maxGrams()). forceToPwm(MotorCalibration) is this over the decoded record;
-// read_run flies it over tc::ThesisRun (thesis_runtime.hpp), the same arithmetic to the bit.
+// The curve's PWM at `grams` + `tenths` / 10, in tenths of a microsecond: between two grams
+// the straight line between their PWMs (the curves are measured per gram); below the first gram
+// the first gram's PWM, at and beyond the heaviest the heaviest's.
+template <class Curve, class PwmFor>
+int32_t pwmTenthsAt(const Curve& curve, uint16_t grams, uint8_t tenths, PwmFor pwmFor) {
+  const uint16_t max = curve.maxGrams();
+  if (grams >= max) return 10 * static_cast<int32_t>(pwmFor(curve, max));
+  if (grams == 0) return 10 * static_cast<int32_t>(pwmFor(curve, 1));
+  const int32_t lo = pwmFor(curve, grams);
+  if (tenths == 0) return 10 * lo;
+  return 10 * lo + static_cast<int32_t>(tenths) * (static_cast<int32_t>(pwmFor(curve, static_cast<uint16_t>(grams + 1))) - lo);
+}
+
+// Option 2.1 over any form of the thesis record for a force in decigrams: `cal` has
+// isCalibrated(), hasSecondCurve() and curves `first` / `second` with start_mv and maxGrams();
+// pwmFor(curve, grams) is the curve's PWM at a gram (1..maxGrams()). Each curve's PWM at the
+// force (pwmTenthsAt, in 0.1 us), then PWM = c1 + (V_now - V1) (c2 - c1) / (V2 - V1) rounded once
+// to the microsecond: at a whole gram exactly the thesis's arithmetic on whole microseconds (the
+// rational is the same, and so is its rounding), between grams the curves' straight line.
+// forceToPwm(MotorCalibration) is this over the decoded record; read_run and fly fly it over
+// tc::ThesisRun (thesis_runtime.hpp), the same arithmetic to the bit.
 template <class Cal, class PwmFor>
-ForcePwmResult forceToPwmWith(const Cal& cal, uint16_t force_g, uint16_t vbat_mv,
-                              const ForcePwmLimits& limits, PwmFor pwmFor) {
+ForcePwmResult forceToPwmWithDg(const Cal& cal, uint16_t force_dg, uint16_t vbat_mv,
+                                const ForcePwmLimits& limits, PwmFor pwmFor) {
   ForcePwmResult result{limits.pwm_min_us, 0};
   if (!cal.isCalibrated() || cal.first.maxGrams() == 0) result.flags |= kNotCalibrated;
-  if (force_g == 0) result.flags |= kStopped;
+  if (force_dg == 0) result.flags |= kStopped;
   if (result.flags) return result;
 
-  // PWM of a curve at force_g, flagging a force beyond what the curve reaches.
-  if (force_g > cal.first.maxGrams()) result.flags |= kSaturated;
-  const uint16_t c1_us = pwmFor(cal.first, force_g);
+  // force_dg / 10 by a product (exact for every uint16_t: no division routine on the AVR).
+  const uint16_t grams = static_cast<uint16_t>((static_cast<uint32_t>(force_dg) * 52429u) >> 19);
+  const uint8_t tenths = static_cast<uint8_t>(force_dg - 10u * grams);
+  // PWM of a curve at the force, flagging a force beyond what the curve reaches.
+  if (force_dg > 10u * cal.first.maxGrams()) result.flags |= kSaturated;
+  const int32_t c1_x10 = pwmTenthsAt(cal.first, grams, tenths, pwmFor);
+  const int32_t c1_us = (c1_x10 * 52429) >> 19;  // whole microseconds (c1_x10 < 2^16, >= 0)
+  const int32_t c1_tenths = c1_x10 - 10 * c1_us;
   if (vbat_mv < limits.v_min_mv || vbat_mv > limits.v_max_mv) {
     result.flags |= kVoltageInvalid;
   } else if (!cal.hasSecondCurve() || cal.second.maxGrams() == 0) {
@@ -120,21 +145,31 @@ ForcePwmResult forceToPwmWith(const Cal& cal, uint16_t force_g, uint16_t vbat_mv
     if (span_mv < min_span_mv && -span_mv < min_span_mv) {
       result.flags |= kEqualVoltages;
     } else {
-      if (force_g > cal.second.maxGrams()) result.flags |= kSaturated;
-      const uint16_t c2_us = pwmFor(cal.second, force_g);
-      // |dv| <= 65535 and |dc| <= 32767 keep the product inside int32; a calibration that
-      // passed the codec's checks has PWMs of a few thousand us, so the clamp never bites.
+      if (force_dg > 10u * cal.second.maxGrams()) result.flags |= kSaturated;
+      const int32_t c2_x10 = pwmTenthsAt(cal.second, grams, tenths, pwmFor);
+      // |dv| <= 65535 and |dc| <= 32767 tenths keep the product inside int32; a calibration
+      // that passed the codec's checks has PWMs of a few thousand us, so the clamp never bites.
       const int32_t dv_mv = static_cast<int32_t>(vbat_mv) - cal.first.start_mv;
-      int32_t dc_us = static_cast<int32_t>(c2_us) - c1_us;
-      if (dc_us > 32767) dc_us = 32767;
-      if (dc_us < -32767) dc_us = -32767;
-      const int32_t pwm_us = static_cast<int32_t>(c1_us) + force_pwm_detail::divRound(dv_mv * dc_us, span_mv);
+      int32_t dc_x10 = c2_x10 - c1_x10;
+      if (dc_x10 > 32767) dc_x10 = 32767;
+      if (dc_x10 < -32767) dc_x10 = -32767;
+      // c1 + (c1_tenths + dv dc_x10 / span) / 10, rounded once: the remainder over 10 span.
+      const int32_t pwm_us =
+          c1_us + force_pwm_detail::divRound(c1_tenths * span_mv + dv_mv * dc_x10, 10 * span_mv);
       result.pwm_us = force_pwm_detail::clampPwm(pwm_us, limits, result.flags);
       return result;
     }
   }
-  result.pwm_us = force_pwm_detail::clampPwm(c1_us, limits, result.flags);
+  result.pwm_us = force_pwm_detail::clampPwm(c1_us + (c1_tenths >= 5 ? 1 : 0), limits, result.flags);
   return result;
+}
+
+// The same for a force in whole grams (the thesis's own commands).
+template <class Cal, class PwmFor>
+ForcePwmResult forceToPwmWith(const Cal& cal, uint16_t force_g, uint16_t vbat_mv,
+                              const ForcePwmLimits& limits, PwmFor pwmFor) {
+  const uint16_t force_dg = force_g > 6553 ? 65530 : static_cast<uint16_t>(10u * force_g);
+  return forceToPwmWithDg(cal, force_dg, vbat_mv, limits, pwmFor);
 }
 
 }  // namespace tc

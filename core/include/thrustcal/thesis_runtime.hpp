@@ -132,8 +132,15 @@ struct ThesisRun {
   }
 };
 
-// Option 2.1 on a ThesisRun: tc::forceToPwm's arithmetic (forceToPwmWith) with the curves'
-// steps read from Storage.
+// Option 2.1 on a ThesisRun: tc::forceToPwm's arithmetic (forceToPwmWithDg) with the curves'
+// steps read from Storage, for a force in decigrams (what the force API flies) or whole grams.
+template <class Storage>
+ForcePwmResult forceToPwmDg(const ThesisRun& run, uint16_t force_dg, uint16_t vbat_mv,
+                            const ForcePwmLimits& limits = ForcePwmLimits()) {
+  return forceToPwmWithDg(run, force_dg, vbat_mv, limits, [](const ThesisCurveRun& curve, uint16_t grams) {
+    return curve.pwmForGrams<Storage>(grams);
+  });
+}
 template <class Storage>
 ForcePwmResult forceToPwm(const ThesisRun& run, uint16_t force_g, uint16_t vbat_mv,
                           const ForcePwmLimits& limits = ForcePwmLimits()) {

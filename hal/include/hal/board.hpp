@@ -14,6 +14,8 @@
 #pragma once
 #include <stdint.h>
 
+#include "hal/mega_pins.hpp"
+
 namespace hal {
 
 constexpr uint32_t kCpuHz = 16000000UL;  // the crystal; the AVR backend asserts F_CPU == this
@@ -147,6 +149,21 @@ constexpr uint8_t kImuI2cAddress = 0x68;  // 7-bit; SLA+W = 0xD0, SLA+R = 0xD1
 constexpr uint8_t kImuWhoAmI = 0x68;      // what its WHO_AM_I register (0x75) reads
 constexpr uint32_t kTwiFastHz = 400000;   // I2C fast mode, the MPU-6050's highest rate
 
+// ---- RC receiver input (fly, docs/fly.md "Wiring a receiver") ----
+// Port K's pin-change interrupt (PCINT2: PCINT16..23 are PK0..PK7, the Mega's A8..A15, free
+// of every other use here): a PPM sum on A8, or one pulse per channel on A8..A15 (channel 1 on
+// A8). Edges are timestamped by Timer5 (free-running, 0.5 us; Timers 1 and 4 carry the ESC
+// frames, Timer0 the millisecond clock).
+struct RcPins {
+  char port;                // 'K'
+  uint8_t ppm_bit;          // PK0: the PPM sum
+  uint8_t channels;         // PWM: one channel per bit from bit 0
+  uint8_t first_arduino_pin;  // A8 is digital pin 62 on the Mega2560
+};
+constexpr RcPins kRcPins = {'K', 0, 8, 62};
+constexpr uint8_t kRcTimer = 5;
+constexpr uint32_t kRcTicksPerSecond = kCpuHz / 8;  // Timer5 at clk / 8: 0.5 us
+
 namespace board {
 // SCL = F_CPU / (16 + 2 * TWBR * 4^TWPS) (ATmega2560 datasheet, 24.5.2): the TWBR value for a
 // bus rate with TWPS = 0, and the rate it gives.
@@ -163,7 +180,21 @@ static_assert(board::twiSclHz(board::twiBitRateRegister(kTwiFastHz)) == kTwiFast
               "400 kHz is exact from 16 MHz (TWBR 12)");
 static_assert((kImuI2cAddress >> 7) == 0, "a 7-bit I2C address");
 
+namespace board {
+// Each table's Arduino pin numbers are the header's (hal/mega_pins.hpp).
+constexpr bool escPinsOnHeader(uint8_t i = 0) {
+  return i >= kEscChannels || (megaPinOf(kEscPins[i].port, kEscPins[i].bit) == kEscPins[i].arduino_pin &&
+                               escPinsOnHeader(static_cast<uint8_t>(i + 1)));
+}
+}  // namespace board
+static_assert(board::escPinsOnHeader(), "each ESC pin's D number is the Mega header's for its port pin");
+static_assert(megaPinOf(kTwiPins.port, kTwiPins.sda_bit) == kTwiPins.sda_arduino_pin &&
+                  megaPinOf(kTwiPins.port, kTwiPins.scl_bit) == kTwiPins.scl_arduino_pin,
+              "SDA and SCL are the Mega header's D20 and D21");
+
 static_assert(kEscChannels == 4, "four ESC outputs: one per calibration slot (tc::kMotorSlots)");
+static_assert(!board::escUsesTimer(kRcTimer), "the receiver's timestamps come from a timer no ESC uses");
+static_assert(kRcPins.ppm_bit < kRcPins.channels && kRcPins.channels <= 8, "PPM and PWM pins on port K");
 static_assert(board::escPinsValid(), "each ESC pin is a compare output A..C of timer 1, 3, 4 or 5");
 static_assert(board::escPinsUnique(), "no two ESCs share a compare output or an Arduino pin");
 static_assert(kEscTicksPerSecond == 2000000UL, "0.5 us ticks: OCRnx = 2 * pwm_us - 1");

@@ -95,12 +95,37 @@ struct Twi {
   static uint8_t lastStatus();
   // Copies up to `length` bytes of the last read's data (valid after kDone); returns how many.
   static uint8_t readData(uint8_t* dst, uint8_t length);
+  // Where in the ESC frame (Esc::frameTimeUs's clock) the last transfer ended, taken by the
+  // interrupt that ended it: a loop paced by the frames times its computation from the read's
+  // end, however late it saw it (fly's status, docs/fly.md).
+  static uint16_t endFrameTimeUs();
   // Ends the present transfer at once (TWI off and on again: the pins are let go); result()
   // is kAborted when one was running.
   static void abort();
   // Bus recovery (I2C spec 3.1.16): TWI off, up to kRecoveryClocks SCL clocks as an open-drain
   // GPIO while a slave holds SDA low, a STOP, TWI on again. True when both lines are high after.
   static bool recoverBus();
+};
+
+// RC receiver input (hal/board.hpp kRcPins): every change of the watched port-K pins, with the
+// port's state after it and a timestamp in 0.5 us ticks of a free-running 16-bit timer no ESC
+// uses (it wraps every 32.8 ms: a decoder measures the intervals between edges, never longer
+// ones), queued by the pin-change interrupt for the main loop. Decoding (PPM sum, one pulse per
+// channel), ranges and failsafe are the caller's (fly: rc_input.hpp).
+struct Rc {
+  struct Edge {
+    uint8_t pins;    // the watched pins' levels after the change, bit i = channel pin i
+    uint16_t ticks;  // when, in 0.5 us ticks
+  };
+  static constexpr uint8_t kQueueEdges = 32;  // ~1.5 PPM frames of edges
+
+  // Watch the pins in `mask` (bit i: A8 + i); 0 stops watching. Pins watched are inputs with
+  // their pull-ups on (an unplugged receiver reads high and still: no edges).
+  static void init(uint8_t mask);
+  // The oldest queued change; false when there is none.
+  static bool nextEdge(Edge& edge);
+  // Changes lost because the queue was full (saturates): a decoder treats them as noise.
+  static uint16_t lostEdges();
 };
 
 // 4 KB EEPROM. updateByte reads first and skips bytes that already hold the value; it kicks the

@@ -25,7 +25,7 @@ class ForceApi : public ::testing::Test {
   }
   // Every motor at `force_g`, a few frames (the battery median and the v2 filter settle).
   void fly(uint16_t force_g) {
-    for (uint8_t i = 0; i < 4; ++i) motors_.setForce(i, force_g);
+    for (uint8_t i = 0; i < 4; ++i) motors_.setForceDg(i, static_cast<uint16_t>(force_g * 10));
     for (int k = 0; k < 40; ++k) motors_.frame();
   }
   fw::ForceActuators motors_;
@@ -88,7 +88,7 @@ TEST_F(ForceApi, AnUncalibratedMotorFliesOnlyWhileItsSourceIsACalibratedSlot) {
   EXPECT_FALSE(motors_.isArmable(3));
   fly(200);
   EXPECT_EQ(motors_.motor(3).pwm_us, tc::kStopPwmUs);
-  EXPECT_EQ(motors_.motor(3).force_g, 0);
+  EXPECT_EQ(motors_.motor(3).force_dg, 0);
 }
 
 TEST_F(ForceApi, ModelSourcesChangeOnlyWhileNothingRunsAndOnlyToCalibratedSlots) {
@@ -98,7 +98,7 @@ TEST_F(ForceApi, ModelSourcesChangeOnlyWhileNothingRunsAndOnlyToCalibratedSlots)
   EXPECT_FALSE(motors_.setModelSource(0, 2)) << "slot 2 is erased";
   EXPECT_FALSE(motors_.setModelSource(4, 0)) << "no motor 4";
   EXPECT_FALSE(motors_.setModelSource(0, 4)) << "no slot 4";
-  motors_.setForce(0, 100);
+  motors_.setForceDg(0, 1000);
   EXPECT_FALSE(motors_.setModelSource(1, 0)) << "a motor runs";
   EXPECT_EQ(motors_.motor(1).source, 1);
   motors_.stopAll();
@@ -122,20 +122,20 @@ TEST_F(ForceApi, MaxForceIsTheLighterCurvesHeaviestGramOrTheV2ModelsLastKnotOrZe
   load();
   auto cal1 = storedCalibration(1);
   // then
-  EXPECT_EQ(motors_.maxForceG(0), 500);
-  EXPECT_EQ(motors_.maxForceG(1), std::min(cal1->first.maxGrams(), cal1->second.maxGrams()));
-  EXPECT_LT(motors_.maxForceG(1), 500);
-  EXPECT_EQ(motors_.maxForceG(2), v2.maxForceDg() / 10);
-  EXPECT_EQ(motors_.maxForceG(3), 0);
+  EXPECT_EQ(motors_.maxForceDg(0), 5000);
+  EXPECT_EQ(motors_.maxForceDg(1), 10 * std::min(cal1->first.maxGrams(), cal1->second.maxGrams()));
+  EXPECT_LT(motors_.maxForceDg(1), 5000);
+  EXPECT_EQ(motors_.maxForceDg(2), v2.maxForceDg());
+  EXPECT_EQ(motors_.maxForceDg(3), 0);
   ASSERT_TRUE(motors_.setModelSource(3, 2));
-  EXPECT_EQ(motors_.maxForceG(3), motors_.maxForceG(2)) << "its source's model";
+  EXPECT_EQ(motors_.maxForceDg(3), motors_.maxForceDg(2)) << "its source's model";
 }
 
 TEST_F(ForceApi, FrameIsTheBatterysReadingsThenTheOutputAndOutputAloneReadsNothing) {
   // given
   storeMotor(0, {13.5, true, 0});
   load();
-  motors_.setForce(0, 300);
+  motors_.setForceDg(0, 3000);
   // when / then
   const uint32_t before = fake::adcConversions();
   motors_.output();

@@ -88,7 +88,7 @@ class Fly : public ::testing::Test {
   // main.cpp up to its loop.
   void boot() {
     app_ = std::make_unique<fly::FlyApp>();
-    hal::Esc::init(fly::kFrameHz);
+    hal::Esc::init(fly::kLoopHz);
     hal::Clock::init();
     hal::Uart::init(hal::kUartBaud);
     hal::Adc::init();

@@ -263,7 +263,7 @@ TEST_F(Fly, ForceModeGivesEachMotorThePulseItsOwnRecordGivesTheForce) {
   armAndSpool(1200);
   uint16_t flown[4];
   for (uint8_t i = 0; i < 4; ++i) {
-    EXPECT_NEAR(fly::gramsOf(app_->flight().force[i]), 300.0f, 0.01f) << int(i);
+    EXPECT_NEAR(fly::gramsOf(app_->flight().force.dg[i]), 300.0f, 0.01f) << int(i);
     flown[i] = pulse(i);
   }
   EXPECT_NE(flown[0], flown[1]) << "four different motors, four different pulses";
@@ -271,7 +271,7 @@ TEST_F(Fly, ForceModeGivesEachMotorThePulseItsOwnRecordGivesTheForce) {
   fw::ForceActuators reference;
   reference.loadSettings();
   reference.loadSlots(nullptr);
-  for (uint8_t i = 0; i < 4; ++i) reference.setForce(i, 300);
+  for (uint8_t i = 0; i < 4; ++i) reference.setForceDg(i, 3000);
   for (int k = 0; k < 101; ++k) reference.frame();
   for (uint8_t i = 0; i < 4; ++i) EXPECT_EQ(flown[i], reference.motor(i).pwm_us) << int(i);
 }
@@ -326,8 +326,8 @@ TEST_F(Fly, TheSeesawFliesMotorsZeroAndOneAndHoldsTheOthersStopped) {
   bootReady();
   command("layout seesaw");
   armAndSpool(600);
-  EXPECT_NEAR(fly::gramsOf(app_->flight().force[0]), 300.0f, 0.01f);
-  EXPECT_NEAR(fly::gramsOf(app_->flight().force[1]), 300.0f, 0.01f);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force.dg[0]), 300.0f, 0.01f);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force.dg[1]), 300.0f, 0.01f);
   EXPECT_GT(pulse(0), 1100);
   EXPECT_GT(pulse(1), 1100);
   EXPECT_EQ(pulse(2), tc::kStopPwmUs);
@@ -340,10 +340,10 @@ TEST_F(Fly, TheCollectiveSpoolsUpOverOneSecondAfterArming) {
   command("thrust 1200");
   command("arm");
   runFor(480);  // 20 ms of the command, then these: about half way
-  const float half = fly::gramsOf(app_->flight().force[0]);
+  const float half = fly::gramsOf(app_->flight().force.dg[0]);
   EXPECT_NEAR(half, 150.0f, 10.0f);
   runFor(600);
-  EXPECT_NEAR(fly::gramsOf(app_->flight().force[0]), 300.0f, 0.01f);
+  EXPECT_NEAR(fly::gramsOf(app_->flight().force.dg[0]), 300.0f, 0.01f);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -44,12 +44,15 @@ TEST(FlyHelp, ComesFromTheTableAndListsEveryCommandWithItsRange) {
        {"help ", "arm ", "disarm ", "sp ROLL_DEG PITCH_DEG ", "thrust G ", "gains KP KI KD ", "yaw KP KI ",
         "mode force|generic|pwm|ardupilot [N]", "layout plus|x|seesaw ", "airframe ARM_MM YAW_ARM_UM",
         "hover US MG_PER_US", "ap EXPO_E4 SPIN_MIN_E4 SPIN_MAX_E4 FULL_G", "apvolt VMAX_MV VMIN_MV",
-        "appwm MIN_US MAX_US", "crash DEG ", "calibrate ", "stream on|off ", "status ", "strict on|off "}) {
+        "appwm MIN_US MAX_US", "crash DEG ", "calibrate ", "stream on|off ", "status ", "strict on|off ",
+        "rc off|ppm|pwm [N]", "rcmap AETR|TAER|AERT|EATR|ERTA ", "rates ANGLE_DEG RATE_DPS YAW_DPS",
+        "fmode angle|rate "}) {
     EXPECT_NE(help.find(std::string("\n") + row), std::string::npos) << row << help;
   }
   EXPECT_NE(help.find("(ROLL_DEG -30..30, PITCH_DEG -30..30)"), std::string::npos) << help;
   EXPECT_NE(help.find("(DEG 10..90)"), std::string::npos) << help;
   EXPECT_NE(help.find(" " + std::to_string(tc::kFailsafeMs) + " ms"), std::string::npos) << help;
+  EXPECT_NE(help.find(" " + std::to_string(fly::kRcLossMs) + " ms without a valid"), std::string::npos) << help;
 }
 
 TEST(FlyHelp, TheManualShowsExactlyWhatHelpPrints) {

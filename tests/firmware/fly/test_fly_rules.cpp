@@ -1,6 +1,6 @@
 // fly's pure rules (firmware/fly/fly_rules.hpp), checked without booting the image: arming
-// refusals in the order a user fixes them, the crash limit, the IMU's fault counts, the frame's
-// layout and the spool-up.
+// refusals in the order a user fixes them, the crash limit, the frame's layout, the frame counts
+// and the spool-up.
 #include <gtest/gtest.h>
 
 #include "fly_rules.hpp"
@@ -66,14 +66,6 @@ TEST(FlyRules, ACrashIsRollOrPitchBeyondTheLimitEitherWay) {
   EXPECT_TRUE(crashed(-3.0f, 0, limit)) << "upside down";
 }
 
-TEST(FlyRules, TheImuFaultsAfterEightBadOrStaleReadsInARowThat_Is20Milliseconds) {
-  EXPECT_FALSE(imuReadsFailed(kImuMaxBadReads - 1));
-  EXPECT_TRUE(imuReadsFailed(kImuMaxBadReads));
-  EXPECT_FALSE(imuFrozen(kImuMaxStaleReads - 1));
-  EXPECT_TRUE(imuFrozen(kImuMaxStaleReads));
-  EXPECT_LE(kImuMaxBadReads * kFrameUs, 100000u / 4) << "well inside the 100 ms a disarm may take";
-}
-
 TEST(FlyRules, TheReadStartsAsLateAsTheBudgetAllowsSoTheResultMeetsTheNextEdge) {
   EXPECT_EQ(kFrameUs, 2500);
   EXPECT_EQ(readPhaseUs(500), 2500 - kImuReadUs - 500);
@@ -112,7 +104,7 @@ TEST(FlyRules, AConsoleLineStartsOnlyWellBeforeTheReadUnlessTheReadLeavesNoRoom)
 
 TEST(FlyRules, EachSlowJobRunsFiftyTimesASecondOnAFrameOfItsOwn) {  // one job per frame: slowJob()
   int count[6] = {};
-  for (uint32_t frame = 0; frame < kFrameHz; ++frame) ++count[static_cast<int>(slowJob(frame))];
+  for (uint32_t frame = 0; frame < kLoopHz; ++frame) ++count[static_cast<int>(slowJob(frame))];
   EXPECT_EQ(slowJob(1), SlowJob::kBatteryModel) << "the frame after the battery's reading";
   EXPECT_EQ(count[static_cast<int>(SlowJob::kBattery)], 50);
   EXPECT_EQ(count[static_cast<int>(SlowJob::kBatteryModel)], 50);
@@ -122,11 +114,26 @@ TEST(FlyRules, EachSlowJobRunsFiftyTimesASecondOnAFrameOfItsOwn) {  // one job p
   EXPECT_FLOAT_EQ(kSlowCycleS, 0.02f);
 }
 
-TEST(FlyRules, TheCollectiveSpoolsUpLinearlyOverOneSecond) {
-  EXPECT_EQ(spoolFraction(0), 0.0f);
-  EXPECT_FLOAT_EQ(spoolFraction(250), 0.25f);
-  EXPECT_EQ(spoolFraction(kSpoolMs), 1.0f);
-  EXPECT_EQ(spoolFraction(60000), 1.0f);
+TEST(FlyRules, TheCollectiveSpoolsUpLinearlyOverOneSecondInIntegers) {
+  const ForceDg full = 3000;  // 300 g
+  EXPECT_EQ(spooledForce(full, 0), 0);
+  EXPECT_EQ(spooledForce(full, 250), 750);
+  EXPECT_EQ(spooledForce(full, 500), 1500);
+  for (uint32_t ms = 0; ms < kSpoolMs; ms += 7)
+    EXPECT_NEAR(spooledForce(full, ms), full * (ms / 1000.0), 3.0) << ms;  // within 1/1024 of it
+  EXPECT_LT(spooledForce(full, kSpoolMs - 1), full);
+  EXPECT_EQ(spooledForce(full, kSpoolMs), full);
+  EXPECT_EQ(spooledForce(full, 60000), full);
+}
+
+// Every count of frames derives from the one loop rate.
+TEST(FlyRules, FrameCountsDeriveFromTheLoopRate) {
+  EXPECT_EQ(kFrameUs * kLoopHz, 1000000u);
+  EXPECT_EQ(framesIn(1000), kLoopHz);
+  EXPECT_EQ(framesIn(20), 8) << "at 400 Hz";
+  EXPECT_EQ(framesIn(1), 1) << "rounded up";
+  EXPECT_EQ(msOfFrames(kLoopHz), 1000u);
+  EXPECT_EQ(kSlowCycleFrames * kSlowJobHz, kLoopHz);
 }
 
 }  // namespace

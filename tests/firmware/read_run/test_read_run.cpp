@@ -112,7 +112,7 @@ TEST_F(ReadRun, MissingOrCorruptSlotIsNeverArmedAndEveryCommandToItIsRefused) {
                                "calibrated"))
         << lift;
     EXPECT_EQ(pulse(2), 1000);
-    EXPECT_EQ(app_->motor(2).force_g, 0);
+    EXPECT_EQ(app_->motor(2).force_dg, 0);
     EXPECT_GT(pulse(0), 1400);
     EXPECT_GT(pulse(3), 1400);
     EXPECT_EQ(app_->mode(), rr::Mode::kReady);  // liftoff did not start
@@ -174,7 +174,7 @@ TEST_F(ReadRun, ForceForAllMotorsGivesEachMotorThePwmOfItsOwnCurve) {
     auto cal = storedCalibration(m);
     EXPECT_EQ(pulse(m), cal->first.pwmForGrams(300));
     EXPECT_NEAR(plantForceG(k[m], pulse(m), v1_mv), 300.0, 6.0);
-    EXPECT_EQ(app_->motor(m).force_g, 300);
+    EXPECT_EQ(app_->motor(m).force_dg, 3000);
   }
   EXPECT_NE(pulse(1), pulse(2));  // different motors, different pulses, same force
 }
@@ -248,10 +248,10 @@ TEST_F(ReadRun, StatusShowsForcePwmFlagsInWordsAndBothBatteryVoltages) {
   // then
   const std::string v1 = volts(mvFromCounts(kCountsV1));
   const std::string pwm0 = std::to_string(pulse(0));
-  EXPECT_TRUE(contains(out, "motor 0: 300 g, " + pwm0 + " us, battery " + v1 +
+  EXPECT_TRUE(contains(out, "motor 0: 300.0 g, " + pwm0 + " us, battery " + v1 +
                                 " V compensated, flags: none"))
       << out;
-  EXPECT_TRUE(contains(out, "motor 2: 300 g, " + std::to_string(pulse(2)) + " us")) << out;
+  EXPECT_TRUE(contains(out, "motor 2: 300.0 g, " + std::to_string(pulse(2)) + " us")) << out;
   EXPECT_TRUE(contains(out, "flags: saturated")) << out;
   EXPECT_TRUE(contains(out, "flags: single curve")) << out;
   EXPECT_TRUE(contains(out, "battery " + v1 + " V raw (median of 101), frame rate 50 Hz, running"))
@@ -454,8 +454,10 @@ TEST_F(ReadRun, LiftoffRampsAllFourMotorsThenHoldsThenStops) {
   EXPECT_TRUE(contains(out, "# liftoff: ramp 0 -> 300 g in 1000 ms, hold 2000 ms")) << out;
   EXPECT_TRUE(contains(out, "# hold 300 g for 2000 ms")) << out;
   EXPECT_TRUE(contains(out, "# liftoff done: motors stopped")) << out;
-  EXPECT_TRUE(contains(out, "# t 0.500 s ramp 150 g, pwm ")) << out;
-  EXPECT_TRUE(contains(out, "# t 2.000 s hold 300 g, pwm ")) << out;
+  // the frames run on the ESC frame's phase (100 us after its edge at 50 Hz): the notes come from
+  // the first frame at or after each half second
+  EXPECT_TRUE(contains(out, "# t 0.501 s ramp 150 g, pwm ")) << out;
+  EXPECT_TRUE(contains(out, "# t 2.001 s hold 300 g, pwm ")) << out;
   EXPECT_EQ(app_->failsafeTrips(), 0u) << "the sequence is the command source";
   EXPECT_EQ(app_->mode(), rr::Mode::kReady);
 }
@@ -526,16 +528,16 @@ TEST_F(ReadRun, StrictModeRefusesSpinningWithoutAChecksumButAlwaysAllowsStopping
   boot();
   command("strict on");
   EXPECT_TRUE(contains(command("f 200"), "error: strict mode")) << fake::output();
-  EXPECT_EQ(app_->motor(0).force_g, 0);
+  EXPECT_EQ(app_->motor(0).force_dg, 0);
   EXPECT_TRUE(contains(command("liftoff 200"), "error: strict mode"));
   EXPECT_EQ(app_->mode(), rr::Mode::kReady);
   command("f 200*74");  // XOR of "f 200"
-  EXPECT_EQ(app_->motor(0).force_g, 200);
+  EXPECT_EQ(app_->motor(0).force_dg, 2000);
   EXPECT_FALSE(contains(command("f 2 0"), "error:")) << "stopping one motor needs no checksum";
-  EXPECT_EQ(app_->motor(2).force_g, 0);
-  EXPECT_EQ(app_->motor(1).force_g, 200);
+  EXPECT_EQ(app_->motor(2).force_dg, 0);
+  EXPECT_EQ(app_->motor(1).force_dg, 2000);
   command("f 0");
-  EXPECT_EQ(app_->motor(0).force_g, 0);
+  EXPECT_EQ(app_->motor(0).force_dg, 0);
   EXPECT_TRUE(contains(command("divider 100000 22000"), "error: strict mode")) << "writes the EEPROM";
   EXPECT_FALSE(contains(command("divider"), "error:")) << "showing it writes nothing";
 }
@@ -588,7 +590,7 @@ TEST_F(ReadRun, BadInputGetsOneErrorLineAndChangesNothing) {
     EXPECT_EQ(got[1].rfind("error: ", 0), 0u) << out;
     EXPECT_EQ(got[2], "rr> ");
     for (uint8_t m = 0; m < rr::kMotors; ++m) EXPECT_EQ(pulse(m), before[m]);
-    EXPECT_EQ(app_->motor(0).force_g, 200);
+    EXPECT_EQ(app_->motor(0).force_dg, 2000);
     EXPECT_EQ(fake::frameRateHz(), 50);
     EXPECT_EQ(app_->mode(), rr::Mode::kReady);
     EXPECT_FALSE(app_->isStreaming());
@@ -607,7 +609,7 @@ TEST_F(ReadRun, HelpListsEveryCommand) {
 // ---------------------------------------------------------------------------------------------
 // Frame rate and stream
 
-TEST_F(ReadRun, RateChangesTheEscFrameRateAndTheControlLoopFollows) {
+TEST_F(ReadRun, RateChangesTheEscFrameRateAndOneControlFrameRunsOnEachEscFrame) {
   struct Case {
     uint16_t hz;
   };
@@ -623,14 +625,20 @@ TEST_F(ReadRun, RateChangesTheEscFrameRateAndTheControlLoopFollows) {
     // when
     const std::string out = command("rate " + std::to_string(c.hz));
     const uint32_t conversions_before = fake::adcConversions();
+    const uint32_t hooks_before = fake::phaseHookCalls();
+    const uint32_t writes_before = fake::escWriteAlls();
     runFor(1000);
 
-    // then: the ESC timer runs at the new rate and the battery is sampled once per frame
+    // then: the ESC timer runs at the new rate and every ESC frame (its phase hook) is one
+    // control frame: the battery sampled once, the four pulses written once, none skipped
     EXPECT_TRUE(contains(out, "frame rate " + std::to_string(c.hz) + " Hz")) << out;
     EXPECT_EQ(fake::frameRateHz(), c.hz);
     const uint32_t frames = (fake::adcConversions() - conversions_before) /
                             fw::BatteryInput::kSamplesPerFrame;
     EXPECT_NEAR(static_cast<double>(frames), c.hz, 1.0);
+    EXPECT_NEAR(static_cast<double>(fake::phaseHookCalls() - hooks_before), c.hz, 1.0);
+    EXPECT_EQ(fake::escWriteAlls() - writes_before, fake::phaseHookCalls() - hooks_before);
+    EXPECT_EQ(app_->framesSkipped(), 0);
   }
 }
 

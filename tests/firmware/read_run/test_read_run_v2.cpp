@@ -305,10 +305,10 @@ TEST_F(ReadRunV2, MixOfV1AndV2SlotsFliesEachWithItsOwnModel) {
   // and status shows the v1 battery compensated, the v2 battery filtered with the headroom
   const uint16_t headroom1_g = tc::headroomDg(storedV2Model(1), mvFromCounts(kCountsV1)) / 10;
   EXPECT_EQ(lineStartingWith(status, "motor 0:"),
-            "motor 0: 300 g, " + std::to_string(pulse(0)) + " us, battery " + v1 +
+            "motor 0: 300.0 g, " + std::to_string(pulse(0)) + " us, battery " + v1 +
                 " V compensated, flags: none");
   EXPECT_EQ(lineStartingWith(status, "motor 1:"),
-            "motor 1: 300 g, " + std::to_string(pulse(1)) + " us, battery " + v1 +
+            "motor 1: 300.0 g, " + std::to_string(pulse(1)) + " us, battery " + v1 +
                 " V filtered, headroom " + std::to_string(headroom1_g) + " g, flags: none");
   EXPECT_TRUE(contains(status, "bus filter " + v1 + " V (v2 motors: 1/8 per frame)")) << status;
 }
@@ -411,7 +411,7 @@ TEST_F(ReadRunV2, V2SlotWithBothCopiesCorruptIsNeverArmed) {
     EXPECT_TRUE(contains(one, "error: motor 2 is " + reason + "; it stays at 1000 us")) << one;
     EXPECT_TRUE(contains(all, "warning: motor 2 " + reason + "; held at 1000 us")) << all;
     EXPECT_EQ(pulse(2), 1000);
-    EXPECT_EQ(app_->motor(2).force_g, 0);
+    EXPECT_EQ(app_->motor(2).force_dg, 0);
     EXPECT_EQ(pulse(0), expectedV2Pwm(0, 300));
   }
 }

@@ -239,7 +239,7 @@ void addDrift(CLI::App& bench) {
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime, "
-               "safety, fly, swap; each figure next to its target");
+               "safety, fly, swap, speed; each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -278,6 +278,10 @@ void registerCommands(CLI::App& app) {
       "the swap experiment's full run (docs/fly.md): motor 1 exchanged, only its slot calibrated again, fly's "
       "10-degree steps in every mode on the seesaw and the gimbal (simavr; minutes)",
       [](const Options& o) { return std::vector<Section>{swapSection(o.paths, swapOptions(o))}; });
+  add(*bench, o, "speed",
+      "simulated seconds per wall second: read_run, fly on the gimbal, and a firmware with "
+      "phase-correct PWM on INT4/INT5 (as MultiWii 2.4 on a Mega)",
+      [](const Options& o) { return std::vector<Section>{speedSection(o.paths)}; });
   addReport(*bench);
   addDrift(*bench);
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
@@ -292,6 +296,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(safetySection(o.paths));
         all.push_back(flySection(o.paths));
         all.push_back(swapSection(o.paths, swapOptions(o)));
+        all.push_back(speedSection(o.paths));
         return all;
       });
 }

@@ -108,6 +108,22 @@ void addAirOptions(CLI::App* cmd, AirCliOptions& o) {
   cmd->add_option("--vibration", o.vibration_g, "seesaw/gimbal: rotor imbalance at the IMU, g at 10,000 rpm")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_option("--esc-pins", o.esc_pins,
+                  "the Arduino pins of ESC outputs 0..3, the rig's motors 0..3, e.g. D3,D5,D6,D2 "
+                  "(default: the board table, D6,D7,D8,D11); pulses are timed from the pins' edges")
+      ->check([](const std::string& list) -> std::string {  // errors at parse time
+        try {
+          parseEscPins(list);
+          return {};
+        } catch (const std::invalid_argument& e) {
+          const std::string what = e.what();
+          return what.rfind("--esc-pins ", 0) == 0 ? what.substr(11) : what;
+        }
+      });
+}
+
+void applyEscPins(Board& board, const AirCliOptions& o) {
+  if (!o.esc_pins.empty()) board.setEscPins(parseEscPins(o.esc_pins));
 }
 
 bool isAirRig(const std::string& rig) { return rig == "seesaw" || rig == "gimbal"; }
@@ -126,6 +142,7 @@ std::unique_ptr<AirframeRig> makeAirframeRig(const std::string& elf, const std::
   applyMotorParts(a.motors, o, s);
   a.imu = o.imu == "mpu6050";
   a.imu_params = imuParams(o);
+  if (!o.esc_pins.empty()) a.esc_pins = parseEscPins(o.esc_pins);
   a.faults = parseFaults(o);
   a.log_period_s = o.log.empty() ? 0.0 : o.log_period_s;
   a.log_in_memory = false;
@@ -212,6 +229,7 @@ void runOnce(const RunOptions& r) {
   } else {
     bare = std::make_unique<Board>(r.elf);
     board = bare.get();
+    applyEscPins(*board, r.air);
   }
   std::unique_ptr<StillAirframe> still;
   if (!rig) still = std::make_unique<StillAirframe>(*board, r.rig, r.air);
@@ -226,8 +244,8 @@ void runOnce(const RunOptions& r) {
   while (board->timeS() < end && !g_run_stop) board->runFor(std::min(0.05, end - board->timeS()));
   std::fflush(stdout);
   const auto& applied = rig ? rig->faultsApplied() : still->faultsApplied();
-  fmt::print(stderr, "sim run: {:.3f} s simulated in {:.2f} s wall ({:.0f}x real time); {}\n",
-             board->simulatedSeconds(), board->wallSeconds(), board->realtimeFactor(),
+  fmt::print(stderr, "sim run: {:.3f} s simulated in {:.2f} s wall ({}); {}\n",
+             board->simulatedSeconds(), board->wallSeconds(), speedText(board->realtimeFactor()),
              rig ? rig->describe() : fmt::format("no rig, IMU {}", r.air.imu));
   for (const std::string& f : applied) fmt::print(stderr, "  fault applied: {}\n", f);
   if (!r.air.log.empty()) fmt::print(stderr, "  truth log: {}\n", r.air.log);

@@ -47,6 +47,7 @@ void AirframeRig::build() {
 
 void AirframeRig::wire() {
   board_.clearPlantWiring();
+  board_.setEscPins(o_.esc_pins);
   t0_s_ = board_.timeS();
   const int motors = rig_->motors();
   board_.addPulseListener([this, motors](int ch, double width_us, double t_s) {
@@ -189,7 +190,14 @@ std::string AirframeRig::describe() const {
   const std::string imu = o_.imu ? fmt::format("MPU-6050 at 0x{:02X} seed {}{}", o_.imu_params.address,
                                                o_.imu_params.seed, o_.imu_params.unit_errors ? "" : " (ideal)")
                                  : std::string("no IMU");
-  return fmt::format("{}; motors {}; {}", rig, motors, imu);
+  std::string pins;
+  const auto table = boardEscPins();
+  for (int i = 0; i < rig_->motors(); ++i)
+    if (o_.esc_pins[i].port != table[i].port || o_.esc_pins[i].bit != table[i].bit)
+      pins = "; ESC pins";
+  if (!pins.empty())
+    for (int i = 0; i < rig_->motors(); ++i) pins += " " + megaPinName(o_.esc_pins[i]);
+  return fmt::format("{}; motors {}; {}{}", rig, motors, imu, pins);
 }
 
 }  // namespace sim

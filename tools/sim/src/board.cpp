@@ -3,16 +3,16 @@
 
 #include <fmt/format.h>
 
-#include <cstdarg>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <memory>
-#include <sstream>
-#include <sys/stat.h>
 
-#include "hex/intel_hex.hpp"
+#include "sim/ext_int.hpp"
+#include "sim/pin_names.hpp"
+#include "sim/ports.hpp"
+#include "sim/timers.hpp"
 #include "sim/twi.hpp"
 
 extern "C" {
@@ -22,11 +22,21 @@ extern "C" {
 #include <simavr/avr_uart.h>
 #include <simavr/sim_avr.h>
 #include <simavr/sim_cycle_timers.h>
-#include <simavr/sim_elf.h>
 #include <simavr/sim_irq.h>
 }
 
 namespace sim {
+
+std::string speedText(double realtime_factor) {
+  if (!(realtime_factor > 0)) return "0x real time";
+  // Rounded to two significant digits, shown without exponent or trailing zeros.
+  const int magnitude = static_cast<int>(std::floor(std::log10(realtime_factor)));
+  const double rounded = std::round(realtime_factor / std::pow(10.0, magnitude - 1)) * std::pow(10.0, magnitude - 1);
+  const int shown = static_cast<int>(std::floor(std::log10(rounded)));  // 9.96 became 10
+  const int decimals = shown >= 1 ? 0 : 1 - shown;
+  return fmt::format("{:.{}f}x real time", rounded, decimals);
+}
+
 namespace {
 
 // ATmega2560 UART0 registers (data space addresses).
@@ -42,147 +52,6 @@ constexpr uint16_t kEecr = 0x3F;   // I/O 0x1F
 constexpr uint8_t kEepeBit = 1, kEempeBit = 2;
 constexpr uint16_t kSramStart = 0x200;
 
-
-// simavr logs "Loaded N .text" and friends for every image; keep errors only.
-void quietLogger(avr_t* avr, const int level, const char* format, va_list ap) {
-  (void)avr;
-  if (level <= LOG_ERROR) {
-    std::vfprintf(stderr, format, ap);
-  }
-}
-
-// True when the file starts with the ELF magic (an application can be .elf or Intel HEX).
-bool isElfFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  char magic[4] = {};
-  in.read(magic, 4);
-  return in.gcount() == 4 && std::memcmp(magic, "\x7f" "ELF", 4) == 0;
-}
-
-// An Intel HEX flash image: the bytes (0xFF where the file says nothing) and the range the
-// file covers, [lo, hi) (lo == hi: no data).
-struct HexFlash {
-  std::vector<uint8_t> bytes;
-  uint32_t lo = 0, hi = 0;
-};
-
-HexFlash readHexFlash(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw BoardError(fmt::format("{}: cannot read the {} (Intel HEX); check the path", path, what));
-  std::ostringstream text;
-  text << in.rdbuf();
-  HexFlash h;
-  try {
-    // Parsed twice with different fills: a byte the file covers reads the same both times.
-    h.bytes = hex::parseIntelHex(text.str(), kFlashBytes, path, 0xFF);
-    const std::vector<uint8_t> zero_fill = hex::parseIntelHex(text.str(), kFlashBytes, path, 0x00);
-    bool any = false;
-    for (uint32_t a = 0; a < kFlashBytes; ++a) {
-      if (h.bytes[a] != zero_fill[a]) continue;
-      if (!any) h.lo = a;
-      any = true;
-      h.hi = a + 1;
-    }
-  } catch (const hex::HexError& e) {
-    throw BoardError(fmt::format("the {} is not a usable Intel HEX flash image: {}", what, e.what()));
-  }
-  return h;
-}
-
-// Frees what elf_read_firmware allocated.
-struct ElfFirmware {
-  elf_firmware_t* fw = static_cast<elf_firmware_t*>(std::calloc(1, sizeof(elf_firmware_t)));
-  ~ElfFirmware() {
-    std::free(fw->flash);
-    std::free(fw->eeprom);
-    std::free(fw);
-  }
-};
-
-// The application image, an AVR ELF (its MCU and F_CPU checked) or Intel HEX, and where it
-// ends. An empty path: no application (a bare bootloader).
-struct AppImage {
-  std::unique_ptr<ElfFirmware> elf;
-  HexFlash hex;
-  uint32_t end = 0;  // first byte past the application
-};
-
-AppImage readApplication(const std::string& app) {
-  AppImage a;
-  if (app.empty()) return a;
-  struct stat st {};
-  if (::stat(app.c_str(), &st) != 0)
-    throw BoardError(fmt::format("{}: no such firmware image; build it first (cmake --build "
-                                 "build/avr) or pass the right --elf path",
-                                 app));
-  if (!isElfFile(app)) {
-    a.hex = readHexFlash(app, "application");
-    a.end = a.hex.hi;
-    return a;
-  }
-  a.elf = std::make_unique<ElfFirmware>();
-  elf_firmware_t* fw = a.elf->fw;
-  if (elf_read_firmware(app.c_str(), fw) != 0)
-    throw BoardError(fmt::format("{}: not a readable AVR ELF file (is it the .elf, not the .hex?)",
-                                 app));
-  if (fw->mmcu[0] == '\0') std::strcpy(fw->mmcu, "atmega2560");
-  if (std::strcmp(fw->mmcu, "atmega2560") != 0)
-    throw BoardError(fmt::format("{}: built for {}, but the virtual board is an atmega2560 "
-                                 "(rebuild with the AVR toolchain file)",
-                                 app, fw->mmcu));
-  if (fw->frequency == 0) fw->frequency = kCpuHz;
-  a.end = fw->flashbase + fw->flashsize;
-  return a;
-}
-
-// The bootloader (Intel HEX, empty path: none), checked to lie above the application `app`,
-// which ends at app_end.
-HexFlash readBootloader(const std::string& path, const std::string& app, uint32_t app_end) {
-  HexFlash boot;
-  if (path.empty()) return boot;
-  boot = readHexFlash(path, "bootloader");
-  if (boot.hi == boot.lo) throw BoardError(fmt::format("{}: the bootloader file holds no data", path));
-  if (boot.lo == 0)
-    throw BoardError(fmt::format("{}: this \"bootloader\" starts at address 0; pass it as the "
-                                 "application (--hex) instead",
-                                 path));
-  if (app_end > boot.lo)
-    throw BoardError(fmt::format(
-        "{}: the application reaches byte 0x{:05X}, into the boot section at 0x{:05X} ({}); "
-        "it cannot be flashed behind this bootloader",
-        app, app_end - 1, boot.lo, path));
-  return boot;
-}
-
-void eraseEeprom(avr_t* avr) {
-  std::vector<uint8_t> erased(kEepromBytes, 0xFF);
-  avr_eeprom_desc_t d{erased.data(), 0, static_cast<uint32_t>(erased.size())};
-  avr_ioctl(avr, AVR_IOCTL_EEPROM_SET, &d);
-}
-
-// Puts the application and the bootloader into the core's flash; with a bootloader every
-// reset enters it (BOOTRST). Returns the CPU frequency to run at (the ELF's F_CPU).
-uint32_t loadImages(avr_t* avr, AppImage& app, HexFlash& boot, const std::string& app_path) {
-  uint32_t frequency = kCpuHz;
-  if (app.elf) {
-    avr_load_firmware(avr, app.elf->fw);
-    frequency = app.elf->fw->frequency;
-    if (frequency != kCpuHz)
-      fmt::print(stderr, "warning: {} says F_CPU = {} Hz; the plant assumes {} Hz timing\n", app_path,
-                 frequency, kCpuHz);
-  } else if (app.hex.hi > 0) {
-    avr_loadcode(avr, app.hex.bytes.data(), app.hex.hi, 0);
-  }
-  if (boot.hi > boot.lo) {
-    avr_loadcode(avr, boot.bytes.data() + boot.lo, boot.hi - boot.lo, boot.lo);
-    avr->reset_pc = boot.lo;  // BOOTRST: every reset enters the bootloader
-    avr->pc = boot.lo;
-    avr->codeend = avr->flashend + 1;
-  }
-  return frequency;
-}
-
 }  // namespace
 
 Board::Board(const std::string& elf_path) : Board(FlashImages{"", elf_path}) {}
@@ -192,37 +61,14 @@ Board::Board(const FlashImages& images) {
   wire();
 }
 
-void Board::load(const FlashImages& images) {
-  avr_global_logger_set(quietLogger);
-  AppImage app = readApplication(images.application);
-  HexFlash boot = readBootloader(images.bootloader_hex, images.application, app.end);
-  avr_ = avr_make_mcu_by_name(app.elf ? app.elf->fw->mmcu : "atmega2560");
-  if (!avr_)
-    throw BoardError("libsimavr does not know the atmega2560; reinstall libsimavr-dev/simavr");
-  avr_init(avr_);
-  avr_->log = LOG_ERROR;
-  // Every later reset (the watchdog's, or reset()) passes through onCoreReset: the harness's
-  // cycle timers are gone then and the pins released.
-  avr_->custom.data = this;
-  core_reset_ = avr_->reset;
-  avr_->reset = &Board::onCoreReset;
-  avr_->sleep = &Board::onSleep;  // idle sleep skips ahead instead of waiting on the wall clock
-  eraseEeprom(avr_);
-  avr_->frequency = loadImages(avr_, app, boot, images.application);
-  if (boot.hi > boot.lo) boot_address_ = boot.lo;
-  if (avr_->vcc == 0) avr_->vcc = 5000;
-  if (avr_->avcc == 0) avr_->avcc = 5000;
-  if (avr_->aref == 0) avr_->aref = 5000;
-}
-
 void Board::wire() {
+  // The chip's ports, external interrupts and timers in place of simavr 1.6's (sim/timers.hpp).
+  ports_ = std::make_unique<Ports>(avr_);
+  ext_int_ = std::make_unique<ExtInt>(avr_);
+  timers_ = std::make_unique<Timers>(avr_, *ports_, [this](const std::string& why) { stop(why); });
   twi_ = std::make_unique<Twi>(avr_);
-  for (int ch = 0; ch < kEscChannels; ++ch) {
-    edge_params_[ch] = EdgeParam{this, ch};
-    avr_irq_t* irq =
-        avr_io_getirq(avr_, AVR_IOCTL_IOPORT_GETIRQ(hal::kEscPins[ch].port), hal::kEscPins[ch].bit);
-    avr_irq_register_notify(irq, &Board::onEscEdge, &edge_params_[ch]);
-  }
+  esc_pins_ = boardEscPins();
+  wireEscPins(true);
   avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_OUT_TRIGGER),
                           &Board::onAdcTrigger, this);
 
@@ -239,7 +85,12 @@ void Board::wire() {
 }
 
 Board::~Board() {
-  twi_.reset();  // its IRQs live in the core's pool: before avr_terminate
+  // Their IRQs and handlers live in the core: before avr_terminate.
+  if (ports_) wireEscPins(false);
+  twi_.reset();
+  timers_.reset();
+  ext_int_.reset();
+  ports_.reset();
   if (avr_) {
     avr_terminate(avr_);
     std::free(avr_);
@@ -285,7 +136,9 @@ uint64_t Board::tickTimer(avr_t*, uint64_t when, void* param) {
 
 // simavr adds 1 + how_long cycles after this callback; nothing waits on the wall clock.
 void Board::onSleep(avr_t* avr, uint64_t how_long_cycles) {
-  static_cast<Board*>(avr->custom.data)->slept_cycles_ += 1 + how_long_cycles;
+  auto* self = static_cast<Board*>(avr->custom.data);
+  self->slept_cycles_ += 1 + how_long_cycles;
+  ++self->sleeps_;
 }
 
 void Board::setProfiling(bool on) {
@@ -302,10 +155,11 @@ void Board::onCoreReset(avr_t* avr) {
 void Board::afterReset() {
   ++resets_;
   last_reset_cycle_ = avr_->cycle;
-  // At reset every pin becomes an input: a pulse in progress ends here (simavr does not raise
-  // the pin change itself).
-  for (int ch = 0; ch < kEscChannels; ++ch)
-    if (esc_[ch].high) escEdge(ch, false);
+  // At reset every pin becomes an input: a pulse in progress ends here (sim::Ports releases
+  // what was driven, and the ESC measurement sees the falling edge).
+  if (ports_) ports_->afterReset();
+  if (timers_) timers_->afterReset();
+  if (ext_int_) ext_int_->afterReset();
   // avr_reset() cancelled every cycle timer, the harness's too.
   if (tick_armed_) avr_cycle_timer_register(avr_, tick_period_, &Board::tickTimer, this);
   rx_armed_ = false;
@@ -350,40 +204,6 @@ std::vector<uint8_t> Board::flash(uint32_t byte_address, std::size_t length) con
 
 void Board::watchPc(uint32_t byte_address, std::function<void(uint64_t cycle)> probe) {
   pc_watches_.push_back(PcWatch{byte_address, std::move(probe)});
-}
-
-// --- ESC ---
-
-void Board::onEscEdge(avr_irq_t*, uint32_t value, void* param) {
-  auto* p = static_cast<EdgeParam*>(param);
-  p->board->escEdge(p->channel, value != 0);
-}
-
-void Board::escEdge(int channel, bool level) {
-  EscPin& pin = esc_[channel];
-  if (level == pin.high) return;
-  const uint64_t now = avr_->cycle;
-  pin.high = level;
-  if (level) {
-    if (pin.last_rise_cycle != 0)
-      pin.last_period_us = static_cast<double>(now - pin.last_rise_cycle) * 1e6 / kCpuHz;
-    pin.last_rise_cycle = now;
-  } else {
-    pin.last_fall_cycle = now;
-    if (pin.last_rise_cycle != 0) {
-      pin.last_pulse_us = static_cast<double>(now - pin.last_rise_cycle) * 1e6 / kCpuHz;
-      ++pin.pulses;
-      for (auto& listener : pulse_listeners_)
-        listener(channel, pin.last_pulse_us, cyclesToSeconds(now));
-    }
-  }
-}
-
-double Board::escPulseUs(int channel, double max_age_s) const {
-  const EscPin& pin = esc_.at(channel);
-  if (pin.pulses == 0) return 0;
-  if (cyclesToSeconds(cycle() - pin.last_fall_cycle) > max_age_s) return 0;
-  return pin.last_pulse_us;
 }
 
 // --- ADC ---
@@ -514,6 +334,13 @@ uint64_t Board::eepeClear(avr_t* avr, uint64_t, void*) {
 
 uint64_t Board::cycle() const { return avr_->cycle; }
 
+void Board::stop(const std::string& why) {
+  // From inside the core (a cycle timer, a register write): the CPU stops at once and run()
+  // throws. Later runs throw the same.
+  if (stop_reason_.empty()) stop_reason_ = why;
+  avr_->state = cpu_Crashed;
+}
+
 void Board::run(uint64_t cycles) {
   const auto wall0 = std::chrono::steady_clock::now();
   avr_t* const avr = avr_;
@@ -538,6 +365,10 @@ void Board::run(uint64_t cycles) {
     }
   }
   simulated_s_ += cyclesToSeconds(avr->cycle - start);
+  if (!stop_reason_.empty()) {
+    wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    throw BoardError(fmt::format("{} (t = {:.6f} s, pc 0x{:05X})", stop_reason_, timeS(), avr->pc));
+  }
   if (state == cpu_Done || state == cpu_Crashed) {
     throw BoardError(fmt::format(
         "the firmware {} at t = {:.6f} s (pc 0x{:05X}); {}",

@@ -151,9 +151,9 @@ void printGather(const GatherResult& r, bool v2) {
                m.curve2.start_v, m.curve2.max_g, m.curve2.error_max_g, m.curve2.error_rms_g,
                v2 ? fmt::format("; start {:.1f} us, {} knots", m.v2_start_us, m.v2_knots)
                   : std::string());
-  fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time ({:.1f}x during "
-             "sweeps); {:.1f} s wall in all, via {}\n",
-             r.simulated_s, r.wall_s, r.realtime_factor, r.sweep_realtime_factor,
+  fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {} ({} during sweeps); {:.1f} s wall "
+             "in all, via {}\n",
+             r.simulated_s, r.wall_s, speedText(r.realtime_factor), speedText(r.sweep_realtime_factor),
              r.session_wall_s, gatherLinkName(r.link));
 }
 
@@ -280,9 +280,8 @@ void runLiftoffCommand(const LiftoffArgs& a) {
               {"simulated_s", sim_s},
               {"wall_s", wall_s}};
   writeJson(a.json, j);
-  fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time; {:.1f} s wall in "
-             "all, via {}\n",
-             sim_s, wall_s, wall_s > 0 ? sim_s / wall_s : 0, session_s, a.via);
+  fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {}; {:.1f} s wall in all, via {}\n",
+             sim_s, wall_s, speedText(wall_s > 0 ? sim_s / wall_s : 0), session_s, a.via);
 }
 
 void addLiftoff(CLI::App& sim) {
@@ -364,6 +363,7 @@ ConsoleRig makeConsoleRig(const ConsoleArgs& a, const std::string& which) {
     r.quad = std::make_unique<QuadRig>(a.elf, plant::QuadFrameParams{}, motors);
     r.board = &r.quad->board;
   }
+  if (!r.airframe) applyEscPins(*r.board, a.air);  // the airframe took them from its options
   return r;
 }
 
@@ -391,8 +391,8 @@ void runConsoleCommand(const ConsoleArgs& a) {
     hex::writeIntelHexFile(a.eeprom, board.eeprom());
     fmt::print("EEPROM saved: {}\n", a.eeprom);
   }
-  fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {:.0f}x real time)\n",
-             board.simulatedSeconds(), a.speed, board.realtimeFactor());
+  fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {})\n",
+             board.simulatedSeconds(), a.speed, speedText(board.realtimeFactor()));
   for (const auto& f : r.airframe ? r.airframe->faultsApplied() : r.still->faultsApplied())
     fmt::print("fault applied: {}\n", f);
   if (!a.air.log.empty()) fmt::print("truth log: {}\n", a.air.log);
@@ -491,9 +491,8 @@ void runBoardCommand(const BoardArgs& a) {
     hex::writeIntelHexFile(a.eeprom, sb.board().eeprom());
     fmt::print("EEPROM saved: {}\n", a.eeprom);
   }
-  fmt::print("{:.1f} s simulated, {} reset(s) by clients; the simulation alone ran at {:.1f}x "
-             "real time\n",
-             sb.board().simulatedSeconds(), sb.link().clientResets(), sb.board().realtimeFactor());
+  fmt::print("{:.1f} s simulated, {} reset(s) by clients; the simulation alone ran at {}\n",
+             sb.board().simulatedSeconds(), sb.link().clientResets(), speedText(sb.board().realtimeFactor()));
 }
 
 void addBoard(CLI::App& sim) {
@@ -569,9 +568,9 @@ void printFleet(const FleetArgs& a, const GatherResult& gr, const nlohmann::json
   fmt::print("  uncalibrated        {:8.2f} %      {:8.2f} %    {:6.2f} deg\n",
              u["thrust_spread_pct"].get<double>(), u["force_error_rms_pct"].get<double>(),
              u["max_tilt_deg"].get<double>());
-  fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {:.1f}x real time ({:.1f}x during "
-             "sweeps)\nresults: {}\n",
-             sim_s, wall_s, wall_s > 0 ? sim_s / wall_s : 0, gr.sweep_realtime_factor, json_path);
+  fmt::print("sim: {:.1f} s simulated in {:.2f} s wall: {} ({} during sweeps)\nresults: {}\n",
+             sim_s, wall_s, speedText(wall_s > 0 ? sim_s / wall_s : 0), speedText(gr.sweep_realtime_factor),
+             json_path);
 }
 
 void runFleetCommand(const FleetArgs& a) {

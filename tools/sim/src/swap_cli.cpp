@@ -123,9 +123,9 @@ void runSwapCommand(const SwapArgs& a) {
     out << r.toJson().dump(2) << "\n";
   }
   fmt::print(
-      "sim: {} flights, {:.1f} s simulated in {:.1f} s of flight ({:.1f}x real time); {:.1f} s wall in all\n",
+      "sim: {} flights, {:.1f} s simulated in {:.1f} s of flight ({}); {:.1f} s wall in all\n",
       r.runs.size(), r.simulated_s, r.flight_wall_s,
-      r.flight_wall_s > 0 ? r.simulated_s / r.flight_wall_s : 0, r.wall_s);
+      speedText(r.flight_wall_s > 0 ? r.simulated_s / r.flight_wall_s : 0), r.wall_s);
   fmt::print("files: {}/series/*.csv{}{}\n", o.out_dir,
              images.empty() ? "" : ", " + fmt::format("{}", fmt::join(images, ", ")),
              a.json.empty() ? "" : ", " + a.json);

@@ -8,7 +8,6 @@
 #include "hal/board.hpp"
 
 extern "C" {
-#include <simavr/avr_extint.h>
 #include <simavr/avr_ioport.h>
 #include <simavr/avr_twi.h>
 #include <simavr/sim_avr.h>
@@ -104,8 +103,8 @@ void Twi::afterReset() {
   bus_held_ = sda_low_;
   reg(kTwsr) = kNoState;
   reg(kTwdr) = 0xFF;
-  // The core's own peripherals reset after this call (extint turns its pin polling back on):
-  // the lines are set up again one cycle later.
+  // The core's own peripherals reset after this call: the lines are set up again one cycle
+  // later.
   if (pull_ups_) avr_cycle_timer_register(avr_, 1, &Twi::onAfterResetCycle, this);
 }
 
@@ -349,11 +348,7 @@ void Twi::applyLines() {
     avr_ioctl(avr_, AVR_IOCTL_IOPORT_SET_EXTERNAL(hal::kTwiPins.port), &none);
     return;
   }
-  // Level-triggered INT0/INT1 share the pins; simavr would poll them every cycle while low.
-  if (hal::kTwiPins.port == 'D') {
-    avr_extint_set_strict_lvl_trig(avr_, hal::kTwiPins.sda_bit, 0);
-    avr_extint_set_strict_lvl_trig(avr_, hal::kTwiPins.scl_bit, 0);
-  }
+  // INT0/INT1 share the pins: sim::ExtInt follows their levels without polling them.
   avr_ioport_external_t ext{};
   ext.name = hal::kTwiPins.port;
   ext.mask = sda | scl;

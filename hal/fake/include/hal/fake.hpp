@@ -86,6 +86,18 @@ uint32_t twiAborts();
 uint32_t twiRecoveries();
 uint32_t twiSclHz();                       // the rate Twi::init was given (0 before)
 
+// RC receiver input (Rc): the test queues the edges a receiver makes, with their pin levels
+// and 0.5 us ticks; rcMask() is what Rc::init watches. The helpers queue whole frames from the
+// given tick: a PPM sum on bit 0 (a 400 us low separator before each channel, idle high; the
+// channel is the time from one separator's start to the next; a sync gap fills the frame to
+// `frame_us`), or one pulse per channel on bits 0..n-1 one after another. They return the tick
+// after the frame.
+void rcEdge(uint8_t pins, uint16_t ticks);
+uint16_t rcPpmFrame(uint16_t from_ticks, const std::vector<uint16_t>& channels_us, uint32_t frame_us = 22500);
+uint16_t rcPwmFrame(uint16_t from_ticks, const std::vector<uint16_t>& channels_us);
+uint8_t rcMask();
+std::size_t rcQueued();  // edges not taken yet
+
 // Time.
 uint32_t nowMs();
 void advanceMs(uint32_t ms);

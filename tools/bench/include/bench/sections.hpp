@@ -81,6 +81,9 @@ struct SwapBenchOptions {
   bool reduced = false;
 };
 Section swapSection(const AvrPaths& paths, const SwapBenchOptions& options);
+// Issue 25 item 5 (sections_speed.cpp): simulated seconds per wall second for read_run, fly on
+// the gimbal and a firmware with phase-correct PWM on INT4/INT5 (target >= 5x real time).
+Section speedSection(const AvrPaths& paths);
 // Footprint rows: each image's stack never used after its deepest paths (simulated).
 void addStackHeadroom(const AvrPaths& paths, Table& table, nlohmann::json& json,
                       std::vector<TargetCheck>& targets);

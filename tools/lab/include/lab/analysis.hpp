@@ -39,6 +39,9 @@ struct Suspect {
 // drift. On more than 20,000 rows the refits run on evenly spaced rows.
 std::vector<Suspect> rankVariables(const Dataset& data, const FitResult& fit, const ModelSpec& spec);
 
+// Parameters of `effect` that the fit left at a bound, in words ("gamma at its bound 0").
+std::vector<std::string> boundsOf(const FitResult& fit, const std::string& effect);
+
 enum class Holdout { kNone, kRuns, kVoltage };
 Holdout parseHoldout(const std::string& text);  // none|runs|voltage; throws std::invalid_argument
 

@@ -3,7 +3,7 @@
 // it adds to the formula, set up on the training data). A new effect is that file plus one line
 // in registry.cpp; nothing else in the lab names effects.
 //
-// How the model evaluates the terms (model.cpp), each hook in registry order:
+// How the model evaluates the terms (model_eval.cpp), each hook in registry order:
 //   drive   x = softPlus(pwm - origin) / span           origin: pmin, or a term's (deadband)
 //           then every term's drive() (voltage, motor)  V the motor sees: vbat then every sag()
 //           then every term's filter() (lag)
@@ -196,6 +196,8 @@ struct EffectDef {
 const std::vector<const EffectDef*>& registry();
 const EffectDef* find(const std::string& name);
 int registryIndex(const std::string& name);  // -1: not in the registry
+// The expression effect (`mul:` when multiplicative, else `add:`).
+const EffectDef& expressionDef(bool multiplicative);
 
 // Terms that are not catalogue entries: a user expression and the diagnosis's probe.
 std::unique_ptr<Term> makeExpression(Setup&, const UserEffect& u);

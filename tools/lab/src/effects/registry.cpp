@@ -37,6 +37,12 @@ const EffectDef* find(const std::string& name) {
   return nullptr;
 }
 
+const EffectDef& expressionDef(bool multiplicative) {
+  for (const auto* e : registry())
+    if (e->role == Role::kExpression && e->multiplicative == multiplicative) return *e;
+  throw std::logic_error("the effect registry has no expression effect");
+}
+
 int registryIndex(const std::string& name) {
   const auto& r = registry();
   for (std::size_t i = 0; i < r.size(); ++i)

@@ -23,11 +23,14 @@ struct AirCliOptions {
   double log_period_s = 0.01;
   std::vector<std::string> motor_parts;  // "M:PRESET": motor M is another part
   double vibration_g = 0.0;        // rotor imbalance at 10,000 rpm
+  std::string esc_pins;            // "D3,D5,D6,D2": ESC outputs 0..3 ("": the board table)
 };
 
 // Adds the options above to a command.
 void addAirOptions(CLI::App* cmd, AirCliOptions& o);
 bool isAirRig(const std::string& rig);  // "seesaw" or "gimbal"
+// --esc-pins on a board of any rig (the bench, the tethered quad, none): its ESC outputs move.
+void applyEscPins(Board& board, const AirCliOptions& o);
 
 // The seesaw or gimbal rig on a board running `elf` (with `eeprom` loaded if not empty), the
 // motors from `preset` varied by `seeds` (3 %), the log file opened and streamed to. Throws

@@ -27,6 +27,7 @@
 #include "plant/sensors.hpp"
 #include "sim/board.hpp"
 #include "sim/imu_on_board.hpp"
+#include "sim/pin_names.hpp"
 
 namespace sim {
 
@@ -59,6 +60,9 @@ struct AirframeOptions {
   plant::GimbalParams gimbal;   // its layout, inertia, damping, battery
   // ESC output i -> motor i (the seesaw uses 0 and 1). Default: four kv1100_9x4.7.
   std::array<plant::ActuatorParams, 4> motors;
+  // The pins of ESC outputs 0..3: the board table (hal::kEscPins) unless a firmware drives its
+  // motors elsewhere (sim/pin_names.hpp: parseEscPins("D3,D5,D6,D2")).
+  std::array<hal::MegaPin, hal::kEscChannels> esc_pins = boardEscPins();
   bool imu = true;
   Mpu6050Params imu_params;
   double imu_temp_c = 25.0;

@@ -1,7 +1,9 @@
 // A simulated Arduino Mega2560 (ATmega2560 at 16 MHz in libsimavr 1.6) running an unchanged
 // firmware ELF, with its pins wired to the host:
-//   ESC 0..3  compare-output pins PH3 (OC4A), PH4 (OC4B), PH5 (OC4C), PB5 (OC1A): every edge is
-//             timestamped with the simulated cycle counter; the high time is the pulse width.
+//   ESC 0..3  by default the board table's pins (hal::kEscPins: D6 D7 D8 D11, timer compare
+//             outputs), or any four pins (setEscPins): every edge is timestamped with the
+//             simulated cycle it happened at (a compare output's: its timer tick); the high time
+//             is the pulse width, whatever drives the pin (a timer or the firmware's PORTx).
 //   A0..A15   answered in millivolts from an AdcSource when a conversion starts.
 //   UART0     bytes out are collected (and passed to listeners); bytes in are paced at the
 //             line rate (one byte per character time at the firmware's baud) and held back
@@ -17,6 +19,11 @@
 //             programmed (simavr ignores the fuses, so the harness sets the reset vector).
 //   TWI       the chip's TWI (sim/twi.hpp: status codes, TWINT, timing from TWBR/TWPS, its
 //             interrupt), not simavr 1.6's; I2C parts (sim/mpu6050.hpp) connect to twi().irq().
+//   Timers    the chip's Timer/Counters 0-5 (sim/timers.hpp: every waveform and compare-output
+//             mode, double-buffered OCRnx, input capture), its ports with compare-output pins
+//             (sim/ports.hpp) and INT0-7 (sim/ext_int.hpp), not simavr 1.6's. What they do not
+//             model (an external timer clock, Timer2's asynchronous mode, a reserved mode) stops
+//             the run: run() throws BoardError naming the timer and the setting.
 // A periodic tick (default 1 ms simulated) lets a plant model advance in step with the CPU.
 //
 // Time is simulated cycles only: the firmware's idle sleep skips ahead (the sleep callback is
@@ -40,6 +47,9 @@ struct avr_irq_t;
 namespace sim {
 
 class Twi;
+class Ports;
+class ExtInt;
+class Timers;
 
 // The board's facts come from the table the firmware is built from (hal/board.hpp).
 using hal::kCpuHz;
@@ -49,6 +59,9 @@ constexpr int kEscChannels = hal::kEscChannels;
 
 inline uint64_t secondsToCycles(double s) { return static_cast<uint64_t>(s * kCpuHz + 0.5); }
 inline double cyclesToSeconds(uint64_t c) { return static_cast<double>(c) / kCpuHz; }
+// A real-time factor as the speed reports print it, two significant digits: "0.26x real
+// time", "7.1x real time", "160x real time".
+std::string speedText(double realtime_factor);
 
 // Why the chip reset (the MCUSR flag the reset sets).
 enum class ResetKind { kPowerOn, kExternal, kBrownOut };
@@ -124,7 +137,16 @@ class Board {
   // --- TWI (I2C master) ---
   Twi& twi() { return *twi_; }
 
+  // --- the chip's ports and timers ---
+  Ports& ports() { return *ports_; }
+  Timers& timers() { return *timers_; }
+
   // --- ESC pins ---
+  // The pins that carry ESC outputs 0..3 (an attitude rig's motors 0..3): default the board
+  // table (hal::kEscPins), or any four distinct pins (sim/pin_names.hpp parses "D3,D5,D6,D2").
+  // What was measured on the old pins is forgotten (nothing changes if they are the same).
+  void setEscPins(const std::array<hal::MegaPin, kEscChannels>& pins);
+  const std::array<hal::MegaPin, kEscChannels>& escPins() const { return esc_pins_; }
   const EscPin& escPin(int channel) const { return esc_.at(channel); }
   // Width of the last pulse on `channel`, or 0 if no pulse ended within `max_age_s` (a dead
   // output: an ESC disarms on that).
@@ -190,6 +212,7 @@ class Board {
   // profile (while on): each instruction's awake cycles added at its word address, pc / 2 (an
   // interrupt's entry counts at the instruction it interrupted; asleep cycles never count).
   uint64_t sleptCycles() const { return slept_cycles_; }
+  uint64_t sleeps() const { return sleeps_; }  // how many stretches of idle sleep that was
   void setProfiling(bool on);
   const std::vector<uint64_t>& awakeCyclesByWord() const { return profile_; }
 
@@ -203,6 +226,8 @@ class Board {
 
  private:
   static void onEscEdge(avr_irq_t* irq, uint32_t value, void* param);
+  void wireEscPins(bool on);
+  void stop(const std::string& why);
   static void onAdcTrigger(avr_irq_t* irq, uint32_t value, void* param);
   static void onUartOut(avr_irq_t* irq, uint32_t value, void* param);
   static void onUartXon(avr_irq_t* irq, uint32_t value, void* param);
@@ -241,6 +266,7 @@ class Board {
   };
   std::vector<PcWatch> pc_watches_;
   std::array<EscPin, kEscChannels> esc_{};
+  std::array<hal::MegaPin, kEscChannels> esc_pins_{};
   struct EdgeParam {
     Board* board;
     int channel;
@@ -253,10 +279,15 @@ class Board {
   double wall_s_ = 0;
   double simulated_s_ = 0;
   uint64_t slept_cycles_ = 0;
+  uint64_t sleeps_ = 0;
   bool profiling_ = false;
   std::vector<uint64_t> profile_;  // awake cycles by word address (setProfiling)
   std::vector<avr_irq_t*> irqs_;
   uint32_t boot_address_ = 0;  // 0: no bootloader
+  std::string stop_reason_;     // a peripheral stopped the run (what it does not model)
+  std::unique_ptr<Ports> ports_;
+  std::unique_ptr<ExtInt> ext_int_;
+  std::unique_ptr<Timers> timers_;
   std::unique_ptr<Twi> twi_;
 };
 
