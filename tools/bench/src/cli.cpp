@@ -27,7 +27,7 @@ struct Options {
 
 SwapBenchOptions swapOptions(const Options& o) {
   SwapBenchOptions s;
-  s.out_dir = std::string(THRUSTCAL_SOURCE_DIR) + "/build/bench/swap";
+  s.out_dir = sourcePath("build/bench/swap");
   s.jobs = o.jobs;
   s.quick = o.quick;
   return s;
@@ -199,7 +199,7 @@ void runDrift(const DriftArgs& a) {
   const ImageSize fly = imageSize(a.paths.elf("fly"));
   now["fly"] = {{"flash_bytes", fly.flash_bytes}, {"sram_static_bytes", fly.sram_static_bytes}};
   SwapBenchOptions so;
-  so.out_dir = a.swap_dir.empty() ? std::string(THRUSTCAL_SOURCE_DIR) + "/build/bench/swap-drift" : a.swap_dir;
+  so.out_dir = a.swap_dir.empty() ? sourcePath("build/bench/swap-drift") : a.swap_dir;
   so.reduced = true;
   now["swap"] = measured(swapSection(a.paths, so));
   const DriftResult r = compareDrift(docs, now, driftFigures(now));

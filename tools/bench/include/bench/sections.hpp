@@ -54,6 +54,8 @@ ImageSize imageSize(const std::string& elf);
 // A path as the docs show it: relative to the source tree when inside it (docs/results.md is
 // written from the JSON and must not name the machine it was measured on).
 std::string shownPath(const std::string& path);
+// `rel` under the source tree this tool was built from ("build/avr" -> /.../build/avr).
+std::string sourcePath(const std::string& rel);
 
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
