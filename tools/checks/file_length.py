@@ -15,18 +15,13 @@ import argparse
 import pathlib
 import sys
 
+import source_tree  # tools/checks/source_tree.py
+
 SOURCES = ('.cpp', '.hpp', '.h', '.cc', '.c', '.inc', '.py', '.sh')
-FOLDERS = ('core', 'hal', 'firmware', 'tools', 'tests')
 
 
 def sources(root):
-    for folder in FOLDERS:
-        base = root / folder
-        if not base.is_dir():
-            continue
-        for f in sorted(base.rglob('*')):
-            if f.suffix in SOURCES and f.is_file() and 'testdata' not in f.relative_to(root).parts:
-                yield f
+    return source_tree.sources(root, SOURCES)
 
 
 def line_count(path):

@@ -14,6 +14,8 @@ import pathlib
 import re
 import sys
 
+import source_tree  # tools/checks/source_tree.py
+
 FACTS = [
     # (what, regular expression of a definition, its one home)
     ('the sweep window of load-cell readings', r'\bconstexpr\s+\w+\s+kForceWindow\s*=',
@@ -59,17 +61,10 @@ FACTS = [
     ('the flash-text macros', r'#\s*define\s+TC_FLASH', 'core/include/thrustcal/flash_text.hpp'),
 ]
 SOURCES = ('.cpp', '.hpp', '.h', '.c', '.inc')
-FOLDERS = ('core', 'hal', 'firmware', 'tools', 'tests')
 
 
 def sources(root):
-    for folder in FOLDERS:
-        base = root / folder
-        if not base.is_dir():
-            continue
-        for f in sorted(base.rglob('*')):
-            if f.suffix in SOURCES and f.is_file() and 'testdata' not in f.relative_to(root).parts:
-                yield f
+    return source_tree.sources(root, SOURCES)
 
 
 def main():
