@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Every test: installs what is missing (Debian packages), builds the AVR images and the host
-# tree (preset `checked`: core/ instrumented for line coverage, every host object built with
-# AddressSanitizer + UndefinedBehaviorSanitizer), runs all tests with ctest (host unit tests,
+# Every test: installs what is missing (Debian packages), builds the AVR images and the checked
+# host tree (preset `checked`, build/checked, its own tree: core/ instrumented for line coverage,
+# every host object built with AddressSanitizer + UndefinedBehaviorSanitizer; tools/demo.sh's
+# build/host is neither used nor touched), runs all tests with ctest (host unit tests,
 # firmware logic on the fake HAL, plant fidelity, model lab, HIL tests of the real images in
 # simavr, the fuzz targets' deterministic replay), prints core/ line coverage, and ends with
 # ctest's summary. Non-zero on any failure; a sanitizer finding aborts its test, which fails.
@@ -12,7 +13,7 @@ cd "$THRUSTCAL_ROOT"
 ensure_packages
 build_avr
 print_firmware_sizes
-build_host -DTHRUSTCAL_COVERAGE=ON -DTHRUSTCAL_SANITIZE=ON
+build_checked
 
 # Sanitizer findings fail the run: UBSan stops at the first one (-fno-sanitize-recover), ASan
 # always does; both print a stack. Leak checking stays on.
@@ -20,16 +21,16 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:-abort_on_error=1:detect_leaks=1:strict_stri
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 
 say "running tests"
-find build/host -name '*.gcda' -delete 2>/dev/null || true
-log=build/host/ctest.log
-realtime_log=build/host/ctest-realtime.log
+find build/checked -name '*.gcda' -delete 2>/dev/null || true
+log=build/checked/ctest.log
+realtime_log=build/checked/ctest-realtime.log
 set +e
 # Tests that drive a simulated board through a pseudo-terminal paced to the wall clock (label
 # `realtime`) wait far more than they compute: they run beside the others instead of taking
 # their slots (docs/testing.md, "Test run time").
-ctest --test-dir build/host -L realtime -j 3 --output-on-failure --timeout 900 > "$realtime_log" 2>&1 &
+ctest --test-dir build/checked -L realtime -j 3 --output-on-failure --timeout 900 > "$realtime_log" 2>&1 &
 realtime_pid=$!
-ctest --test-dir build/host -LE realtime -j "$JOBS" --output-on-failure --timeout 900 2>&1 | tee "$log"
+ctest --test-dir build/checked -LE realtime -j "$JOBS" --output-on-failure --timeout 900 2>&1 | tee "$log"
 status=${PIPESTATUS[0]}
 wait "$realtime_pid"
 realtime_status=$?
@@ -41,9 +42,9 @@ set -e
 say "core/ line coverage"
 cov_status=0
 cov_out=$(gcovr -r "$THRUSTCAL_ROOT" --filter "$THRUSTCAL_ROOT/core/" \
-  --print-summary --fail-under-line 90 -o build/host/coverage.txt build/host 2>&1) || cov_status=$?
+  --print-summary --fail-under-line 90 -o build/checked/coverage.txt build/checked 2>&1) || cov_status=$?
 echo "$cov_out" | grep -E '^(lines|branches):' || echo "$cov_out"
-[ $cov_status -eq 0 ] || echo "error: core/ line coverage is below 90 % (details: build/host/coverage.txt)"
+[ $cov_status -eq 0 ] || echo "error: core/ line coverage is below 90 % (details: build/checked/coverage.txt)"
 
 echo
 echo "ctest summary (realtime tests):"

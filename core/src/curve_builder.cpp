@@ -79,6 +79,19 @@ struct PavaPool {
   }
 };
 
+// The PWM where the line from lo to hi reaches target_dg (lo.force_dg < target_dg <=
+// hi.force_dg, so the span is never zero), rounded to the nearest microsecond.
+uint16_t pwmBetween(const SweepSample& lo, const SweepSample& hi, int32_t target_dg) {
+  const uint32_t above = static_cast<uint32_t>(target_dg - lo.force_dg);        // < 2^16
+  const uint32_t span_us = static_cast<uint32_t>(hi.pwm_us) - lo.pwm_us;       // < 2^16
+  // int32 before subtracting: on AVR int16 - int16 is a 16-bit int and could wrap.
+  const uint32_t span_dg = static_cast<uint32_t>(static_cast<int32_t>(hi.force_dg) - lo.force_dg);
+  const uint32_t num = above * span_us;
+  uint32_t add = num / span_dg;
+  if (2u * (num % span_dg) >= span_dg) ++add;
+  return static_cast<uint16_t>(lo.pwm_us + add);
+}
+
 }  // namespace
 
 bool CurveBuilderBase::add(uint16_t pwm_us, int16_t force_dg) {
@@ -139,19 +152,7 @@ BuildReport CurveBuilderBase::build(ForceCurveBase& out) {
     const int32_t target_dg = static_cast<int32_t>(grams) * kDecigramsPerGram;
     while (samples_[reach].force_dg < target_dg) ++reach;  // stops: last point >= max_grams
     uint16_t pwm = samples_[reach].pwm_us;
-    if (reach > 0) {
-      // f0 < target <= f1: linear interpolation, rounded to the nearest microsecond.
-      const SweepSample& lo = samples_[reach - 1];
-      const SweepSample& hi = samples_[reach];
-      const uint32_t above = static_cast<uint32_t>(target_dg - lo.force_dg);        // < 2^16
-      const uint32_t span_us = static_cast<uint32_t>(hi.pwm_us) - lo.pwm_us;       // < 2^16
-      // int32 before subtracting: on AVR int16 - int16 is a 16-bit int and could wrap.
-      const uint32_t span_dg = static_cast<uint32_t>(static_cast<int32_t>(hi.force_dg) - lo.force_dg);
-      const uint32_t num = above * span_us;
-      uint32_t add = num / span_dg;
-      if (2u * (num % span_dg) >= span_dg) ++add;
-      pwm = static_cast<uint16_t>(lo.pwm_us + add);
-    }
+    if (reach > 0) pwm = pwmBetween(samples_[reach - 1], samples_[reach], target_dg);
     if (grams == 1) {
       out.pwm_at_1g_us = pwm;
     } else {

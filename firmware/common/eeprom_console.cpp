@@ -4,12 +4,13 @@
 #include "console.hpp"
 #include "hal/hal.hpp"
 #include "thrustcal/crc16.hpp"
+#include "thrustcal/eeprom_codec.hpp"
 
 namespace fw {
 
 namespace {
 
-constexpr uint16_t kSlotBytes = 1024;
+constexpr uint16_t kSlotBytes = tc::kRecordBytes;  // one motor's slot
 constexpr uint8_t kSlots = hal::Eeprom::kSize / kSlotBytes;
 constexpr uint8_t kRecordBytes = 16;
 static_assert(hal::Eeprom::kSize % kSlotBytes == 0, "whole slots");

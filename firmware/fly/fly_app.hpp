@@ -12,7 +12,7 @@
 // and the output stage, whose pulses the next rising edge carries; then one slow job (battery,
 // an accelerometer correction, a stream row), the failsafes, and the watchdog's kick.
 //
-// Safety rules (DESIGN.md), all enforced here:
+// Safety rules (docs/safety.md, "The rules"), all enforced here:
 //  - nothing spins unless a complete, valid `arm` line asked (with strict on: checksummed), the
 //    ESCs had their 2 s at the stop pulse, the IMU is healthy and its gyro calibrated, the
 //    vehicle is level and still, and every motor the layout flies can fly in the mode;

@@ -9,7 +9,7 @@
 //     with the watchdog still on at its shortest period (16 ms); an image that does not switch it
 //     off first resets again and again (WDRF must be cleared before WDE can be);
 //  3. paints every SRAM byte between the end of the static data (_end) and RAMEND with
-//     kStackPaint, so the stack's high-water mark can be read later (hal::Stack).
+//     hal::kStackPaint, so the stack's high-water mark can be read later (hal::Stack).
 //
 // The stock Arduino Mega2560 bootloader (stk500v2) reads and clears MCUSR before the program
 // starts, so behind it MCUSR reads 0. (Its shortcut after a watchdog reset, an eicall to the
@@ -23,7 +23,6 @@
 #include "hal/hal.hpp"
 
 namespace {
-constexpr uint8_t kStackPaint = 0xC5;
 constexpr uint32_t kRunningMagic = 0x7C3A51E9;
 }  // namespace
 
@@ -42,7 +41,7 @@ void tc_boot_init3() {
   MCUSR = 0;
   wdt_disable();
   // Nothing is on the stack yet (SP = RAMEND, no call made): paint all of it.
-  for (uint8_t* p = &_end; p <= reinterpret_cast<uint8_t*>(RAMEND); ++p) *p = kStackPaint;
+  for (uint8_t* p = &_end; p <= reinterpret_cast<uint8_t*>(RAMEND); ++p) *p = hal::kStackPaint;
 }
 }
 
@@ -67,7 +66,7 @@ uint16_t Stack::untouchedBytes(void (*yield)()) {
   const uint8_t* p = &_end;
   const uint8_t* const top = reinterpret_cast<const uint8_t*>(RAMEND);
   uint16_t n = 0;
-  while (p <= top && *p == kStackPaint) {
+  while (p <= top && *p == hal::kStackPaint) {
     ++p;
     ++n;
     if (yield != nullptr && (n & 63) == 0) yield();

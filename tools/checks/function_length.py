@@ -7,20 +7,23 @@ A brace counter, not a compiler: comments, string and character literals (raw st
 preprocessor lines are blanked first; a `{` at namespace or class level opens a function when
 the text before it (since the last `;`, `{` or `}`) has a parameter list and is not a
 namespace, class, enum or an initializer (`= {`). Lambdas and local classes count towards the
-function they are in.
+function they are in. A fragment pasted into a function by `#include "X.inc"` (the AVR assembly
+frame of model v2) counts with its lines, as if written there.
 
   tools/checks/function_length.py [--max 80] [--all] PATH...
 Exit 1 when a function is too long and carries no reason; --all lists every function over the
-limit, reasons included.
+limit, reasons included. Folders named testdata (the checks' own fixtures) are skipped when a
+folder is given.
 """
 import argparse
 import pathlib
 import re
 import sys
 
-SOURCES = ('.cpp', '.hpp', '.h', '.cc', '.c')
+SOURCES = ('.cpp', '.hpp', '.h', '.cc', '.c', '.inc')
 SCOPE = re.compile(r'\b(namespace|class|struct|union)\b')
 LONG_MARK = re.compile(r'//\s*long:\s*\S')
+INCLUDE_INC = re.compile(r'^\s*#\s*include\s+"([^"]+\.inc)"')
 
 
 def blank(text):
@@ -113,8 +116,27 @@ def function_name(header):
     return m.group(1) if m else h[:40]
 
 
+def pasted_lines(path, lines, first, last, seen=()):
+    """[(fragment, lines)] of the `#include "X.inc"` lines in lines[first-1..last-1], each
+    fragment with what it includes in turn."""
+    out = []
+    for line in lines[first - 1:last]:
+        m = INCLUDE_INC.match(line)
+        if not m:
+            continue
+        inc = (path.parent / m.group(1)).resolve()
+        if inc in seen or not inc.is_file():
+            continue
+        inc_lines = inc.read_text(errors='replace').split('\n')
+        count = len(inc_lines) - (inc_lines[-1] == '')
+        out.append((inc.name, count))
+        out += pasted_lines(inc, inc_lines, 1, len(inc_lines), seen + (inc,))
+    return out
+
+
 def functions(path):
-    """[(name, first_line, last_line, reason_or_None)] for every function body in the file."""
+    """[(name, first_line, last_line, reason_or_None, pasted)] for every function body in the
+    file; pasted: the fragments it includes, [(file name, lines)]."""
     raw = path.read_text(errors='replace')
     text = blank(raw)
     lines = raw.split('\n')
@@ -152,7 +174,8 @@ def functions(path):
             if kind == 'function':
                 first, name = opened.pop()
                 last = text.count('\n', 0, i) + 1
-                found.append((name, first, last, reason(lines, first)))
+                found.append((name, first, last, reason(lines, first),
+                              pasted_lines(path, lines, first, last)))
             header_start = i + 1
         elif c == ';':
             header_start = i + 1
@@ -183,7 +206,8 @@ def main():
     files = []
     for p in args.paths:
         if p.is_dir():
-            files += sorted(f for f in p.rglob('*') if f.suffix in SOURCES and f.is_file())
+            files += sorted(f for f in p.rglob('*') if f.suffix in SOURCES and f.is_file()
+                            and 'testdata' not in f.relative_to(p).parts)
         elif p.is_file():
             files.append(p)
         else:
@@ -194,18 +218,22 @@ def main():
         return 2
     too_long, marked, count = [], [], 0
     for f in files:
-        for name, first, last, why in functions(f):
+        for name, first, last, why, pasted in functions(f):
             count += 1
-            length = last - first + 1
+            # an include line is replaced by the fragment's lines
+            length = last - first + 1 + sum(n - 1 for _, n in pasted)
             if length <= args.max:
                 continue
-            (marked if why else too_long).append((f, first, name, length, why))
+            where = ''
+            if pasted:
+                where = ' (' + ', '.join(f'{n} from {inc}' for inc, n in pasted) + ')'
+            (marked if why else too_long).append((f, first, name, f'{length} lines{where}', why))
     for f, first, name, length, why in too_long:
-        print(f'{f}:{first}: {name} is {length} lines (at most {args.max}): split it into named '
+        print(f'{f}:{first}: {name} is {length} (at most {args.max}): split it into named '
               'steps, or say why it stays long with a `// long: REASON` comment above it')
     if args.all:
         for f, first, name, length, why in marked:
-            print(f'{f}:{first}: {name} is {length} lines, {why}')
+            print(f'{f}:{first}: {name} is {length}, {why}')
     print(f'{count} functions in {len(files)} files; {len(too_long)} over {args.max} lines without '
           f'a reason, {len(marked)} with one')
     return 1 if too_long else 0

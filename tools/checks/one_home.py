@@ -14,6 +14,8 @@ import pathlib
 import re
 import sys
 
+import source_tree  # tools/checks/source_tree.py
+
 FACTS = [
     # (what, regular expression of a definition, its one home)
     ('the sweep window of load-cell readings', r'\bconstexpr\s+\w+\s+kForceWindow\s*=',
@@ -46,6 +48,7 @@ FACTS = [
     ('the ESC pin table', r'\bEscPin\s+kEscPins\[\]\s*=', 'hal/include/hal/board.hpp'),
     ('the Mega2560 header pin map', r'\bMegaPin\s+kMegaPins\[', 'hal/include/hal/mega_pins.hpp'),
     ('an ESC pin as a (port, bit) literal', r"\{\s*'[A-L]'\s*,\s*[0-7]\s*\}", None),
+    ('the stack paint byte', r'\bconstexpr\s+[\w:]+\s+kStackPaint\w*\s*=', 'hal/include/hal/board.hpp'),
     ('the timer driver\'s pulse clamp', r'\bconstexpr\s+[\w:]+\s+kPulseClamp(Min|Max)Us\s*=',
      'hal/include/hal/board.hpp'),
     # Protocol facts (core).
@@ -54,20 +57,15 @@ FACTS = [
     ('a bare throttle-range default', r'\buint16_t\s+pwm_(min|max)_us\s*=\s*(1000|2000)\s*;', None),
     ('gather_store\'s setting ranges', r'\bconstexpr\s+[\w:]+\s+kSweep(Pwm|Step|Settle)\w*\s*=',
      'core/include/thrustcal/sweep_limits.hpp'),
+    ('a motor slot\'s EEPROM bytes (1024)', r'\bconstexpr\s+[\w:]+\s+k\w*(Slot|Record)\w*Bytes\s*=\s*1024\b',
+     'core/include/thrustcal/eeprom_codec.hpp'),
     ('the flash-text macros', r'#\s*define\s+TC_FLASH', 'core/include/thrustcal/flash_text.hpp'),
 ]
 SOURCES = ('.cpp', '.hpp', '.h', '.c', '.inc')
-FOLDERS = ('core', 'hal', 'firmware', 'tools', 'tests')
 
 
 def sources(root):
-    for folder in FOLDERS:
-        base = root / folder
-        if not base.is_dir():
-            continue
-        for f in sorted(base.rglob('*')):
-            if f.suffix in SOURCES and f.is_file() and 'testdata' not in f.relative_to(root).parts:
-                yield f
+    return source_tree.sources(root, SOURCES)
 
 
 def main():

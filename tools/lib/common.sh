@@ -1,18 +1,21 @@
-# Shared by tools/demo.sh and tools/test.sh: install what is missing, build both trees.
+# Shared by tools/demo.sh, tools/test.sh, tools/results.sh and tools/fuzz.sh: install what is
+# missing, configure and build the trees each needs.
 # Sourced, not run.
 
 THRUSTCAL_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 JOBS="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
 
-# Debian packages the project needs (build, firmware, simulator, lab, plots, coverage).
-THRUSTCAL_PACKAGES=(
+# Debian packages: what tools/demo.sh needs (build, firmware, simulator, lab, plots), and what
+# the tests add (GoogleTest, avrdude for the board tests, gcovr for coverage).
+THRUSTCAL_DEMO_PACKAGES=(
   cmake g++ make pkg-config
-  gcc-avr binutils-avr avr-libc avrdude arduino-core-avr
+  gcc-avr binutils-avr avr-libc arduino-core-avr
   simavr libsimavr-dev libelf-dev
-  googletest libgtest-dev libgmock-dev
   libeigen3-dev libcli11-dev libmuparser-dev nlohmann-json3-dev libfmt-dev
-  gnuplot-nox gcovr jq
+  gnuplot-nox jq
 )
+THRUSTCAL_TEST_PACKAGES=(googletest libgtest-dev libgmock-dev avrdude gcovr python3)
+THRUSTCAL_PACKAGES=("${THRUSTCAL_DEMO_PACKAGES[@]}" "${THRUSTCAL_TEST_PACKAGES[@]}")
 # What tools/fuzz.sh adds (libFuzzer ships with Debian's clang runtime).
 THRUSTCAL_FUZZ_PACKAGES=(clang libclang-rt-14-dev)
 
@@ -41,20 +44,88 @@ ensure_packages() {
     || die "apt-get install failed for: ${missing[*]}"
 }
 
-# build_avr: firmware images into build/avr (prints avr-size for each image).
+# build_avr [TARGET...]: firmware images into build/avr (all of them by default).
 build_avr() {
   say "configuring the AVR tree (build/avr)"
   cmake --preset avr >/dev/null
-  say "building firmware images"
-  cmake --build --preset avr -j "$JOBS"
+  say "building firmware images${1:+: $*}"
+  if [ $# -eq 0 ]; then
+    cmake --build --preset avr -j "$JOBS"
+  else
+    cmake --build --preset avr -j "$JOBS" --target "$@"
+  fi
 }
 
-# build_host [extra cmake args]: core, fake HAL, tests and the thrustcal tool into build/host.
-build_host() {
-  say "configuring the host tree (build/host)"
-  cmake --preset host "$@" >/dev/null
-  say "building host tools and tests"
-  cmake --build --preset host -j "$JOBS"
+# The two host trees, each configured with every flag that decides what its binaries are, so a
+# cache left by an earlier configure cannot change them (docs/testing.md, "Two host trees"):
+#   plain   build/host     tools/demo.sh, tools/results.sh: optimised, no instrumentation
+#   checked build/checked  tools/test.sh: core/ line coverage, ASan + UBSan on every object
+THRUSTCAL_PLAIN_FLAGS=(-DTHRUSTCAL_TREE=plain -DCMAKE_BUILD_TYPE=RelWithDebInfo
+  "-DTHRUSTCAL_HOST_OPT=-O2 -g1" -DTHRUSTCAL_SANITIZE=OFF -DTHRUSTCAL_COVERAGE=OFF -DTHRUSTCAL_FUZZ=OFF)
+THRUSTCAL_CHECKED_FLAGS=(-DTHRUSTCAL_TREE=checked -DCMAKE_BUILD_TYPE=RelWithDebInfo
+  -DTHRUSTCAL_SANITIZE=ON -DTHRUSTCAL_UBSAN_SKIP=alignment,null,pointer-overflow,object-size,vptr
+  -DTHRUSTCAL_COVERAGE=ON -DTHRUSTCAL_FUZZ=OFF -DTHRUSTCAL_TESTS=ON)
+
+# cache_value DIR NAME: NAME's value in DIR's CMakeCache.txt (empty when absent).
+cache_value() {
+  sed -n "s/^$2:[A-Z]*=//p" "$1/CMakeCache.txt" 2>/dev/null | head -n 1
+}
+
+# check_tree_cache DIR FLAG...: dies unless DIR's cache holds each -DNAME=VALUE given, and (for
+# the plain tree) no instrumentation slipped in through CMAKE_*_FLAGS (e.g. CXXFLAGS at the first
+# configure).
+check_tree_cache() {
+  local dir=$1 flag name want got v
+  shift
+  for flag in "$@"; do
+    flag=${flag#-D}
+    name=${flag%%=*}
+    want=${flag#*=}
+    got=$(cache_value "$dir" "$name")
+    [ "$got" = "$want" ] || die "$dir was configured with $name=$got, but this script builds it with \
+$name=$want; its CMake cache disagrees with the flags passed. Remove $dir (rm -rf $dir) and run again."
+  done
+  if [ "$(cache_value "$dir" THRUSTCAL_TREE)" = plain ]; then
+    for name in CMAKE_CXX_FLAGS CMAKE_C_FLAGS CMAKE_EXE_LINKER_FLAGS; do
+      v=$(cache_value "$dir" "$name")
+      case "$v" in
+        *-fsanitize*|*--coverage*|*-fprofile-arcs*)
+          die "$dir is the plain tree, but its $name holds instrumentation ($v); unset CFLAGS, CXXFLAGS \
+and LDFLAGS, remove $dir and run again" ;;
+      esac
+    done
+  fi
+}
+
+# configure_host_tree PRESET [FLAG...]: configures PRESET's tree with the flags, then checks its
+# cache holds them.
+configure_host_tree() {
+  local preset=$1 dir
+  shift
+  dir="$THRUSTCAL_ROOT/build/$([ "$preset" = host ] && echo host || echo "$preset")"
+  say "configuring the host tree ($preset: ${dir#"$THRUSTCAL_ROOT"/})"
+  cmake --preset "$preset" "$@" >/dev/null
+  check_tree_cache "$dir" "$@"
+}
+
+# build_plain [TARGET...]: the plain tree (build/host), only the targets named (tools/demo.sh
+# and tools/results.sh need `thrustcal` alone; tests are not configured: no GoogleTest needed).
+build_plain() {
+  configure_host_tree host "${THRUSTCAL_PLAIN_FLAGS[@]}" -DTHRUSTCAL_TESTS=OFF
+  if [ $# -eq 0 ]; then
+    say "building the plain host tree (build/host)"
+    cmake --build --preset host -j "$JOBS"
+  else
+    say "building $* (build/host)"
+    cmake --build --preset host -j "$JOBS" --target "$@"
+  fi
+}
+
+# build_checked: the checked tree (build/checked), every test and tool.
+build_checked() {
+  configure_host_tree checked "${THRUSTCAL_CHECKED_FLAGS[@]}"
+  say "building host tools and tests, coverage + ASan + UBSan (build/checked)"
+  cmake --build --preset checked -j "$JOBS"
 }
 
 print_firmware_sizes() {

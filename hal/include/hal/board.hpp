@@ -23,6 +23,9 @@ constexpr uint32_t kCpuHz = 16000000UL;  // the crystal; the AVR backend asserts
 // ---- memories (ATmega2560) ----
 constexpr uint32_t kFlashBytes = 256UL * 1024;
 constexpr uint16_t kEepromBytes = 4096;
+// The byte the boot code paints the free SRAM with (hal/avr/system.cpp): the stack never used is
+// what still holds it, counted by hal::Stack on the chip and by the simulator's stack scenario.
+constexpr uint8_t kStackPaint = 0xC5;
 
 // ---- ADC channels ----
 constexpr uint8_t kAdcLoadCell = 0;  // A0

@@ -30,7 +30,7 @@ constexpr uint16_t kCountsV2 = 820;  // second curve's start voltage
 
 inline uint16_t mvFromCounts(uint16_t counts) { return tc::BatteryMonitor().millivoltsFromCounts(counts); }
 
-// Plant: thrust follows the effective motor voltage duty * V (DESIGN.md), quadratically:
+// Plant: thrust follows the effective motor voltage duty * V (docs/model_v2.md), quadratically:
 //   F = k * ((pwm - 1080 us) / 1000 us * V)^2,  k in g/V^2 differs per motor.
 inline double plantForceG(double k, uint16_t pwm_us, uint16_t vbat_mv) {
   if (pwm_us <= 1080) return 0.0;

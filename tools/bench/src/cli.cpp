@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "bench/doc_blocks.hpp"
+#include "bench/drift.hpp"
 #include "bench/report.hpp"
 #include "bench/sections.hpp"
 
@@ -20,7 +22,16 @@ struct Options {
   AvrPaths paths;
   bool quick = false;
   int settle_ms = 0;  // 0: the benchmark's default
+  int jobs = 1;       // swap: flights at once
 };
+
+SwapBenchOptions swapOptions(const Options& o) {
+  SwapBenchOptions s;
+  s.out_dir = sourcePath("build/bench/swap");
+  s.jobs = o.jobs;
+  s.quick = o.quick;
+  return s;
+}
 
 void emit(const std::vector<Section>& sections, const Options& o) {
   nlohmann::json j;
@@ -68,6 +79,9 @@ void add(CLI::App& bench, const std::shared_ptr<Options>& o, const std::string& 
   sub->add_option("--avr-build", o->paths.avr_build,
                   "AVR build tree holding firmware/{gather_store,read_run}/*.elf "
                   "(default: <source>/build/avr)");
+  if (name == "swap" || name == "all")
+    sub->add_option("--jobs", o->jobs, "swap: flights at once, each its own simulated board (default 1)")
+        ->check(CLI::Range(1, 64));
   if (name == "accuracy" || name == "all")
     sub->add_option("--settle-ms", o->settle_ms, "accuracy: settle time per sweep step (default 600)")
         ->check(CLI::Range(20, 5000));
@@ -104,27 +118,53 @@ bool writeOrCheck(const std::string& path, const std::string& text, bool check) 
 }
 
 struct ReportArgs {
-  std::string from, results, readme;
+  std::string from, results;
+  std::vector<std::string> docs;
   bool check = false;
 };
+
+// Rewrites (or checks) the generated blocks of one markdown file; with --check, names the line
+// of each block that differs.
+bool blocksOf(const std::string& path, const nlohmann::json& bench, bool check) {
+  const std::string text = readFile(path);
+  const std::string want = withBlocks(text, path, bench);
+  if (check && want != text) {
+    for (const DocBlock& b : findBlocks(text, path)) {
+      const std::string has = text.substr(b.content_begin, b.content_end - b.content_begin);
+      if (has != renderBlock(b, bench))
+        std::cout << fmt::format("{}:{}: the generated block \"{}\" differs from the JSON's figures\n", path,
+                                 b.line, b.kind);
+    }
+  }
+  return writeOrCheck(path, want, check);
+}
 
 void runReport(const ReportArgs& a) {
   const nlohmann::json bench = nlohmann::json::parse(readFile(a.from));
   bool same = true;
   if (!a.results.empty()) same = writeOrCheck(a.results, resultsMarkdown(bench), a.check) && same;
-  if (!a.readme.empty())
-    same = writeOrCheck(a.readme, withMeasuredTable(readFile(a.readme), measuredTable(bench)), a.check) && same;
+  int blocks = 0;
+  for (const std::string& doc : a.docs) {
+    if (doc == a.results) continue;  // written whole above
+    blocks += static_cast<int>(findBlocks(readFile(doc), doc).size());
+    same = blocksOf(doc, bench, a.check) && same;
+  }
   if (!same) throw CLI::RuntimeError(1);
-  if (a.check) std::cout << "the docs hold the figures of " << a.from << '\n';
+  if (a.check)
+    std::cout << fmt::format("the docs hold the figures of {} ({} generated blocks in {} files)\n", a.from, blocks,
+                             a.docs.size());
 }
 
 void addReport(CLI::App& bench) {
   CLI::App* sub = bench.add_subcommand(
-      "report", "write docs/results.md and README's measured table from `bench all --json` (tools/results.sh)");
+      "report", "write docs/results.md and every generated block of the docs from `bench all --json` "
+                "(tools/results.sh)");
   auto a = std::make_shared<ReportArgs>();
-  sub->add_option("--from", a->from, "the JSON of `thrustcal bench all --json`")->required();
+  sub->add_option("--from", a->from, "the JSON of `thrustcal bench all --json` (docs/results.json)")->required();
   sub->add_option("--results", a->results, "write the results page here (docs/results.md)");
-  sub->add_option("--readme", a->readme, "rewrite the measured table between its markers in this README");
+  sub->add_option("--docs", a->docs,
+                  "markdown files whose `<!-- generated: ... -->` blocks to rewrite (README.md docs/*.md)");
+  sub->add_option("--readme", a->docs, "the same as --docs (README's measured table is such a block)");
   sub->add_flag("--check", a->check, "write nothing: fail when the files differ from what the JSON gives");
   sub->callback([a] {
     try {
@@ -138,12 +178,68 @@ void addReport(CLI::App& bench) {
   });
 }
 
+struct DriftArgs {
+  std::string from, swap_dir;
+  AvrPaths paths;
+};
+
+// A section's JSON, or an error when it could not be measured (a drift check that measured
+// nothing must not pass).
+nlohmann::json measured(const Section& s) {
+  if (!s.json.value("available", true))
+    throw std::runtime_error(fmt::format("{} could not be measured: {}", s.key, s.json.value("reason", "?")));
+  return s.json;
+}
+
+void runDrift(const DriftArgs& a) {
+  const nlohmann::json docs = nlohmann::json::parse(readFile(a.from));
+  nlohmann::json now;
+  now["compute"] = measured(computeSection(a.paths));
+  now["footprint"] = measured(footprintSection(a.paths));
+  const ImageSize fly = imageSize(a.paths.elf("fly"));
+  now["fly"] = {{"flash_bytes", fly.flash_bytes}, {"sram_static_bytes", fly.sram_static_bytes}};
+  SwapBenchOptions so;
+  so.out_dir = a.swap_dir.empty() ? sourcePath("build/bench/swap-drift") : a.swap_dir;
+  so.reduced = true;
+  now["swap"] = measured(swapSection(a.paths, so));
+  const DriftResult r = compareDrift(docs, now, driftFigures(now));
+  r.table.print(std::cout);
+  std::cout << fmt::format("compared {} figures with {}: {} drifted past their tolerance, {} missing there\n",
+                           r.compared, a.from, r.drifted, r.missing);
+  if (r.drifted + r.missing > 0) {
+    std::cout << "the docs quote " << a.from << ", which no longer holds what the code measures: run "
+              << "tools/results.sh and commit docs/results.json with the docs it rewrites\n";
+    throw CLI::RuntimeError(1);
+  }
+}
+
+void addDrift(CLI::App& bench) {
+  CLI::App* sub = bench.add_subcommand(
+      "drift", "measure the cheap figures again (compute cycles, image sizes, footprint, a reduced swap) and "
+               "fail when one moved past its tolerance from the docs' JSON");
+  auto a = std::make_shared<DriftArgs>();
+  sub->add_option("--from", a->from, "the JSON the docs are generated from (docs/results.json)")->required();
+  sub->add_option("--avr-build", a->paths.avr_build, "AVR build tree (default: <source>/build/avr)");
+  sub->add_option("--swap-dir", a->swap_dir,
+                  "the reduced swap's calibration cache and series (default: <source>/build/bench/swap-drift)");
+  sub->callback([a] {
+    try {
+      runDrift(*a);
+    } catch (const CLI::RuntimeError&) {
+      throw;
+    } catch (const std::exception& e) {
+      std::cerr << "thrustcal bench drift: " << e.what() << '\n';
+      throw CLI::RuntimeError(1);
+    }
+  });
+}
+
 }  // namespace
 
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime, "
-               "safety, fly, speed; each figure next to its target");
+               "safety, fly, swap, speed; each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -178,6 +274,10 @@ void registerCommands(CLI::App& app) {
       "fly, the 400 Hz attitude loop, on the virtual airframe in each mode: CPU load, loop period, IMU "
       "read to ESC edge, flash/SRAM, stack never used (simavr)",
       [](const Options& o) { return std::vector<Section>{flySection(o.paths)}; });
+  add(*bench, o, "swap",
+      "the swap experiment's full run (docs/fly.md): motor 1 exchanged, only its slot calibrated again, fly's "
+      "10-degree steps in every mode on the seesaw and the gimbal (simavr; minutes)",
+      [](const Options& o) { return std::vector<Section>{swapSection(o.paths, swapOptions(o))}; });
   add(*bench, o, "speed",
       "simulated seconds per wall second: read_run, fly on the gimbal, and a firmware with "
       "phase-correct PWM on INT4/INT5 (as MultiWii 2.4 on a Mega)",
@@ -187,6 +287,7 @@ void registerCommands(CLI::App& app) {
       "against the plant's own (stock motors and swap parts)",
       [](const Options& o) { return std::vector<Section>{dynamicsSection(o.paths, o.quick)}; });
   addReport(*bench);
+  addDrift(*bench);
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
         std::vector<Section> all;
@@ -198,6 +299,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(runtimeSection(o.paths));
         all.push_back(safetySection(o.paths));
         all.push_back(flySection(o.paths));
+        all.push_back(swapSection(o.paths, swapOptions(o)));
         all.push_back(speedSection(o.paths));
         all.push_back(dynamicsSection(o.paths, o.quick));
         return all;

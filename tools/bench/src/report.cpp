@@ -178,18 +178,8 @@ std::string resultsMarkdown(const nlohmann::json& bench) {
 std::string measuredTable(const nlohmann::json& b) {
   return "| what | figure | reproduce |\n|---|---|---|\n" + hangRow(b) + floodRow(b) + footprintRows(b) +
          computeAndRuntimeRows(b) + flyRow(b) + calibrationRow(b) +
-         "| console fuzz | 10,000+ lines per image, every rule held | `ctest --test-dir build/host -R "
+         "| console fuzz | 10,000+ lines per image, every rule held | `ctest --test-dir build/checked -R "
          "ConsoleFuzz` |\n";
-}
-
-std::string withMeasuredTable(const std::string& readme, const std::string& table) {
-  const std::size_t begin = readme.find(kMeasuredBegin);
-  const std::size_t end = readme.find(kMeasuredEnd);
-  if (begin == std::string::npos || end == std::string::npos || end < begin)
-    throw std::runtime_error(fmt::format("README has no \"{}\" ... \"{}\" markers around its measured table",
-                                         kMeasuredBegin, kMeasuredEnd));
-  const std::size_t from = begin + std::string(kMeasuredBegin).size();
-  return readme.substr(0, from) + "\n" + table + readme.substr(end);
 }
 
 }  // namespace bench

@@ -85,6 +85,8 @@ uint64_t symbolSize(const std::string& elf, const std::string& demangled) {
 
 }  // namespace
 
+std::string sourcePath(const std::string& rel) { return std::string(THRUSTCAL_SOURCE_DIR) + "/" + rel; }
+
 std::string shownPath(const std::string& path) {
   const std::string root = std::string(THRUSTCAL_SOURCE_DIR) + "/";
   return path.rfind(root, 0) == 0 ? path.substr(root.size()) : path;
@@ -96,7 +98,7 @@ ImageSize imageSize(const std::string& elf) {
 }
 
 std::string AvrPaths::elf(const std::string& image) const {
-  const std::string tree = avr_build.empty() ? std::string(THRUSTCAL_SOURCE_DIR) + "/build/avr" : avr_build;
+  const std::string tree = avr_build.empty() ? sourcePath("build/avr") : avr_build;
   return tree + "/firmware/" + image + "/" + image + ".elf";
 }
 

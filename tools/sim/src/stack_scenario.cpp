@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "hal/board.hpp"
 #include "sim/board.hpp"
 #include "sim/console.hpp"
 #include "sim/elf_symbols.hpp"
@@ -24,7 +25,6 @@ namespace sim {
 
 namespace {
 
-constexpr uint8_t kStackPaint = 0xC5;  // what the boot code paints the free SRAM with
 
 // "stack: N of M bytes never used" from status's lines.
 void readStatus(const std::vector<std::string>& lines, StackHeadroom& h) {
@@ -44,7 +44,7 @@ int scanUntouched(Board& board, const std::string& elf) {
   const uint32_t end = elfSymbol(elf, "_end").address & 0xFFFF;
   const avr_t* avr = board.avr();
   int n = 0;
-  for (uint32_t a = end; a <= avr->ramend && avr->data[a] == kStackPaint; ++a) ++n;
+  for (uint32_t a = end; a <= avr->ramend && avr->data[a] == hal::kStackPaint; ++a) ++n;
   return n;
 }
 

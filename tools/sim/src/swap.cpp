@@ -173,6 +173,7 @@ Target target(const std::string& what, const std::string& part, AirRig rig, int 
   t.target = fmt::format("3. swap, force mode, PD, {}: {} with {} in slot {} ({} runs)", airRigName(rig),
                          what, part, kSwapSlot, pairs);
   t.wanted = wanted;
+  t.what = what, t.part = part, t.rig = airRigName(rig);
   t.met = w.seen && !w.undefined && std::fabs(w.value) <= limit;
   t.figure = w.undefined ? fmt::format("not measurable ({}: no rise or no settling)", w.where)
                          : fmt::format(fmt::runtime(figure), w.value, w.stock) + " (" + w.where + ")";

@@ -1,4 +1,4 @@
-// `thrustcal sim swap --json FILE` (sim/swap.hpp): runs[] and targets[] as DESIGN.md fixes them
+// `thrustcal sim swap --json FILE` (sim/swap.hpp): runs[] and targets[] as docs/architecture.md fixes them
 // ("Interfaces other people script against"), with what made them beside.
 #include <cmath>
 
@@ -97,7 +97,10 @@ nlohmann::json SwapResult::toJson() const {
                             {"target", t.target},
                             {"figure", t.figure},
                             {"wanted", t.wanted},
-                            {"met", t.met}});
+                            {"met", t.met},
+                            {"what", t.what},
+                            {"part", t.part},
+                            {"rig", t.rig}});
   nlohmann::json dyn = nlohmann::json::array();
   for (const Dynamics& d : dynamics.parts)
     dyn.push_back({{"part", d.part},

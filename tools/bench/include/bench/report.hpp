@@ -1,7 +1,8 @@
 // docs/results.md and README's "Measured" table, written from the JSON of
 // `thrustcal bench all --json`: the docs carry the bench's own figures, so they cannot drift
-// from what was measured. tools/results.sh re-runs the bench and rewrites both; the ctest
-// Checks.ResultsDocsAreTheBenchJson fails when the committed docs and docs/results.json differ.
+// from what was measured. tools/results.sh re-runs the bench and rewrites both (and every other
+// generated block, bench/doc_blocks.hpp); the ctest Checks.ResultsDocsAreTheBenchJson fails when
+// the committed docs and docs/results.json differ.
 #pragma once
 #include <string>
 
@@ -13,13 +14,8 @@ namespace bench {
 // first. Throws std::runtime_error naming what is missing from the JSON.
 std::string resultsMarkdown(const nlohmann::json& bench);
 
-// README's "Measured" table (markdown), each figure read from the JSON.
+// README's "Measured" table (markdown), each figure read from the JSON: the block
+// `<!-- generated: measured -->` (bench/doc_blocks.hpp).
 std::string measuredTable(const nlohmann::json& bench);
-
-// `readme` with the text between kMeasuredBegin and kMeasuredEnd replaced by `table`. Throws
-// std::runtime_error when the markers are missing.
-inline constexpr const char* kMeasuredBegin = "<!-- measured: begin (thrustcal bench report) -->";
-inline constexpr const char* kMeasuredEnd = "<!-- measured: end -->";
-std::string withMeasuredTable(const std::string& readme, const std::string& table);
 
 }  // namespace bench

@@ -54,6 +54,8 @@ ImageSize imageSize(const std::string& elf);
 // A path as the docs show it: relative to the source tree when inside it (docs/results.md is
 // written from the JSON and must not name the machine it was measured on).
 std::string shownPath(const std::string& path);
+// `rel` under the source tree this tool was built from ("build/avr" -> /.../build/avr).
+std::string sourcePath(const std::string& rel);
 
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
@@ -72,6 +74,17 @@ Section safetySection(const AvrPaths& paths);
 // in each of its modes: CPU load, loop period, IMU read to the ESC edge that carries it, flash
 // and static SRAM, stack never used.
 Section flySection(const AvrPaths& paths);
+// Issue 19 item 3 (sections_swap.cpp): the swap experiment's full run (sim/swap.hpp): targets,
+// figures per rig, axis and gains, the motors' time constants. out_dir holds the calibration
+// cache and the series (empty: <source>/build/bench/swap); quick: one IMU unit, PD gains only;
+// reduced: `bench drift`'s run, the gimbal, force mode, PD, the KV900 part, IMU unit 1.
+struct SwapBenchOptions {
+  std::string out_dir;
+  int jobs = 1;
+  bool quick = false;
+  bool reduced = false;
+};
+Section swapSection(const AvrPaths& paths, const SwapBenchOptions& options);
 // Issue 25 item 5 (sections_speed.cpp): simulated seconds per wall second for read_run, fly on
 // the gimbal and a firmware with phase-correct PWM on INT4/INT5 (target >= 5x real time).
 Section speedSection(const AvrPaths& paths);

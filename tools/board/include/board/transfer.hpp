@@ -22,11 +22,12 @@
 #include "board/avrdude.hpp"
 #include "board/console_client.hpp"
 #include "hal/board.hpp"
+#include "thrustcal/eeprom_codec.hpp"
 
 namespace board {
 
 using hal::kEepromBytes;  // the board table (hal/board.hpp)
-constexpr std::size_t kSlotBytes = 1024;
+constexpr std::size_t kSlotBytes = tc::kRecordBytes;
 constexpr uint32_t kBootSectionStart = 0x3E000;  // the Mega2560's 8 KiB boot section
 constexpr double kBootTimeoutS = 10.0;  // bootloader wait (~1 s) + banner; read_run arms 2 s
 

@@ -17,7 +17,7 @@
 
 namespace plant {
 
-// Thesis/DESIGN per-cell open-circuit voltage at SoC 0, 5, 10, 20, ..., 100 %.
+// The per-cell open-circuit voltage (tools/plant/README.md) at SoC 0, 5, 10, 20, ..., 100 %.
 struct OcvPoint {
   double soc;     // 0..1
   double cell_v;

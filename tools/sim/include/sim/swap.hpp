@@ -157,6 +157,7 @@ struct RunResult {
 struct Target {
   std::string target, figure, wanted;
   bool met = false;
+  std::string what, part, rig;  // "overshoot vs stock", the swapped part, "seesaw" | "gimbal"
 };
 
 struct SwapResult {
@@ -166,7 +167,7 @@ struct SwapResult {
   std::vector<RunResult> runs;
   std::vector<Target> targets;
   double simulated_s = 0, flight_wall_s = 0, wall_s = 0;
-  // runs[] and targets[] as the public interface has them (DESIGN.md), plus setup, dynamics, sim.
+  // runs[] and targets[] as scripts read them (docs/architecture.md, "Interfaces"), plus setup, dynamics, sim.
   nlohmann::json toJson() const;
 };
 

@@ -9,6 +9,19 @@
 
 namespace sim::swap {
 
+// One table of figures: a rig's axis with one set of gains, a row per mode and part (means over
+// the IMU units), a part's change against stock in the same mode in brackets. The bench's swap
+// section and docs/fly.md show these cells; formatTable prints them aligned.
+struct FigureTable {
+  AirRig rig = AirRig::kGimbal;
+  std::string axis;
+  Gains gains = Gains::kPd;
+  std::string title;  // "seesaw roll, PD gains (800 0 146 mN m), 10-degree step, mean of 3 IMU unit(s)"
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+};
+std::vector<FigureTable> figureTables(const SwapResult& result);
+
 std::string formatTable(const SwapResult& result);
 std::string formatTargets(const SwapResult& result);
 std::string formatDynamics(const SwapResult& result);

@@ -1,0 +1,122 @@
+// Generated blocks in the docs (bench/doc_blocks.hpp) and the drift comparison (bench/drift.hpp)
+// on small JSON: what each kind renders, inline and block form, and the errors a writer meets.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "bench/doc_blocks.hpp"
+#include "bench/drift.hpp"
+
+namespace {
+
+const nlohmann::json kResults = nlohmann::json::parse(R"({
+  "fly": {"flash_bytes": 66714, "modes": {"force_v2": {"cpu_load_pct": 36.84}, "pwm": {"cpu_load_pct": 31.91},
+                                          "force_thesis": {"cpu_load_pct": 49.87}}},
+  "swap": {"runs": [
+             {"rig": "seesaw", "mode": "force", "part": "kv1100_9x4.7", "seed": 1, "final_deg": 8.31, "change": -2.5},
+             {"rig": "seesaw", "mode": "force", "part": "kv1100_9x4.7", "seed": 2, "final_deg": 8.52, "change": 1.5},
+             {"rig": "gimbal", "mode": "force", "part": "kv1100_9x4.7", "seed": 1, "final_deg": 9.9, "change": 0.5},
+             {"rig": "seesaw", "mode": "pwm", "part": "stock", "seed": 1, "final_deg": null, "change": 0}],
+           "targets": [{"met": true}, {"met": false}, {"met": true}]},
+  "tables": [{"title": "8. Swap dynamics: time constants", "header": ["motor", "tau"],
+              "rows": [["stock", "78.9 ms"]], "notes": []}]
+})");
+
+std::string render(const std::string& doc) { return bench::withBlocks(doc, "doc.md", kResults); }
+
+TEST(DocBlocks, InlineValueIsRewrittenInItsSentence) {
+  EXPECT_EQ(render("flash <!-- generated: value fly.flash_bytes , -->1<!-- generated: end --> B."),
+            "flash <!-- generated: value fly.flash_bytes , -->66,714<!-- generated: end --> B.");
+}
+
+TEST(DocBlocks, MinMaxRangeAndMaxabsOverAWildcard) {
+  EXPECT_EQ(render("<!-- generated: range fly.modes.*.cpu_load_pct .1f -->?<!-- generated: end -->"),
+            "<!-- generated: range fly.modes.*.cpu_load_pct .1f -->31.9-49.9<!-- generated: end -->");
+  EXPECT_EQ(render("<!-- generated: range fly.modes{force_v2,pwm}.cpu_load_pct .1f --><!-- generated: end -->"),
+            "<!-- generated: range fly.modes{force_v2,pwm}.cpu_load_pct .1f -->31.9-36.8<!-- generated: end -->");
+  EXPECT_EQ(render("<!-- generated: max fly.modes.*.cpu_load_pct .1f --><!-- generated: end -->"),
+            "<!-- generated: max fly.modes.*.cpu_load_pct .1f -->49.9<!-- generated: end -->");
+  EXPECT_EQ(render("<!-- generated: maxabs swap.runs.*.change .1f --><!-- generated: end -->"),
+            "<!-- generated: maxabs swap.runs.*.change .1f -->2.5<!-- generated: end -->");
+}
+
+TEST(DocBlocks, FilterSelectsArrayElementsEvenWithADotInAValue) {
+  EXPECT_EQ(render("<!-- generated: range swap.runs[rig=seesaw,part=kv1100_9x4.7].final_deg .1f -->"
+                   "<!-- generated: end -->"),
+            "<!-- generated: range swap.runs[rig=seesaw,part=kv1100_9x4.7].final_deg .1f -->8.3-8.5"
+            "<!-- generated: end -->");
+  EXPECT_EQ(bench::numbersAt(kResults, "swap.runs[mode!=force].change"), (std::vector<double>{0}));
+  EXPECT_EQ(render("<!-- generated: range swap.runs.*.change +.1f --><!-- generated: end -->"),
+            "<!-- generated: range swap.runs.*.change +.1f -->-2.5..+1.5<!-- generated: end -->");
+  // a number matched as text; a null (a figure the run could not measure) is skipped
+  EXPECT_EQ(bench::numbersAt(kResults, "swap.runs[seed=1].final_deg"), (std::vector<double>{8.31, 9.9}));
+}
+
+TEST(DocBlocks, MetCountsTheTargetsMet) {
+  EXPECT_EQ(render("<!-- generated: met swap.targets -->x<!-- generated: end -->"),
+            "<!-- generated: met swap.targets -->2 of 3<!-- generated: end -->");
+}
+
+TEST(DocBlocks, BlockFormRendersATableBetweenItsMarkerLines) {
+  const std::string doc = "before\n<!-- generated: table \"8. Swap dynamics\" -->\nstale\n<!-- generated: end -->\nafter\n";
+  EXPECT_EQ(render(doc),
+            "before\n<!-- generated: table \"8. Swap dynamics\" -->\n| motor | tau |\n|---|---:|\n| stock | 78.9 ms |\n"
+            "<!-- generated: end -->\nafter\n");
+  EXPECT_EQ(render(render(doc)), render(doc));  // rendering again changes nothing
+}
+
+TEST(DocBlocks, ErrorsNameFileLineAndWhat) {
+  const auto error = [](const std::string& doc) {
+    try {
+      render(doc);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error("a\n<!-- generated: value fly.nothing -->1<!-- generated: end -->"),
+            "doc.md:2: the results JSON has no \"nothing\" (in fly.nothing): run tools/results.sh, or fix the block's "
+            "path");
+  EXPECT_EQ(error("<!-- generated: value fly.modes.*.cpu_load_pct -->1<!-- generated: end -->"),
+            "doc.md:1: value fly.modes.*.cpu_load_pct matches 3 numbers: use min, max or range");
+  EXPECT_EQ(error("<!-- generated: frobnicate x -->1<!-- generated: end -->"),
+            "doc.md:1: unknown kind \"frobnicate\" (measured, table, value, min, max, maxabs, range, met)");
+  EXPECT_EQ(error("x\n\n<!-- generated: value fly.flash_bytes -->1"),
+            "doc.md:3: no \"<!-- generated: end -->\" after this block");
+  EXPECT_EQ(error("<!-- generated: table \"9. Nothing\" -->\n<!-- generated: end -->\n"),
+            "doc.md:1: no bench table's title starts with \"9. Nothing\"");
+  EXPECT_EQ(error("<!-- generated: table \"8. Swap dynamics\" -->x<!-- generated: end -->"),
+            "doc.md:1: \"table\" gives several lines: put its markers on lines of their own");
+}
+
+TEST(Drift, AFigurePastItsToleranceIsCountedAndOneWithinIsNot) {
+  const nlohmann::json docs = {{"fly", {{"flash_bytes", 66714}, {"sram_static_bytes", 3023}}}};
+  nlohmann::json now = {{"fly", {{"flash_bytes", 66714 + 300}, {"sram_static_bytes", 3023 + 16}}}};
+  bench::DriftResult r = bench::compareDrift(docs, now, bench::driftFigures(now));
+  EXPECT_EQ(r.compared, 2);
+  EXPECT_EQ(r.drifted, 0);  // 300 B is within 0.5 % of 66,714 B; 16 B of SRAM within 16 B
+  now["fly"]["flash_bytes"] = 66714 + 400;
+  now["fly"]["sram_static_bytes"] = 3023 - 17;
+  r = bench::compareDrift(docs, now, bench::driftFigures(now));
+  EXPECT_EQ(r.drifted, 2);
+  EXPECT_EQ(r.missing, 0);
+}
+
+TEST(Drift, SwapRunsAreComparedWithTheSameRunOfTheDocs) {
+  const auto run = [](double rise_s) {
+    return nlohmann::json{{"rig", "gimbal"}, {"mode", "force"}, {"part", "kv900_11x4.7"}, {"gains", "pd"},
+                          {"axis", "roll"},  {"seed", 1},       {"rise_s", rise_s}};
+  };
+  nlohmann::json other = run(0.3);
+  other["seed"] = 2;  // another IMU unit: not the run compared
+  const nlohmann::json docs = {{"swap", {{"runs", {other, run(0.215)}}}}};
+  const nlohmann::json now = {{"swap", {{"runs", {run(0.2165)}}}}};
+  const std::vector<bench::DriftFigure> figures = bench::driftFigures(now);
+  ASSERT_EQ(figures.size(), 1u);
+  EXPECT_EQ(figures[0].path, "swap.runs[rig=gimbal,mode=force,part=kv900_11x4.7,gains=pd,axis=roll,seed=1].rise_s");
+  EXPECT_EQ(bench::compareDrift(docs, now, figures).drifted, 0);  // 1.5 ms: within 2 ms
+  EXPECT_EQ(bench::compareDrift(docs, {{"swap", {{"runs", {run(0.225)}}}}}, figures).drifted, 1);
+  EXPECT_EQ(bench::compareDrift({{"swap", {{"runs", {other}}}}}, now, figures).missing, 1);
+}
+
+}  // namespace

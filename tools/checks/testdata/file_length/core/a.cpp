@@ -1,0 +1,7 @@
+// fixture: 7 lines
+int a() {
+  return 1;
+}
+
+// end
+// of a

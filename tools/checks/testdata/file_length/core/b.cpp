@@ -1,0 +1,3 @@
+// fixture: 3 lines
+int b();
+// end
