@@ -11,7 +11,9 @@
 #      `lab walk` on the thesis's bench (one motor, LiPo and current-limited supply): the
 #      diagnosis's advice followed step by step until the error is at the noise floor;
 #   4. the swap experiment reduced (issue 19): motor 1 replaced by three parts, only slot 1
-#      calibrated again, fly's 10-degree steps in every mode; a table and one plot overlaid.
+#      calibrated again, fly's 10-degree steps in every mode; a table and one plot overlaid;
+#   5. each motor's dynamics (issue 26): gather_store's dyn on a stock motor and the KV900 part,
+#      every measured time constant beside the plant's own.
 # Results: build/demo/summary.json, build/demo/*.png, build/demo/lab/report.md, logs.
 set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
@@ -119,6 +121,20 @@ do for [mode in "force generic pwm ardupilot"] {
 unset multiplot
 GP
 
+say "dynamics (issue 26): gather_store's dyn cell and dyn, measured time constants against the plant's"
+# Two parts side by side (about 20 s of wall each, in parallel): a stock motor (seed 11) and the
+# KV900 part of the swap. Each: dyn cell, a calibration sweep, store v2, dyn; step logs kept.
+"$TC" sim dyn --part stock --seed 11 --log "$OUT/dyn_stock.csv" --json "$OUT/dyn_stock.json" \
+  > "$OUT/dyn_stock.txt" 2> >(sed -u 's/^/   /' >&2) &
+dyn_stock=$!
+"$TC" sim dyn --part kv900_11x4.7 --log "$OUT/dyn_kv900.csv" --json "$OUT/dyn_kv900.json" \
+  > "$OUT/dyn_kv900.txt" 2> >(sed -u 's/^/   /' >&2)
+wait "$dyn_stock"
+for part in stock kv900; do
+  echo "dyn, part $part (tau: gather_store's fit, plant: thrustcal plant step for the same pulses and bus)"
+  cat "$OUT/dyn_$part.txt"
+done
+
 wall_s=$(( $(date +%s) - t0 ))
 jq -n --slurpfile g "$OUT/gather.json" --slurpfile l "$OUT/liftoff.json" \
       --slurpfile g2 "$OUT/gather_v2.json" --slurpfile l2 "$OUT/liftoff_v2.json" \
@@ -157,3 +173,4 @@ jq -r '
 echo
 echo "files: $OUT/summary.json, $OUT/force_curves.png, $OUT/liftoff_thrust.png, $OUT/lab/report.md"
 echo "swap: $OUT/swap.txt (table, targets, time constants), $OUT/swap.json, $OUT/swap_steps.png, $OUT/swap/series/*.csv"
+echo "dynamics: $OUT/dyn_{stock,kv900}.{txt,json,csv} (table, stored dynamics, step logs)"

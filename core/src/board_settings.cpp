@@ -47,28 +47,41 @@ RecordLimits BoardSettings::recordLimits() const {
 }
 
 void serializeSettings(const BoardSettings& s, uint16_t sequence, uint8_t* image) {
-  image[0] = kSettingsKind;
+  const bool bench = s.bench.isPresent();
+  image[0] = bench ? kSettingsKindBench : kSettingsKind;
   image[1] = kSettingsMagic;
   image[2] = static_cast<uint8_t>(sequence & 0xFF);
   image[3] = static_cast<uint8_t>(sequence >> 8);
   putU32(image + 4, s.divider_top_ohm);
   putU32(image + 8, s.divider_bottom_ohm);
-  const uint16_t crc = crc16CcittFalse(image, kSettingsCrcOffset);
-  image[kSettingsCrcOffset] = static_cast<uint8_t>(crc & 0xFF);
-  image[kSettingsCrcOffset + 1] = static_cast<uint8_t>(crc >> 8);
+  if (bench) {
+    image[12] = s.bench.stages;
+    image[13] = static_cast<uint8_t>(s.bench.tau_01ms & 0xFF);
+    image[14] = static_cast<uint8_t>(s.bench.tau_01ms >> 8);
+  }
+  const uint16_t crc_at = static_cast<uint16_t>(settingsLength(image[0]) - 2);
+  const uint16_t crc = crc16CcittFalse(image, crc_at);
+  image[crc_at] = static_cast<uint8_t>(crc & 0xFF);
+  image[crc_at + 1] = static_cast<uint8_t>(crc >> 8);
 }
 
 DecodeStatus parseSettings(const uint8_t* image, BoardSettings& out, uint16_t& sequence) {
   out = BoardSettings();
   sequence = 0;
   if (image[0] == 0xFF) return DecodeStatus::kErased;
-  if (image[0] != kSettingsKind || image[1] != kSettingsMagic) return DecodeStatus::kBadVersion;
-  const uint16_t crc = static_cast<uint16_t>(image[kSettingsCrcOffset] |
-                                             (static_cast<uint16_t>(image[kSettingsCrcOffset + 1]) << 8));
-  if (crc16CcittFalse(image, kSettingsCrcOffset) != crc) return DecodeStatus::kBadCrc;
+  const bool bench = image[0] == kSettingsKindBench;
+  if ((!bench && image[0] != kSettingsKind) || image[1] != kSettingsMagic) return DecodeStatus::kBadVersion;
+  const uint16_t crc_at = static_cast<uint16_t>(settingsLength(image[0]) - 2);
+  const uint16_t crc = static_cast<uint16_t>(image[crc_at] | (static_cast<uint16_t>(image[crc_at + 1]) << 8));
+  if (crc16CcittFalse(image, crc_at) != crc) return DecodeStatus::kBadCrc;
   BoardSettings s;
   s.divider_top_ohm = getU32(image + 4);
   s.divider_bottom_ohm = getU32(image + 8);
+  if (bench) {
+    s.bench.stages = image[12];
+    s.bench.tau_01ms = static_cast<uint16_t>(image[13] | (static_cast<uint16_t>(image[14]) << 8));
+    if (!s.bench.isValid()) return DecodeStatus::kBadContent;
+  }
   if (!s.isValid()) return DecodeStatus::kBadContent;
   out = s;
   sequence = static_cast<uint16_t>(image[2] | (static_cast<uint16_t>(image[3]) << 8));

@@ -27,7 +27,8 @@ bool ModelV2::finalize() {
             step_dg >= (coarse ? kV2MinStepDg : kV2MinStepSmallDg) && knots >= 2 &&
             knots <= kV2MaxKnots && fine_knots >= 1 &&
             fine_knots <= knots && (coarse ? coarse_step_dg >= kV2MinStepDg : coarse_step_dg == 0) &&
-            top <= 65535u && isSaneV2Mv(rest_mv) && (second_mv == 0 || isSaneV2Mv(second_mv));
+            top <= 65535u && isSaneV2Mv(rest_mv) && (second_mv == 0 || isSaneV2Mv(second_mv)) &&
+            (!dynamics.isPresent() || dynamics.isValid());
   if (ok) {
     ok = drive_512usmv[0] > 0;
     for (uint8_t k = 1; ok && k < knots; ++k) ok = drive_512usmv[k] >= drive_512usmv[k - 1];

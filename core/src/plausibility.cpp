@@ -19,6 +19,7 @@ const char* implausibleText(Implausible rule) {
     case Implausible::kStartRange: return TC_FLASH_TEXT("ESC start threshold out of range");
     case Implausible::kSagBase: return TC_FLASH_TEXT("sag table base pulse outside the ESC range");
     case Implausible::kSag: return TC_FLASH_TEXT("battery sag out of bounds");
+    case Implausible::kDynamics: return TC_FLASH_TEXT("motor dynamics out of range");
   }
   return TC_FLASH_TEXT("unknown rule");
 }
@@ -150,6 +151,17 @@ Plausibility checkModelV2(const ModelV2& m, const RecordLimits& limits) {
   if (pwm_us > kThrottleMaxUs + kPwmToleranceUs)
     return fail(Implausible::kPwmRange, PlausibilityUnit::kUs, pwm_us, start_us, kThrottleMaxUs, 0,
                 static_cast<int8_t>(last));
+  return m.dynamics.isPresent() ? checkDynamics(m.dynamics) : Plausibility();
+}
+
+Plausibility checkDynamics(const MotorDynamics& d) {
+  if (d.points < 1 || d.points > kDynMaxPoints || d.lo_dg == 0 || d.lo_dg > d.hi_dg) return malformed();
+  const uint16_t taus[4] = {d.up_lo_01ms, d.up_hi_01ms, d.down_lo_01ms, d.down_hi_01ms};
+  for (uint16_t tau : taus)
+    if (outside(tau, kDynTauMin01ms, kDynTauMax01ms))
+      return fail(Implausible::kDynamics, PlausibilityUnit::kTenthMs, tau, kDynTauMin01ms, kDynTauMax01ms);
+  if (d.lo_dg == d.hi_dg && (d.up_lo_01ms != d.up_hi_01ms || d.down_lo_01ms != d.down_hi_01ms))
+    return malformed();
   return Plausibility();
 }
 

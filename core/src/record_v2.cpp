@@ -20,6 +20,8 @@ constexpr uint16_t kCoarseStepOffset = 15;
 constexpr uint16_t kDriveOffset = 17;
 constexpr uint16_t kSagOffset = kDriveOffset + 2 * kV2MaxKnots;
 static_assert(kSagOffset + kV2MaxKnots == kRecordV2CrcOffset, "layout table and code disagree");
+constexpr uint16_t kDynOffset = kRecordV2CrcOffset;  // the dynamics take the CRC's place
+static_assert(kDynOffset + 13 + 2 == kRecordV2DynBytes, "dynamics layout and size disagree");
 
 }  // namespace
 
@@ -40,7 +42,19 @@ void serializeModelV2(const ModelV2& model, uint16_t sequence, uint8_t* image, u
     putU16(image + kDriveOffset + 2 * k, used ? model.drive_512usmv[k] : 0);
     image[kSagOffset + k] = used ? model.sag_10mv[k] : 0;
   }
-  putU16(image + kRecordV2CrcOffset, crc16CcittFalse(image, kRecordV2CrcOffset));
+  const MotorDynamics& d = model.dynamics;
+  image[5] = static_cast<uint8_t>((model.flags & ~kV2HasDynamics) | (d.isPresent() ? kV2HasDynamics : 0));
+  if (d.isPresent()) {
+    image[kDynOffset] = d.points;
+    putU16(image + kDynOffset + 1, d.lo_dg);
+    putU16(image + kDynOffset + 3, d.hi_dg);
+    putU16(image + kDynOffset + 5, d.up_lo_01ms);
+    putU16(image + kDynOffset + 7, d.up_hi_01ms);
+    putU16(image + kDynOffset + 9, d.down_lo_01ms);
+    putU16(image + kDynOffset + 11, d.down_hi_01ms);
+  }
+  const uint16_t crc_at = static_cast<uint16_t>(recordV2Length(image[5]) - 2);
+  putU16(image + crc_at, crc16CcittFalse(image, crc_at));
 }
 
 DecodeStatus parseModelV2(const uint8_t* image, ModelV2& out, uint16_t& sequence,
@@ -50,11 +64,25 @@ DecodeStatus parseModelV2(const uint8_t* image, ModelV2& out, uint16_t& sequence
   if (why) *why = Plausibility();
   if (image[0] == 0xFF) return DecodeStatus::kErased;
   if (image[0] != kLayoutVersion2 || image[1] != magic) return DecodeStatus::kBadVersion;
-  if (crc16CcittFalse(image, kRecordV2CrcOffset) != getU16(image + kRecordV2CrcOffset))
-    return DecodeStatus::kBadCrc;
+  const uint16_t crc_at = static_cast<uint16_t>(recordV2Length(image[5]) - 2);
+  if (crc16CcittFalse(image, crc_at) != getU16(image + crc_at)) return DecodeStatus::kBadCrc;
   ModelV2 m;
   m.knots = image[4];
-  m.flags = image[5];
+  m.flags = static_cast<uint8_t>(image[5] & ~kV2HasDynamics);
+  if (image[5] & kV2HasDynamics) {
+    MotorDynamics& d = m.dynamics;
+    d.points = image[kDynOffset];
+    d.lo_dg = getU16(image + kDynOffset + 1);
+    d.hi_dg = getU16(image + kDynOffset + 3);
+    d.up_lo_01ms = getU16(image + kDynOffset + 5);
+    d.up_hi_01ms = getU16(image + kDynOffset + 7);
+    d.down_lo_01ms = getU16(image + kDynOffset + 9);
+    d.down_hi_01ms = getU16(image + kDynOffset + 11);
+    if (!d.isPresent()) {  // the flag without points: not what the writer makes
+      if (why) why->rule = Implausible::kMalformed;
+      return DecodeStatus::kBadContent;
+    }
+  }
   m.start_q4_us = getU16(image + 6);
   m.step_dg = getU16(image + 8);
   m.rest_mv = getU16(image + 10);

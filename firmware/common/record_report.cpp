@@ -39,7 +39,7 @@ void printDivider(const tc::BoardSettings& settings) {
 }
 
 bool setDivider(uint32_t top_ohm, uint32_t bottom_ohm, tc::BoardSettings& settings) {
-  tc::BoardSettings wanted;
+  tc::BoardSettings wanted = settings;  // the rest of the settings (the bench's response) stays
   wanted.divider_top_ohm = top_ohm;
   wanted.divider_bottom_ohm = bottom_ohm;
   if (!wanted.isValid()) {

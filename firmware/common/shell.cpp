@@ -6,6 +6,9 @@
 #include "console.hpp"
 
 namespace fw {
+
+const char kArgText[] TC_FLASH = "";
+
 namespace detail {
 
 namespace {
@@ -26,32 +29,13 @@ void readArg(const CommandSpec& spec, uint8_t index, ArgSpec& arg) {
   readBytes(&arg, &spec.args[index], sizeof arg);
 }
 
-// Index of `token` among the '|'-separated words (PROGMEM), or -1.
-int8_t wordIndex(const char* words, const char* token) {
-  int8_t index = 0;
-  const char* p = words;
-  for (;;) {
-    const char* t = token;
-    for (;;) {
-      const uint8_t c = tc::flashByte(p);
-      if (c == '|' || c == 0) {
-        if (*t == '\0') return index;
-        break;
-      }
-      if (static_cast<uint8_t>(*t) != c) break;
-      ++p;
-      ++t;
-    }
-    while (tc::flashByte(p) != '|' && tc::flashByte(p) != 0) ++p;  // rest of this word
-    if (tc::flashByte(p) == 0) return -1;
-    ++p;
-    ++index;
-  }
-}
-
 bool parseArg(const ArgSpec& arg, const char* token, int32_t& value) {
+  if (arg.words == kArgText) {
+    value = 0;
+    return true;
+  }
   if (arg.words != nullptr) {
-    const int8_t index = wordIndex(arg.words, token);
+    const int8_t index = tc::flashWordIndex(arg.words, token);
     if (index < 0) return false;
     value = index;
     return true;
@@ -86,7 +70,7 @@ uint8_t printUsage(const CommandSpec& spec) {
     ArgSpec arg;
     readArg(spec, i, arg);
     const bool optional = i >= spec.min_args;
-    const char* label = arg.words != nullptr ? arg.words : arg.name;
+    const char* label = arg.words != nullptr && arg.words != kArgText ? arg.words : arg.name;
     hal::Uart::write(' ');
     if (optional) hal::Uart::write('[');
     hal::Uart::printP(label);
@@ -142,6 +126,7 @@ int8_t matchCommand(const void* table, uint8_t rows, size_t stride, char* line,
       ArgSpec arg;
       readArg(spec, i, arg);
       ok = parseArg(arg, tokens[i + 1], parsed.value[i]);
+      parsed.text[i] = tokens[i + 1];
     }
     if (!ok) continue;
     parsed.count = given;
@@ -203,7 +188,7 @@ void printHelp(const void* table, uint8_t rows, size_t stride) {
     for (uint8_t i = 0; i < spec.max_args; ++i) {
       ArgSpec arg;
       readArg(spec, i, arg);
-      if (arg.words != nullptr) continue;
+      if (arg.words != nullptr) continue;  // words and text: no range
       hal::Uart::printP(first ? TC_FLASH_TEXT(" (") : TC_FLASH_TEXT(", "));
       first = false;
       hal::Uart::printP(arg.name);

@@ -27,7 +27,10 @@ namespace fw {
 constexpr uint8_t kShellMaxArgs = 4;
 
 // One argument: an integer in [min, max], or (words != nullptr) one of the '|'-separated
-// words, whose index becomes the value ("on|off": on = 0, off = 1).
+// words, whose index becomes the value ("on|off": on = 0, off = 1), or (words == kArgText)
+// any one token, which the handler reads from ArgValues::text (a parameter's name or value:
+// the handler checks it against its own table).
+extern const char kArgText[];  // TC_FLASH; compared by address only
 struct ArgSpec {
   const char* name;   // TC_FLASH, shown in usage and errors ("G", "MS")
   const char* words;  // TC_FLASH or nullptr
@@ -37,6 +40,7 @@ struct ArgSpec {
 
 struct ArgValues {
   int32_t value[kShellMaxArgs] = {};
+  const char* text[kShellMaxArgs] = {};  // each argument as typed (valid while the handler runs)
   uint8_t count = 0;
   int32_t operator[](uint8_t index) const { return value[index]; }
   bool has(uint8_t index) const { return index < count; }
@@ -46,7 +50,8 @@ enum CommandFlag : uint8_t {
   // Can spin a motor or write the EEPROM: with strict mode on, the line must carry a valid
   // checksum (console protocol, docs/console.md).
   kCmdGuarded = 1u << 0,
-  // Hidden from `help` (aliases kept for old scripts).
+  // Hidden from `help`: aliases kept for old scripts, rows another row's help names (the
+  // help text stays only the usage line).
   kCmdHidden = 1u << 1,
   // With kCmdGuarded: a last argument of 0 is a stop (`f 0`, `f 2 0`), which never needs a
   // checksum; any other value is guarded.

@@ -3,8 +3,10 @@
 // range-checks the arguments from the rows, refuses guarded rows without a checksum in strict
 // mode and prints `help` from them. docs/fly.md holds the help text a host test compares with
 // printHelp().
+#include "eeprom_console.hpp"
 #include "fly_app.hpp"
 #include "fly_view.hpp"
+#include "params.hpp"
 #include "shell.hpp"
 
 namespace fly {
@@ -13,7 +15,6 @@ using fw::sayLine;
 
 namespace {
 constexpr int8_t kMaxSetpointDeg = 30;
-constexpr uint16_t kMaxGain = 10000;        // mN m per rad (or per rad/s, rad s)
 constexpr uint16_t kMaxThrustG = 4 * 2500;  // four motors of the heaviest class flown
 }  // namespace
 
@@ -50,6 +51,19 @@ struct Commands {
   static void stream(App& app, const Args& a) { app.cmdStream(a[0] == 0); }  // on|off
   static void status(App& app, const Args&) { app.cmdStatus(); }
   static void strict(App& app, const Args& a) { app.cmdStrict(a[0] == 0); }  // on|off
+  static void paramList(App& app, const Args&) { Params::list(app); }
+  static void paramAction(App& app, const Args& a) {  // save|load|defaults
+    if (a[0] == 0) Params::save(app);
+    else if (a[0] == 1) Params::reload(app);
+    else Params::defaults(app);
+  }
+  static void paramGet(App& app, const Args& a) { Params::get(app, a.text[1]); }
+  static void paramSet(App& app, const Args& a) { Params::set(app, a.text[1], a.text[2]); }
+  static void eeprom(App& app, const Args& a) {  // crc|dump: reading only, the frames go on
+    if (app.refuseWhileArmed()) return;
+    if (a[0] == 0) fw::eepromCrc();
+    else fw::eepromDump(&FlyApp::serviceHook);
+  }
   static void rc(App& app, const Args& a) {  // off|ppm|pwm [N]
     app.cmdRc(static_cast<RcProtocol>(a[0]), a.has(1) ? static_cast<uint8_t>(a[1]) : app.rcSettings().pwm_channels);
   }
@@ -128,7 +142,10 @@ void FlyApp::cmdThrust(uint16_t thrust_g) {
   view::thrust(*this);
 }
 
+// Gains change disarmed only: armed, a new gain steps the torque by its change times the present
+// error (the saved parameters' rule, params.hpp).
 void FlyApp::cmdGains(uint16_t kp, uint16_t ki, uint16_t kd) {
+  if (refuseWhileArmed()) return;
   ControllerSettings s = controller_.settings();
   s.angle.kp_nm_per_rad = kp * 0.001f;
   s.angle.ki_nm_per_rad_s = ki * 0.001f;
@@ -138,6 +155,7 @@ void FlyApp::cmdGains(uint16_t kp, uint16_t ki, uint16_t kd) {
 }
 
 void FlyApp::cmdYawGains(uint16_t kp, uint16_t ki) {
+  if (refuseWhileArmed()) return;
   ControllerSettings s = controller_.settings();
   s.yaw.kp_nm_s_per_rad = kp * 0.001f;
   s.yaw.ki_nm_per_rad = ki * 0.001f;
@@ -267,9 +285,7 @@ const char kThrustG[] TC_FLASH = "G";
 const char kKp[] TC_FLASH = "KP";
 const char kKi[] TC_FLASH = "KI";
 const char kKd[] TC_FLASH = "KD";
-const char kModes[] TC_FLASH = "force|generic|pwm|ardupilot";
 const char kSlot[] TC_FLASH = "N";
-const char kLayouts[] TC_FLASH = "plus|x|seesaw";
 const char kArmMm[] TC_FLASH = "ARM_MM";
 const char kYawArmUm[] TC_FLASH = "YAW_ARM_UM";
 const char kHoverUs[] TC_FLASH = "US";
@@ -284,40 +300,53 @@ const char kMinUs[] TC_FLASH = "MIN_US";
 const char kMaxUs[] TC_FLASH = "MAX_US";
 const char kDeg[] TC_FLASH = "DEG";
 const char kOnOff[] TC_FLASH = "on|off";
-const char kRcProtocols[] TC_FLASH = "off|ppm|pwm";
+const char kParamList[] TC_FLASH = "list";
+const char kParamActions[] TC_FLASH = "save|load|defaults";
+const char kParamGetWord[] TC_FLASH = "get";
+const char kParamSetWord[] TC_FLASH = "set";
+const char kParamNameArg[] TC_FLASH = "NAME";
+const char kParamValueArg[] TC_FLASH = "VALUE";
+const char kCrcDump[] TC_FLASH = "crc|dump";
 const char kRcChannels[] TC_FLASH = "N";
-const char kRcMapWords[] TC_FLASH = "AETR|TAER|AERT|EATR|ERTA";
 const char kAngleDeg[] TC_FLASH = "ANGLE_DEG";
 const char kRateDps[] TC_FLASH = "RATE_DPS";
 const char kYawDps[] TC_FLASH = "YAW_DPS";
-const char kFlightModes[] TC_FLASH = "angle|rate";
 
 const fw::ArgSpec kSetpointArgs[] TC_FLASH = {{kRollDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg},
                                               {kPitchDeg, nullptr, -kMaxSetpointDeg, kMaxSetpointDeg}};
 const fw::ArgSpec kThrustArgs[] TC_FLASH = {{kThrustG, nullptr, 0, kMaxThrustG}};
 const fw::ArgSpec kGainArgs[] TC_FLASH = {
     {kKp, nullptr, 0, kMaxGain}, {kKi, nullptr, 0, kMaxGain}, {kKd, nullptr, 0, kMaxGain}};
-const fw::ArgSpec kModeArgs[] TC_FLASH = {{kModes, kModes, 0, 0}, {kSlot, nullptr, 0, kMotors - 1}};
-const fw::ArgSpec kLayoutArgs[] TC_FLASH = {{kLayouts, kLayouts, 0, 0}};
-const fw::ArgSpec kAirframeArgs[] TC_FLASH = {{kArmMm, nullptr, 50, 1000},
-                                              {kYawArmUm, nullptr, 1000, 100000}};
+const fw::ArgSpec kModeArgs[] TC_FLASH = {{kOutputModeWords, kOutputModeWords, 0, 0}, {kSlot, nullptr, 0, kMotors - 1}};
+const fw::ArgSpec kLayoutArgs[] TC_FLASH = {{kLayoutWords, kLayoutWords, 0, 0}};
+const fw::ArgSpec kAirframeArgs[] TC_FLASH = {{kArmMm, nullptr, kMinArmMm, kMaxArmMm},
+                                              {kYawArmUm, nullptr, kMinYawArmUm, kMaxYawArmUm}};
 const fw::ArgSpec kHoverArgs[] TC_FLASH = {{kHoverUs, nullptr, tc::kThrottleMinUs + 1, tc::kThrottleMaxUs},
-                                           {kSlope, nullptr, 1, 20000}};
-const fw::ArgSpec kApArgs[] TC_FLASH = {{kExpo, nullptr, -10000, 10000},
-                                        {kSpinMin, nullptr, 0, 3000},
-                                        {kSpinMax, nullptr, 9000, 10000},
-                                        {kFullG, nullptr, 1, 20000}};
-const fw::ArgSpec kApVoltArgs[] TC_FLASH = {{kVmax, nullptr, 0, 26000}, {kVmin, nullptr, 0, 26000}};
+                                           {kSlope, nullptr, 1, kMaxSlopeMgPerUs}};
+const fw::ArgSpec kApArgs[] TC_FLASH = {{kExpo, nullptr, -kMaxApExpoE4, kMaxApExpoE4},
+                                        {kSpinMin, nullptr, 0, kMaxApSpinMinE4},
+                                        {kSpinMax, nullptr, kMinApSpinMaxE4, kMaxApSpinMaxE4},
+                                        {kFullG, nullptr, 1, kMaxApFullG}};
+const fw::ArgSpec kApVoltArgs[] TC_FLASH = {{kVmax, nullptr, 0, kMaxApVoltMv}, {kVmin, nullptr, 0, kMaxApVoltMv}};
 const fw::ArgSpec kApPwmArgs[] TC_FLASH = {{kMinUs, nullptr, hal::kPulseClampMinUs, hal::kPulseClampMaxUs},
                                            {kMaxUs, nullptr, hal::kPulseClampMinUs, hal::kPulseClampMaxUs}};
 const fw::ArgSpec kCrashArgs[] TC_FLASH = {{kDeg, nullptr, kMinCrashDeg, kMaxCrashDeg}};
 const fw::ArgSpec kOnOffArgs[] TC_FLASH = {{kOnOff, kOnOff, 0, 0}};
-const fw::ArgSpec kRcArgs[] TC_FLASH = {{kRcProtocols, kRcProtocols, 0, 0},
+const fw::ArgSpec kParamListArgs[] TC_FLASH = {{kParamList, kParamList, 0, 0}};
+const fw::ArgSpec kParamActionArgs[] TC_FLASH = {{kParamActions, kParamActions, 0, 0}};
+const fw::ArgSpec kParamGetArgs[] TC_FLASH = {{kParamGetWord, kParamGetWord, 0, 0},
+                                              {kParamNameArg, fw::kArgText, 0, 0}};
+const fw::ArgSpec kParamSetArgs[] TC_FLASH = {{kParamSetWord, kParamSetWord, 0, 0},
+                                              {kParamNameArg, fw::kArgText, 0, 0},
+                                              {kParamValueArg, fw::kArgText, 0, 0}};
+const fw::ArgSpec kEepromArgs[] TC_FLASH = {{kCrcDump, kCrcDump, 0, 0}};
+const fw::ArgSpec kRcArgs[] TC_FLASH = {{kRcProtocolWords, kRcProtocolWords, 0, 0},
                                         {kRcChannels, nullptr, kRcMinChannels, kRcMaxChannels}};
 const fw::ArgSpec kRcMapArgs[] TC_FLASH = {{kRcMapWords, kRcMapWords, 0, 0}};
-const fw::ArgSpec kRatesArgs[] TC_FLASH = {{kAngleDeg, nullptr, 5, 60}, {kRateDps, nullptr, 10, 1000},
-                                           {kYawDps, nullptr, 10, 1000}};
-const fw::ArgSpec kFlightModeArgs[] TC_FLASH = {{kFlightModes, kFlightModes, 0, 0}};
+const fw::ArgSpec kRatesArgs[] TC_FLASH = {{kAngleDeg, nullptr, kMinStickAngleDeg, kMaxStickAngleDeg},
+                                           {kRateDps, nullptr, kMinStickRateDps, kMaxStickRateDps},
+                                           {kYawDps, nullptr, kMinStickRateDps, kMaxStickRateDps}};
+const fw::ArgSpec kFlightModeArgs[] TC_FLASH = {{kFlightModeWords, kFlightModeWords, 0, 0}};
 
 const char kHelpName[] TC_FLASH = "help";
 const char kArmName[] TC_FLASH = "arm";
@@ -339,6 +368,8 @@ const char kLevelName[] TC_FLASH = "level";
 const char kStreamName[] TC_FLASH = "stream";
 const char kStatusName[] TC_FLASH = "status";
 const char kStrictName[] TC_FLASH = "strict";
+const char kParamName[] TC_FLASH = "param";
+const char kEepromName[] TC_FLASH = "eeprom";
 const char kRcName[] TC_FLASH = "rc";
 const char kRcMapName[] TC_FLASH = "rcmap";
 const char kRatesName[] TC_FLASH = "rates";
@@ -371,7 +402,7 @@ const char kLevelHelp[] TC_FLASH = "the vehicle stands level: trim the accelerom
 const char kStreamHelp[] TC_FLASH =
     "CSV t_s,roll,pitch,roll_sp,pitch_sp (deg),p,q,r (deg/s),\nforce0..3 (g),pulse0..3 (us), 50 lines/s";
 const char kStatusHelp[] TC_FLASH = "state, IMU, attitude, settings, loop timing, motors";
-const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw need a checksum";
+const char kStrictHelp[] TC_FLASH = "arm, sp, thrust, gains, yaw, param set|save|load|defaults need a checksum";
 const char kRcHelp[] TC_FLASH =
     "receiver: PPM sum on A8 | one pulse per channel on\n"
     "A8.. (N channels, default 5); sticks arm: throttle low,\n"
@@ -379,6 +410,12 @@ const char kRcHelp[] TC_FLASH =
 const char kRcMapHelp[] TC_FLASH = "the first four channels' order (A roll, E pitch, T, R yaw)";
 const char kRatesHelp[] TC_FLASH = "full stick: angle (angle mode), roll/pitch rate, yaw rate";
 const char kFmodeHelp[] TC_FLASH = "sticks' mode without a switch on channel 5";
+// One help row for the five `param` commands and none for `eeprom` (thrustcal board's, docs/fly.md):
+// help is one blocking reply, and armed, a longer one drops the keep-alive lines sent while it
+// prints (the 64-byte receive ring fills) until the link failsafe disarms (thrustcal bench fly).
+const char kParamListHelp[] TC_FLASH =
+    "every saved parameter: NAME VALUE  # unit, range; also\nparam get NAME | set NAME VALUE | save|load|defaults";
+const char kHiddenHelp[] TC_FLASH = "";  // rows help does not list
 
 // Every console command. kCmdGuarded: what strict mode refuses without a checksum, everything
 // that can start the motors or change what armed motors do.
@@ -400,8 +437,13 @@ const fw::Command<FlyApp> kCommands[] TC_FLASH = {
     {{kCrashName, kCrashArgs, 1, 1, 0, kCrashHelp}, &Commands::crash},
     {{kCalibrateName, nullptr, 0, 0, 0, kCalibrateHelp}, &Commands::calibrate},
     {{kLevelName, nullptr, 0, 0, 0, kLevelHelp}, &Commands::level},
+    {{kParamName, kParamListArgs, 1, 1, 0, kParamListHelp}, &Commands::paramList},
+    {{kParamName, kParamActionArgs, 1, 1, fw::kCmdGuarded | fw::kCmdHidden, kHiddenHelp}, &Commands::paramAction},
+    {{kParamName, kParamGetArgs, 2, 2, fw::kCmdHidden, kHiddenHelp}, &Commands::paramGet},
+    {{kParamName, kParamSetArgs, 3, 3, fw::kCmdGuarded | fw::kCmdHidden, kHiddenHelp}, &Commands::paramSet},
     {{kStreamName, kOnOffArgs, 1, 1, 0, kStreamHelp}, &Commands::stream},
     {{kStatusName, nullptr, 0, 0, 0, kStatusHelp}, &Commands::status},
+    {{kEepromName, kEepromArgs, 1, 1, fw::kCmdHidden, kHiddenHelp}, &Commands::eeprom},
     {{kStrictName, kOnOffArgs, 1, 1, 0, kStrictHelp}, &Commands::strict},
     {{kRcName, kRcArgs, 1, 2, 0, kRcHelp}, &Commands::rc},
     {{kRcMapName, kRcMapArgs, 1, 1, 0, kRcMapHelp}, &Commands::rcmap},

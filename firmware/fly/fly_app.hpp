@@ -33,7 +33,8 @@
 // fly_rules.hpp holds the pure decisions. Each stage's tunables are a plain settings struct
 // (ControllerSettings, MixerSettings, OutputSettings, LevelTrim, FlightSettings). Files:
 // fly_app.cpp (start-up, the loop, frames, arming), commands.cpp (the command table and the
-// cmd methods), fly_view.cpp and fly_status_view.cpp (every line printed).
+// cmd methods), fly_view.cpp and fly_status_view.cpp (every line printed), params*.cpp (the
+// saved parameters: their table, the `param` commands, the EEPROM record).
 #pragma once
 #include <stdint.h>
 
@@ -169,6 +170,7 @@ class FlyApp {
 
  private:
   friend struct Commands;  // commands.cpp: the table's handlers, one call each to a cmd method
+  friend struct Params;    // params.cpp: the saved parameters read and write the settings
 
   // Commands (commands.cpp), arguments parsed and range-checked by the table.
   void cmdArm();

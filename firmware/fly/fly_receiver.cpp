@@ -5,13 +5,9 @@
 // here, their table rows in commands.cpp.
 #include "fly_app.hpp"
 #include "fly_view.hpp"
+#include "params.hpp"  // kRcMapWords: the maps `rcmap` offers (the usual transmitters' orders, MultiWii's list)
 
 namespace fly {
-
-namespace {
-// The maps `rcmap` offers (the channel order of the usual transmitters: MultiWii's list).
-const char kRcMaps[][5] TC_FLASH = {"AETR", "TAER", "AERT", "EATR", "ERTA"};
-}  // namespace
 
 void FlyApp::pollReceiver(uint32_t now_ms) {
   if (rc_settings_.protocol == RcProtocol::kOff) return;
@@ -91,7 +87,7 @@ void FlyApp::applyReceiverSettings() {
 
 void FlyApp::cmdRcMap(uint8_t which) {
   if (refuseWhileArmed()) return;
-  tc::flashCopy(rc_settings_.map, kRcMaps[which], sizeof rc_settings_.map);
+  tc::flashWordCopy(kRcMapWords, which, rc_settings_.map, sizeof rc_settings_.map);  // params.hpp's words
   view::receiver(*this);
 }
 
@@ -105,7 +101,10 @@ void FlyApp::cmdRates(uint8_t angle_deg, uint16_t rate_dps, uint16_t yaw_dps) {
   view::receiver(*this);
 }
 
+// Disarmed only, like every setting that could make the motors jump (params.hpp): switching the
+// law from angle to rate steps the torque unless the vehicle is level and still.
 void FlyApp::cmdFlightMode(FlightMode mode) {
+  if (refuseWhileArmed()) return;
   rc_settings_.default_mode = mode;
   view::receiver(*this);
 }

@@ -3,6 +3,7 @@
 #include "fly_view.hpp"
 
 #include "fly_view_parts.hpp"
+#include "params.hpp"
 #include "slot_report.hpp"
 
 namespace fly {
@@ -159,6 +160,8 @@ void status(const FlyApp& app, const LoopStats& loop, void (*yield)()) {
   yield();
   gains(app);
   crashLimit(app);
+  yield();
+  Params::sayStatus(app);
   yield();
   statusIntegrators(app);
   yield();

@@ -4,6 +4,7 @@
 
 #include "fly_app.hpp"
 #include "hal/hal.hpp"
+#include "params.hpp"
 #include "simavr_mcu_tag.hpp"
 
 // simavr reads the part, clock and supply voltages from this tag (the virtual airframe).
@@ -27,6 +28,7 @@ int main() {
   app.printBanner();
   app.loadCalibration();  // the four slots, once (the force API)
   app.start();            // the frames begin: the IMU read at a fixed point of every ESC frame
+  fly::Params::load(app); // the saved parameters, or the defaults (and why)
   app.startImu();         // WHO_AM_I, then its settings
   app.calibrateGyro();    // the gyro's bias at rest
 

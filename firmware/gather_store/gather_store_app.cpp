@@ -172,6 +172,8 @@ void GatherStoreApp::cmdStoreV2() {
     view::sayV2FitFailed(slot, outcome.refine, rep.status);
     return;
   }
+  // A new fit from a sweep corrected with this slot's dynamics keeps them (a refine read them).
+  if (!outcome.refine && sweep_.lag_corrected) model_.dynamics = lag_dynamics_;
   CountingEeprom::written = 0;
   const tc::StoreReport report = tc::storeModelV2<CountingEeprom>(slot, model_, limits);
   outcome.written = CountingEeprom::written;

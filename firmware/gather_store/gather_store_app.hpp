@@ -61,6 +61,8 @@
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/curve_builder.hpp"
+#include "thrustcal/dynamics_fit.hpp"
+#include "thrustcal/sweep_lag.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_curve.hpp"
 #include "thrustcal/limits.hpp"
@@ -113,9 +115,20 @@ struct SweepSettings {
   bool settle_auto = true;      // step on once the force stops changing (settle MS: off)
 };
 
+// dyn and dyn cell (dynamics_runner.cpp): one step log, blocks of tc::kDynBlockConversions
+// load-cell conversions and one battery conversion (about 1.8 ms): 0.05 s before a step and
+// 0.6 s after it, enough for the slowest motor and the load cell's filter to settle.
+constexpr uint16_t kDynLogBlocks = 360;
+constexpr uint16_t kDynPreBlocks = 30;
+struct DynLog {
+  int16_t force_dg[kDynLogBlocks];                         // mean force per block
+  uint16_t vbat_mv[kDynLogBlocks / tc::kDynBlocksPerVbat];  // bus, mean of 4 blocks
+};
+
 // Work space no two commands use at once, in one union (1.1 KB of SRAM less): the curve
-// builder of a sweep (from `sweep` to its summary) and the record buffer of store and show
-// (read-modify-write). start...() constructs the member a command is about to use.
+// builder of a sweep (from `sweep` to its summary), the record buffer of store and show
+// (read-modify-write), a step log of dyn. start...() constructs the member a command is about
+// to use.
 class Scratch {
  public:
   Scratch() : record_() {}
@@ -131,13 +144,33 @@ class Scratch {
     return record_;
   }
   tc::MotorCalibration& record() { return record_; }
+  DynLog& startDynLog() {
+    new (&dyn_) DynLog();
+    return dyn_;
+  }
 
  private:
-  // Both members are trivially destructible: constructing over either ends the other.
+  // The members are trivially destructible: constructing over one ends the others.
   union {
     tc::CurveBuilder<kMaxSweepSamples> builder_;
     tc::MotorCalibration record_;
+    DynLog dyn_;
   };
+};
+static_assert(sizeof(DynLog) <= sizeof(tc::CurveBuilder<kMaxSweepSamples>), "a step log must not grow the scratch space");
+
+// One recorded step log: when it ran (Clock::micros), where its step is.
+// The step's instant is kept on the log's own grid (the block it was written before, and the
+// rest of that ESC frame plus the new width), so it and the blocks share one time base.
+struct DynRecording {
+  uint32_t start_us = 0;  // the first conversion
+  uint32_t end_us = 0;    // after the last
+  uint16_t step_block = 0;       // the pulse was written as this block began (0: no step)
+  uint16_t edge_after_us = 0;    // from that write to the ESC's falling edge that carried it
+  uint32_t edge_us = 0;   // that edge on Clock::micros (0: no step)
+  uint16_t from_us = 0, to_us = 0;
+  float blockS() const { return static_cast<float>(end_us - start_us) * 1e-6f / kDynLogBlocks; }
+  float stepS() const { return static_cast<float>(step_block) * blockS() + static_cast<float>(edge_after_us) * 1e-6f; }
 };
 
 // Why a sweep ended.
@@ -158,7 +191,12 @@ struct SweepResult {
   tc::BuildReport report;
   tc::ThesisCurve curve;         // start_mv = average battery of the first 40 us bin
   tc::SagTable sag;
+  bool lag_corrected = false;    // a fixed-settle sweep corrected with the slot's dynamics
 };
+
+// From writing a pulse now to the ESC's falling edge that carries it: the rest of this frame
+// and the new width (the compare registers are double-buffered). dynamics_runner.cpp.
+uint16_t escEdgeAfterWriteUs(uint16_t pwm_us);
 
 class GatherStoreApp {
  public:
@@ -205,6 +243,8 @@ class GatherStoreApp {
   void cmdStatus();
   void cmdDividerShow();
   void cmdDivider(uint32_t top_ohm, uint32_t bottom_ohm);
+  void cmdDynCell();
+  void cmdDyn();
   void sayPlannedSteps();  // " us, K steps" + newline
   // Prints the refusal and returns true unless `why` is kNone.
   bool refuse(StoreRefusal why, const view::RefusalFacts& facts);
@@ -219,6 +259,12 @@ class GatherStoreApp {
   // One step: pulse, settle, force and battery medians, checks. False: aborted (the motor
   // is already at 1000 us and the reason printed).
   bool measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv);
+  // A fixed-settle sweep of a slot whose record holds dynamics, with the bench's response in the
+  // settings: its readings are corrected for the lag (issue 26 item 2). Prints a line when on.
+  void startLagCorrection(uint8_t slot);
+  // A step's sample into the curve, the sag table and the v2 fitter (corrected one step late).
+  void keepSample(const tc::SweepPointV2& raw, uint32_t start_us);
+  void addToBuilders(const tc::SweepPointV2& p);
   // Builds the curve and the sag table from the samples and prints the summary.
   void finishSweep(uint8_t slot, uint32_t elapsed_ms);
   bool waitOrAbort(uint16_t ms);  // false: a key arrived (motor already stopped)
@@ -234,6 +280,18 @@ class GatherStoreApp {
   // receiver; the rest of its line is discarded too. Otherwise the reading that aborted.
   static constexpr uint16_t kKeyUnread = 0xFFFF;
   void abortSweep(SweepEnd why, uint16_t value);
+
+  // dyn (dynamics_runner.cpp). One block: its load-cell sum (1/16 count) and battery reading.
+  // False: aborted (printed, motor stopped).
+  bool readDynBlock(uint16_t& sum_q4, uint16_t& vbat_counts);
+  bool storeDynBlock(DynLog& log, uint16_t b, uint16_t sum_q4, uint16_t vbat_counts, uint16_t& vbat_sum);
+  // A step log: kDynLogBlocks blocks, `to_us` written at block kDynPreBlocks.
+  bool recordStep(DynLog& log, uint16_t to_us, DynRecording& rec);
+  // dyn cell: blocks until a weight step is seen, the step kDynPreBlocks * 2 blocks in.
+  bool recordCellStep(DynLog& log, DynRecording& rec);
+  // One step of dyn: record, print, fit. False: aborted.
+  bool dynStep(uint16_t from_us, uint16_t to_us, uint32_t session_us, tc::MotorStepFit& fit);
+  tc::StepLog stepLog(const DynLog& log, const DynRecording& rec) const;
 
   // Readings outside a sweep.
   uint16_t medianForceCounts();
@@ -268,6 +326,11 @@ class GatherStoreApp {
   tc::SagBuilder sag_builder_;
   tc::ModelV2Fitter<kMaxV2Samples> fitter_;  // the sweep's samples for model v2
   tc::ModelV2 model_;            // store v2 / show: the model fitted, refined or read
+  // The lag correction of the sweep running (sweep_lag.hpp), the dynamics it uses (kept for
+  // store v2), the last step's ESC edge and the centre of its force reading (Clock::micros).
+  tc::SweepLagCorrector lag_;
+  tc::MotorDynamics lag_dynamics_;
+  uint32_t step_edge_us_ = 0, step_read_us_ = 0;
 };
 
 }  // namespace gs

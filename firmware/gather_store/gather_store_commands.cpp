@@ -4,7 +4,8 @@
 // checked against that output (tests/firmware/gather_store/test_gather_store_docs.cpp).
 //
 // Guarded (kCmdGuarded: with strict on, only checksummed lines run them): the commands that
-// spin a motor or write the EEPROM, i.e. sweep, store 1|2|v2, erase and divider R1 R2.
+// spin a motor or write the EEPROM, i.e. sweep, store 1|2|v2, erase, divider R1 R2, dyn and
+// dyn cell.
 #include "console.hpp"
 #include "eeprom_console.hpp"
 #include "gather_store_app.hpp"
@@ -57,6 +58,8 @@ struct GatherStoreCommands {
     app.cmdDivider(static_cast<uint32_t>(a[0]), static_cast<uint32_t>(a[1]));
   }
   static void strict(GatherStoreApp& app, const Args& a) { app.reader_.strictCommand(a[0] == 0); }
+  static void dynCell(GatherStoreApp& app, const Args&) { app.cmdDynCell(); }
+  static void dyn(GatherStoreApp& app, const Args&) { app.cmdDyn(); }
 };
 
 namespace {
@@ -83,6 +86,7 @@ const char kStatus[] TC_FLASH = "status";
 const char kEeprom[] TC_FLASH = "eeprom";
 const char kDivider[] TC_FLASH = "divider";
 const char kStrict[] TC_FLASH = "strict";
+const char kDyn[] TC_FLASH = "dyn";
 
 const char kN[] TC_FLASH = "N";
 const char kG[] TC_FLASH = "G";
@@ -99,6 +103,7 @@ const char kWord2[] TC_FLASH = "2";
 const char kWordV2[] TC_FLASH = "v2";
 const char kWordsEeprom[] TC_FLASH = "crc|dump";
 const char kWordsOnOff[] TC_FLASH = "on|off";
+const char kWordCell[] TC_FLASH = "cell";
 
 static_assert(tc::LoadCellConfig().overload_g == tc::kKnownWeightMaxG, "cal/span up to the overload");
 constexpr int32_t kSlotMax = tc::kMotorSlots - 1;
@@ -119,6 +124,7 @@ const fw::ArgSpec kArgEeprom[] TC_FLASH = {{kWordsEeprom, kWordsEeprom, 0, 0}};
 const fw::ArgSpec kArgDivider[] TC_FLASH = {{kR1, nullptr, 0, kDividerMax},
                                              {kR2, nullptr, 0, kDividerMax}};
 const fw::ArgSpec kArgOnOff[] TC_FLASH = {{kWordsOnOff, kWordsOnOff, 0, 0}};
+const fw::ArgSpec kArgCell[] TC_FLASH = {{kWordCell, kWordCell, 0, 0}};
 
 // Help lines. The numbers they quote are the constants' (checked below); the ranges of the
 // arguments are appended by fw::printHelp from the specs above.
@@ -149,7 +155,11 @@ const char kHelpStatus[] TC_FLASH = "settings, live force and battery, last swee
 const char kHelpEeprom[] TC_FLASH = "EEPROM CRC-16 per slot and whole, or all of it as Intel HEX";
 const char kHelpDividerShow[] TC_FLASH = "the battery divider (read_run flies with it too)";
 const char kHelpDivider[] TC_FLASH = "set it in ohm: R1 pack-A1, R2 A1-ground,\ndefault 100000 47000 (15.638 V)";
-const char kHelpStrict[] TC_FLASH = "sweep, store, erase and divider R1 R2 need a checksum\n(host clients)";
+const char kHelpStrict[] TC_FLASH = "sweep, store, erase, divider R1 R2 and dyn need a checksum\n(host clients)";
+const char kHelpDyn[] TC_FLASH = "the motor's dynamics: force steps up and down at 5 points,\n"
+                                 "step logs streamed; stored with its model v2";
+const char kHelpDynCell[] TC_FLASH = "the load cell's own response: lift a weight off the plate\n"
+                                     "(once per bench; stored with the board settings)";
 static_assert(tc::kV2MinVoltageGapMv == 500, "store v2's help quotes 0.5 V");
 
 const fw::Command<GatherStoreApp> kCommands[] TC_FLASH = {
@@ -174,6 +184,8 @@ const fw::Command<GatherStoreApp> kCommands[] TC_FLASH = {
     {{kEeprom, kArgEeprom, 1, 1, 0, kHelpEeprom}, C::eeprom},
     {{kDivider, nullptr, 0, 0, 0, kHelpDividerShow}, C::dividerShow},
     {{kDivider, kArgDivider, 2, 2, kCmdGuarded, kHelpDivider}, C::divider},
+    {{kDyn, kArgCell, 1, 1, kCmdGuarded, kHelpDynCell}, C::dynCell},
+    {{kDyn, nullptr, 0, 0, kCmdGuarded, kHelpDyn}, C::dyn},
     {{kStrict, kArgOnOff, 1, 1, 0, kHelpStrict}, C::strict},
 };
 

@@ -123,6 +123,17 @@ void sayStoreSafety(const tc::StoreReport& report, uint8_t slot) {
                     "slot could keep the old calibration meanwhile (a power cut then leaves the "
                     "motor not calibrated, never flown wrong)"));
   }
+  if (report.params == tc::ParamsMove::kMoved) {
+    say(TC_FLASH_TEXT("# fly's saved parameters moved out of motor "));
+    fw::printUint(slot);
+    sayLine(TC_FLASH_TEXT("'s slot first (they live in a slot without a thesis record)"));
+  } else if (report.params == tc::ParamsMove::kDropped) {
+    say(TC_FLASH_TEXT("warning: fly's saved parameters lived in motor "));
+    fw::printUint(slot);
+    sayLine(TC_FLASH_TEXT("'s slot and no other slot is free of thesis records: they are gone (fly "
+                          "flies its defaults and says so; thrustcal board params push puts a "
+                          "file back once a slot is free)"));
+  }
 }
 
 
@@ -252,6 +263,13 @@ void showModelV2(uint8_t slot, const tc::RecordV2Read& r, const tc::ModelV2& mod
     say(TC_FLASH_TEXT(" us"));
   }
   fw::newline();
+  say(TC_FLASH_TEXT("dynamics: "));
+  if (model.dynamics.isPresent()) {
+    printDynamics(model.dynamics);
+    fw::newline();
+  } else {
+    sayLine(TC_FLASH_TEXT("not measured (dyn measures them)"));
+  }
 }
 
 void showRecordV1(uint8_t slot, tc::DecodeStatus status, const tc::Plausibility& why,
@@ -283,5 +301,12 @@ void showRecordV1(uint8_t slot, tc::DecodeStatus status, const tc::Plausibility&
   }
 }
 
+void sayLagCorrected(int16_t largest_dg) {
+  say(TC_FLASH_TEXT("# lag correction: largest shift of a reading "));
+  fw::printFixed(largest_dg, 1);
+  sayLine(TC_FLASH_TEXT(" g (the curve and model v2 use the corrected readings; the rows above are as read)"));
+}
+
 }  // namespace view
+
 }  // namespace gs

@@ -6,6 +6,7 @@
 
 #include "gather_store_app.hpp"
 #include "store_decision.hpp"
+#include "thrustcal/dynamics_fit.hpp"
 #include "thrustcal/eeprom_store.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -32,6 +33,8 @@ void printCsvRow(uint16_t pwm_us, int16_t force_dg, uint16_t vbat_mv, uint32_t t
                  uint8_t slot);
 void sayProgress(uint16_t done, uint16_t planned, int16_t max_force_dg);
 void saySweepSummary(const SweepResult& sweep, uint32_t elapsed_ms);
+// "# lag correction: largest shift of a reading X g"
+void sayLagCorrected(int16_t largest_dg);
 
 // What a refusal to store says; the facts the message needs.
 struct RefusalFacts {
@@ -69,6 +72,25 @@ struct V2Outcome {
 };
 void sayV2Outcome(const V2Outcome& outcome, const tc::StoreReport& report,
                   const tc::ModelV2& model);
+
+// dyn and dyn cell (dynamics_view.cpp; the step log's format: docs/gather_store.md).
+void sayDynHeader();  // the CSV header
+// The log's rows: t_s since `session_us`, the pulse the ESC flew then, force, bus, slot, dir.
+void printDynRows(const DynLog& log, const DynRecording& rec, uint32_t session_us, uint8_t slot, int8_t dir);
+void sayDynStep(int8_t dir, const DynRecording& rec, uint32_t session_us, uint16_t vbat_mv);
+void sayDynFit(int8_t dir, const DynRecording& rec, const tc::MotorStepFit& fit);
+void sayCellFit(const tc::BenchStepFit& fit);
+void sayCellStored(const tc::BenchResponse& bench, const tc::SettingsWrite& w);
+// dyn's preconditions, each refusal with what to do. True: it may run.
+bool dynMayRun(bool tared, const tc::BenchResponse& bench, tc::DecodeStatus v2, uint8_t slot);
+void sayDynPlan(uint8_t slot, uint16_t max_force_dg, const tc::BenchResponse& bench, uint16_t lo_us,
+                uint16_t hi_us);
+void sayDynFailed(uint8_t slot, uint8_t points_ok);
+void sayDynStored(uint8_t slot, const tc::MotorDynamics& d, uint32_t session_ms, const tc::StoreReport& report);
+// "3 stages of 30.0 ms (mean delay 90.0 ms)"
+void printBenchResponse(const tc::BenchResponse& bench);
+// "5 points 90.1..449.8 g: spin-up 91.2 -> 74.0 ms, spin-down 92.0 -> 74.9 ms"
+void printDynamics(const tc::MotorDynamics& d);
 
 // show
 void showModelV2(uint8_t slot, const tc::RecordV2Read& read, const tc::ModelV2& model);

@@ -259,6 +259,13 @@ void GatherStoreApp::cmdStatus() {
   say(TC_FLASH_TEXT("; battery "));
   fw::sayVolts(battery_.millivoltsFromCounts(medianBatteryCounts()));
   fw::newline();
+  say(TC_FLASH_TEXT("load cell response: "));
+  if (board_settings_.bench.isPresent()) {
+    view::printBenchResponse(board_settings_.bench);
+    fw::newline();
+  } else {
+    sayLine(TC_FLASH_TEXT("not identified (dyn cell measures it)"));
+  }
 
   say(TC_FLASH_TEXT("last sweep: "));
   if (!sweep_.valid) {

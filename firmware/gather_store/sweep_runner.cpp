@@ -164,8 +164,10 @@ void GatherStoreApp::cmdSweep() {
     if (!waitOrAbort(static_cast<uint16_t>(kArmMs - since_arm))) return;
   }
 
+  startLagCorrection(slot);
   sayLine(TC_FLASH_TEXT("pwm_us,force_g,vbat_v,t_s,motor,dir"));
   const uint32_t start_ms = hal::Clock::millis();
+  const uint32_t start_us = hal::Clock::micros();
   uint16_t pwm = sweep_settings_.pwm_min_us;
   int16_t max_force_dg = 0;
   for (uint16_t done = 1; done <= planned;
@@ -173,16 +175,46 @@ void GatherStoreApp::cmdSweep() {
     int16_t force_dg;
     uint16_t vbat_mv;
     if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
-    scratch_.builder().add(pwm, force_dg);
-    sag_builder_.add(pwm, vbat_mv);
-    fitter_.add(pwm, force_dg, vbat_mv);  // false once full: store v2 then refuses the sweep
+    keepSample({pwm, force_dg, vbat_mv}, start_us);
     if (force_dg > max_force_dg) max_force_dg = force_dg;
     view::printCsvRow(pwm, force_dg, vbat_mv, hal::Clock::millis() - start_ms, slot);
     if (done % kProgressEvery == 0 && done != planned) view::sayProgress(done, planned, max_force_dg);
   }
   stopMotor();
   last_end_ = SweepEnd::kDone;
+  tc::SweepPointV2 last;
+  if (sweep_.lag_corrected && lag_.finish(last)) addToBuilders(last);
   finishSweep(slot, hal::Clock::millis() - start_ms);
+  if (sweep_.lag_corrected) view::sayLagCorrected(lag_.largestCorrectionDg());
+}
+
+void GatherStoreApp::startLagCorrection(uint8_t slot) {
+  sweep_.lag_corrected = false;
+  if (sweep_settings_.settle_auto || !board_settings_.bench.isPresent()) return;
+  if (tc::readModelV2<hal::Eeprom>(slot, model_, board_settings_.recordLimits()).status != tc::DecodeStatus::kOk ||
+      !model_.dynamics.isPresent())
+    return;
+  lag_dynamics_ = model_.dynamics;
+  lag_.start(lag_dynamics_, board_settings_.bench);
+  sweep_.lag_corrected = true;
+  sayLine(TC_FLASH_TEXT("# readings corrected for the lag: the motor's stored dynamics and the load cell's response"));
+}
+
+void GatherStoreApp::addToBuilders(const tc::SweepPointV2& p) {
+  scratch_.builder().add(p.pwm_us, p.force_dg);
+  sag_builder_.add(p.pwm_us, p.vbat_mv);
+  fitter_.add(p.pwm_us, p.force_dg, p.vbat_mv);  // false once full: store v2 then refuses the sweep
+}
+
+void GatherStoreApp::keepSample(const tc::SweepPointV2& raw, uint32_t start_us) {
+  if (!sweep_.lag_corrected) {
+    addToBuilders(raw);
+    return;
+  }
+  tc::SweepPointV2 before;
+  const float edge_s = static_cast<float>(step_edge_us_ - start_us) * 1e-6f;
+  const float read_s = static_cast<float>(step_read_us_ - start_us) * 1e-6f;
+  if (lag_.push(edge_s, read_s, raw, before)) addToBuilders(before);
 }
 
 bool GatherStoreApp::swallowLineFeed() {
@@ -201,12 +233,15 @@ bool GatherStoreApp::swallowLineFeed() {
 
 bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {
   hal::Esc::writePulse(sweep_settings_.slot, pwm_us);
+  step_edge_us_ = hal::Clock::micros() + escEdgeAfterWriteUs(pwm_us);
   uint16_t force_counts;
   if (sweep_settings_.settle_auto) {
     if (!settleForce(force_counts)) return false;
   } else {
     if (!waitOrAbort(sweep_settings_.settle_ms)) return false;
+    const uint32_t read_from_us = hal::Clock::micros();
     if (!readForceCounts(force_counts)) return false;
+    step_read_us_ = read_from_us + (hal::Clock::micros() - read_from_us) / 2u;
   }
   const tc::LoadCellStatus cell_status = cell_.check(force_counts);
   if (cell_status == tc::LoadCellStatus::kImplausible) {

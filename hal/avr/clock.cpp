@@ -37,6 +37,21 @@ uint32_t Clock::millis() {
   return ms;
 }
 
+uint32_t Clock::micros() {
+  uint32_t ms;
+  uint8_t count;
+  bool pending;
+  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+    ms = g_millis;
+    count = TCNT0;
+    pending = (TIFR0 & _BV(OCF0A)) != 0;
+  }
+  // The compare matched (the counter then restarts at 0) but its interrupt has not run yet: the
+  // millisecond it ends is not counted in g_millis.
+  if (pending && count != kTimer0Top) ++ms;
+  return ms * 1000u + static_cast<uint32_t>(count) * 4u;
+}
+
 void Clock::delayMs(uint16_t ms) {
   const uint32_t start = millis();
   while (millis() - start < ms) sleepUntilInterrupt();

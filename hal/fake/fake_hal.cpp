@@ -7,7 +7,9 @@
 //  - transmitting takes no time and never waits (so the wait hook is never called);
 //  - an EEPROM address outside 0..4095 throws std::out_of_range (the AVR would wrap around
 //    silently): such an access is a bug in the code under test;
-//  - an ADC conversion takes no simulated time (104 us on the AVR);
+//  - an ADC conversion takes no simulated time (104 us on the AVR) unless a test sets one
+//    (setAdcConversionUs): then conversions move a microsecond clock within the millisecond,
+//    and every whole millisecond they fill runs as a wait does;
 //  - a TWI transfer takes none either: it ends inside its start call (about 0.5 ms for a
 //    15-byte read at 400 kHz on the AVR), unless the fake holds SDA low;
 //  - time moves in whole milliseconds, so the ESC phase hook runs up to 1 ms after its time.
@@ -31,6 +33,8 @@ struct ScheduledInput {
 
 struct FakeState {
   uint32_t now_ms = 0;
+  uint16_t sub_us = 0;            // microseconds into the present millisecond (conversions)
+  uint16_t adc_conversion_us = 0;
   uint32_t time_limit_ms = 0;
   std::function<void(uint32_t)> tick_hook;
 
@@ -179,6 +183,7 @@ namespace hal {
 // ---- Clock ----
 void Clock::init() {}
 uint32_t Clock::millis() { return state().now_ms; }
+uint32_t Clock::micros() { return state().now_ms * 1000u + state().sub_us; }
 void Clock::delayMs(uint16_t ms) { waitMs(ms); }
 void Clock::sleepUntilInterrupt() { waitMs(1); }
 void Clock::sleepUnless(bool (*pending)()) {
@@ -197,6 +202,13 @@ uint16_t Adc::readCounts(uint8_t channel) {
                             " does not exist (0..15)");
   }
   ++s.adc_conversions;
+  if (s.adc_conversion_us != 0) {  // the conversion takes its time, then reads
+    s.sub_us = static_cast<uint16_t>(s.sub_us + s.adc_conversion_us);
+    while (s.sub_us >= 1000) {
+      s.sub_us = static_cast<uint16_t>(s.sub_us - 1000);
+      waitMs(1);
+    }
+  }
   if (s.adc_source) return clampCounts(s.adc_source(channel));
   return s.adc_counts[channel];
 }
@@ -224,7 +236,8 @@ void Esc::setPhaseHook(uint16_t at_us, PhaseHook hook) {
 
 uint16_t Esc::frameTimeUs() {
   const uint32_t period = framePeriodUs();
-  return period == 0 ? 0 : static_cast<uint16_t>((static_cast<uint64_t>(state().now_ms) * 1000u) % period);
+  return period == 0 ? 0
+                     : static_cast<uint16_t>((static_cast<uint64_t>(state().now_ms) * 1000u + state().sub_us) % period);
 }
 
 uint16_t Esc::frameRateHz() { return state().frame_hz; }
@@ -413,6 +426,7 @@ void setAdcSource(std::function<uint16_t(uint8_t channel)> source) {
 }
 
 uint32_t adcConversions() { return state().adc_conversions; }
+void setAdcConversionUs(uint16_t us) { state().adc_conversion_us = us; }
 
 uint16_t pulseUs(uint8_t channel) { return Esc::pulseUs(channel); }
 uint32_t phaseHookCalls() { return state().phase_hook_calls; }

@@ -2,6 +2,7 @@
 #pragma once
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
@@ -11,6 +12,16 @@
 #include "sim/imu_on_board.hpp"
 
 namespace air {
+
+// Runs a shell command; its stdout and stderr, and its exit status in `status`.
+inline std::string shell(const std::string& command, int& status) {
+  std::string out;
+  FILE* p = ::popen((command + " 2>&1").c_str(), "r");
+  char buf[512];
+  while (p && std::fgets(buf, sizeof buf, p)) out += buf;
+  status = p ? ::pclose(p) : -1;
+  return out;
+}
 
 // A perfect IMU (no unit errors, no noise) unless a test asks otherwise.
 inline sim::Mpu6050Params idealImu() {

@@ -329,14 +329,7 @@ TEST_F(Airframe, ABoardWithoutARigGetsTheStillImuAndItsFaultsAtTheirCycle) {
   }
 }
 
-std::string shell(const std::string& command, int& status) {
-  std::string out;
-  FILE* p = ::popen((command + " 2>&1").c_str(), "r");
-  char buf[512];
-  while (p && std::fgets(buf, sizeof buf, p)) out += buf;
-  status = p ? ::pclose(p) : -1;
-  return out;
-}
+using air::shell;
 
 TEST_F(Airframe, SimRunPrintsTheUartAndWritesTheTruthLog) {
   if (std::string(IMU_EXAMPLE_ELF).empty()) GTEST_SKIP();

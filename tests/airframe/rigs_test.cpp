@@ -178,6 +178,35 @@ TEST(Gimbal, EqualMotorsMakeNoTorqueAndTheCcwPairYawsTheFrameClockwise) {
   EXPECT_NEAR(t.motor_torque_nm[1], 0.0, 1e-9);
 }
 
+TEST(Gimbal, ASpinPerMotorReplacesTheLayoutsAndTurnsTheYawTorqueAround) {
+  // given: the X layout's spins reversed (MultiWii's QUADX: front-left and rear-right clockwise)
+  plant::GimbalParams p;
+  p.damping_nms_per_rad = {0, 0, 0};
+  p.common.spin = {-1, 1, -1, 1};
+  plant::Gimbal g(p, {motor(), motor(), motor(), motor()});
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(g.mount(i).spin, p.common.spin[i]) << i;
+  for (int i = 0; i < 4; ++i) g.holdPulse(i, 1450);
+  // when: motors 0 and 2, now the clockwise pair, run faster
+  g.holdPulse(0, 1550);
+  g.holdPulse(2, 1550);
+  g.step(2.0);
+  const auto t = g.truth();
+  const double q_cw = g.actuator(0).torque_nm() + g.actuator(2).torque_nm();
+  const double q_ccw = g.actuator(1).torque_nm() + g.actuator(3).torque_nm();
+  // then: the reaction turns the frame counter-clockwise, as much as the layout's turned it clockwise
+  EXPECT_NEAR(t.motor_torque_nm[2], q_cw - q_ccw, std::abs(q_cw - q_ccw) * 0.01);
+  EXPECT_GT(t.motor_torque_nm[2], 0.0);
+  EXPECT_GT(t.rate_dps[2], 0.0);
+}
+
+TEST(Gimbal, ASpinListOfTheWrongLengthOrValueIsRefused) {
+  plant::GimbalParams p;
+  p.common.spin = {1, -1, 1};
+  EXPECT_THROW(plant::Gimbal(p, {motor(), motor(), motor(), motor()}), std::invalid_argument);
+  p.common.spin = {1, -1, 1, 0};
+  EXPECT_THROW(plant::Gimbal(p, {motor(), motor(), motor(), motor()}), std::invalid_argument);
+}
+
 TEST(Gimbal, PlusAndXLayoutsPutTheMotorsOnTheirArms) {
   for (auto layout : {plant::Layout::kPlus, plant::Layout::kX}) {
     plant::Gimbal g = quietGimbal(layout);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/accuracy.hpp"
+#include "plant/actuator.hpp"
 #include "plant/params.hpp"
 
 namespace {
@@ -87,6 +88,41 @@ TEST(BenchAccuracy, SettledSweepsReadTheTrueThrustAndUnsettledOnesReadLow) {
   // lags (motor and load-cell filter), so its readings are low by more than 1 %
   EXPECT_LT(std::abs(bias(600)), 0.5);
   EXPECT_LT(bias(200), -1.0);
+}
+
+// Issue 26 item 2: the same 200 ms and 100 ms sweeps corrected with the motor's dynamics read
+// the settled thrust again (the bias of the uncorrected ones goes away).
+TEST(BenchAccuracy, LagCorrectedFastSweepsReadTheSettledThrust) {
+  const plant::ActuatorParams motor = plant::makeVaried(plant::presetParams("kv1100_9x4.7"), 21);
+  auto bias = [&](int settle_ms, bool corrected) {
+    bench::SweepSpec spec;
+    spec.settle_ms = settle_ms;
+    if (corrected) {
+      spec.lag_dynamics = bench::plantDynamics(motor);
+      spec.lag_bench.stages = 3;
+      spec.lag_bench.tau_01ms = 300;
+    }
+    const bench::Sweep s = bench::simulateSweep(motor, bench::lipoAt(12.4), spec);
+    EXPECT_EQ(s.largest_correction_g > 0, corrected);
+    double sum = 0;
+    int n = 0;
+    const plant::Actuator settled(motor);  // what the step settles to (the reading's instant lags)
+    for (const bench::SweepPoint& p : s.points) {
+      const double truth_g = settled.steadyState(p.pwm_us, p.true_bus_v).thrust_g;
+      if (truth_g >= 100 && truth_g <= 450) {  // benchmark 1's commands
+        sum += (p.force_dg / 10.0 - truth_g) / truth_g;
+        ++n;
+      }
+    }
+    return 100.0 * sum / n;
+  };
+  ASSERT_TRUE(bench::plantDynamics(motor).isValid());
+  for (int settle_ms : {200, 100}) {
+    SCOPED_TRACE(settle_ms);
+    const double raw = bias(settle_ms, false), fixed = bias(settle_ms, true);
+    EXPECT_LT(raw, -1.0);
+    EXPECT_LT(std::abs(fixed), settle_ms == 200 ? 0.3 : 0.5) << "as read: " << raw << " %";
+  }
 }
 
 TEST(BenchAccuracy, RejectsAnEmptyGrid) {

@@ -25,34 +25,7 @@ namespace {
 using board_test::image;
 using board_test::patternImage;
 
-// A simulated Mega2560 on a pty, its bridge running in a thread.
-class SimulatedBoard : public ::testing::Test {
- protected:
-  void SetUp() override { BOARD_REQUIRE_TOOLS(); }
-  void TearDown() override {
-    if (sb) sb->link().stop();
-  }
-  void start(const std::string& app, std::vector<uint8_t> eeprom = {}) {
-    sim::SimBoardOptions o;
-    o.application = app;
-    o.eeprom = std::move(eeprom);
-    o.pty.on_reset = [this] {
-      ++resets;
-      if (on_reset) on_reset(resets);
-    };
-    sb = std::make_unique<sim::SimBoard>(o);
-    sb->link().start(sim::Pacing{1.0, 0.0});
-    port = sb->link().path();
-  }
-  std::vector<uint8_t> eeprom() {
-    return sb->link().paused([&] { return sb->board().eeprom(); });
-  }
-
-  std::unique_ptr<sim::SimBoard> sb;
-  std::string port;
-  int resets = 0;                     // client resets (bridge thread)
-  std::function<void(int)> on_reset;  // runs in the bridge thread, simulation stopped
-};
+using board_test::SimulatedBoard;
 
 TEST_F(SimulatedBoard, EepromPutThenGetRoundTripsAPatternWhereEveryAddressIsDistinguishable) {
   // given: gather_store behind the bootloader, EEPROM erased; a whole-image pattern file
@@ -188,7 +161,7 @@ TEST_F(SimulatedBoard, NoPortNoAvrdudeNoFirmwareOrAnImageOverTheBootloaderAreRef
             std::string::npos);
   // no firmware to verify with: nothing is written
   const std::string no_fw = message([&] { board::putEeprom(port, dir + "/pattern.hex", quick); });
-  EXPECT_NE(no_fw.find("needs gather_store or read_run"), std::string::npos) << no_fw;
+  EXPECT_NE(no_fw.find("needs gather_store, read_run or fly"), std::string::npos) << no_fw;
   EXPECT_EQ(eeprom(), std::vector<uint8_t>(4096, 0xFF));
 }
 

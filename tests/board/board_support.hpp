@@ -1,5 +1,5 @@
 // Shared by the board path tests: where the images, the bootloader and avrdude are, a pattern
-// EEPROM image, and running `thrustcal` as a child process.
+// EEPROM image, running `thrustcal` as a child process, and a simulated board on a pty.
 #pragma once
 #include <gtest/gtest.h>
 
@@ -13,6 +13,8 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -152,5 +154,34 @@ inline ProcessResult run(const std::vector<std::string>& args, double timeout_s)
   Process p(args);
   return p.wait(timeout_s);
 }
+
+// A simulated Mega2560 on a pty, its bridge running in a thread.
+class SimulatedBoard : public ::testing::Test {
+ protected:
+  void SetUp() override { BOARD_REQUIRE_TOOLS(); }
+  void TearDown() override {
+    if (sb) sb->link().stop();
+  }
+  void start(const std::string& app, std::vector<uint8_t> eeprom = {}) {
+    sim::SimBoardOptions o;
+    o.application = app;
+    o.eeprom = std::move(eeprom);
+    o.pty.on_reset = [this] {
+      ++resets;
+      if (on_reset) on_reset(resets);
+    };
+    sb = std::make_unique<sim::SimBoard>(o);
+    sb->link().start(sim::Pacing{1.0, 0.0});
+    port = sb->link().path();
+  }
+  std::vector<uint8_t> eeprom() {
+    return sb->link().paused([&] { return sb->board().eeprom(); });
+  }
+
+  std::unique_ptr<sim::SimBoard> sb;
+  std::string port;
+  int resets = 0;                     // client resets (bridge thread)
+  std::function<void(int)> on_reset;  // runs in the bridge thread, simulation stopped
+};
 
 }  // namespace board_test

@@ -121,7 +121,9 @@ TEST(BoardStory, CommandsSayWhatIsWrongWhenThePortIsMissing) {
         std::vector<std::string>{"calibrate", "--port", "/dev/nonexistent_tty", "--slot", "0",
                                  "--mount-g", "81", "--yes"},
         std::vector<std::string>{"liftoff", "--port", "/dev/nonexistent_tty", "--force", "100",
-                                 "--yes"}}) {
+                                 "--yes"},
+        std::vector<std::string>{"params", "pull", "--port", "/dev/nonexistent_tty", "/tmp/x"},
+        std::vector<std::string>{"params", "push", "--port", "/dev/nonexistent_tty", "/tmp/x"}}) {
     std::vector<std::string> full = {tc, "board"};
     full.insert(full.end(), args.begin(), args.end());
     const board_test::ProcessResult r = board_test::run(full, 30);

@@ -60,9 +60,11 @@ bool noValidSpare() {
 class EepromStore : public ::testing::Test {
  public:  // the setup tables below reach the models through the fixture
   void SetUp() override { Ee::erase(); }
-  const tc::ModelV2 m1 = tc_test::motorModel(1.8, 1097, 12.4);
+  // m1 and m3 carry the motor's dynamics (128-byte copies), m2 none (115 bytes): every store
+  // below moves dynamics through its copies and spares, or adds or drops them.
+  const tc::ModelV2 m1 = tc_test::withDynamics(tc_test::motorModel(1.8, 1097, 12.4));
   const tc::ModelV2 m2 = tc_test::motorModel(1.6, 1080, 12.4);
-  const tc::ModelV2 m3 = tc_test::motorModel(2.0, 1110, 11.1);
+  const tc::ModelV2 m3 = tc_test::withDynamics(tc_test::motorModel(2.0, 1110, 11.1), 4, 1.2);
   const tc::MotorCalibration cal_a = tc_test::thesisRecord(SyntheticMotor(), 12.4, 10.9);
   const tc::MotorCalibration cal_b = [] {
     SyntheticMotor m;
@@ -254,6 +256,20 @@ TEST_F(EepromStore, V2ToV2StoresKeepTheirGuaranteeThroughTheStoreFunction) {
                 [&] { tc::storeModelV2<Ee>(3, m3); });
 }
 
+TEST_F(EepromStore, DynamicsAddedToAStoredModelAreThereWholeOrNotAtAllAtEveryByte) {
+  // given: motor 2 holds m2 (no dynamics; copy A), as after `store v2`
+  tc::writeModelV2<Ee>(2, m2);
+  const tc::ModelV2 m2_dyn = tc_test::withDynamics(m2);
+  // when: `dyn` stores the measured dynamics with the same model, cut after every byte
+  const int news = cutEverywhere(Ee::image(), 2, Calibration{nullptr, &m2}, Calibration{nullptr, &m2_dyn},
+                                 [&] { tc::storeModelV2<Ee>(2, m2_dyn); });
+  // then: the new copy (B) wins with its last CRC byte, never a model with half its dynamics
+  EXPECT_GE(news, 1);
+  tc::ModelV2 got;
+  EXPECT_EQ(tc::readModelV2<Ee>(2, got).copy, 1);
+  EXPECT_TRUE(tc_test::sameModel(got, m2_dyn));
+}
+
 TEST_F(EepromStore, EraseCutAnywhereLeavesTheNewestModelOrNothingNeverTheOlderOne) {
   for (bool newest_in_b : {true, false}) {
     SCOPED_TRACE(newest_in_b ? "newest in B" : "newest in A");
@@ -325,8 +341,16 @@ tc::BoardSettings divider(uint32_t top, uint32_t bottom) {
   return s;
 }
 
+// The settings with the bench's response (`dyn cell`): 3 stages of 30.0 ms.
+tc::BoardSettings withBench(tc::BoardSettings s) {
+  s.bench.stages = 3;
+  s.bench.tau_01ms = 300;
+  return s;
+}
+
 bool sameDivider(const tc::BoardSettings& a, const tc::BoardSettings& b) {
-  return a.divider_top_ohm == b.divider_top_ohm && a.divider_bottom_ohm == b.divider_bottom_ohm;
+  return a.divider_top_ohm == b.divider_top_ohm && a.divider_bottom_ohm == b.divider_bottom_ohm &&
+         a.bench == b.bench;
 }
 
 }  // namespace
@@ -365,25 +389,39 @@ TEST_F(EepromStore, DividersThatCannotBeRightAreRefused) {
 }
 
 TEST_F(EepromStore, DividerWriteCutAnywhereLeavesTheOldOrTheNewSetting) {
-  tc::storeSettings<Ee>(divider(100000, 22000));
-  tc::storeSettings<Ee>(divider(100000, 33000));  // copies A and B both used
-  const std::vector<uint8_t> before = Ee::image();
-  Ee::restore(before);  // counts from here
-  tc::storeSettings<Ee>(divider(56000, 10000));
-  const int32_t total = static_cast<int32_t>(Ee::update_calls);
-  EXPECT_EQ(total, tc::kSettingsBytes);
-  for (int16_t torn : {-1, 0x00, 0xA5}) {
-    for (int32_t k = 0; k <= total; ++k) {
-      Ee::restore(before);
-      Ee::budget = k;
-      Ee::torn = torn;
-      tc::storeSettings<Ee>(divider(56000, 10000));
-      Ee::budget = -1;
-      tc::BoardSettings s;
-      ASSERT_EQ(tc::readSettings<Ee>(s).status, tc::DecodeStatus::kOk);
-      EXPECT_TRUE(sameDivider(s, divider(100000, 33000)) || sameDivider(s, divider(56000, 10000)))
-          << k << " " << s.divider_top_ohm << "/" << s.divider_bottom_ohm;
-      EXPECT_EQ(sameDivider(s, divider(56000, 10000)), k == total);
+  // the divider alone (14 bytes), the bench's response added (17), then the divider changed
+  // keeping the response (17 over 17)
+  struct Case {
+    tc::BoardSettings old_s, new_s;
+    uint16_t bytes;
+  };
+  const Case cases[] = {
+      {divider(100000, 33000), divider(56000, 10000), tc::kSettingsBytes},
+      {divider(100000, 33000), withBench(divider(100000, 33000)), tc::kSettingsBenchBytes},
+      {withBench(divider(100000, 33000)), withBench(divider(56000, 10000)), tc::kSettingsBenchBytes},
+  };
+  for (const Case& c : cases) {
+    Ee::erase();
+    tc::storeSettings<Ee>(divider(100000, 22000));
+    tc::storeSettings<Ee>(c.old_s);  // copies A and B both used
+    const std::vector<uint8_t> before = Ee::image();
+    Ee::restore(before);  // counts from here
+    tc::storeSettings<Ee>(c.new_s);
+    const int32_t total = static_cast<int32_t>(Ee::update_calls);
+    EXPECT_EQ(total, c.bytes);
+    for (int16_t torn : {-1, 0x00, 0xA5}) {
+      for (int32_t k = 0; k <= total; ++k) {
+        Ee::restore(before);
+        Ee::budget = k;
+        Ee::torn = torn;
+        tc::storeSettings<Ee>(c.new_s);
+        Ee::budget = -1;
+        tc::BoardSettings s;
+        ASSERT_EQ(tc::readSettings<Ee>(s).status, tc::DecodeStatus::kOk);
+        EXPECT_TRUE(sameDivider(s, c.old_s) || sameDivider(s, c.new_s))
+            << k << " " << s.divider_top_ohm << "/" << s.divider_bottom_ohm;
+        EXPECT_EQ(sameDivider(s, c.new_s), k == total);
+      }
     }
   }
 }

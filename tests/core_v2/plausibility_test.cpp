@@ -220,6 +220,12 @@ const V2Case kV2Cases[] = {
        for (uint8_t k = 0; k < m.knots; ++k) m.drive_512usmv[k] = static_cast<uint16_t>(m.drive_512usmv[k] * 3 / 2);
      },
      tc::Implausible::kPwmRange, ""},
+    {"measured dynamics with a 3 ms spin-up",
+     [](tc::ModelV2& m) {
+       m.dynamics = tc_test::withDynamics(m).dynamics;
+       m.dynamics.up_lo_01ms = 30;
+     },
+     tc::Implausible::kDynamics, "motor dynamics out of range (3.0 ms; allowed 5.0..2000.0 ms)"},
 };
 
 TEST(Plausibility, EveryV2RuleRefusesItsModelWithItsReason) {
@@ -244,9 +250,9 @@ TEST(Plausibility, ImplausibleV2CopyWithAGoodCrcIsBadContentAndNeverLoaded) {
     tc::ModelV2 m = good;
     c.spoil(m);
     RamEeprom::erase();
-    uint8_t image[tc::kRecordV2Bytes];
+    uint8_t image[tc::kRecordV2MaxBytes];
     tc::serializeModelV2(m, 1, image);
-    std::memcpy(RamEeprom::bytes + tc::copyAddressV2(2, 0), image, sizeof image);
+    std::memcpy(RamEeprom::bytes + tc::copyAddressV2(2, 0), image, tc::recordV2Length(image[5]));
     // when
     tc::ModelV2 v2;
     tc::MotorCalibration v1;
@@ -269,12 +275,12 @@ TEST(Plausibility, EveryRuleIsExercisedByTheTables) {
   std::set<tc::Implausible> seen;
   for (const V1Case& c : kV1Cases) seen.insert(c.rule);
   for (const V2Case& c : kV2Cases) seen.insert(c.rule);
-  for (uint8_t r = 1; r <= static_cast<uint8_t>(tc::Implausible::kSag); ++r)
+  for (uint8_t r = 1; r <= static_cast<uint8_t>(tc::kLastImplausible); ++r)
     EXPECT_TRUE(seen.count(static_cast<tc::Implausible>(r))) << tc::implausibleText(static_cast<tc::Implausible>(r));
   std::set<std::string> texts;
-  for (uint8_t r = 0; r <= static_cast<uint8_t>(tc::Implausible::kSag); ++r)
+  for (uint8_t r = 0; r <= static_cast<uint8_t>(tc::kLastImplausible); ++r)
     texts.insert(tc::implausibleText(static_cast<tc::Implausible>(r)));
-  EXPECT_EQ(texts.size(), static_cast<std::size_t>(tc::Implausible::kSag) + 1);
+  EXPECT_EQ(texts.size(), static_cast<std::size_t>(tc::kLastImplausible) + 1);
   EXPECT_STREQ(tc::implausibleText(static_cast<tc::Implausible>(99)), "unknown rule");
 }
 

@@ -87,6 +87,20 @@ inline tc::ModelV2 motorModel(double exponent, double start_us, double rest_v) {
   return fittedModel(motor, rest_v);
 }
 
+// `model` with measured-looking dynamics (thrustcal/dynamics.hpp): spin-up 92 -> 74 ms and
+// spin-down 95 -> 76 ms over 80..440 g, from `points` operating points; `slower` scales them.
+inline tc::ModelV2 withDynamics(tc::ModelV2 model, uint8_t points = 5, double slower = 1.0) {
+  tc::MotorDynamics& d = model.dynamics;
+  d.points = points;
+  d.lo_dg = 800;
+  d.hi_dg = 4400;
+  d.up_lo_01ms = static_cast<uint16_t>(std::lround(920 * slower));
+  d.up_hi_01ms = static_cast<uint16_t>(std::lround(740 * slower));
+  d.down_lo_01ms = static_cast<uint16_t>(std::lround(950 * slower));
+  d.down_hi_01ms = static_cast<uint16_t>(std::lround(760 * slower));
+  return model;
+}
+
 inline bool sameCalibration(const tc::MotorCalibration& a, const tc::MotorCalibration& b) {
   if (a.first.start_mv != b.first.start_mv || a.second.start_mv != b.second.start_mv ||
       a.first.maxGrams() != b.first.maxGrams() || a.second.maxGrams() != b.second.maxGrams() ||
@@ -103,7 +117,7 @@ inline bool sameCalibration(const tc::MotorCalibration& a, const tc::MotorCalibr
 inline bool sameModel(const tc::ModelV2& a, const tc::ModelV2& b) {
   if (a.start_q4_us != b.start_q4_us || a.step_dg != b.step_dg || a.knots != b.knots ||
       a.fine_knots != b.fine_knots || a.coarse_step_dg != b.coarse_step_dg || a.flags != b.flags ||
-      a.rest_mv != b.rest_mv || a.second_mv != b.second_mv)
+      a.rest_mv != b.rest_mv || a.second_mv != b.second_mv || a.dynamics != b.dynamics)
     return false;
   for (uint8_t k = 0; k < tc::kV2MaxKnots; ++k)
     if (a.drive_512usmv[k] != b.drive_512usmv[k] || a.sag_10mv[k] != b.sag_10mv[k]) return false;

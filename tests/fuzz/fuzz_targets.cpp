@@ -140,9 +140,10 @@ void repairCrcs(uint8_t* image) {
     const uint16_t v2_at[] = {0, tc::kRecordV2CopyOffset, tc::kRecordV2SpareOffset, 2 * tc::kRecordV2SpareOffset,
                               3 * tc::kRecordV2SpareOffset};
     for (uint16_t at : v2_at)
-      if (slot[at] == tc::kLayoutVersion2) putCrc(slot + at, tc::kRecordV2CrcOffset);
+      if (slot[at] == tc::kLayoutVersion2) putCrc(slot + at, static_cast<uint16_t>(tc::recordV2Length(slot[at + 5]) - 2));
     for (uint16_t at : tc::kSettingsOffset)
-      if (slot[at] == tc::kSettingsKind) putCrc(slot + at, tc::kSettingsCrcOffset);
+      if (slot[at] == tc::kSettingsKind || slot[at] == tc::kSettingsKindBench)
+        putCrc(slot + at, static_cast<uint16_t>(tc::settingsLength(slot[at]) - 2));
   }
 }
 

@@ -1,4 +1,4 @@
-// Real data: Bitcraze's Crazyflie 2.1 thrust-stand logs (../shared/data). The force follows
+// Real data: Bitcraze's Crazyflie 2.1 thrust-stand logs (tests/lab/data, MIT licence). The force follows
 // pwm * vbat; the `voltage` effect must lower the error against a PWM-only curve, and a direct fit
 // equals the ladder that adds its effects one by one.
 #include <gtest/gtest.h>

@@ -132,6 +132,37 @@ TEST(TimerModes, PhaseAndFrequencyCorrect) {
   EXPECT_EQ(last(log.highs("D12"), 3), (V{200, 200, 200}));
 }
 
+// PB7 (D13) carries OC0A and OC1C; with both connected the output compare modulator combines
+// them: AND while PORTB7 is 0, OR while it is 1.
+TEST(TimerModes, TheOutputCompareModulatorOnPb7) {
+  TIMERS_REQUIRE_IMAGES();
+  sim::Board board(image("timer_pfc"));
+  PinLog log(board, {"D13"});
+  auto step = [&](const char* command) {
+    const std::size_t before = log.edges("D13").size();
+    const std::size_t from = board.output().size();
+    board.sendText(command);
+    board.runUntil([&] { return board.output().find("ok", from) != std::string::npos; }, sim::secondsToCycles(0.01));
+    board.runFor(0.0005);  // the buffered OCR1C and the new level settle
+    const std::size_t settled = log.edges("D13").size();
+    board.runFor(0.0005);
+    return std::make_pair(settled - before, log.edges("D13").size() - settled);
+  };
+  // OC1C constantly high (OCR1C = TOP), AND: D13 is OC0A, 128 of 256 cycles
+  step("m");
+  EXPECT_EQ(last(log.highs("D13"), 3), (V{128, 128, 128}));
+  EXPECT_EQ(last(log.periods("D13"), 3), (V{256, 256, 256}));
+  // OR with a constant high: high, no edge
+  EXPECT_EQ(step("o").second, 0u);
+  EXPECT_TRUE(board.ports().level('B', 7));
+  // OC1C constantly low, OR: OC0A again
+  EXPECT_GT(step("z").second, 20u);
+  EXPECT_EQ(last(log.highs("D13"), 3), (V{128, 128, 128}));
+  // AND with a constant low: low, no edge
+  EXPECT_EQ(step("a").second, 0u);
+  EXPECT_FALSE(board.ports().level('B', 7));
+}
+
 // The widths (or intervals) of a sequence: `before` repeated, then what is left, which must be
 // `across` (if given) followed by `after` repeated at least twice.
 void expectSwitch(const V& seen, int64_t before, const V& across, int64_t after, const char* pin) {

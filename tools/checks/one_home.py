@@ -44,6 +44,7 @@ FACTS = [
     ('the flash size', r'\bconstexpr\s+[\w:]+\s+k\w*Flash\w*Bytes\s*=\s*\d', 'hal/include/hal/board.hpp'),
     ('a UART baud rate', r'\bconstexpr\s+[\w:]+\s+k\w*Baud\s*=\s*\d', 'hal/include/hal/board.hpp'),
     ('the ESC pin table', r'\bEscPin\s+kEscPins\[\]\s*=', 'hal/include/hal/board.hpp'),
+    ('the Mega2560 header pin map', r'\bMegaPin\s+kMegaPins\[', 'hal/include/hal/mega_pins.hpp'),
     ('an ESC pin as a (port, bit) literal', r"\{\s*'[A-L]'\s*,\s*[0-7]\s*\}", None),
     ('the timer driver\'s pulse clamp', r'\bconstexpr\s+[\w:]+\s+kPulseClamp(Min|Max)Us\s*=',
      'hal/include/hal/board.hpp'),

@@ -16,6 +16,15 @@
 //        8     4  divider bottom resistor R2, ohm
 //       12     2  CRC-16/CCITT-FALSE of bytes 0..11
 //
+// With the bench's load-cell response identified (gather_store's `dyn cell`, issue 26;
+// thrustcal/dynamics.hpp) the kind is 0x54 ('T') and the copy 17 bytes:
+//
+//       12     1  equal low-pass stages (1..4)
+//       13     2  each stage's time constant, 0.1 ms (1 ms .. 2 s)
+//       15     2  CRC-16/CCITT-FALSE of bytes 0..14
+//
+// Without it the copy is the 14-byte kind 0x53 above, byte for byte.
+//
 // The loader looks at both copies in every host slot and takes the newest valid one; none:
 // the defaults. A write goes to the copy that does not hold the newest (body, sequence, CRC:
 // the same power-fail-safe order as a v2 record), in the host that holds the newest, so a cut
@@ -29,27 +38,38 @@
 
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/crc16.hpp"
+#include "thrustcal/dynamics.hpp"
 #include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/host_copies.hpp"
 #include "thrustcal/record_limits.hpp"
 #include "thrustcal/record_v2.hpp"
 
 namespace tc {
 
 constexpr uint8_t kSettingsKind = 0x53;
+constexpr uint8_t kSettingsKindBench = 0x54;  // with the bench's response
 constexpr uint8_t kSettingsMagic = 0xD7;
 constexpr uint16_t kSettingsBytes = 14;
+constexpr uint16_t kSettingsBenchBytes = 17;
+constexpr uint16_t kSettingsMaxBytes = kSettingsBenchBytes;
 constexpr uint16_t kSettingsOffset[2] = {960, 992};  // copies A and B within a host slot
 constexpr uint16_t kSettingsSeqOffset = 2;
 constexpr uint16_t kSettingsCrcOffset = kSettingsBytes - 2;
+// Bytes of a copy whose kind byte is `kind`.
+inline uint16_t settingsLength(uint8_t kind) {
+  return kind == kSettingsKindBench ? kSettingsBenchBytes : kSettingsBytes;
+}
 constexpr uint32_t kDividerMaxOhm = 10000000ul;   // 10 MOhm: above, the ADC's input current matters
 constexpr uint32_t kDividerMinBottomOhm = 100;
 constexpr uint16_t kMaxFullScaleMv = 60000;
-static_assert(kRecordV2CopyOffset + kRecordV2Bytes <= 960, "settings must lie after copy B");
-static_assert(992 + kSettingsBytes <= kRecordBytes, "settings copy B must fit the slot");
+static_assert(kRecordV2CopyOffset + kRecordV2MaxBytes <= 960, "settings must lie after copy B");
+static_assert(960 + kSettingsMaxBytes <= 992, "settings copy A must end before copy B");
+static_assert(992 + kSettingsMaxBytes <= kRecordBytes, "settings copy B must fit the slot");
 
 struct BoardSettings {
   uint32_t divider_top_ohm = kDefaultDividerTopOhm;
   uint32_t divider_bottom_ohm = kDefaultDividerBottomOhm;
+  BenchResponse bench;  // the load cell's response (`dyn cell`); not identified by default
 
   // Full scale of the monitor in mV (5 V on the pin); 0 when the divider is not valid.
   uint16_t fullScaleMv() const;
@@ -65,9 +85,10 @@ struct BoardSettings {
   RecordLimits recordLimits() const;
 };
 
+// settingsLength(image[0]) bytes (give kSettingsMaxBytes of room).
 void serializeSettings(const BoardSettings& s, uint16_t sequence, uint8_t* image);
-// kErased (kind 0xFF), kBadVersion (other kind or magic), kBadCrc, kBadContent (divider not
-// valid), kOk. `out` is left at the defaults unless kOk.
+// kErased (kind 0xFF), kBadVersion (other kind or magic), kBadCrc, kBadContent (divider or
+// bench response not valid), kOk. `out` is left at the defaults unless kOk.
 DecodeStatus parseSettings(const uint8_t* image, BoardSettings& out, uint16_t& sequence);
 
 struct SettingsRead {
@@ -96,8 +117,9 @@ namespace settings_detail {
 
 template <class Storage>
 DecodeStatus readCopy(uint16_t addr, BoardSettings& out, uint16_t& sequence) {
-  uint8_t image[kSettingsBytes];
-  for (uint16_t i = 0; i < kSettingsBytes; ++i) image[i] = Storage::readByte(static_cast<uint16_t>(addr + i));
+  uint8_t image[kSettingsMaxBytes];
+  const uint16_t length = settingsLength(Storage::readByte(addr));
+  for (uint16_t i = 0; i < length; ++i) image[i] = Storage::readByte(static_cast<uint16_t>(addr + i));
   return parseSettings(image, out, sequence);
 }
 
@@ -112,22 +134,14 @@ template <class Storage>
 SettingsRead readSettings(BoardSettings& out) {
   SettingsRead r;
   out = BoardSettings();
-  for (uint8_t host = 0; host < kMotorSlots; ++host) {
-    if (!isHostSlot<Storage>(host)) continue;
-    for (uint8_t copy = 0; copy < 2; ++copy) {
-      BoardSettings s;
-      uint16_t seq = 0;
-      const DecodeStatus st = settings_detail::readCopy<Storage>(settings_detail::copyAddress(host, copy), s, seq);
-      if (st != DecodeStatus::kOk) continue;
-      if (r.status != DecodeStatus::kOk || sequenceNewer(seq, r.sequence)) {
-        r.status = DecodeStatus::kOk;
-        r.host = host;
-        r.copy = copy;
-        r.sequence = seq;
-        out = s;
-      }
-    }
-  }
+  HostCopy at;
+  uint8_t hosts = 0;
+  r.status = newestHostCopy<Storage>(out, at, hosts, [](uint8_t host, uint8_t copy, BoardSettings& s, uint16_t& seq) {
+    return settings_detail::readCopy<Storage>(settings_detail::copyAddress(host, copy), s, seq);
+  });
+  r.host = at.host;
+  r.copy = at.copy;
+  r.sequence = at.sequence;
   return r;
 }
 
@@ -140,41 +154,29 @@ SettingsWrite writeSettings(const BoardSettings& s, uint8_t avoid = kNoSlot) {
   const SettingsRead now = readSettings<Storage>(now_values);
   const bool have = now.status == DecodeStatus::kOk;
   if (have && now.host != avoid && now_values.divider_top_ohm == s.divider_top_ohm &&
-      now_values.divider_bottom_ohm == s.divider_bottom_ohm) {
+      now_values.divider_bottom_ohm == s.divider_bottom_ohm && now_values.bench == s.bench) {
     w.status = SettingsWriteStatus::kUnchanged;
     w.host = now.host;
     w.copy = now.copy;
     w.sequence = now.sequence;
     return w;
   }
-  if (have && now.host != avoid && isHostSlot<Storage>(now.host)) {
-    w.host = now.host;
-    w.copy = static_cast<uint8_t>(now.copy ^ 1u);
-  } else {
-    for (uint8_t h = kMotorSlots; h-- > 0;) {
-      if (h != avoid && isHostSlot<Storage>(h)) {
-        w.host = h;
-        break;
-      }
-    }
-    if (w.host == kNoSlot) {
-      w.status = SettingsWriteStatus::kNoRoom;
-      return w;
-    }
-    w.copy = 0;
+  HostCopy newest;
+  newest.host = now.host;
+  newest.copy = now.copy;
+  newest.sequence = now.sequence;
+  const HostCopy next = nextHostCopy<Storage>(have, newest, avoid);
+  if (next.host == kNoSlot) {
+    w.status = SettingsWriteStatus::kNoRoom;
+    return w;
   }
-  w.sequence = have ? static_cast<uint16_t>(now.sequence + 1) : 1;
-  uint8_t image[kSettingsBytes];
+  w.host = next.host;
+  w.copy = next.copy;
+  w.sequence = next.sequence;
+  uint8_t image[kSettingsMaxBytes];
   serializeSettings(s, w.sequence, image);
   const uint16_t addr = settings_detail::copyAddress(w.host, w.copy);
-  for (uint16_t i = 0; i < kSettingsCrcOffset; ++i) {
-    if (i == kSettingsSeqOffset || i == kSettingsSeqOffset + 1) continue;
-    Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
-  }
-  for (uint16_t i = kSettingsSeqOffset; i < kSettingsSeqOffset + 2; ++i)
-    Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
-  for (uint16_t i = kSettingsCrcOffset; i < kSettingsBytes; ++i)
-    Storage::updateByte(static_cast<uint16_t>(addr + i), image[i]);
+  writeCopyInOrder<Storage>(addr, image, settingsLength(image[0]), kSettingsSeqOffset);
   BoardSettings back;
   uint16_t seq = 0;
   const bool ok = settings_detail::readCopy<Storage>(addr, back, seq) == DecodeStatus::kOk && seq == w.sequence;

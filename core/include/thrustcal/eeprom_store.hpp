@@ -33,6 +33,7 @@
 
 #include "thrustcal/board_settings.hpp"
 #include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/param_store.hpp"
 #include "thrustcal/plausibility.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -54,6 +55,7 @@ struct StoreReport {
   uint8_t copy = kNoCopy;        // v2: own copy written
   uint16_t sequence = 0;         // v2: its sequence number
   Plausibility why;              // kImplausible: the rule
+  ParamsMove params = ParamsMove::kNone;  // v1: a parameter record the slot held (param_store.hpp)
 };
 
 namespace store_detail {
@@ -72,7 +74,7 @@ uint8_t findHost(uint8_t owner) {
 template <class Storage>
 bool writeSpare(uint8_t owner, uint8_t host, const ModelV2& model, uint16_t sequence,
                 const RecordLimits& limits) {
-  uint8_t image[kRecordV2Bytes];
+  uint8_t image[kRecordV2MaxBytes];
   serializeModelV2(model, sequence, image, spareMagic(owner));
   const uint16_t addr = spareAddressV2(owner, host);
   uint16_t changed = 0;
@@ -164,7 +166,7 @@ StoreReport storeModelV2(uint8_t slot, const ModelV2& model, const RecordLimits&
 
 // Stores the thesis record `cal` into `slot` (nothing, v1 or v2 before), power-fail-safe from
 // v2 (see the top of this file). `cal` is checked for plausibility first (and its curves
-// finalized). Moves the board settings out of the slot first.
+// finalized). Moves the board settings and a parameter record out of the slot first.
 template <class Storage>
 StoreReport storeRecordV1(uint8_t slot, MotorCalibration& cal, const RecordLimits& limits = RecordLimits()) {
   StoreReport rep;
@@ -184,6 +186,7 @@ StoreReport storeRecordV1(uint8_t slot, MotorCalibration& cal, const RecordLimit
       return rep;
     }
   }
+  rep.params = moveParamsOutOf<Storage>(slot);
   ModelV2 old;
   const RecordV2Read now = readModelV2<Storage>(slot, old, limits);
   uint8_t host = kNoSlot;

@@ -28,6 +28,7 @@
 #pragma once
 #include <stdint.h>
 
+#include "thrustcal/dynamics.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/record_limits.hpp"
 
@@ -76,6 +77,10 @@ struct ModelV2 {
   uint16_t drive_512usmv[kV2MaxKnots] = {};  // drive at each knot, non-decreasing, > 0
   uint8_t sag_10mv[kV2MaxKnots] = {};        // rest_mv minus the reading at each knot
 
+  // The motor's speed lag (gather_store's `dyn`; none until measured): stored with the model,
+  // in the same copy under its CRC (record_v2.hpp), so it survives every store as the model does.
+  MotorDynamics dynamics;
+
   bool isPresent() const { return start_q4_us != 0 && knots != 0; }
   uint16_t maxForceDg() const { return max_force_dg; }
   // Force of knot k (0-based), decigrams.
@@ -89,13 +94,15 @@ struct ModelV2 {
   // one run (coarse: at least kV2MinStepDg, or 0 without coarse knots), knots outside 2..32,
   // fine_knots outside 1..knots, rest_mv / second_mv outside kPackMinMv..kPackMaxMv
   // (second_mv may be 0), drive not increasing (a knot lower than the one before, or the
-  // first knot 0). Whether the model is physically right is checkModelV2's question
-  // (thrustcal/plausibility.hpp).
+  // first knot 0), dynamics present but not valid (MotorDynamics::isValid). Whether the model
+  // is physically right is checkModelV2's question (thrustcal/plausibility.hpp).
   bool finalize();
   void clear();
 };
 
-enum : uint8_t { kV2Refined = 1u << 0 };
+// Flags. kV2HasDynamics is the record's (set when the model has dynamics, record_v2.hpp), never
+// a ModelV2's: parsing clears it from `flags` and fills `dynamics`.
+enum : uint8_t { kV2Refined = 1u << 0, kV2HasDynamics = 1u << 1 };
 
 // Battery reading filter: first-order IIR, y += (x - y) / 2^shift per frame (default 1/8),
 // exact in steady state (`rem` keeps the fraction below 1 mV), plus the reciprocal of y for

@@ -29,6 +29,10 @@
 //     kSag          sag at a knot above kMaxSagPercent of the resting voltage
 //     kPwmRange     PWM at the last knot, at the best voltage the record saw, above the ESC's
 //                   maximum (+ kPwmToleranceUs)
+//     kMalformed    motor dynamics present with a point count outside 1..kDynMaxPoints, the
+//                   lightest point 0 or above the heaviest (thrustcal/dynamics.hpp)
+//     kDynamics     a time constant of the dynamics outside kDynTauMin01ms..kDynTauMax01ms, or
+//                   the two ends of one point differing
 #pragma once
 #include <stdint.h>
 
@@ -39,6 +43,7 @@ namespace tc {
 
 struct MotorCalibration;
 struct ModelV2;
+struct MotorDynamics;
 class ForceCurveBase;
 
 enum class Implausible : uint8_t {
@@ -53,10 +58,12 @@ enum class Implausible : uint8_t {
   kStartRange,
   kSagBase,
   kSag,
+  kDynamics,
 };
+constexpr Implausible kLastImplausible = Implausible::kDynamics;
 
 // Unit of a Plausibility's value and limits.
-enum class PlausibilityUnit : uint8_t { kNone = 0, kUs, kMv, kDg, kG, kPercent };
+enum class PlausibilityUnit : uint8_t { kNone = 0, kUs, kMv, kDg, kG, kPercent, kTenthMs };
 
 // The first rule a record broke, where, the offending value and the allowed range.
 struct Plausibility {
@@ -80,6 +87,8 @@ const char* implausibleText(Implausible rule);
 Plausibility checkCalibration(MotorCalibration& cal, const RecordLimits& limits = RecordLimits());
 // v2: checks the stored fields of a model (finalize() need not have run).
 Plausibility checkModelV2(const ModelV2& model, const RecordLimits& limits = RecordLimits());
+// A motor's dynamics (thrustcal/dynamics.hpp; checkModelV2 runs it on a model that has them).
+Plausibility checkDynamics(const MotorDynamics& dynamics);
 
 // Prints "TEXT (WHERE: VALUE UNIT; allowed LO..HI UNIT)" (or "; at least LO UNIT" when the
 // rule has no upper limit) through an output with
@@ -112,6 +121,7 @@ void printPlausibility(const Plausibility& p, Out& out) {
       case PlausibilityUnit::kDg: decimals = 1; unit = TC_FLASH_TEXT(" g"); break;
       case PlausibilityUnit::kG: unit = TC_FLASH_TEXT(" g"); break;
       case PlausibilityUnit::kPercent: unit = TC_FLASH_TEXT(" %"); break;
+      case PlausibilityUnit::kTenthMs: decimals = 1; unit = TC_FLASH_TEXT(" ms"); break;
       default: break;
     }
     out.fixed(p.value, decimals);

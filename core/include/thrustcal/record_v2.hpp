@@ -22,6 +22,21 @@
 //       81    32  monitor sag at each knot, 10 mV units (unused knots 0)
 //      113     2  CRC-16/CCITT-FALSE of bytes 0..112
 //
+// With the motor's dynamics (flags bit 1, gather_store's `dyn`; thrustcal/dynamics.hpp) the
+// copy is 128 bytes, the whole of its 128-byte position, and the CRC moves behind them:
+//
+//      113     1  operating points measured (1..8)
+//      114     2  lightest point, decigrams
+//      116     2  heaviest point, decigrams
+//      118     2  spin-up time constant at the lightest point, 0.1 ms
+//      120     2  ... at the heaviest
+//      122     2  spin-down time constant at the lightest point, 0.1 ms
+//      124     2  ... at the heaviest
+//      126     2  CRC-16/CCITT-FALSE of bytes 0..125
+//
+// A record without dynamics is byte for byte the 115-byte layout above. The flags byte says
+// where the CRC is; a damaged flags byte fails the CRC either way.
+//
 // Power-fail safety, v2 -> v2: a write goes to the copy that is NOT the newest valid one,
 // with the newest sequence + 1, in this order: body (offsets 0-1, 4-112), then the sequence
 // (2-3), then the CRC (113-114). Until the last CRC byte lands, the copy being written either
@@ -59,7 +74,9 @@ namespace tc {
 constexpr uint8_t kLayoutVersion2 = 2;
 constexpr uint8_t kRecordV2Magic = 0x5C;
 constexpr uint8_t kRecordV2SpareMagic = 0xC0;  // | owner slot: a spare copy in another slot
-constexpr uint16_t kRecordV2Bytes = 115;
+constexpr uint16_t kRecordV2Bytes = 115;     // without dynamics
+constexpr uint16_t kRecordV2DynBytes = 128;  // with the motor's dynamics (flags kV2HasDynamics)
+constexpr uint16_t kRecordV2MaxBytes = kRecordV2DynBytes;
 constexpr uint16_t kRecordV2CopyOffset = 512;  // copy B, from the slot start
 constexpr uint16_t kRecordV2SpareOffset = 128; // spare position j at 128 * (j + 1), j = 0..2
 constexpr uint16_t kRecordV2SeqOffset = 2;
@@ -69,13 +86,18 @@ constexpr uint8_t kNoSlot = 0xFF;
 // Copies the loader looks at per owner: own A (0), own B (1), spares in the other three
 // slots (2..4: copy 2 + j lives in host (owner + 1 + j) mod 4).
 constexpr uint8_t kV2Copies = 5;
-static_assert(kRecordV2Bytes <= 256, "a v2 record must fit in 256 bytes");
-static_assert(kRecordV2Bytes <= kRecordV2SpareOffset, "copy A must end before the spares");
-static_assert(kRecordV2SpareOffset * 3 + kRecordV2Bytes <= kRecordV2CopyOffset,
+static_assert(kRecordV2MaxBytes <= 256, "a v2 record must fit in 256 bytes");
+static_assert(kRecordV2MaxBytes <= kRecordV2SpareOffset, "copy A must end before the spares");
+static_assert(kRecordV2SpareOffset * 3 + kRecordV2MaxBytes <= kRecordV2CopyOffset,
               "the spares must end before copy B");
-static_assert(kRecordV2CopyOffset + kRecordV2Bytes <= kRecordBytes, "copy B must fit the slot");
+static_assert(kRecordV2CopyOffset + kRecordV2MaxBytes <= 640, "copy B must end before fly's parameters (640)");
 static_assert(17 + 3 * kV2MaxKnots + 2 == kRecordV2Bytes, "layout table and size disagree");
 static_assert(kMotorSlots == 4, "spare positions assume four slots");
+
+// Bytes of a copy whose flags byte (offset 5) is `flags`: CRC at the length - 2.
+inline uint16_t recordV2Length(uint8_t flags) {
+  return (flags & kV2HasDynamics) ? kRecordV2DynBytes : kRecordV2Bytes;
+}
 
 inline uint16_t copyAddressV2(uint8_t slot, uint8_t copy) {
   return static_cast<uint16_t>(slotAddress(slot) + (copy ? kRecordV2CopyOffset : 0));
@@ -104,13 +126,14 @@ bool isHostSlot(uint8_t slot) {
   return Storage::readByte(slotAddress(slot)) != kLayoutVersion1;
 }
 
-// Image of one copy (CRC included). The model must be finalized. Cannot fail. `magic`:
-// kRecordV2Magic for an own copy, spareMagic(owner) for a spare.
+// Image of one copy (CRC included): recordV2Length(image[5]) bytes, kRecordV2Bytes without
+// dynamics, kRecordV2DynBytes with (give kRecordV2MaxBytes of room). The model must be
+// finalized. Cannot fail. `magic`: kRecordV2Magic for an own copy, spareMagic(owner) for a spare.
 void serializeModelV2(const ModelV2& model, uint16_t sequence, uint8_t* image,
                       uint8_t magic = kRecordV2Magic);
-// Decodes one copy's image: kErased (version 0xFF), kBadVersion (other version or magic),
-// kBadCrc, kBadContent (the layout or a plausibility rule refused it: the rule in `why`,
-// may be null), kOk. `out` is cleared unless kOk.
+// Decodes one copy's image (recordV2Length(image[5]) bytes are read): kErased (version 0xFF),
+// kBadVersion (other version or magic), kBadCrc, kBadContent (the layout or a plausibility rule
+// refused it: the rule in `why`, may be null), kOk. `out` is cleared unless kOk.
 DecodeStatus parseModelV2(const uint8_t* image, ModelV2& out, uint16_t& sequence,
                           const RecordLimits& limits = RecordLimits(), Plausibility* why = nullptr,
                           uint8_t magic = kRecordV2Magic);
@@ -160,9 +183,9 @@ namespace record_v2_detail {
 template <class Storage>
 DecodeStatus readCopy(uint16_t addr, uint8_t magic, ModelV2& out, uint16_t& sequence,
                       const RecordLimits& limits, Plausibility* why) {
-  uint8_t image[kRecordV2Bytes];
-  for (uint16_t i = 0; i < kRecordV2Bytes; ++i)
-    image[i] = Storage::readByte(static_cast<uint16_t>(addr + i));
+  uint8_t image[kRecordV2MaxBytes];
+  const uint16_t length = recordV2Length(Storage::readByte(static_cast<uint16_t>(addr + 5)));
+  for (uint16_t i = 0; i < length; ++i) image[i] = Storage::readByte(static_cast<uint16_t>(addr + i));
   return parseModelV2(image, out, sequence, limits, why, magic);
 }
 
@@ -187,17 +210,19 @@ void put(uint16_t addr, uint8_t value, uint16_t& changed) {
   Storage::updateByte(addr, value);
 }
 
-// Writes one copy's image in the power-fail-safe order: body, sequence, CRC.
+// Writes one copy's image in the power-fail-safe order: body (the dynamics included), sequence,
+// CRC.
 template <class Storage>
 void writeImage(uint16_t addr, const uint8_t* image, uint16_t& changed) {
-  for (uint16_t i = 0; i < kRecordV2CrcOffset; ++i) {
+  const uint16_t length = recordV2Length(image[5]);
+  const uint16_t crc_at = static_cast<uint16_t>(length - 2);
+  for (uint16_t i = 0; i < crc_at; ++i) {
     if (i == kRecordV2SeqOffset || i == kRecordV2SeqOffset + 1) continue;
     put<Storage>(static_cast<uint16_t>(addr + i), image[i], changed);
   }
   for (uint16_t i = kRecordV2SeqOffset; i < kRecordV2SeqOffset + 2; ++i)
     put<Storage>(static_cast<uint16_t>(addr + i), image[i], changed);
-  for (uint16_t i = kRecordV2CrcOffset; i < kRecordV2Bytes; ++i)
-    put<Storage>(static_cast<uint16_t>(addr + i), image[i], changed);
+  for (uint16_t i = crc_at; i < length; ++i) put<Storage>(static_cast<uint16_t>(addr + i), image[i], changed);
 }
 
 // How much a failure reason tells: a copy whose CRC is right but whose content cannot be right
@@ -270,7 +295,7 @@ template <class Storage>
 RecordV2Write writeModelV2(uint8_t slot, const ModelV2& model,
                            const RecordLimits& limits = RecordLimits()) {
   RecordV2Write w;
-  uint8_t image[kRecordV2Bytes];
+  uint8_t image[kRecordV2MaxBytes];
   ModelV2 check = model;
   w.status = record_v2_detail::checkBeforeWrite(check, limits, w.why);
   if (w.status != WriteV2Status::kWritten) return w;
@@ -280,8 +305,9 @@ RecordV2Write writeModelV2(uint8_t slot, const ModelV2& model,
   if (now.copy == 0 || now.copy == 1) {
     // Same model already newest? Compare everything but the sequence and the CRC.
     const uint16_t base = copyAddressV2(slot, now.copy);
-    bool same = true;
-    for (uint16_t i = 0; same && i < kRecordV2CrcOffset; ++i) {
+    const uint16_t crc_at = static_cast<uint16_t>(recordV2Length(image[5]) - 2);
+    bool same = Storage::readByte(static_cast<uint16_t>(base + 5)) == image[5];
+    for (uint16_t i = 0; same && i < crc_at; ++i) {
       if (i == kRecordV2SeqOffset || i == kRecordV2SeqOffset + 1) continue;
       same = Storage::readByte(static_cast<uint16_t>(base + i)) == image[i];
     }

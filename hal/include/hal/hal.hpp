@@ -15,6 +15,9 @@ namespace hal {
 struct Clock {
   static void init();
   static uint32_t millis();
+  // Microseconds since init, 4 us resolution (Timer0's count within the millisecond); wraps
+  // after 71 minutes. For timing inside a measurement (gather_store's step logs).
+  static uint32_t micros();
   // Busy time passes asleep (idle mode) so the simulator can skip ahead.
   static void delayMs(uint16_t ms);
   // Sleeps (idle mode) until the next interrupt: at the latest the next 1 ms tick.

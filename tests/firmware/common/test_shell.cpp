@@ -173,4 +173,26 @@ TEST(ShellZeroIsStop, AGuardedRowWhoseLastArgumentIsZeroNeedsNoChecksum) {
   hal::fake::reset();
 }
 
+// fw::kArgText: a token taken as typed (fly's `param set NAME VALUE`), checked by the handler.
+void runSet(Calls& c, const fw::ArgValues& a) {
+  c.log.push_back(std::string("set ") + a.text[1] + " " + a.text[2] + " " + std::to_string(a.count));
+}
+const fw::ArgSpec kSet[] = {{"set", "set", 0, 0}, {"NAME", fw::kArgText, 0, 0}, {"VALUE", fw::kArgText, 0, 0}};
+const fw::Command<Calls> kTextTable[] = {{{"param", kSet, 3, 3, 0, "a value by name"}, runSet}};
+
+TEST(ShellText, AnArgumentTakenAsTypedReachesTheHandlerAndShowsItsNameInUsageAndHelp) {
+  hal::fake::reset();
+  Calls calls;
+  char line[] = "param set level_x_mg -39.1";
+  EXPECT_EQ(fw::dispatch(calls, kTextTable, line, fw::LineContext()), fw::ShellResult::kRan);
+  ASSERT_EQ(calls.log.size(), 1u);
+  EXPECT_EQ(calls.log[0], "set level_x_mg -39.1 3");
+  char short_line[] = "param set x";
+  hal::fake::takeOutput();
+  EXPECT_EQ(fw::dispatch(calls, kTextTable, short_line, fw::LineContext()), fw::ShellResult::kRejected);
+  EXPECT_EQ(hal::fake::takeOutput(), "error: usage: param set NAME VALUE\r\n");
+  fw::printHelp(kTextTable);
+  EXPECT_EQ(hal::fake::takeOutput(), "param set NAME VALUE  a value by name\r\n");
+}
+
 }  // namespace

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "fly_app.hpp"
+#include "params.hpp"
 #include "hal/fake.hpp"
 #include "hal/hal.hpp"
 #include "records_fixture.hpp"
@@ -97,6 +98,7 @@ class Fly : public ::testing::Test {
     app_->printBanner();
     calibrated_ = app_->loadCalibration();
     app_->start();
+    fly::Params::load(*app_);
     app_->startImu();
     app_->calibrateGyro();
   }

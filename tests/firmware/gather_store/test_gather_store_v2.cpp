@@ -240,8 +240,9 @@ TEST_F(GatherStoreV2, ShowDescribesAV2SlotAndItsPwmsMatchTheModel) {
   command("store v2");
   // when
   const Response out = command("show");
-  // then
-  ASSERT_EQ(out.lines.size(), 3u) << out.text();
+  // then (the last line: dynamics, not measured)
+  ASSERT_EQ(out.lines.size(), 4u) << out.text();
+  EXPECT_EQ(out.lines[3], "dynamics: not measured (dyn measures them)");
   EXPECT_EQ(out.lines[0],
             "motor 0 (EEPROM 0..1023): calibrated, model v2 (copy A, sequence 1; other copy "
             "erased (never calibrated))");

@@ -9,8 +9,10 @@
 #include <fmt/format.h>
 
 #include "plant/actuator.hpp"
+#include "plant/fidelity.hpp"
 #include "plant/sensors.hpp"
 #include "thrustcal/battery_monitor.hpp"
+#include "thrustcal/dynamics_fit.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/model_v2.hpp"
@@ -220,6 +222,29 @@ void sweepReadingError(const Sweep& high, const Sweep& low, MotorSummary& summar
   summary.sweep_reading_error_rms_pct = n ? std::sqrt(sum_sq / n) : 0.0;
 }
 
+}  // namespace
+
+tc::MotorDynamics plantDynamics(const plant::ActuatorParams& motor, double scale) {
+  constexpr double kBusV = 11.5;
+  const plant::Actuator a(motor);
+  double max_g = 0;
+  for (int p = 1000; p <= 1800; p += 5) max_g = std::max(max_g, a.steadyState(p, kBusV).thrust_g);
+  tc::DynamicsLawFit law;
+  for (int i = 1; i <= 5; ++i) {  // dyn's points: 20..80 % of the force, stepped +-10 us here
+    const double want_g = max_g * (0.05 + 0.15 * i);
+    int pulse = 1000;
+    while (pulse < 1800 && a.steadyState(pulse, kBusV).thrust_g < want_g) pulse += 5;
+    const double up = scale * plant::stepTimeConstant_s(motor, kBusV, pulse - 10, pulse + 10);
+    const double down = scale * plant::stepTimeConstant_s(motor, kBusV, pulse + 10, pulse - 10);
+    law.add(static_cast<float>(want_g), static_cast<float>(up), static_cast<float>(down));
+  }
+  tc::MotorDynamics d;
+  if (!law.build(d)) throw std::runtime_error(motor.name + ": the plant's time constants make no storable law");
+  return d;
+}
+
+namespace {
+
 // Motor `i` of the config: its two sweeps (LiPo, bench supply) and every model fitted to them.
 std::unique_ptr<MotorModels> calibrateMotor(const AccuracyConfig& config, size_t i,
                                             const plant::ActuatorParams& nominal, MotorSummary& summary) {
@@ -227,6 +252,12 @@ std::unique_ptr<MotorModels> calibrateMotor(const AccuracyConfig& config, size_t
   const plant::ActuatorParams params = plant::makeVaried(nominal, seed, config.variation);
   const std::string what = fmt::format("motor {} (seed {})", i, seed);
   SweepSpec spec = config.sweep;
+  if (config.lag_correction) {
+    spec.lag_dynamics = plantDynamics(params, config.lag_tau_scale);
+    const plant::LoadCellParams cell;
+    spec.lag_bench.stages = static_cast<uint8_t>(cell.lowpass_tau_s.size());
+    spec.lag_bench.tau_01ms = tc::secondsTo01ms(static_cast<float>(cell.lowpass_tau_s[0]));
+  }
   spec.noise_seed = seed * 2 + 1;
   const Sweep high = simulateSweep(params, lipoAt(config.cal_high_v), spec);
   spec.noise_seed = seed * 2 + 2;

@@ -161,7 +161,7 @@ void registerCommands(CLI::App& app) {
   add(*bench, o, "calibration",
       "simulated sweep time and stored-curve error of gather_store in simavr: thesis 200 ms steps "
       "vs a v2 sweep",
-      [](const Options& o) { return std::vector<Section>{calibrationSection(o.paths)}; });
+      [](const Options& o) { return std::vector<Section>{calibrationSection(o.paths, !o.quick)}; });
   add(*bench, o, "liftoff",
       "read_run in simavr on the tethered quad for a simulated minute on a draining pack: thesis "
       "vs v2 records",
@@ -182,6 +182,10 @@ void registerCommands(CLI::App& app) {
       "simulated seconds per wall second: read_run, fly on the gimbal, and a firmware with "
       "phase-correct PWM on INT4/INT5 (as MultiWii 2.4 on a Mega)",
       [](const Options& o) { return std::vector<Section>{speedSection(o.paths)}; });
+  add(*bench, o, "dynamics",
+      "each motor's spin-up and spin-down time constants as gather_store's dyn measures them in simavr, "
+      "against the plant's own (stock motors and swap parts)",
+      [](const Options& o) { return std::vector<Section>{dynamicsSection(o.paths, o.quick)}; });
   addReport(*bench);
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
       [](const Options& o) {
@@ -189,12 +193,13 @@ void registerCommands(CLI::App& app) {
         all.push_back(accuracySection(accuracyConfig(o)));
         all.push_back(computeSection(o.paths));
         all.push_back(footprintSection(o.paths));
-        all.push_back(calibrationSection(o.paths));
+        all.push_back(calibrationSection(o.paths, !o.quick));
         all.push_back(liftoffSection(o.paths, o.quick));
         all.push_back(runtimeSection(o.paths));
         all.push_back(safetySection(o.paths));
         all.push_back(flySection(o.paths));
         all.push_back(speedSection(o.paths));
+        all.push_back(dynamicsSection(o.paths, o.quick));
         return all;
       });
 }

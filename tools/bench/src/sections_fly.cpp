@@ -242,6 +242,7 @@ void setUpMode(sim::AirframeRig& rig, sim::Console& con, const FlyMode& mode) {
   command(con, "layout plus");
   command(con, "thrust 1200");
   for (const std::string& line : mode.setup) command(con, line);
+  sim::flyDisarmedPaths(con);  // `param save`'s stack counts in the figure flyDeepestPaths reads
 }
 
 void arm(sim::Console& con, const FlyMode& mode) {

@@ -39,6 +39,7 @@
 #include "sim/scenarios.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/model_v2.hpp"
+#include "calibration_runs.hpp"
 #endif
 
 namespace bench {
@@ -67,7 +68,7 @@ Table notAvailable(const std::string& title, const std::string& why) {
 
 #ifndef THRUSTCAL_BENCH_HAVE_SIM
 
-Section calibrationSection(const AvrPaths&) {
+Section calibrationSection(const AvrPaths&, bool) {
   Section s;
   s.key = "calibration";
   const std::string why = "tools/sim (thrustcal_sim) is not part of this build: no gather scenario";
@@ -88,9 +89,6 @@ Section liftoffSection(const AvrPaths&, bool) {
 
 namespace {
 
-const std::vector<uint64_t> kSeeds = {11, 12, 13, 14};
-const std::string kPreset = "kv1100_9x4.7";
-constexpr double kVariation = 0.03;
 
 uint16_t monitorReading_mv(double bus_v) {
   const plant::BatterySensorParams sensor;
@@ -98,11 +96,6 @@ uint16_t monitorReading_mv(double bus_v) {
   return tc::BatteryMonitor().millivoltsFromCounts(static_cast<uint16_t>(counts));
 }
 
-struct CurveError {
-  double max_pct = 0, rms_pct = 0;
-  int worst_g = 0;  // gram of the largest error
-  double max_flight_pct = 0;  // largest error over kFlightLoG..kBandHiG
-};
 
 template <class PwmFor>
 CurveError curveError(const plant::Bench& bench, PwmFor pwm_for) {
@@ -141,18 +134,6 @@ auto v2PwmFor(const plant::Bench& bench, const tc::ModelV2& model) {
   };
 }
 
-struct MethodRun {
-  std::string key, name;
-  int step_us = 10, settle_ms = 200;
-  sim::GatherResult gather;
-  bool settle_auto = false;           // settle_ms is the cap
-  std::string store_v2;               // v2: how the model was stored
-  std::vector<CurveError> errors;     // per motor, first sweep's bench
-  std::vector<tc::ModelV2> v2;        // v2 only: decoded from the board's EEPROM
-  std::vector<uint8_t> eeprom;        // what read_run flies
-  std::vector<double> sweep_s;        // per motor, first sweep (simulated)
-  double sweep_s_max = 0, sweep_s_mean = 0;
-};
 
 // The calibrations, run once per `thrustcal bench` call and shared by sections 4 and 5.
 struct CalibrationRuns {
@@ -170,8 +151,10 @@ void summarizeSweeps(MethodRun& m) {
   }
 }
 
-MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::string& name,
-                     int step_us, int settle_ms, sim::GatherModel model, bool settle_auto = false) {
+}  // namespace
+
+MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::string& name, int step_us,
+                     int settle_ms, sim::GatherModel model, bool settle_auto, const std::vector<uint8_t>& eeprom) {
   MethodRun m;
   m.key = key;
   m.name = name;
@@ -190,6 +173,7 @@ MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::s
   o.settle_ms = settle_ms;
   o.settle_auto = settle_auto;
   o.model = model;
+  o.eeprom = eeprom;
   // Typed into the simulated UART, simulated time only: the figures are reproducible byte for
   // byte (the pty path of `sim gather` paces idle time by the wall clock) and 4x quicker.
   o.link = sim::GatherLink::kInProcess;
@@ -215,6 +199,8 @@ void checkStoredV2(MethodRun& m) {
     m.v2.push_back(model);
   }
 }
+
+namespace {
 
 // Cached per gather_store image: `bench all` runs the gathers once for sections 4 and 5.
 CalibrationRuns& calibrationRuns(const AvrPaths& paths) {
@@ -267,6 +253,8 @@ CalibrationRuns& calibrationRuns(const AvrPaths& paths) {
   return runs;
 }
 
+}  // namespace
+
 nlohmann::json methodJson(const MethodRun& m) {
   nlohmann::json j = {{"name", m.name}, {"step_us", m.step_us}, {"settle_ms", m.settle_ms},
                       {"settle_auto", m.settle_auto},
@@ -289,6 +277,8 @@ nlohmann::json methodJson(const MethodRun& m) {
   j["curve_error_rms_pct"] = std::sqrt(rms);
   return j;
 }
+
+namespace {
 
 struct LiftoffFigures {
   double rms_pct = 0, max_pct = 0, drift_pct = 0, max_tilt_deg = 0, bus_v_start = 0, bus_v_end = 0;
@@ -358,7 +348,7 @@ LiftoffFigures flyLiftoff(const std::string& elf, const MethodRun& m, double soc
 
 }  // namespace
 
-Section calibrationSection(const AvrPaths& paths) {
+Section calibrationSection(const AvrPaths& paths, bool fast_sweeps) {
   Section s;
   s.key = "calibration";
   const std::string title = fmt::format(
@@ -387,6 +377,13 @@ Section calibrationSection(const AvrPaths& paths) {
     s.targets.push_back({fmt::format("4. calibration, {}", m->name.substr(0, m->name.find(','))),
                          fmt::format("{:.1f} s, max {:.2f} %", m->sweep_s_max, worst_flight),
                          "<= 60 s, max <= 1 % (100-450 g)", met});
+  }
+  if (fast_sweeps) {
+    try {
+      addFastSweepRows(paths, runs.v2_default, t, s.json, s.targets);
+    } catch (const std::exception& e) {
+      t.addRow({std::string("fast sweeps: not available: ") + e.what(), "-", "-", "-", "-", "-", "-"});
+    }
   }
   t.addNote("target judged over 100-450 g, benchmark 1's command range; 50-450 g shown for the low end");
   t.addNote("simulated s: the longest first sweep over the four motors (gather_store's own clock in simavr)");

@@ -8,6 +8,7 @@
 #include "thrustcal/load_cell.hpp"
 #include "thrustcal/limits.hpp"
 #include "thrustcal/median_filter.hpp"
+#include "thrustcal/sweep_lag.hpp"
 #include "thrustcal/sweep_rules.hpp"
 
 namespace bench {
@@ -52,6 +53,14 @@ uint16_t settleByMeasurement(plant::Bench& bench, const SweepSpec& spec, uint16_
   return counts;
 }
 
+// The corrector is one step behind: the reading just taken in, the one before it corrected.
+void correctLastButOne(tc::SweepLagCorrector& lag, double edge_s, double read_s, std::vector<SweepPoint>& points) {
+  const SweepPoint& p = points.back();
+  tc::SweepPointV2 out;
+  if (lag.push(static_cast<float>(edge_s), static_cast<float>(read_s), {p.pwm_us, p.force_dg, p.vbat_mv}, out))
+    points[points.size() - 2].force_dg = out.force_dg;
+}
+
 }  // namespace
 
 plant::BatteryParams lipoAt(double rest_v) {
@@ -81,7 +90,11 @@ Sweep simulateSweep(const plant::ActuatorParams& motor, const plant::BatteryPara
   const tc::BatteryMonitor monitor;
 
   const double settle_s = spec.settle_ms / 1000.0;
+  const bool correct = !spec.settle_auto && spec.lag_dynamics.isPresent();
+  tc::SweepLagCorrector lag;
+  lag.start(spec.lag_dynamics, spec.lag_bench);
   for (int pwm = spec.pwm_min_us; pwm <= spec.pwm_max_us; pwm += spec.step_us) {
+    const double edge_s = bench.time_s();
     bench.actuator().holdPulse(pwm);
     if (spec.settle_auto) {
       settleByMeasurement(bench, spec, q4);
@@ -98,6 +111,12 @@ Sweep simulateSweep(const plant::ActuatorParams& motor, const plant::BatteryPara
     pt.true_thrust_g = bench.actuator().thrust_g();
     pt.true_bus_v = bench.busVoltage_v();
     sweep.points.push_back(pt);
+    if (correct) correctLastButOne(lag, edge_s, bench.time_s(), sweep.points);
+  }
+  if (correct) {
+    tc::SweepPointV2 out;
+    if (lag.finish(out)) sweep.points.back().force_dg = out.force_dg;
+    sweep.largest_correction_g = lag.largestCorrectionDg() / 10.0;
   }
   bench.actuator().holdPulse(spec.pwm_min_us);
   sweep.simulated_s = bench.time_s();

@@ -1,4 +1,4 @@
-// `thrustcal board flash|eeprom put|eeprom get|calibrate|liftoff`.
+// `thrustcal board flash|eeprom put|eeprom get|calibrate|liftoff` (and params: params_cli.cpp).
 #include "board/cli.hpp"
 #include "hal/board.hpp"
 #include "thrustcal/record_limits.hpp"
@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "board/calibrate.hpp"
+#include "board/cli_support.hpp"
 #include "board/liftoff.hpp"
 #include "board/transfer.hpp"
 #include "lab/analysis.hpp"
@@ -29,25 +30,6 @@ namespace board {
 namespace {
 
 namespace fs = std::filesystem;
-
-void info(const std::string& line) {
-  std::fprintf(stderr, "board: %s\n", line.c_str());
-  std::fflush(stderr);
-}
-
-// Runs `body`; any error becomes a message and exit code 1 (130 after Ctrl-C).
-template <class F>
-void guarded(F&& body) {
-  try {
-    body();
-  } catch (const Interrupted& e) {
-    std::fprintf(stderr, "\nthrustcal board: interrupted: %s\n", e.what());
-    std::exit(130);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "\nthrustcal board: error: %s\n", e.what());
-    std::exit(1);
-  }
-}
 
 std::string fmtDuration(double s) {
   if (!std::isfinite(s) || s < 0) s = 0;
@@ -467,13 +449,15 @@ void registerCommands(CLI::App& app) {
       "board",
       "A Mega2560 on a serial port (a real board on USB, or `thrustcal sim board`): flash images\n"
       "through its stock bootloader, put and get its EEPROM through the firmware, calibrate a\n"
-      "motor on the bench, fly the lift-off. Every command resets the board when it opens the\n"
-      "port (as avrdude and the Arduino IDE do) and waits for the firmware's prompt.");
+      "motor on the bench, fly the lift-off, move fly's saved parameters as a text file. Every\n"
+      "command resets the board when it opens the port (as avrdude and the Arduino IDE do) and\n"
+      "waits for the firmware's prompt.");
   board->require_subcommand(1);
   addFlash(*board);
   addEeprom(*board);
   addCalibrate(*board);
   addLiftoff(*board);
+  addParams(*board);
 }
 
 }  // namespace board

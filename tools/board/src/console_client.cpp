@@ -47,6 +47,7 @@ const char* imageName(Image image) {
   switch (image) {
     case Image::kGatherStore: return "gather_store";
     case Image::kReadRun: return "read_run";
+    case Image::kFly: return "fly";
     default: return "an unknown image";
   }
 }
@@ -107,10 +108,10 @@ std::vector<std::string> ConsoleClient::waitForBoot(double timeout_s) {
       remember(l);
       lines.push_back(l);
     }
-    for (const char* p : {"gs> ", "rr> "}) {
+    for (const char* p : {"gs> ", "rr> ", "fly> "}) {
       if (buffer_ == p) {
         prompt_ = p;
-        image_ = prompt_ == "gs> " ? Image::kGatherStore : Image::kReadRun;
+        image_ = prompt_ == "gs> " ? Image::kGatherStore : prompt_ == "rr> " ? Image::kReadRun : Image::kFly;
         buffer_.clear();
         return lines;
       }
@@ -118,8 +119,8 @@ std::vector<std::string> ConsoleClient::waitForBoot(double timeout_s) {
     if (interruptRequested()) throw Interrupted("interrupted while waiting for the board to boot");
     if (since(t0) > timeout_s)
       throw BoardTimeout(fmt::format(
-          "{}: no prompt (gs> or rr>) within {:.0f} s of the reset; the board is not running "
-          "gather_store or read_run (flash one: thrustcal board flash --port {} "
+          "{}: no prompt (gs>, rr> or fly>) within {:.0f} s of the reset; the board is not running "
+          "gather_store, read_run or fly (flash one: thrustcal board flash --port {} "
           "build/avr/firmware/gather_store/gather_store.hex), or this is not the board's port. "
           "Received:\n{}",
           port_.path(), timeout_s, port_.path(), tail()));

@@ -42,7 +42,7 @@ std::vector<bool> givenBytes(const std::string& text, std::size_t size, const st
   return given;
 }
 
-// Opens the port (a reset) and waits for gather_store or read_run; `why` says what the board
+// Opens the port (a reset) and waits for gather_store, read_run or fly; `why` says what the board
 // must answer for.
 std::unique_ptr<SerialPort> openBooted(const std::string& port, const char* why,
                                        std::unique_ptr<ConsoleClient>& con, double timeout_s) {
@@ -51,8 +51,8 @@ std::unique_ptr<SerialPort> openBooted(const std::string& port, const char* why,
   try {
     con->waitForBoot(timeout_s);
   } catch (const BoardTimeout& e) {
-    throw BoardTimeout(fmt::format("{}\n{} needs gather_store or read_run running on the board "
-                                   "(they answer `eeprom crc` and `eeprom dump`)",
+    throw BoardTimeout(fmt::format("{}\n{} needs gather_store, read_run or fly running on the "
+                                   "board (they answer `eeprom crc` and `eeprom dump`)",
                                    e.what(), why));
   }
   return sp;
@@ -85,6 +85,62 @@ std::string avrdudeDiagnosis(const AvrdudeRun& run, const std::string& port, dou
 }
 
 }  // namespace
+
+// ---- writing through the bootloader, verifying through the firmware -------------------------
+
+AvrdudeRun writeEepromHex(const std::string& port, const std::string& hex_text, const std::string& source,
+                          const std::string& what, const TransferOptions& o) {
+  char tmpl[] = "/tmp/thrustcal_eeprom_XXXXXX";
+  const int fd = ::mkstemp(tmpl);
+  if (fd < 0) throw std::runtime_error("cannot make a temporary file in /tmp");
+  ::close(fd);
+  const std::string tmp = tmpl;
+  struct Remove {
+    std::string path;
+    ~Remove() { std::remove(path.c_str()); }
+  } remove{tmp};
+  std::ofstream(tmp) << hex_text;
+  auto args = avrdudeArgs(port);
+  args.push_back("-V");  // avrdude's verify reads through the broken bootloader read
+  args.push_back("-U");
+  args.push_back("eeprom:w:" + tmp + ":i");
+  const AvrdudeRun run = runAvrdude(args, o.avrdude_timeout_s);
+  if (run.exit_code != 0 || run.timed_out)
+    throw AvrdudeError(fmt::format("{}: {}; the EEPROM may be partly written: run `thrustcal board {}` again. "
+                                   "avrdude said:\n{}",
+                                   source, avrdudeDiagnosis(run, port, o.avrdude_timeout_s), what,
+                                   lastLines(run.output)));
+  return run;
+}
+
+Verified verifyEeprom(const std::string& port, const std::vector<uint8_t>& want, const std::string& what,
+                      const TransferOptions& o) {
+  const auto t0 = Clock::now();
+  std::unique_ptr<ConsoleClient> con;
+  std::vector<std::string> boot;
+  auto sp = std::make_unique<SerialPort>(port);
+  con = std::make_unique<ConsoleClient>(*sp);
+  try {
+    boot = con->waitForBoot(o.boot_timeout_s);
+  } catch (const BoardTimeout& e) {
+    throw BoardTimeout(fmt::format("{}\n{} (to verify what it wrote) needs gather_store, read_run or fly "
+                                   "running on the board",
+                                   e.what(), what));
+  }
+  Verified v;
+  v.crcs = boardEepromCrc(*con);
+  v.image = con->image();
+  v.boot = boot;
+  v.wall_s = since(t0);
+  const EepromCrcs expect = EepromCrcs::of(want);
+  if (v.crcs != expect)
+    throw std::runtime_error(fmt::format(
+        "{}: verify FAILED: the board's EEPROM differs in {} (board: {}; image: {}); write it "
+        "again, and if it fails again the EEPROM or the bootloader is at fault",
+        port, slotsDiffering(expect, v.crcs), v.crcs.text(), expect.text()));
+  say(o.progress, fmt::format("verified through {}: {}", imageName(v.image), v.crcs.text()));
+  return v;
+}
 
 // ---- CRCs and files ------------------------------------------------------------------------
 
@@ -223,7 +279,6 @@ FlashResult flashImage(const std::string& port, const std::string& hex_path,
 
 EepromPutResult putEeprom(const std::string& port, const std::string& hex_path,
                           const TransferOptions& o) {
-  const double timeout_s = o.avrdude_timeout_s;
   const Progress& progress = o.progress;
   const auto t0 = Clock::now();
   requirePort(port);
@@ -256,43 +311,42 @@ EepromPutResult putEeprom(const std::string& port, const std::string& hex_path,
   }
   r.prepare_wall_s = since(t0);
   // The whole image, so avrdude has nothing to merge with what the broken read returns.
-  char tmpl[] = "/tmp/thrustcal_eeprom_XXXXXX";
-  const int fd = ::mkstemp(tmpl);
-  if (fd < 0) throw std::runtime_error("cannot make a temporary file in /tmp");
-  ::close(fd);
-  const std::string tmp = tmpl;
-  struct Remove {
-    std::string path;
-    ~Remove() { std::remove(path.c_str()); }
-  } remove{tmp};
-  hex::writeIntelHexFile(tmp, image);
-  auto args = avrdudeArgs(port);
-  args.push_back("-V");
-  args.push_back("-U");
-  args.push_back("eeprom:w:" + tmp + ":i");
   say(progress, fmt::format("writing {} EEPROM bytes through the bootloader on {} (a real "
                             "board takes ~3.3 ms per byte: ~14 s)",
                             hal::kEepromBytes, port));
-  r.avrdude = runAvrdude(args, timeout_s);
-  if (r.avrdude.exit_code != 0 || r.avrdude.timed_out)
-    throw AvrdudeError(fmt::format("{}: {}; the EEPROM may be partly written: run `thrustcal "
-                                   "board eeprom put` again. avrdude said:\n{}",
-                                   hex_path, avrdudeDiagnosis(r.avrdude, port, timeout_s),
-                                   lastLines(r.avrdude.output)));
+  r.avrdude = writeEepromHex(port, hex::formatIntelHex(image), hex_path, "eeprom put", o);
   r.written = true;
-  const auto tv = Clock::now();
-  std::unique_ptr<ConsoleClient> con;
-  auto sp = openBooted(port, "eeprom put (to verify what it wrote)", con, o.boot_timeout_s);
-  r.crcs = boardEepromCrc(*con);
-  r.verify_wall_s = since(tv);
-  const EepromCrcs want = EepromCrcs::of(image);
-  if (r.crcs != want)
-    throw std::runtime_error(fmt::format(
-        "{}: verify FAILED: the board's EEPROM differs in {} (board: {}; image: {}); write it "
-        "again, and if it fails again the EEPROM or the bootloader is at fault",
-        port, slotsDiffering(want, r.crcs), r.crcs.text(), want.text()));
+  const Verified v = verifyEeprom(port, image, "eeprom put", o);
+  r.crcs = v.crcs;
+  r.verify_wall_s = v.wall_s;
   r.wall_s = since(t0);
-  say(progress, fmt::format("verified through {}: {}", imageName(con->image()), r.crcs.text()));
+  return r;
+}
+
+EepromRangeResult putEepromRange(const std::string& port, const std::vector<uint8_t>& image, std::size_t first,
+                                 std::size_t count, const std::string& what, const TransferOptions& o) {
+  if (image.size() != kEepromBytes || first % 16 != 0 || count % 16 != 0 || first + count > kEepromBytes)
+    throw std::invalid_argument(fmt::format("EEPROM range {}..{} is not whole 16-byte records", first,
+                                            first + count));
+  const auto t0 = Clock::now();
+  requirePort(port);
+  findAvrdude();
+  EepromRangeResult r;
+  std::string part;
+  std::istringstream all(hex::formatIntelHex(image));
+  for (std::string line; std::getline(all, line);) {
+    const std::size_t addr = std::stoul(line.substr(3, 4), nullptr, 16);
+    if (line.substr(7, 2) == "01" || (line.substr(7, 2) == "00" && addr >= first && addr < first + count))
+      part += line + "\n";
+  }
+  say(o.progress, fmt::format("writing EEPROM bytes {}..{} through the bootloader on {} (nothing else)", first,
+                              first + count - 1, port));
+  r.avrdude = writeEepromHex(port, part, what, what, o);
+  const Verified v = verifyEeprom(port, image, what, o);
+  r.crcs = v.crcs;
+  r.image = v.image;
+  r.boot = v.boot;
+  r.wall_s = since(t0);
   return r;
 }
 

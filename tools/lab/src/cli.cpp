@@ -213,6 +213,11 @@ void addGenerate(CLI::App* lab) {
       ->capture_default_str();
   g->add_option("--settle-s", gen->settle_s, "seconds per PWM point (0: the hidden effect's default)")
       ->capture_default_str();
+  g->add_flag("--bench-filter", gen->bench_filter,
+              "read the force through the plant's load-cell low-pass (three 30 ms stages), as a bench does");
+  g->add_option("--noise-lag1", gen->noise_lag1,
+                "the noise's lag-1 autocorrelation from row to row (AR(1): a filtered reading), 0..0.95")
+      ->capture_default_str();
   auto layout = std::make_shared<std::string>("project");
   auto stand = std::make_shared<StandLayout>();
   g->add_option("--layout", *layout,

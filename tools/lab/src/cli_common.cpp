@@ -27,6 +27,9 @@ void addCommon(CLI::App* cmd, Common& c) {
       ->capture_default_str();
   cmd->add_option("--report", c.report_dir, "write plots (PNG+SVG) and report.md into this directory");
   cmd->add_flag("--json", c.json_out, "print JSON instead of text");
+  cmd->add_option("--fix", c.fixes,
+                  "hold a parameter at a known value instead of fitting it, NAME=VALUE, repeatable (a bench's own "
+                  "filter: --fix tau_cell_s=0.03 --fix cell_stages=3)");
   cmd->add_flag("--no-motor-split", c.no_motor_split, "one run per file even with a motor column");
 }
 
@@ -57,13 +60,19 @@ Dataset load(const Common& c, std::vector<std::string>& warnings, bool collapse_
   return d;
 }
 
+ModelSpec specOf(const Common& c) {
+  ModelSpec spec = parseSpec(c.model);
+  for (const auto& f : c.fixes) fixParameter(spec, f);
+  return spec;
+}
+
 json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 json paramsJson(const FitResult& f) {
   json a = json::array();
   for (const auto& p : f.params)
     a.push_back({{"name", p.name}, {"unit", p.unit}, {"effect", p.effect}, {"value", num(p.value)},
-                 {"sigma", num(p.sigma)}});
+                 {"sigma", num(p.sigma)}, {"fixed", p.fixed}});
   return a;
 }
 
@@ -116,9 +125,7 @@ std::string fmtSigma(const Param& p) {
 void printFit(const FitResult& f, const NoiseEstimate* noise) {
   std::printf("fit: RMSE %.3f g (%.2f %% of the largest force), max %.2f g (%.2f %%), %d parameters, BIC %.1f, AIC %.1f\n",
               f.rmse_g, f.rmse_pct, f.max_g, f.max_pct, f.k, f.bic, f.aic);
-  if (noise)
-    std::printf("noise floor: %s, from the data (%zu contrasts of neighbouring rows%s)\n", describe(*noise).c_str(),
-                noise->contrasts, noise->features ? fmt::format(", {} kinks left out", noise->features).c_str() : "");
+  if (noise) std::printf("noise floor: %s\n", floorText(*noise).c_str());
   std::printf("parameters:\n");
   int curve = 0;
   for (const auto& p : f.params) {
@@ -126,7 +133,7 @@ void printFit(const FitResult& f, const NoiseEstimate* noise) {
       ++curve;
       continue;
     }
-    std::printf("  %-20s %-28s (%s)\n", p.name.c_str(), fmtSigma(p).c_str(), p.effect.c_str());
+    std::printf("  %-20s %-28s (%s%s)\n", p.name.c_str(), fmtSigma(p).c_str(), p.effect.c_str(), p.fixed ? ", held" : "");
   }
   if (curve) std::printf("  + %d curve coefficients c1..c%d [g] (in --json)\n", curve, curve);
   for (const auto& w : f.warnings) std::printf("  note: %s\n", w.c_str());
@@ -151,15 +158,56 @@ std::string commandLine(const std::string& sub, const Common& c, const std::vect
   for (const auto& m : c.maps) s += " --map '" + m + "'";
   s += " --model '" + c.model + "'";
   if (!c.where.empty()) s += " --where '" + c.where + "'";
+  for (const auto& f : c.fixes) s += " --fix '" + f + "'";
   for (const auto& a : adds) s += " --add '" + a + "'";
   return s;
 }
 
+std::string floorText(const NoiseEstimate& n) {
+  if (!n.known()) return describe(n);
+  if (n.method == "pure_error")
+    return fmt::format("{}, pure error: the scatter within {} set points' steady parts ({} of their {} rows), "
+                       "lag-1 autocorrelation {:.2f} (successive differences alone {:.3g} g, neighbouring rows as if "
+                       "independent {:.3g} g)",
+                       describe(n), n.setpoints, n.steady_rows, n.setpoint_rows, n.lag1, n.successive_g,
+                       n.uncorrected_g);
+  return fmt::format("{}, from the data ({} contrasts of neighbouring rows{}), lag-1 autocorrelation {:.2f}{}",
+                     describe(n), n.contrasts, n.features ? fmt::format(", {} kinks left out", n.features) : "",
+                     n.lag1, n.lag1 > 0 ? fmt::format(" ({:.3g} g as if independent)", n.uncorrected_g) : "");
+}
+
 json noiseJson(const NoiseEstimate& n) {
-  return {{"method", "neighbouring rows: contrasts of four neighbours orthogonal to a quadratic in the PWM, the "
-                     "logged conditions regressed out (docs/lab.md)"},
+  const bool pure = n.method == "pure_error";
+  return {{"method", pure ? "pure error: the pooled scatter within repeated set points' steady parts, corrected for "
+                            "correlated samples (docs/lab.md)"
+                          : "neighbouring rows: contrasts of four neighbours orthogonal to a quadratic in the PWM, the "
+                            "logged conditions regressed out, corrected for correlated samples (docs/lab.md)"},
+          {"estimator", n.method}, {"assumption", n.assumption}, {"lag1", num(n.lag1)},
+          {"uncorrected_g", num(n.uncorrected_g)}, {"successive_g", num(n.successive_g)},
+          {"setpoints", n.setpoints}, {"steady_rows", n.steady_rows}, {"setpoint_rows", n.setpoint_rows},
           {"contrasts", n.contrasts}, {"features_left_out", n.features}, {"dof", num(n.dof)},
           {"conditions", n.conditions}, {"note", n.note}, {"why_not", n.why_not}};
+}
+
+json lackOfFitJson(const LackOfFit& l) {
+  return {{"tested", l.tested}, {"f", num(l.f)}, {"dof1", l.dof1}, {"dof2", num(l.dof2)}, {"p_value", num(l.p_value)},
+          {"significant", l.significant}, {"setpoint_rms_g", num(l.setpoint_rms_g)}, {"excess_g", num(l.excess_g)},
+          {"text", l.text}, {"why_not", l.why_not}};
+}
+
+json dynamicsJson(const std::vector<MotorDynamics>& dynamics) {
+  json a = json::array();
+  for (const auto& d : dynamics)
+    a.push_back({{"motor", d.motor.empty() ? json(nullptr) : json(d.motor)}, {"tau_up_s", num(d.tau_up_s)},
+                 {"tau_up_sigma_s", num(d.tau_up_sigma_s)}, {"tau_down_s", num(d.tau_down_s)},
+                 {"tau_down_sigma_s", num(d.tau_down_sigma_s)},
+                 {"spin_down", d.asymmetry > 0 ? "slower" : d.asymmetry < 0 ? "faster" : "alike"}, {"text", d.text}});
+  return a;
+}
+
+void printAssessmentExtras(const Assessment& a) {
+  if (a.lack_of_fit.tested) std::printf("lack of fit: %s\n", a.lack_of_fit.text.c_str());
+  for (const auto& d : a.dynamics) std::printf("dynamics: %s\n", d.text.c_str());
 }
 
 json regionsJson(const std::vector<Region>& regions) {
@@ -189,6 +237,8 @@ void addVerdictJson(json& j, const Assessment& d) {
   j["noise_g"] = num(d.noise.sigma_g);
   j["noise_g_ci"] = known ? json::array({d.noise.lo_g, d.noise.hi_g}) : json(nullptr);
   j["noise"] = noiseJson(d.noise);
+  j["noise"]["lack_of_fit"] = lackOfFitJson(d.lack_of_fit);
+  j["dynamics"] = dynamicsJson(d.dynamics);
   j["verdict"] = verdictName(d.verdict);
   j["verdict_text"] = d.verdict_text;
   j["unexplained_g"] = num(d.unexplained_g);

@@ -26,7 +26,11 @@ struct Common {
   std::string holdout = "none";
   bool no_motor_split = false;
   std::string where;
+  std::vector<std::string> fixes;  // --fix NAME=VALUE
 };
+
+// The model SPEC with the --fix values held.
+ModelSpec specOf(const Common& c);
 
 void addCommon(CLI::App* cmd, Common& c);
 
@@ -62,7 +66,17 @@ void printReport(const ReportFiles& rep);
 
 std::string commandLine(const std::string& sub, const Common& c, const std::vector<std::string>& adds);
 
+// The noise floor in words: its value, the estimator and what it saw.
+std::string floorText(const NoiseEstimate& n);
+
 json noiseJson(const NoiseEstimate& n);
+
+json lackOfFitJson(const LackOfFit& l);
+
+json dynamicsJson(const std::vector<MotorDynamics>& dynamics);
+
+// The lack-of-fit test and each motor's dynamics, a line each (when there are any).
+void printAssessmentExtras(const Assessment& a);
 
 json regionsJson(const std::vector<Region>& regions);
 

@@ -81,6 +81,7 @@ void printDiagnosis(const Diagnosis& d, const Dataset& data, const Common& c) {
   printCauses(d);
   printUntested(d.variables);
   printEvidence(d);
+  printAssessmentExtras(d);
   if (!d.regions.empty()) std::printf("where the residual is:\n");
   for (const auto& r : d.regions) std::printf("  - %s\n", r.text.c_str());
   std::printf("verdict: %s\n", d.verdict_text.c_str());
@@ -90,7 +91,7 @@ void printDiagnosis(const Diagnosis& d, const Dataset& data, const Common& c) {
 int runDiagnose(const Common& c) {
   std::vector<std::string> warnings;
   const Dataset data = load(c, warnings, /*collapse_warnings=*/false);
-  const ModelSpec spec = parseSpec(c.model);
+  const ModelSpec spec = specOf(c);
   const Diagnosis d = diagnose(data, spec, parseHoldout(c.holdout));
   ReportFiles rep;
   if (!c.report_dir.empty()) {
@@ -141,7 +142,7 @@ void printLadder(const std::vector<LadderStep>& steps, const Dataset& data, cons
   const NoiseEstimate& noise = steps.back().assessment.noise;
   std::printf("error ladder on %zu samples in %zu run(s); BIC = n ln(RSS/n) + k ln n, an effect earns its\n"
               "parameters when BIC falls by more than 2; noise floor %s\n\n",
-              data.rows(), data.runs(), describe(noise).c_str());
+              data.rows(), data.runs(), floorText(noise).c_str());
   std::printf("%-4s %-34s %4s %10s %7s %9s %8s %11s %9s  %s\n", "step", "model", "k", "RMSE g", "/noise", "max g",
               "RMSE %", "BIC", "dBIC", "verdict");
   for (std::size_t i = 0; i < steps.size(); ++i) {
@@ -163,6 +164,7 @@ void printLadder(const std::vector<LadderStep>& steps, const Dataset& data, cons
     std::printf("  %-16s score %.3f -> %s\n", s.variable.c_str(), s.score, s.advice.c_str());
   }
   printUntested(last.variables);
+  printAssessmentExtras(last.assessment);
   for (const auto& r : last.assessment.regions) std::printf("where the residual is: %s\n", r.text.c_str());
   std::printf("verdict: %s\n", last.assessment.verdict_text.c_str());
 }
@@ -170,7 +172,7 @@ void printLadder(const std::vector<LadderStep>& steps, const Dataset& data, cons
 int runLadder(const Common& c, const std::vector<std::string>& adds) {
   std::vector<std::string> warnings;
   const Dataset data = load(c, warnings);
-  const ModelSpec spec = parseSpec(c.model);
+  const ModelSpec spec = specOf(c);
   for (const auto& a : adds) parseSpec(a);  // fail early on a typo
   const auto steps = ladder(data, spec, adds, parseHoldout(c.holdout));
   ReportFiles rep;
@@ -228,7 +230,7 @@ void printWalk(const Walk& w, const Common& c) {
 int runWalk(const Common& c, int max_adds) {
   std::vector<std::string> warnings;
   const Dataset data = load(c, warnings, /*collapse_warnings=*/false);
-  const ModelSpec spec = parseSpec(c.model);
+  const ModelSpec spec = specOf(c);
   if (max_adds < 1) throw std::invalid_argument("--max-adds must be 1 or more");
   const Walk w = walk(data, spec, max_adds, parseHoldout(c.holdout));
   ReportFiles rep;

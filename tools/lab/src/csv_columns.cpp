@@ -92,6 +92,10 @@ void StreamParser::standColumn(std::size_t c, const KnownColumn& kc, const std::
   auto& v = out_.columns[c];
   if (scale != 1.0)
     for (auto& x : v) x *= scale;
+  if (uk.empty() && lower(base) == "time")
+    out_.notes.push_back(fmt::format("{}: column '{}' has no unit: read as seconds (t_s); if it counts "
+                                     "milliseconds, --map t_s=time/1000",
+                                     file_, origin_[c]));
   std::string label = fmt::format("{} ({})", base, kc.unit_label);
   if (scale != 1.0) label += fmt::format(", logged in {}", unit);
   if (std::string(kc.target) == "force_g") standThrustSign(c, scale);

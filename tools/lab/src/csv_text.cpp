@@ -163,7 +163,12 @@ std::string unitKey(const std::string& unit) {
 
 const std::vector<KnownColumn>& knownColumns() {
   static const std::vector<KnownColumn> k = {
-      {"time", "t_s", "s", {{"s", 1.0}, {"ms", 1e-3}}},
+      // a time column under any of its usual names: seconds unless its unit says milliseconds (a bare
+      // `time` is taken as seconds, with a note)
+      {"time", "t_s", "s", {{"s", 1.0}, {"ms", 1e-3}, {"", 1.0}}},
+      {"time_s", "t_s", "s", {{"", 1.0}}},
+      {"time_ms", "t_s", "s", {{"", 1e-3}}},
+      {"t_ms", "t_s", "s", {{"", 1e-3}}},
       {"esc signal", "pwm_us", "µs", {{"us", 1.0}, {"ms", 1000.0}}, true},
       {"thrust", "force_g", "g",
        {{"n", kGramsPerNewton}, {"kgf", 1000.0}, {"gf", 1.0}, {"g", 1.0}, {"kg", 1000.0},

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -9,9 +10,11 @@
 
 #ifdef THRUSTCAL_LAB_HAVE_PLANT
 #include "plant/actuator.hpp"
+#include "plant/fidelity.hpp"
 #include "plant/params.hpp"
 #include "plant/power_source.hpp"
 #include "plant/random.hpp"
+#include "plant/sensors.hpp"
 #endif
 
 namespace lab {
@@ -44,6 +47,12 @@ const std::vector<HiddenEffectInfo> kHidden = {
      "voltages (10.0 to 12.4 V): above the limit it folds its voltage back and the force falls while the drive "
      "rises; vbat_v is the supply's set voltage (read at the supply, not at the ESC), current_a its current",
      "curve+deadband+voltage", "current_limit", "current_a (a response: evidence, not a suspect)"},
+    {"lag",
+     "a dynamics session (a step log): two motors with 3 % part variation on an 11.1 V bench supply, each "
+     "held at PWM set points and logged at 500 Hz through every step: a staircase 1400-1600 us in 50 us steps "
+     "and back, then four 100 us steps up and down between 1450 and 1550 us; the rotor follows each step "
+     "with the plant's own dynamics, spin-down slower than spin-up (the ESC does not brake)",
+     "curve+motor", "lag", "dpwm_us"},
     {"plate",
      "a deflector plate under the propeller at a height varied per point (plate_height_m): "
      "ground effect, force x 1/(1 - (R/4z)^2); not in the catalogue",
@@ -136,6 +145,29 @@ const HiddenEffectInfo& hiddenInfo(const std::string& name) {
   throw std::invalid_argument("unknown hidden effect '" + name + "'; known: " + names);
 }
 
+// The step log (`lag`): its bus voltage and the steps its truth is measured on.
+constexpr double kStepBusV = 11.1;
+constexpr double kStepLowUs = 1450, kStepHighUs = 1550;
+
+// The set points of one run: a sweep up and down in 25 us steps, or the step log's staircase and
+// steps; each with its direction.
+std::vector<std::pair<double, double>> pointsOf(const std::string& h) {
+  std::vector<std::pair<double, double>> points;  // pulse, dir
+  if (h == "lag") {
+    for (double p = 1400; p <= 1600.0 + 1e-9; p += 50) points.emplace_back(p, 1.0);
+    for (double p = 1550; p >= 1400.0 - 1e-9; p -= 50) points.emplace_back(p, -1.0);
+    for (int k = 0; k < 4; ++k) {
+      points.emplace_back(kStepLowUs, -1.0);
+      points.emplace_back(kStepHighUs, 1.0);
+    }
+    points.emplace_back(kStepLowUs, -1.0);
+    return points;
+  }
+  for (double p = 1000; p <= 1900.0 + 1e-9; p += 25) points.emplace_back(p, 1.0);
+  for (double p = 1900; p >= 1000.0 - 1e-9; p -= 25) points.emplace_back(p, -1.0);
+  return points;
+}
+
 plant::BatteryParams benchAt(double v) {
   plant::BatteryParams b = plant::BatteryParams::benchSupply(v, 80.0);
   b.wiring_r_ohm = 0.03;
@@ -146,7 +178,17 @@ plant::BatteryParams benchAt(double v) {
 std::vector<RunSetup> runSetups(const std::string& h, const plant::ActuatorParams& base, uint64_t seed) {
   std::vector<RunSetup> runs;
   const double volts[] = {10.2, 11.1, 12.0, 12.6};
-  if (h == "motor") {
+  if (h == "lag") {
+    for (int m = 0; m < 2; ++m) {
+      RunSetup r;
+      r.motor = m;
+      r.params = plant::makeVaried(base, seed * 100 + static_cast<uint64_t>(m), 0.03);
+      r.battery = plant::BatteryParams::benchSupply(kStepBusV, 80.0);
+      r.battery.wiring_r_ohm = 0.0;  // the truth is the plant's at this bus voltage
+      r.pause_before_s = 1.0;
+      runs.push_back(r);
+    }
+  } else if (h == "motor") {
     for (int m = 0; m < 4; ++m) {
       const plant::ActuatorParams p = plant::makeVaried(base, seed * 100 + static_cast<uint64_t>(m), 0.03);
       for (double v : {10.8, 12.4}) {
@@ -216,11 +258,12 @@ class Session {
     env.pressure_pa = run.pressure_pa;
     plant::Actuator act(run.params, env);
     plant::PowerSource ps(run.battery);
-    std::vector<std::pair<double, double>> points;  // pulse, dir
-    for (double p = 1000; p <= 1900.0 + 1e-9; p += 25) points.emplace_back(p, 1.0);
-    for (double p = 1900; p >= 1000.0 - 1e-9; p -= 25) points.emplace_back(p, -1.0);
+    const std::vector<std::pair<double, double>> points = pointsOf(h_);
+    // the step log starts with its rotor settled at the first set point
+    if (h_ == "lag") act.setSpeed_rpm(act.steadyState(points.front().first, kStepBusV).rpm);
     clock_ += run.pause_before_s;
     const double run_start = clock_;
+    cell_.fill(act.thrust_g());
     for (const auto& [pulse, dir] : points) {
       act.holdPulse(pulse);
       // sag: the pack also feeds the frame's other motors, 0..8 A that change point by point
@@ -241,6 +284,7 @@ class Session {
         bus_v = ps.solveBusVoltage(load);
         bus_current = act.step(kDt, bus_v);
         ps.step(kDt, bus_current + other_a);
+        readCell(act.thrust_g());
         if ((k + 1) % every == 0)
           record(now + kDt, run, run_index, act, ps, env, {pulse, dir, other_a, plate, bus_current, bus_v});
       }
@@ -252,6 +296,14 @@ class Session {
     double pulse, dir, other_a, plate, bus_current, bus_v;
   };
 
+  // The bench's load-cell low-pass between the thrust and its reading (--bench-filter): the
+  // plant's stages (plant/sensors.hpp), stepped with the plant.
+  void readCell(double thrust_g) {
+    const auto& tau = plant::LoadCellParams().lowpass_tau_s;
+    double in = thrust_g;
+    for (std::size_t k = 0; k < cell_.size(); ++k) in = cell_[k] += (1 - std::exp(-kDt / tau[k])) * (in - cell_[k]);
+  }
+
   // One row: the bench's reading now.
   void record(double now, const RunSetup& run, std::size_t run_index, const plant::Actuator& act,
               const plant::PowerSource& ps, const plant::Environment& env, const Point& pt) {
@@ -259,13 +311,16 @@ class Session {
     r.t_s = now;
     r.motor = run.motor;
     r.pwm_us = pt.pulse;
-    double force = act.thrust_g();
+    double force = o_.bench_filter ? cell_.back() : act.thrust_g();
     if (h_ == "plate") {
       const double ratio = run.params.prop.diameter_m / 2 / (4 * pt.plate);
       force /= 1 - ratio * ratio;
     }
     force += creep_g_per_min_ * now / 60.0;
-    r.force_g = force + (o_.noise_g > 0 ? rng_.normal(o_.noise_g, 4.0) : 0.0);
+    // the load cell's noise, AR(1) when its samples correlate (a filtered reading)
+    const double rho = o_.noise_lag1;
+    noise_state_ = rho * noise_state_ + std::sqrt(1 - rho * rho) * (o_.noise_g > 0 ? rng_.normal(o_.noise_g, 4.0) : 0.0);
+    r.force_g = force + noise_state_;
     r.vbat_v = h_ == "sag" || h_ == "current_limit" ? ps.restingVoltage_v() : pt.bus_v;
     r.current_a = pt.bus_current + pt.other_a;
     r.rpm = act.rpm();
@@ -283,6 +338,8 @@ class Session {
   double settle_s_;
   plant::Rng& rng_;
   double creep_g_per_min_;
+  double noise_state_ = 0.0;
+  std::array<double, 3> cell_{};
   double clock_ = 0.0;
   std::vector<Row> rows_;
 };
@@ -326,7 +383,10 @@ void describe(const GenerateOptions& o, const HiddenEffectInfo& info, double set
     comments.push_back(fmt::format("a model without it: {}; the effect that explains it: {}; "
                                    "the variable to blame: {}",
                                    info.start_model, info.right_effect, info.responsible));
-  comments.push_back(fmt::format("load-cell noise: {} g (one standard deviation)", o.noise_g));
+  comments.push_back(fmt::format("load-cell noise: {} g (one standard deviation){}", o.noise_g,
+                                 o.noise_lag1 > 0 ? fmt::format(", lag-1 autocorrelation {}", o.noise_lag1) : ""));
+  if (o.bench_filter)
+    comments.push_back("the force read through the plant's load-cell low-pass (its stages: plant/sensors.hpp)");
 }
 
 }  // namespace
@@ -334,6 +394,8 @@ void describe(const GenerateOptions& o, const HiddenEffectInfo& info, double set
 Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
   const HiddenEffectInfo& info = hiddenInfo(o.hidden);
   if (!(o.noise_g >= 0)) throw std::invalid_argument("--noise-g must be >= 0");
+  if (!(o.noise_lag1 >= 0 && o.noise_lag1 <= 0.95))
+    throw std::invalid_argument("--noise-lag1 must be within 0..0.95 (the noise's lag-1 autocorrelation)");
   const std::string& h = o.hidden;
   const plant::ActuatorParams base = plant::presetParams(o.preset);
   plant::Rng rng(o.seed * 7919 + 13);
@@ -341,16 +403,44 @@ Dataset generate(const GenerateOptions& o, std::vector<std::string>* comments) {
   if (!(o.settle_s >= 0) || !(o.log_hz >= 0) || o.log_hz > 1.0 / 0.002)
     throw std::invalid_argument("--settle-s must be >= 0 and --log-hz within 0..500 (the plant steps at 500 Hz)");
   const double settle_s = o.settle_s > 0 ? o.settle_s : h == "drift" || h == "thermal" ? 2.0 : 0.5;
-  const std::vector<Row> rows = Session(o, settle_s, rng).run(runs);
+  GenerateOptions with_rate = o;
+  if (h == "lag" && !(o.log_hz > 0)) with_rate.log_hz = 500;  // a step log: every sample of the bench's ADC
+  const std::vector<Row> rows = Session(with_rate, settle_s, rng).run(runs);
   Dataset d = toDataset(rows, runs, h);
-  if (comments) describe(o, info, settle_s, *comments);
+  if (comments) {
+    describe(with_rate, info, settle_s, *comments);
+    for (const auto& t : stepTruth(o))
+      comments->push_back(fmt::format("truth: motor {} tau_up {:.4f} s, tau_down {:.4f} s (the plant's rotor speed, "
+                                      "{:.0f} <-> {:.0f} us at {:.1f} V)",
+                                      t.motor, t.tau_up_s, t.tau_down_s, t.from_us, t.to_us, t.bus_v));
+  }
   return d;
+}
+
+std::vector<StepTruth> stepTruth(const GenerateOptions& o) {
+  std::vector<StepTruth> out;
+  if (o.hidden != "lag") return out;
+  for (const RunSetup& r : runSetups(o.hidden, plant::presetParams(o.preset), o.seed)) {
+    StepTruth t;
+    t.motor = r.motor;
+    t.from_us = kStepLowUs;
+    t.to_us = kStepHighUs;
+    t.bus_v = kStepBusV;
+    t.tau_up_s = plant::stepTimeConstant_s(r.params, kStepBusV, kStepLowUs, kStepHighUs);
+    t.tau_down_s = plant::stepTimeConstant_s(r.params, kStepBusV, kStepHighUs, kStepLowUs);
+    out.push_back(t);
+  }
+  return out;
 }
 
 #else
 
 Dataset generate(const GenerateOptions&, std::vector<std::string>*) {
   throw std::runtime_error("this build has no plant model (tools/plant): cannot generate data");
+}
+
+std::vector<StepTruth> stepTruth(const GenerateOptions&) {
+  throw std::runtime_error("this build has no plant model (tools/plant): no step truth");
 }
 
 #endif

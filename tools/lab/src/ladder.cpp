@@ -151,7 +151,7 @@ std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,
     }
     // the diagnosis of the first and the last step (the report and the text use those)
     if (s == 0 || s == adds.size()) step.variables = rankVariables(data, step.fit, step.spec);
-    step.at_noise_floor = noise.known() && step.fit.rmse_g <= noise.hi_g;
+    step.at_noise_floor = atNoiseFloor(noise, step.fit);
     step.assessment.noise = noise;
     if (s == adds.size()) step.assessment = assess(data, step.spec, step.fit, step.variables, &noise);
     steps.push_back(std::move(step));

@@ -73,6 +73,7 @@ void Model::Impl::setup() {
   std::vector<std::pair<int, const Term*>> order;
   auto make = [&](const effects::EffectDef& def, int key, auto&& build) {
     effects::Setup s(train, def, defs, motor_ids);
+    s.fixes = &spec.fixed;
     s.pmin = pmin, s.pmax = pmax, s.span = span, s.vref = vref, s.fmax = fmax;
     owned.push_back(build(s));
     order.emplace_back(key, owned.back().get());

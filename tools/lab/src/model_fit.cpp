@@ -71,7 +71,8 @@ Eigen::VectorXd Model::Impl::runLm(const Eigen::VectorXd& start, FitResult& r, b
   std::vector<Eigen::Index> moving;
   for (Eigen::Index i = 0; i < np; ++i) {
     sc[i] = defs[static_cast<std::size_t>(i)].scale;
-    if (!fixed || !(*fixed)[static_cast<std::size_t>(i)]) moving.push_back(i);
+    const bool held = defs[static_cast<std::size_t>(i)].fixed || (fixed && (*fixed)[static_cast<std::size_t>(i)]);
+    if (!held) moving.push_back(i);
   }
   if (moving.empty()) return start;
   const int nm = static_cast<int>(moving.size());
@@ -109,8 +110,9 @@ Eigen::VectorXd Model::Impl::warmStart(const std::vector<Param>& warm, bool neut
   Eigen::VectorXd start = initialTheta();
   for (std::size_t i = 0; i < defs.size(); ++i) {
     const auto& d = defs[i];
-    bool found = false;
+    bool found = d.fixed;  // a held parameter keeps its value
     for (const auto& w : warm)
+      if (!d.fixed)
       if (w.name == d.name && w.effect == d.effect && std::isfinite(w.value)) {
         start[static_cast<Eigen::Index>(i)] = w.value;
         found = true;
@@ -127,7 +129,7 @@ Eigen::VectorXd Model::Impl::scanStart(Eigen::VectorXd th, const std::vector<Par
   const double inf = std::numeric_limits<double>::infinity();
   for (std::size_t j = 0; j < defs.size(); ++j) {
     const auto i = static_cast<Eigen::Index>(j);
-    const double lo = defs[j].scan_from;
+    const double lo = defs[j].fixed ? kNaN : defs[j].scan_from;
     bool is_new = std::isfinite(lo);
     if (known)
       for (const auto& w : *known) is_new = is_new && w.name != defs[j].name;
@@ -206,7 +208,7 @@ double Model::Impl::search(const std::vector<Param>* warm, bool warm_only, doubl
 FitResult Model::Impl::quickResult(FitResult& r, double best_rss) const {
   const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
   r.n = static_cast<std::size_t>(y.size());
-  r.k = static_cast<int>(coef.size() + np);
+  r.k = static_cast<int>(coef.size()) + freeParams();
   r.rss = best_rss;
   const double n = static_cast<double>(r.n);
   r.rmse_g = std::sqrt(r.rss / n);
@@ -220,15 +222,15 @@ FitResult Model::Impl::quickResult(FitResult& r, double best_rss) const {
   for (Eigen::Index j = 0; j < np; ++j) {
     const auto& d = defs[static_cast<std::size_t>(j)];
     r.params.push_back({d.name, d.unit, d.effect, theta[j], kNaN});
+    r.params.back().fixed = d.fixed;
   }
   return r;
 }
 
 // The errors and criteria of the fit on every row, and the warnings about it.
 void Model::Impl::errorsOf(FitResult& r, const Eigen::VectorXd& pred, Eigen::Index nl) const {
-  const Eigen::Index np = static_cast<Eigen::Index>(defs.size());
   r.n = static_cast<std::size_t>(y.size());
-  r.k = static_cast<int>(nl + np) + (own ? own->countedParams() : 0);
+  r.k = static_cast<int>(nl) + freeParams() + (own ? own->countedParams() : 0);
   const Eigen::VectorXd res = y - pred;
   r.rss = res.squaredNorm();
   const double n = static_cast<double>(r.n);
@@ -263,8 +265,11 @@ Eigen::VectorXd Model::Impl::sigmas(FitResult& r, const Eigen::VectorXd& pred, c
     const double h = 1e-3 * defs[static_cast<std::size_t>(j)].scale;
     tp[j] += h;
     Eigen::VectorXd c = coef;
-    dcol[static_cast<std::size_t>(j)] = (predictWith(train_bound, tp, c, false, nullptr) - pred) / h;
+    dcol[static_cast<std::size_t>(j)] = defs[static_cast<std::size_t>(j)].fixed  // held: no column
+                                            ? Eigen::VectorXd::Zero(pred.size())
+                                            : Eigen::VectorXd((predictWith(train_bound, tp, c, false, nullptr) - pred) / h);
   }
+  const Eigen::Index held = np - freeParams();
   Eigen::VectorXd mul, add;
   std::vector<double> x;
   if (nl > 0) {
@@ -288,14 +293,16 @@ Eigen::VectorXd Model::Impl::sigmas(FitResult& r, const Eigen::VectorXd& pred, c
   }
   if (!finite) return sig;
   JtJ = JtJ.selfadjointView<Eigen::Lower>();
-  const double dof = std::max(static_cast<double>(r.n) - static_cast<double>(ncol), 1.0);
+  const double dof = std::max(static_cast<double>(r.n) - static_cast<double>(ncol - held), 1.0);
   const double s2 = r.rss / dof;
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(JtJ);
   const Eigen::MatrixXd cov = cod.pseudoInverse() * s2;
   for (Eigen::Index j = 0; j < ncol; ++j) sig[j] = std::sqrt(std::max(cov(j, j), 0.0));
-  if (cod.rank() < ncol)
+  for (Eigen::Index j = 0; j < np; ++j)
+    if (defs[static_cast<std::size_t>(j)].fixed) sig[static_cast<Eigen::Index>(active.size()) + j] = kNaN;
+  if (cod.rank() < ncol - held)
     r.warnings.push_back(fmt::format("{} parameter combination(s) are not determined by the data "
-                                     "(their uncertainties are not meaningful)", ncol - cod.rank()));
+                                     "(their uncertainties are not meaningful)", ncol - held - cod.rank()));
   return sig;
 }
 
@@ -323,8 +330,9 @@ void Model::Impl::paramsOf(FitResult& r, const Eigen::VectorXd& sig, const std::
     pr.effect = d.effect;
     pr.value = theta[j];
     pr.sigma = sig[static_cast<Eigen::Index>(active.size()) + j];
+    pr.fixed = d.fixed;
     const double tol = 1e-6 * std::fabs(d.scale);
-    if (theta[j] <= d.lo + tol || theta[j] >= d.hi - tol) {
+    if (!d.fixed && (theta[j] <= d.lo + tol || theta[j] >= d.hi - tol)) {
       pr.at_bound = true;
       pr.bound = theta[j] <= d.lo + tol ? d.lo : d.hi;
       r.warnings.push_back(fmt::format("{} stopped at its bound {:.6g}", d.name, pr.bound));

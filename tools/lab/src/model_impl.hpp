@@ -76,6 +76,13 @@ struct Model::Impl {
 
   Eigen::VectorXd initialTheta() const;
 
+  // The nonlinear parameters the fit moves (not held by --fix or as a setting).
+  int freeParams() const {
+    int n = 0;
+    for (const auto& d : defs) n += d.fixed ? 0 : 1;
+    return n;
+  }
+
   // A drive for a base of its own (the effects that depend on it): PWM over the span.
   std::vector<double> plainDrive(const Rows& b) const;
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <stdexcept>
 
@@ -130,10 +131,37 @@ ModelSpec parseSpec(const std::string& spec) {
 
 ModelSpec combine(const ModelSpec& base, const ModelSpec& more) {
   ModelSpec out = base;
+  for (const auto& [name, value] : more.fixed) out.fixed[name] = value;
   for (const auto& e : more.effects)
     if (!out.has(e)) out.effects.push_back(e);
   out.user.insert(out.user.end(), more.user.begin(), more.user.end());
   return out;
+}
+
+void fixParameter(ModelSpec& spec, const std::string& text) {
+  const auto eq = text.find('=');
+  const std::string name = trimCopy(text.substr(0, eq));
+  char* end = nullptr;
+  const std::string value = eq == std::string::npos ? "" : trimCopy(text.substr(eq + 1));
+  const double v = std::strtod(value.c_str(), &end);
+  if (eq == std::string::npos || name.empty() || value.empty() || *end != '\0' || !std::isfinite(v))
+    throw std::invalid_argument("--fix '" + text + "': expected NAME=VALUE, e.g. --fix tau_cell_s=0.03");
+  // the name as an entry documents it (per-motor names end in _motor_ID)
+  const auto motor = name.find("_motor_");
+  const std::string documented = motor == std::string::npos ? name : name.substr(0, motor);
+  std::string all;
+  for (const auto* e : effects::registry())
+    for (const auto& p : e->params) {
+      const std::string base = p.name.size() > 8 && p.name.compare(p.name.size() - 8, 8, "_motor_N") == 0
+                                   ? p.name.substr(0, p.name.size() - 8)
+                                   : p.name;
+      if (base == documented || p.name == name) {
+        spec.fixed[name] = v;
+        return;
+      }
+      if (e->role != effects::Role::kExpression) all += (all.empty() ? "" : ", ") + p.name;
+    }
+  throw std::invalid_argument("--fix " + name + ": no effect has a parameter of that name; they are: " + all);
 }
 
 void addDerivedColumns(Dataset& data) {

@@ -8,6 +8,8 @@
 #include <map>
 #include <numeric>
 
+#include "noise_rows.hpp"
+
 namespace lab {
 
 namespace {
@@ -16,37 +18,9 @@ constexpr std::size_t kWindow = 4;          // rows per contrast: orthogonal to 
 constexpr double kFeatureSd = 4.0;          // contrasts beyond this many robust SD are features
 constexpr double kMedianChi2One = 0.454936; // median of a chi-square with one degree of freedom
 constexpr double kMinDof = 5.0;
-constexpr double kHeldShare = 0.3;          // more repeated readings than this: held between updates
-
-bool contains(const std::string& s, const char* word) { return s.find(word) != std::string::npos; }
-
-// A column that may be computed from the force reading (a thrust in other units, an
-// efficiency in g/W): regressing it out would take the noise with it.
-bool mayHoldForce(const std::string& name) {
-  std::string n = name;
-  for (auto& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  for (const char* w : {"force", "thrust", "weight", "efficien", "lift", "load", "mass"})
-    if (contains(n, w)) return true;
-  return false;
-}
-
-// The logged conditions whose contrasts are regressed out: every other numeric column logged on
-// every row and not constant.
-std::vector<std::size_t> conditionColumns(const Dataset& d) {
-  std::vector<std::size_t> out;
-  for (std::size_t c = 0; c < d.names.size(); ++c) {
-    const std::string& n = d.names[c];
-    if (n == "pwm_us" || n == "force_g" || n == "run" || mayHoldForce(n)) continue;
-    const auto& v = d.columns[c];
-    bool finite = true, varies = false;
-    for (double x : v) {
-      finite = finite && std::isfinite(x);
-      varies = varies || x != v.front();
-    }
-    if (finite && varies) out.push_back(c);
-  }
-  return out;
-}
+constexpr double kMaxLag1 = 0.95;
+constexpr double kDenseShare = 0.005;       // neighbours this close in PWM (share of its span): a ramp
+constexpr std::size_t kMinLevelWindows = 30;  // level windows of each spacing before rho is estimated
 
 // The unit contrast over a window's abscissae x[0..3] orthogonal to 1, x and x^2 (those of them
 // the points can tell apart); false when there is none.
@@ -76,131 +50,165 @@ bool contrastWeights(const double* x, double* w) {
 
 // One contrast: its window's first row in the group's order, its group, its weights.
 struct Window {
-  std::size_t group = 0, start = 0;
+  std::size_t group = 0, start = 0, step = 1;  // rows start, start + step, ... of the group
+  bool in_time = false;                        // at one set point (else along the PWM)
   double w[kWindow] = {};
 };
 
-// The sweep direction of each row: the sign of the PWM's change in logging order within its run
-// (a repeated set point keeps the direction it had), times the `dir` column's sign when logged,
-// so a sweep restarting from the bottom, or a logged turn, starts a new sweep.
-std::vector<int> directions(const Dataset& d) {
-  std::vector<int> sign(d.rows(), 0);
-  const auto& pwm = d.col("pwm_us");
-  const std::vector<double>* dir = d.has("dir") ? &d.col("dir") : nullptr;
-  std::map<int, std::size_t> last;      // run -> its previous row
-  std::map<int, int> last_sign;         // run -> the direction so far
-  std::map<int, std::vector<std::size_t>> unsigned_rows;  // rows before the run's first change
-  for (std::size_t i = 0; i < d.rows(); ++i) {
-    const int r = d.run[i];
-    const auto it = last.find(r);
-    int s = 0;
-    if (it != last.end() && pwm[i] != pwm[it->second]) s = pwm[i] > pwm[it->second] ? 1 : -1;
-    if (s == 0) s = last_sign[r];
-    if (s != 0 && last_sign[r] == 0)
-      for (std::size_t j : unsigned_rows[r]) sign[j] = s;
-    if (s == 0) unsigned_rows[r].push_back(i);
-    sign[i] = s;
-    last_sign[r] = s;
-    last[r] = i;
-  }
-  if (dir)
-    for (std::size_t i = 0; i < d.rows(); ++i)
-      if (std::isfinite((*dir)[i]) && (*dir)[i] < 0) sign[i] = 2 + sign[i];  // a turn the log says: its own sweep
-  return sign;
-}
-
-// Rows that repeat the previous row's force exactly, in logging order within a run: when most
-// do, the logger held the reading between updates, and one row per update is one reading.
-std::vector<bool> heldReadings(const Dataset& d, bool& held) {
-  const auto& f = d.col("force_g");
-  std::vector<bool> repeat(d.rows(), false);
-  std::map<int, std::size_t> last;
-  std::size_t repeats = 0;
-  for (std::size_t i = 0; i < d.rows(); ++i) {
-    const auto it = last.find(d.run[i]);
-    repeat[i] = it != last.end() && f[i] == f[it->second];
-    repeats += repeat[i] ? 1 : 0;
-    last[d.run[i]] = i;
-  }
-  held = static_cast<double>(repeats) > kHeldShare * static_cast<double>(d.rows());
-  if (!held) std::fill(repeat.begin(), repeat.end(), false);
-  return repeat;
-}
-
-// The rows of each sweep (a run's rows in logging order, cut where the direction turns), sorted
-// by PWM, then by time or logging order; held repeats of a reading left out.
-std::vector<std::vector<std::size_t>> neighbourGroups(const Dataset& d, bool& held) {
-  const auto& pwm = d.col("pwm_us");
-  const std::vector<double>* t = d.has("t_s") ? &d.col("t_s") : nullptr;
-  const std::vector<int> sign = directions(d);
-  const std::vector<bool> repeat = heldReadings(d, held);
-  std::map<std::pair<int, int>, std::vector<std::size_t>> groups;
-  std::map<int, std::pair<int, int>> segment;  // run -> (segment, its direction)
-  for (std::size_t i = 0; i < d.rows(); ++i) {
-    auto [it, fresh] = segment.try_emplace(d.run[i], 0, sign[i]);
-    if (!fresh && sign[i] != it->second.second) it->second = {it->second.first + 1, sign[i]};
-    if (!repeat[i]) groups[{d.run[i], it->second.first}].push_back(i);
-  }
-  std::vector<std::vector<std::size_t>> out;
-  for (auto& [key, rows] : groups) {
-    std::stable_sort(rows.begin(), rows.end(), [&](std::size_t a, std::size_t b) {
-      if (pwm[a] != pwm[b]) return pwm[a] < pwm[b];
-      return t && std::isfinite((*t)[a]) && std::isfinite((*t)[b]) ? (*t)[a] < (*t)[b] : a < b;
-    });
-    out.push_back(std::move(rows));
-  }
-  return out;
-}
-
-// The windows of four neighbours: along the PWM where the four PWMs differ, along time where
-// they are one set point (a transient is smooth in time), none where they mix the two.
-std::vector<Window> windowsOf(const Dataset& d, const std::vector<std::vector<std::size_t>>& groups) {
+// The windows of four neighbours (`step` 2: every other row): along the PWM where the four PWMs
+// differ, along time where they are one set point (a transient is smooth in time), none where they
+// mix the two.
+std::vector<Window> windowsOf(const Dataset& d, const std::vector<std::vector<std::size_t>>& groups,
+                              std::size_t step = 1) {
   const auto& pwm = d.col("pwm_us");
   const std::vector<double>* t = d.has("t_s") ? &d.col("t_s") : nullptr;
   std::vector<Window> out;
   for (std::size_t g = 0; g < groups.size(); ++g) {
     const auto& rows = groups[g];
-    for (std::size_t s = 0; s + kWindow <= rows.size(); ++s) {
+    for (std::size_t s = 0; s + step * (kWindow - 1) < rows.size(); ++s) {
       double p[kWindow], x[kWindow];
       std::size_t distinct = 1;
       for (std::size_t k = 0; k < kWindow; ++k) {
-        p[k] = pwm[rows[s + k]];
+        p[k] = pwm[rows[s + step * k]];
         if (k && p[k] != p[k - 1]) ++distinct;
       }
+      Window w;
       if (distinct == kWindow) {
         std::copy(p, p + kWindow, x);
       } else if (distinct == 1) {
-        for (std::size_t k = 0; k < kWindow; ++k)
-          x[k] = t && std::isfinite((*t)[rows[s + k]]) ? (*t)[rows[s + k]] : static_cast<double>(rows[s + k]);
+        w.in_time = true;
+        for (std::size_t k = 0; k < kWindow; ++k) {
+          const std::size_t r = rows[s + step * k];
+          x[k] = t && std::isfinite((*t)[r]) ? (*t)[r] : static_cast<double>(r);
+        }
       } else {
         continue;
       }
-      Window w;
       w.group = g;
       w.start = s;
+      w.step = step;
       if (contrastWeights(x, w.w)) out.push_back(w);
     }
   }
   return out;
 }
 
-// Effective degrees of freedom of the kept contrasts: overlapping windows share rows, so their
-// contrasts correlate; nu = (N - k) N / sum_ij C_ij^2.
+// Cov(e_i, e_j) / sigma^2 of two windows' contrasts of one group when the noise is AR(1) with
+// lag-1 autocorrelation rho along the group's rows (rho 0: independent samples).
+double contrastCov(const Window& a, const Window& b, double rho) {
+  double c = 0;
+  for (std::size_t p = 0; p < kWindow; ++p)
+    for (std::size_t q = 0; q < kWindow; ++q) {
+      const double lag = std::fabs(static_cast<double>(a.start + a.step * p) - static_cast<double>(b.start + b.step * q));
+      c += a.w[p] * b.w[q] * (lag == 0 ? 1.0 : std::pow(rho, lag));
+    }
+  return c;
+}
+
+// Effective degrees of freedom of the kept contrasts: overlapping windows share rows, and
+// correlated samples tie windows further apart, so their contrasts correlate;
+// nu = (N - k) / N * (sum_i C_ii)^2 / sum_ij C_ij^2.
 double effectiveDof(const std::vector<Window>& win, const std::vector<bool>& keep, std::size_t n_kept,
-                    std::size_t k) {
-  double sum_c2 = static_cast<double>(n_kept);
+                    std::size_t k, double rho) {
+  // windows further apart than this share (almost) nothing
+  const std::size_t reach = kWindow - 1 + (rho > 0 ? static_cast<std::size_t>(std::min(30.0, std::log(1e-3) / std::log(rho))) : 0);
+  double diag = 0, sum_c2 = 0;
   for (std::size_t i = 0; i < win.size(); ++i) {
     if (!keep[i]) continue;
-    for (std::size_t j = i + 1; j < win.size() && j <= i + kWindow - 1; ++j) {
-      if (!keep[j] || win[j].group != win[i].group) continue;
-      const std::size_t lag = win[j].start - win[i].start;
-      if (lag == 0 || lag >= kWindow) continue;
-      double c = 0;
-      for (std::size_t a = lag; a < kWindow; ++a) c += win[i].w[a] * win[j].w[a - lag];
+    const double cii = contrastCov(win[i], win[i], rho);
+    diag += cii;
+    sum_c2 += cii * cii;
+    for (std::size_t j = i + 1; j < win.size() && win[j].group == win[i].group && win[j].start - win[i].start <= reach;
+         ++j) {
+      if (!keep[j]) continue;
+      const double c = contrastCov(win[i], win[j], rho);
       sum_c2 += 2 * c * c;
     }
   }
-  return (static_cast<double>(n_kept) - static_cast<double>(k)) * static_cast<double>(n_kept) / sum_c2;
+  const double n = static_cast<double>(n_kept);
+  return (n - static_cast<double>(k)) / n * diag * diag / sum_c2;
+}
+
+// The windows whose rows see (nearly) the same force: at one set point in time, or along a dense
+// drive (a ramp whose neighbours lie within kDenseShare of the PWM span); a sweep's one reading
+// per set point is neither.
+bool nearlyLevel(const Window& w, const std::vector<bool>& dense_group) { return w.in_time || dense_group[w.group]; }
+
+std::vector<bool> denseGroups(const Dataset& d, const std::vector<std::vector<std::size_t>>& groups) {
+  const auto& pwm = d.col("pwm_us");
+  const auto [lo, hi] = std::minmax_element(pwm.begin(), pwm.end());
+  std::vector<bool> dense(groups.size(), false);
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    std::vector<double> steps;
+    for (std::size_t k = 1; k < groups[g].size(); ++k)
+      if (pwm[groups[g][k]] != pwm[groups[g][k - 1]])
+        steps.push_back(std::fabs(pwm[groups[g][k]] - pwm[groups[g][k - 1]]));
+    if (steps.empty()) continue;
+    std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+    dense[g] = steps[steps.size() / 2] <= kDenseShare * (*hi - *lo);
+  }
+  return dense;
+}
+
+// Sum of the squared contrasts of the level windows, features beyond 4 robust SD left out, and
+// their expectation's coefficients: E sum e^2 = sigma^2 sum_d alpha_d rho^(step d).
+double levelContrasts(const Dataset& d, const std::vector<std::vector<std::size_t>>& groups,
+                      const std::vector<Window>& win, const std::vector<bool>& dense, std::vector<double>& alpha,
+                      std::size_t& used) {
+  const auto& f = d.col("force_g");
+  std::vector<double> e2;
+  std::vector<const Window*> level;
+  for (const auto& w : win) {
+    if (!nearlyLevel(w, dense)) continue;
+    double e = 0;
+    for (std::size_t k = 0; k < kWindow; ++k) e += w.w[k] * f[groups[w.group][w.start + w.step * k]];
+    e2.push_back(e * e);
+    level.push_back(&w);
+  }
+  alpha.assign(kWindow, 0.0);
+  used = 0;
+  if (e2.empty()) return 0;
+  std::vector<double> sorted = e2;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+  const double cut = kFeatureSd * kFeatureSd * sorted[sorted.size() / 2] / kMedianChi2One;
+  double sum = 0;
+  for (std::size_t i = 0; i < e2.size(); ++i) {
+    if (e2[i] > cut) continue;
+    sum += e2[i];
+    ++used;
+    for (std::size_t p = 0; p < kWindow; ++p)
+      for (std::size_t q = 0; q < kWindow; ++q) alpha[p > q ? p - q : q - p] += level[i]->w[p] * level[i]->w[q];
+  }
+  return sum;
+}
+
+// The noise's lag-1 autocorrelation, AR(1) along the groups' rows: contrasts of every other row
+// vary more than those of neighbours when successive samples correlate (E e^2 = sigma^2
+// sum_pq w_p w_q rho^(step |p - q|)). Only from windows over which the force is level; 0 (the rows
+// taken as independent) where there are too few of them.
+double lag1Of(const Dataset& d, const std::vector<std::vector<std::size_t>>& groups, const std::vector<Window>& win1) {
+  const std::vector<bool> dense = denseGroups(d, groups);
+  const std::vector<Window> win2 = windowsOf(d, groups, 2);
+  std::vector<double> a1, a2;
+  std::size_t n1 = 0, n2 = 0;
+  const double s1 = levelContrasts(d, groups, win1, dense, a1, n1);
+  const double s2 = levelContrasts(d, groups, win2, dense, a2, n2);
+  if (n1 < kMinLevelWindows || n2 < kMinLevelWindows || !(s1 > 0) || !(s2 > 0)) return 0;
+  auto poly = [](const std::vector<double>& c, double x) {
+    double v = 0, pw = 1;
+    for (double a : c) v += a * pw, pw *= x;
+    return v;
+  };
+  const double seen = s1 / s2;
+  auto gap = [&](double rho) { return seen - poly(a1, rho) / poly(a2, rho * rho); };
+  double lo = 0, hi = kMaxLag1;
+  if (gap(lo) >= 0) return 0;
+  if (gap(hi) <= 0) return hi;
+  for (int it = 0; it < 50; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (gap(mid) < 0 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
 }
 
 // Least squares of e on the columns of Z over the kept rows, from the normal equations (Z's
@@ -231,7 +239,7 @@ Eigen::VectorXd regressOut(const Eigen::VectorXd& e, const Eigen::MatrixXd& z, c
 void contrastsOf(const Dataset& d, const std::vector<std::vector<std::size_t>>& groups, const std::vector<Window>& win,
                  Eigen::VectorXd& e, Eigen::MatrixXd& z, std::vector<std::string>& names) {
   const auto& f = d.col("force_g");
-  const std::vector<std::size_t> cond = conditionColumns(d);
+  const std::vector<std::size_t> cond = noise_rows::conditionColumns(d);
   const auto n = static_cast<Eigen::Index>(win.size());
   const auto nc = static_cast<Eigen::Index>(cond.size());
   e.resize(n);
@@ -323,14 +331,15 @@ double chiSquareQuantile(double p, double dof) {
   return dof * std::max(c, 0.0) * std::max(c, 0.0) * std::max(c, 0.0);
 }
 
-NoiseEstimate estimateNoise(const Dataset& data) {
+NoiseEstimate neighbourNoise(const Dataset& data) {
   NoiseEstimate out;
+  out.method = "neighbours";
   if (!data.has("pwm_us") || !data.has("force_g")) {
     out.why_not = "the data have no pwm_us or force_g";
     return out;
   }
   bool held = false;
-  const auto groups = neighbourGroups(data, held);
+  const auto groups = noise_rows::neighbourGroups(data, held);
   if (held) out.note = "most rows repeat the previous force reading (held between updates): one row per update used";
   const std::vector<Window> win = windowsOf(data, groups);
   Eigen::VectorXd e;
@@ -353,7 +362,13 @@ NoiseEstimate estimateNoise(const Dataset& data) {
   for (std::size_t i = 0; i < win.size(); ++i)
     if (keep[i]) rss += r[static_cast<Eigen::Index>(i)] * r[static_cast<Eigen::Index>(i)];
   const double dof_rss = static_cast<double>(n_kept) - static_cast<double>(rank);
-  out.dof = dof_rss > 0 ? effectiveDof(win, keep, n_kept, static_cast<std::size_t>(rank)) : 0;
+  out.lag1 = dof_rss > 0 ? lag1Of(data, groups, win) : 0;
+  std::vector<double> alpha(kWindow, 0.0);  // E rss = sigma^2 sum_d alpha_d rho^d over the kept windows
+  for (std::size_t i = 0; i < win.size(); ++i)
+    if (keep[i])
+      for (std::size_t p = 0; p < kWindow; ++p)
+        for (std::size_t q = 0; q < kWindow; ++q) alpha[p > q ? p - q : q - p] += win[i].w[p] * win[i].w[q];
+  out.dof = dof_rss > 0 ? effectiveDof(win, keep, n_kept, static_cast<std::size_t>(rank), out.lag1) : 0;
   if (!(out.dof >= kMinDof)) {
     out.why_not = fmt::format("too few neighbouring rows: {} windows of four rows sorted by PWM within a run "
                               "(need enough for {} degrees of freedom); log more points per sweep",
@@ -361,10 +376,37 @@ NoiseEstimate estimateNoise(const Dataset& data) {
     out.conditions.clear();
     return out;
   }
-  out.sigma_g = std::sqrt(rss / dof_rss);
+  out.uncorrected_g = std::sqrt(rss / dof_rss);
+  // a contrast of AR(1) samples has the variance sum_d alpha_d rho^d / N of independent ones'
+  double shrink = 0, pw = 1;
+  for (double a : alpha) shrink += a * pw, pw *= out.lag1;
+  shrink /= static_cast<double>(n_kept);
+  out.sigma_g = out.uncorrected_g / std::sqrt(std::max(shrink, 1e-6));
   out.lo_g = out.sigma_g * std::sqrt(out.dof / chiSquareQuantile(0.975, out.dof));
   out.hi_g = out.sigma_g * std::sqrt(out.dof / chiSquareQuantile(0.025, out.dof));
+  out.assumption = fmt::format(
+      "no set point is held long enough to repeat it: neighbouring rows (four at a time, sorted by PWM within a "
+      "sweep, or in time at one PWM) see the same force up to a quadratic in the drive, so their contrasts are "
+      "noise; {}",
+      out.lag1 > 0 ? fmt::format("the noise is AR(1) in logging order, lag-1 autocorrelation {:.2f} (contrasts of "
+                                 "every other row against neighbours', where the force is level), sigma corrected "
+                                 "for it ({:.3g} g if the samples were independent)",
+                                 out.lag1, out.uncorrected_g)
+                   : std::string("successive rows are taken as independent (too few rows at one set point or along "
+                                 "a dense ramp to measure their correlation, or none found)"));
   return out;
+}
+
+NoiseEstimate estimateNoise(const Dataset& data) {
+  NoiseEstimate pure = pureErrorNoise(data);
+  const NoiseEstimate neighbours = neighbourNoise(data);
+  if (!pure.known()) return neighbours;
+  // what the neighbours' contrasts would have said, for the record
+  pure.uncorrected_g = neighbours.uncorrected_g;
+  pure.contrasts = neighbours.contrasts;
+  pure.features = neighbours.features;
+  pure.note = neighbours.note;
+  return pure;
 }
 
 std::string describe(const NoiseEstimate& n) {

@@ -286,11 +286,22 @@ void noiseSection(std::vector<Block>& page, const LadderStep& last) {
   const Assessment& a = last.assessment;
   page.push_back({Block::Kind::kH2, "Against the noise floor", {}, {}, ""});
   page.push_back({Block::Kind::kPara,
-                  fmt::format("Noise floor (the measurement noise, estimated from neighbouring rows): {}. Verdict for "
-                              "`{}`: {}.",
+                  fmt::format("Noise floor (the measurement noise, estimated from {}): {}. Verdict for `{}`: {}.",
+                              a.noise.method == "pure_error" ? "the scatter within repeated set points"
+                                                             : "neighbouring rows",
                               describe(a.noise), last.spec.text(),
                               a.verdict_text.empty() ? std::string("not judged") : a.verdict_text),
                   {}, {}, ""});
+  if (!a.noise.assumption.empty())
+    page.push_back({Block::Kind::kPara, "What the floor assumes: " + a.noise.assumption + ".", {}, {}, ""});
+  if (a.lack_of_fit.tested)
+    page.push_back({Block::Kind::kPara, "Lack of fit: " + a.lack_of_fit.text + ".", {}, {}, ""});
+  Block dynamics{Block::Kind::kList, "", {}, {}, ""};
+  for (const auto& d : a.dynamics) dynamics.items.push_back(d.text);
+  if (!dynamics.items.empty()) {
+    page.push_back({Block::Kind::kPara, "Dynamics (the fitted `lag`):", {}, {}, ""});
+    page.push_back(dynamics);
+  }
   Block where{Block::Kind::kList, "", {}, {}, ""};
   for (const auto& r : a.regions) where.items.push_back(r.text);
   if (!where.items.empty()) page.push_back(where);

@@ -44,17 +44,22 @@ void judge(Assessment& d, const Dataset& data, const FitResult& fit, const std::
   const double rmse = fit.rmse_g;
   const NoiseEstimate& n = d.noise;
   d.unexplained_g = n.known() ? std::sqrt(std::max(0.0, rmse * rmse - n.sigma_g * n.sigma_g)) : rmse;
+  const bool at_floor = atNoiseFloor(n, fit, &d.lack_of_fit);
+  const LackOfFit& lof = d.lack_of_fit;
+  if (lof.significant) d.unexplained_g = std::max(d.unexplained_g, lof.excess_g);
   bool explained = !d.next.where.empty();
   for (const auto& s : variables) explained = explained || (s.significant && s.role == Role::kCause);
   for (const auto& e : d.evidence) explained = explained || e.significant;
-  if (n.known() && rmse <= n.hi_g) {
+  if (at_floor) {
     d.verdict = Verdict::kAtNoiseFloor;
-    d.verdict_text = fmt::format("at the noise floor: RMSE {:.3g} g is within the measurement noise, {}", rmse,
-                                 describe(n));
+    d.verdict_text = fmt::format("at the noise floor: RMSE {:.3g} g is within the measurement noise, {}{}", rmse,
+                                 describe(n), lof.tested ? "; " + lof.text : std::string());
     return;
   }
-  const std::string above = n.known() ? fmt::format("above the noise floor of {}", describe(n))
-                                      : "(the noise floor is " + describe(n) + ")";
+  std::string above = n.known() ? fmt::format("above the noise floor of {}", describe(n))
+                                : "(the noise floor is " + describe(n) + ")";
+  if (lof.significant && rmse <= n.hi_g)
+    above = fmt::format("although the RMSE {:.3g} g is within the noise of {}: {}", rmse, describe(n), lof.text);
   d.regions = residualRegions(data, fit, n);
   if (explained) {
     d.verdict = Verdict::kSuspects;
@@ -70,6 +75,12 @@ void judge(Assessment& d, const Dataset& data, const FitResult& fit, const std::
 }
 
 }  // namespace
+
+bool atNoiseFloor(const NoiseEstimate& noise, const FitResult& fit, LackOfFit* lof_out) {
+  const LackOfFit lof = lackOfFit(noise, fit.residual_g, fit.k);
+  if (lof_out) *lof_out = lof;
+  return noise.known() && fit.rmse_g <= noise.hi_g && !lof.significant;
+}
 
 const char* verdictName(Verdict v) {
   switch (v) {
@@ -89,6 +100,7 @@ Assessment assess(const Dataset& data, const ModelSpec& spec, const FitResult& f
   a.evidence = gatherEvidence(data);
   scoreEvidence(data, fit, spec, a.evidence, tested);
   a.next = nextAdvice(variables, a.evidence);
+  a.dynamics = dynamicsOf(fit);
   judge(a, data, fit, variables);
   return a;
 }

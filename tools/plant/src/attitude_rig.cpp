@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 namespace plant {
 
@@ -35,6 +36,16 @@ AttitudeRig::AttitudeRig(const RigCommon& common, const std::vector<ActuatorPara
     : common_(common), mounts_(mounts), power_(common.power) {
   if (motors.size() != mounts.size() || motors.empty())
     throw std::invalid_argument("an attitude rig needs one mount per motor, and at least one motor");
+  if (!common.spin.empty()) {
+    if (common.spin.size() != mounts.size())
+      throw std::invalid_argument("the rig has " + std::to_string(mounts.size()) + " motors: give one spin per motor, not " +
+                                  std::to_string(common.spin.size()));
+    for (std::size_t i = 0; i < mounts_.size(); ++i) {
+      if (common.spin[i] != 1 && common.spin[i] != -1)
+        throw std::invalid_argument("a motor's spin is +1 (counter-clockwise from above) or -1 (clockwise)");
+      mounts_[i].spin = common.spin[i];
+    }
+  }
   for (const ActuatorParams& p : motors) act_.emplace_back(p, common.env);
   dead_.assign(act_.size(), false);
   rotor_angle_rad_.assign(act_.size(), 0.0);

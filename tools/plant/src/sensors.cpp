@@ -28,13 +28,31 @@ void LoadCellSensor::settle(double down_g) {
 void LoadCellSensor::step(double dt_s, double down_g, double thrust_g) {
   thrust_g_ = thrust_g;
   // The amplifier clips before the filter.
-  double v = std::clamp(p_.idealMillivolts(down_g + p_.plate_g), p_.out_min_mv, p_.out_max_mv);
-  for (int i = 0; i < p_.order; ++i) {
-    const double tau = p_.lowpass_tau_s[i];
-    stage_mv_[i] = tau > 0.0 ? stage_mv_[i] + (v - stage_mv_[i]) * dt_s / (tau + dt_s) : v;
-    v = stage_mv_[i];
+  const double in = std::clamp(p_.idealMillivolts(down_g + p_.plate_g), p_.out_min_mv, p_.out_max_mv);
+  if (p_.order == 0) {
+    stage_mv_[0] = in;
+    return;
   }
-  if (p_.order == 0) stage_mv_[0] = v;
+  // The RC stages are continuous: sub-steps of at most kSubStepS, each stage exact for its input
+  // held at the mean of its start and end values (second order: no lead or lag of its own, so a
+  // step reaches the ADC as the analog cascade passes it, whatever the caller's step).
+  constexpr double kSubStepS = 125e-6;
+  const int subs = std::max(1, static_cast<int>(std::ceil(dt_s / kSubStepS - 1e-9)));
+  const double h = dt_s / subs;
+  if (h != gain_h_s_) {
+    for (int i = 0; i < p_.order; ++i)
+      gain_[i] = p_.lowpass_tau_s[i] > 0.0 ? 1.0 - std::exp(-h / p_.lowpass_tau_s[i]) : 1.0;
+    gain_h_s_ = h;
+  }
+  for (int k = 0; k < subs; ++k) {
+    double v_old = in, v_new = in;
+    for (int i = 0; i < p_.order; ++i) {
+      const double old = stage_mv_[i];
+      stage_mv_[i] += (0.5 * (v_old + v_new) - old) * gain_[i];
+      v_old = old;
+      v_new = stage_mv_[i];
+    }
+  }
 }
 
 double LoadCellSensor::filteredMillivolts() const {

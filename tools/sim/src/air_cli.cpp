@@ -36,6 +36,12 @@ std::vector<AirFault> parseFaults(const AirCliOptions& o) {
   return faults;
 }
 
+// "--OPTION TEXT: " in front of a parser's message once, as CLI11 reports check failures.
+std::string checkMessage(const std::invalid_argument& e, const std::string& option) {
+  const std::string what = e.what();
+  return what.rfind(option + " ", 0) == 0 ? what.substr(option.size() + 1) : what;
+}
+
 Mpu6050Params imuParams(const AirCliOptions& o) {
   Mpu6050Params p;
   p.seed = o.imu_seed;
@@ -94,8 +100,7 @@ void addAirOptions(CLI::App* cmd, AirCliOptions& o) {
           parseAirFault(spec);
           return {};
         } catch (const std::invalid_argument& e) {
-          const std::string what = e.what();  // CLI11 puts "--fault: " in front already
-          return what.rfind("--fault ", 0) == 0 ? what.substr(8) : what;
+          return checkMessage(e, "--fault");  // CLI11 puts "--fault: " in front already
         }
       });
   cmd->add_option("--log", o.log, "seesaw/gimbal: write the rig's true attitude, rates, motor forces "
@@ -105,6 +110,31 @@ void addAirOptions(CLI::App* cmd, AirCliOptions& o) {
       ->capture_default_str();
   cmd->add_option("--motor", o.motor_parts, "seesaw/gimbal: M:PRESET makes motor M another part, "
                                             "e.g. 2:kv900_11x4.7 (repeatable)");
+  cmd->add_option("--spin", o.spin, "gimbal: each motor's propeller direction, cw or ccw seen from above, motor 0 "
+                                    "first, e.g. cw,ccw,cw,ccw (default: the layout's, docs/sim.md)");
+  cmd->add_option("--imu-mount", o.imu_mount, std::string("the IMU's rotation against the airframe: ") + kImuMountSyntax)
+      ->check([](const std::string& spec) -> std::string {
+        try {
+          parseImuMount(spec);
+          return {};
+        } catch (const std::invalid_argument& e) {
+          return checkMessage(e, "--imu-mount");
+        }
+      })
+      ->capture_default_str();
+  cmd->add_option("--rc", o.rc, std::string("an RC receiver on these pins: ") + kRcSpecSyntax +
+                                  "; no signal until a value comes (docs/sim.md, \"RC receiver input\")")
+      ->check([](const std::string& spec) -> std::string {
+        try {
+          parseRcSpec(spec, nullptr);  // against the ESC pins (--esc-pins) when the board is made
+          return {};
+        } catch (const std::invalid_argument& e) {
+          return checkMessage(e, "--rc");
+        }
+      });
+  cmd->add_option("--rc-script", o.rc_script, "the receiver's channel values over simulated time: CSV "
+                                              "t_s,ch1..ch8 (us), a row T,loss stops the signal")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--vibration", o.vibration_g, "seesaw/gimbal: rotor imbalance at the IMU, g at 10,000 rpm")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
@@ -128,6 +158,25 @@ void applyEscPins(Board& board, const AirCliOptions& o) {
 
 bool isAirRig(const std::string& rig) { return rig == "seesaw" || rig == "gimbal"; }
 
+std::vector<int> parseSpin(const std::string& text, int motors) {
+  std::vector<int> spin;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string word = text.substr(start, comma - start);
+    start = comma + 1;
+    if (word != "cw" && word != "ccw")
+      throw std::invalid_argument(fmt::format("--spin {}: '{}' is neither cw nor ccw; write one direction per motor, "
+                                              "seen from above, e.g. --spin cw,ccw,cw,ccw",
+                                              text, word));
+    spin.push_back(word == "ccw" ? 1 : -1);
+  }
+  if (static_cast<int>(spin.size()) != motors)
+    throw std::invalid_argument(fmt::format("--spin {}: {} directions for a rig with {} motors; write one per motor, "
+                                            "motor 0 first", text, spin.size(), motors));
+  return spin;
+}
+
 std::unique_ptr<AirframeRig> makeAirframeRig(const std::string& elf, const std::string& rig,
                                              const std::string& preset,
                                              const std::vector<uint64_t>& seeds,
@@ -140,8 +189,15 @@ std::unique_ptr<AirframeRig> makeAirframeRig(const std::string& elf, const std::
   for (uint64_t i = s.size(); i < 4; ++i) s.push_back(i + 1);
   for (int i = 0; i < 4; ++i) a.motors[i] = motorForSeed(preset, s[i], 0.03);
   applyMotorParts(a.motors, o, s);
+  if (!o.spin.empty()) {
+    if (a.rig == AirRig::kSeesaw)
+      throw std::invalid_argument("--spin: the seesaw turns about its pivot only, where the propellers' directions "
+                                  "make no torque; use --spin with --rig gimbal");
+    a.gimbal.common.spin = parseSpin(o.spin, 4);
+  }
   a.imu = o.imu == "mpu6050";
   a.imu_params = imuParams(o);
+  a.imu_mount = parseImuMount(o.imu_mount);
   if (!o.esc_pins.empty()) a.esc_pins = parseEscPins(o.esc_pins);
   a.faults = parseFaults(o);
   a.log_period_s = o.log.empty() ? 0.0 : o.log_period_s;
@@ -155,14 +211,40 @@ std::unique_ptr<AirframeRig> makeAirframeRig(const std::string& elf, const std::
   return made;
 }
 
+// --- RC input ---
+
+std::unique_ptr<RcOnBoard> makeRcInput(Board& board, const AirCliOptions& o, bool pty) {
+  if (o.rc.empty()) {
+    if (!o.rc_script.empty() || o.rc_pty)
+      throw std::invalid_argument(fmt::format("{} needs a receiver: add --rc ppm:PIN or --rc pwm:PIN,PIN,...",
+                                              o.rc_script.empty() ? "--rc-pty" : "--rc-script"));
+    return nullptr;
+  }
+  std::vector<RcScriptRow> rows;
+  if (!o.rc_script.empty()) rows = readRcScript(o.rc_script);  // errors before the board runs
+  auto rc = std::make_unique<RcOnBoard>(board, parseRcSpec(o.rc, &board.escPins()));
+  if (!rows.empty()) rc->play(std::move(rows));
+  if (pty || o.rc_pty) rc->openPty();
+  return rc;
+}
+
+std::string rcSummary(const RcOnBoard& rc) {
+  constexpr std::size_t kShown = 20;
+  const auto& a = rc.applied();
+  std::string s = fmt::format("rc: {}, {} changes applied, {} frames sent", rc.describe(), a.size(), rc.part().frames);
+  for (std::size_t i = 0; i < a.size() && i < kShown; ++i) s += "\n  rc " + a[i];
+  if (a.size() > kShown) s += fmt::format("\n  ... {} more", a.size() - kShown);
+  return s;
+}
+
 // --- a board without a rig ---
 
 StillAirframe::StillAirframe(Board& board, const std::string& rig, const AirCliOptions& o) : board_(board) {
   if (!o.log.empty())
     throw std::invalid_argument(fmt::format("--log records a rig's attitude: use --rig seesaw or "
                                             "gimbal (the {} stands still)", rig));
-  if (!o.motor_parts.empty() || o.vibration_g > 0)
-    throw std::invalid_argument("--motor and --vibration need --rig seesaw or gimbal");
+  if (!o.motor_parts.empty() || o.vibration_g > 0 || !o.spin.empty())
+    throw std::invalid_argument("--motor, --vibration and --spin need --rig seesaw or gimbal");
   for (const AirFault& f : parseFaults(o)) {
     if (isMotorFault(f))
       throw std::invalid_argument(fmt::format("--fault {}: motor faults need --rig seesaw or gimbal", f.spec));
@@ -171,7 +253,8 @@ StillAirframe::StillAirframe(Board& board, const std::string& rig, const AirCliO
     pending_.push_back(f);
   }
   std::stable_sort(pending_.begin(), pending_.end(), [](auto& a, auto& b) { return a.at_s < b.at_s; });
-  if (o.imu == "mpu6050") imu_ = std::make_unique<ImuOnBoard>(board_, imuParams(o), levelAtRest());
+  if (o.imu == "mpu6050")
+    imu_ = std::make_unique<ImuOnBoard>(board_, imuParams(o), levelAtRest(), parseImuMount(o.imu_mount));
   std::weak_ptr<int> alive = alive_;
   board_.addResetListener([this, alive](uint64_t) {
     if (!alive.expired()) arm();  // a reset cancelled the cycle timer
@@ -234,6 +317,10 @@ void runOnce(const RunOptions& r) {
   }
   std::unique_ptr<StillAirframe> still;
   if (!rig) still = std::make_unique<StillAirframe>(*board, r.rig, r.air);
+  const std::unique_ptr<RcOnBoard> rc = makeRcInput(*board, r.air, false);
+  if (rc && !rc->ptyPath().empty())
+    fmt::print(stderr, "sim run: RC receiver {}; live channel values: type 'ch 1500 1500 1000 1500' lines on {}\n",
+               rc->describe(), rc->ptyPath());
   if (!r.eeprom.empty()) board->setEeprom(hex::readIntelHexFile(r.eeprom, kEepromBytes));
   if (!r.quiet)
     board->addOutputListener([](uint8_t b) {
@@ -250,6 +337,7 @@ void runOnce(const RunOptions& r) {
   fmt::print(stderr, "sim run: {:.3f} s simulated in {:.2f} s wall ({}); {}\n",
              board->simulatedSeconds(), board->wallSeconds(), speedText(board->realtimeFactor()),
              rig ? rig->describe() : fmt::format("no rig, IMU {}", r.air.imu));
+  if (rc) fmt::print(stderr, "  {}\n", rcSummary(*rc));
   if (!r.air.log.empty()) fmt::print(stderr, "  truth log: {}\n", r.air.log);
 }
 
@@ -277,6 +365,8 @@ void addRunCommand(CLI::App& sim) {
   cmd->add_option("--send", r->send, "a line typed into UART0 at the start (repeatable; Enter = CR)");
   cmd->add_flag("--quiet", r->quiet, "do not copy the UART output to stdout");
   addAirOptions(cmd, r->air);
+  cmd->add_flag("--rc-pty", r->air.rc_pty, "with --rc: also open the live RC pseudo-terminal (sim console "
+                                           "always does)");
   cmd->callback([r] {
     try {
       runOnce(*r);

@@ -67,7 +67,7 @@ void AirframeRig::wire() {
       m.specific_force_g = t.specific_force_g;
       m.temp_c = o_.imu_temp_c;
       return m;
-    });
+    }, o_.imu_mount);
   }
 }
 
@@ -198,10 +198,14 @@ std::string AirframeRig::describe() const {
                       g.arm_m, g.inertia_kgm2[0], g.inertia_kgm2[1], g.inertia_kgm2[2]);
   }
   std::string motors;
-  for (int i = 0; i < rig_->motors(); ++i) motors += (i ? ", " : "") + rig_->actuator(i).params().name;
-  const std::string imu = o_.imu ? fmt::format("MPU-6050 at 0x{:02X} seed {}{}", o_.imu_params.address,
-                                               o_.imu_params.seed, o_.imu_params.unit_errors ? "" : " (ideal)")
-                                 : std::string("no IMU");
+  for (int i = 0; i < rig_->motors(); ++i)
+    motors += fmt::format("{}{} {}", i ? ", " : "", rig_->actuator(i).params().name, rig_->mount(i).spin > 0 ? "CCW" : "CW");
+  const bool turned = o_.imu_mount.yaw_deg != 0 || o_.imu_mount.flipped;
+  const std::string imu =
+      o_.imu ? fmt::format("MPU-6050 at 0x{:02X} seed {}{}{}", o_.imu_params.address, o_.imu_params.seed,
+                           o_.imu_params.unit_errors ? "" : " (ideal)",
+                           turned ? ", mounted " + imuMountName(o_.imu_mount) : std::string())
+             : std::string("no IMU");
   std::string pins;
   const auto table = boardEscPins();
   for (int i = 0; i < rig_->motors(); ++i)

@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "sim/ext_int.hpp"
+#include "sim/pin_change.hpp"
 #include "sim/pin_names.hpp"
 #include "sim/ports.hpp"
 #include "sim/timers.hpp"
@@ -67,6 +68,7 @@ void Board::wire() {
   ext_int_ = std::make_unique<ExtInt>(avr_);
   timers_ = std::make_unique<Timers>(avr_, *ports_, [this](const std::string& why) { stop(why); });
   twi_ = std::make_unique<Twi>(avr_);
+  pin_change_ = std::make_unique<PinChange>(avr_);
   esc_pins_ = boardEscPins();
   wireEscPins(true);
   avr_irq_register_notify(avr_io_getirq(avr_, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_OUT_TRIGGER),
@@ -88,6 +90,7 @@ Board::~Board() {
   // Their IRQs and handlers live in the core: before avr_terminate.
   if (ports_) wireEscPins(false);
   twi_.reset();
+  pin_change_.reset();
   timers_.reset();
   ext_int_.reset();
   ports_.reset();

@@ -394,10 +394,15 @@ void runConsoleCommand(ConsoleArgs a) {
   board.setEeprom(image);
   if (!r.airframe) r.still = std::make_unique<StillAirframe>(board, which, a.air);
   if (r.airframe) fmt::print("rig: {}\n", r.airframe->describe());
+  const std::unique_ptr<RcOnBoard> rc = makeRcInput(board, a.air, true);
   PtyBridge pty(board);
   fmt::print("simulated board ({}, {} rig) on {}\n", fs::path(a.elf).filename().string(), which,
              pty.path());
   fmt::print("open it with:  screen {0} {1}   or   picocom -b {1} {0}\n", pty.path(), hal::kUartBaud);
+  if (rc)
+    fmt::print("RC receiver ({}) on {}: type 'ch 1500 1500 1000 1500 ...' (us, channels 1..8), 'loss', "
+               "'status'; no signal until then{}\n",
+               rc->describe(), rc->ptyPath(), a.air.rc_script.empty() ? "" : " or the script's first row");
   fmt::print("Ctrl-C here ends the simulation{}.\n",
              a.read_only || a.eeprom.empty() ? "" : " and saves the EEPROM to " + a.eeprom);
   std::fflush(stdout);
@@ -422,6 +427,7 @@ void runConsoleCommand(ConsoleArgs a) {
   }
   fmt::print("{:.1f} s simulated (paced at {:g}x; the simulation alone ran at {})\n",
              board.simulatedSeconds(), a.speed, speedText(board.realtimeFactor()));
+  if (rc) fmt::print("{}\n", rcSummary(*rc));
   if (!a.air.log.empty()) fmt::print("truth log: {}\n", a.air.log);
 }
 
@@ -665,6 +671,7 @@ void registerCommands(CLI::App& app) {
   addRunCommand(*sim);
   addImuCommand(*sim);
   addSwapCommand(*sim);
+  addDynCommand(*sim);
 }
 
 }  // namespace sim

@@ -148,7 +148,27 @@ void Ports::setOverride(char port, int bit, int source, bool connected, bool lev
 void Ports::setInput(char port, int bit, bool level, uint64_t cycle) {
   Port* p = find(port);
   if (!p || bit < 0 || bit > 7) throw std::invalid_argument("setInput: no such pin");
+  const auto mask = static_cast<uint8_t>(1u << bit);
+  setExternalLevels(avr_, port, mask, level ? mask : 0);
   deliver(cycle, *p, bit, level ? 1 : 0);
+}
+
+void Ports::releaseInput(char port, int bit) {
+  if (find(port) && bit >= 0 && bit < 8) clearExternalLevels(avr_, port, static_cast<uint8_t>(1u << bit));
+}
+
+void setExternalLevels(avr_t* avr, char port, uint8_t mask, uint8_t value) {
+  avr_ioport_t* p = corePort(avr, port);
+  if (!p) throw std::invalid_argument(std::string("this simavr core has no PORT") + port);
+  p->external.pull_mask = static_cast<uint8_t>(p->external.pull_mask | mask);
+  p->external.pull_value = static_cast<uint8_t>((p->external.pull_value & ~mask) | (value & mask));
+}
+
+void clearExternalLevels(avr_t* avr, char port, uint8_t mask) {
+  avr_ioport_t* p = corePort(avr, port);
+  if (!p) throw std::invalid_argument(std::string("this simavr core has no PORT") + port);
+  p->external.pull_mask = static_cast<uint8_t>(p->external.pull_mask & ~mask);
+  p->external.pull_value = static_cast<uint8_t>(p->external.pull_value & ~mask);
 }
 
 void Ports::deliver(uint64_t cycle, Port& p, int bit, int level) {

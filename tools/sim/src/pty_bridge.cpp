@@ -53,22 +53,38 @@ void setRaw(int fd) {
 
 }  // namespace
 
+RawPty openRawPty() {
+  RawPty pty;
+  pty.master_fd = ::posix_openpt(O_RDWR | O_NOCTTY);
+  if (pty.master_fd < 0 || ::grantpt(pty.master_fd) != 0 || ::unlockpt(pty.master_fd) != 0) {
+    const int error = errno;
+    if (pty.master_fd >= 0) ::close(pty.master_fd);
+    throw std::runtime_error(fmt::format(
+        "cannot open a pseudo-terminal ({}); is /dev/pts mounted?", std::strerror(error)));
+  }
+  const char* name = ::ptsname(pty.master_fd);
+  if (!name) {
+    ::close(pty.master_fd);
+    throw std::runtime_error("ptsname failed: no terminal name for the pty");
+  }
+  pty.path = name;
+  // Raw mode on the slave side; the pty keeps it between clients.
+  pty.slave_fd = ::open(pty.path.c_str(), O_RDWR | O_NOCTTY);
+  if (pty.slave_fd >= 0) setRaw(pty.slave_fd);
+  ::fcntl(pty.master_fd, F_SETFL, ::fcntl(pty.master_fd, F_GETFL) | O_NONBLOCK);
+  return pty;
+}
+
 struct PtyBridge::LoopState {
   double idle_slice_s, busy_slice_s;
 };
 
 PtyBridge::PtyBridge(Board& board, PtyOptions options)
     : board_(board), options_(std::move(options)) {
-  master_fd_ = ::posix_openpt(O_RDWR | O_NOCTTY);
-  if (master_fd_ < 0 || ::grantpt(master_fd_) != 0 || ::unlockpt(master_fd_) != 0)
-    throw std::runtime_error(fmt::format(
-        "cannot open a pseudo-terminal ({}); is /dev/pts mounted?", std::strerror(errno)));
-  const char* name = ::ptsname(master_fd_);
-  if (!name) throw std::runtime_error("ptsname failed: no terminal name for the pty");
-  path_ = name;
-  // Raw mode on the slave side; the pty keeps it between clients.
-  slave_fd_ = ::open(path_.c_str(), O_RDWR | O_NOCTTY);
-  if (slave_fd_ >= 0) setRaw(slave_fd_);
+  const RawPty pty = openRawPty();
+  master_fd_ = pty.master_fd;
+  slave_fd_ = pty.slave_fd;
+  path_ = pty.path;
   if (options_.reset_on_open) {
     // Packet mode: the slave's tcflush shows up as a status byte on the master. With our own
     // slave descriptor closed the master sees POLLHUP until a client opens the port.
@@ -79,7 +95,6 @@ PtyBridge::PtyBridge(Board& board, PtyOptions options)
     if (slave_fd_ >= 0) ::close(slave_fd_);
     slave_fd_ = -1;
   }
-  ::fcntl(master_fd_, F_SETFL, ::fcntl(master_fd_, F_GETFL) | O_NONBLOCK);
   if (!options_.link_path.empty()) {
     struct stat st {};
     if (::lstat(options_.link_path.c_str(), &st) == 0) {

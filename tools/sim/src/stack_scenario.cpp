@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <regex>
+#include <stdexcept>
+#include <string>
 
 #include "sim/board.hpp"
 #include "sim/console.hpp"
@@ -119,6 +121,14 @@ StackHeadroom flyDeepestPaths(const std::string& elf, Console& con) {
   h.scanned_untouched_bytes = scanUntouched(board, elf);
   h.console_tail = con.tail(40);
   return h;
+}
+
+void flyDisarmedPaths(Console& con) {
+  for (const char* line : {"param list", "param save"}) {
+    for (const std::string& l : con.command(line, 5.0))
+      if (l.rfind("error: ", 0) == 0 && l.find("no room") == std::string::npos)  // thesis records: no room
+        throw std::runtime_error(std::string("fly refused `") + line + "`: " + l);
+  }
 }
 
 }  // namespace sim

@@ -27,6 +27,8 @@ const char* modeName(Mode mode) {
       return "pwm";
     case Mode::kArduPilot:
       return "ardupilot";
+    case Mode::kPeer:
+      return "peer";
     case Mode::kForce:
       break;
   }
@@ -63,13 +65,18 @@ std::vector<RunSpec> plan(const SwapOptions& o) {
         for (Gains gains : o.gains)
           for (const char* axis : {"roll", "pitch"}) {
             if (rig == AirRig::kSeesaw && std::string(axis) == "pitch") continue;  // one axis
-            for (uint64_t seed : o.imu_seeds) runs.push_back({rig, mode, part, gains, axis, seed});
+            for (uint64_t seed : o.imu_seeds) runs.push_back({rig, mode, part, gains, axis, seed, ""});
           }
+  if (!o.peer) return runs;
+  for (const std::string& part : parts)  // the peer: the gimbal, its own gains
+    for (const char* axis : {"roll", "pitch"})
+      for (uint64_t seed : o.imu_seeds)
+        runs.push_back({AirRig::kGimbal, Mode::kPeer, part, Gains::kPd, axis, seed, o.peer->name});
   return runs;
 }
 
 std::string groupOf(const RunSpec& r) {
-  return fmt::format("{} {} {}", airRigName(r.rig), modeName(r.mode), r.part);
+  return fmt::format("{} {} {}", airRigName(r.rig), runModeName(r), r.part);
 }
 
 // Flies the runs on `jobs` threads (results in plan order); a progress line per finished group.
@@ -86,7 +93,8 @@ std::vector<RunResult> flyAll(const SwapOptions& o, const Calibration& c, const 
   auto worker = [&] {
     for (std::size_t i; (i = next++) < runs.size();) {
       try {
-        results[i] = flyRun(o, c, runs[i], (series / (runId(runs[i]) + ".csv")).string());
+        const std::string csv = (series / (runId(runs[i]) + ".csv")).string();
+        results[i] = runs[i].mode == Mode::kPeer ? flyPeerRun(o, runs[i], csv) : flyRun(o, c, runs[i], csv);
       } catch (...) {
         const std::lock_guard<std::mutex> lock(mu);
         if (!failure) failure = std::current_exception();
@@ -219,12 +227,17 @@ SwapResult runSwap(const SwapOptions& o) {
   for (const std::string& p : o.parts) findPart(p);  // a wrong name fails before any gather
   SwapResult res;
   res.options = o;
-  res.calibration = calibrate(o);
+  if (!o.modes.empty()) res.calibration = calibrate(o);  // a peer alone has no records
   res.dynamics = measureDynamics(o);
   const std::vector<RunSpec> runs = plan(o);
-  progress(fmt::format(
-      "{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s)", runs.size(),
-      o.rigs.size(), o.modes.size(), o.parts.size(), o.gains.size(), o.imu_seeds.size()));
+  const std::string peer = o.peer ? "the peer " + o.peer->name + " on the gimbal" : "";
+  if (o.modes.empty())
+    progress(fmt::format("{} flights: {}, stock and {} part(s), {} IMU unit(s)", runs.size(), peer, o.parts.size(),
+                         o.imu_seeds.size()));
+  else
+    progress(fmt::format("{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s){}",
+                         runs.size(), o.rigs.size(), o.modes.size(), o.parts.size(), o.gains.size(),
+                         o.imu_seeds.size(), peer.empty() ? "" : ", " + peer));
   res.runs = flyAll(o, res.calibration, runs, progress);
   res.targets = swapTargets(res.runs, o.parts);
   riseChanges(res.dynamics.parts, res.runs);

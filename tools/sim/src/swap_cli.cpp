@@ -22,7 +22,8 @@ struct SwapArgs {
   std::string json, model = "v2";
   std::vector<std::string> rigs = {"seesaw", "gimbal"}, modes = {"force", "generic", "pwm", "ardupilot"},
                            gains = {"pd", "pid"};
-  bool quick = false, no_plots = false;
+  bool quick = false, no_plots = false, peer_only = false;
+  std::string peer;
 };
 
 void declareSwapOptions(CLI::App* cmd, SwapArgs& a) {
@@ -80,6 +81,10 @@ void declareSwapOptions(CLI::App* cmd, SwapArgs& a) {
   cmd->add_option("--gather-elf", o->gather_elf, "gather_store ELF image")->capture_default_str();
   cmd->add_option("--fly-elf", o->fly_elf, "fly ELF image")->capture_default_str();
   cmd->add_flag("--no-plots", a.no_plots, "no gnuplot");
+  cmd->add_option("--peer", a.peer,
+                  "a peer's profile (docs/sim.md, \"A peer in the swap\"): another firmware flown on the gimbal "
+                  "with stock and every part, its runs in runs[] as mode peer:NAME");
+  cmd->add_flag("--peer-only", a.peer_only, "fly only the peer (no fly mode; nothing is calibrated)");
   cmd->add_flag("--no-level", [o](std::int64_t) { o->level = false; },
                 "skip fly's `level` before each flight (the IMU's zero-g offsets then tilt what it holds)");
 }
@@ -96,7 +101,12 @@ swap::SwapOptions optionsFrom(const SwapArgs& a) {
     o.modes = {swap::Mode::kForce, swap::Mode::kPwm};
     o.gains = {swap::Gains::kPd};
   }
-  if (o.imu_seeds.empty() || o.rigs.empty() || o.modes.empty() || o.gains.empty())
+  if (!a.peer.empty()) o.peer = std::make_shared<const PeerProfile>(readPeerProfile(a.peer));
+  if (a.peer_only) {
+    if (!o.peer) throw std::invalid_argument("--peer-only needs --peer FILE");
+    o.modes.clear();
+  }
+  if (o.imu_seeds.empty() || o.rigs.empty() || (o.modes.empty() && !o.peer) || o.gains.empty())
     throw std::invalid_argument("nothing to fly: give at least one rig, mode, gain set and IMU seed");
   return o;
 }
@@ -107,7 +117,8 @@ void runSwapCommand(const SwapArgs& a) {
   fmt::print("{}", swap::formatTable(r));
   fmt::print("\n{}\n{}", swap::formatTargets(r), swap::formatDynamics(r));
   const auto& m = r.calibration.modes;
-  fmt::print(
+  if (!o.modes.empty())
+    fmt::print(
       "modes without records: pwm hover {} us at {:.3f} g/us (the stock LiPo sweeps); ardupilot {} (the "
       "lab's "
       "fit on {} rows of the stock sweeps, RMS {:.1f} g)\n",

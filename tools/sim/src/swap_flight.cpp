@@ -11,6 +11,7 @@
 
 #include "sim/console.hpp"
 #include "sim/swap.hpp"
+#include "swap_flight_parts.hpp"
 #include "thrustcal/limits.hpp"
 
 namespace sim::swap {
@@ -44,6 +45,8 @@ std::vector<std::string> setupLines(const SwapOptions& o, const Calibration& c, 
       lines.insert(lines.end(), c.modes.ardupilot_lines.begin(), c.modes.ardupilot_lines.end());
       lines.insert(lines.end(), {"mode ardupilot", fmt::format("thrust {}", thrust_g)});
       break;
+    case Mode::kPeer:
+      throw std::logic_error("a peer's run is not fly's (flyPeerRun)");
   }
   return lines;
 }
@@ -58,6 +61,8 @@ void counterweigh(plant::SeesawParams& s, const plant::ActuatorParams& replaced,
   if (motor_kg != 0) s.parts.push_back({"counterweight (motor)", motor_kg, s.arm_m, s.motor_height_m, 0.0});
   if (prop_kg != 0) s.parts.push_back({"counterweight (propeller)", prop_kg, s.arm_m, s.prop_height_m, 0.0});
 }
+
+}  // namespace
 
 AirframeOptions rigOptions(const SwapOptions& o, const RunSpec& r) {
   AirframeOptions a;
@@ -74,6 +79,8 @@ AirframeOptions rigOptions(const SwapOptions& o, const RunSpec& r) {
   a.log_period_s = o.log_period_s;
   return a;
 }
+
+namespace {
 
 // `s` simulated seconds with a keep-alive line every 100 ms.
 void flyFor(AirframeRig& rig, double s) {
@@ -131,6 +138,8 @@ double angleOf(const AirSample& s, const std::string& axis) {
   return axis == "roll" ? s.truth.roll_deg : s.truth.pitch_deg;
 }
 
+}  // namespace
+
 void writeSeries(const std::string& path, const std::vector<AirSample>& rows, double t_step, const RunSpec& r,
                  double sp_deg) {
   std::ofstream out(path, std::ios::trunc);
@@ -151,9 +160,13 @@ void writeSeries(const std::string& path, const std::vector<AirSample>& rows, do
   }
 }
 
+namespace {
+
 double settleOf(const SwapOptions& o, const RunSpec& r) {
   return r.gains == Gains::kPid ? o.pid_settle_s : o.settle_s;
 }
+
+}  // namespace
 
 // The rows of the rig's log from the level flight before the step to the window's end.
 std::vector<AirSample> windowOf(const std::vector<AirSample>& log, double t_step, double settle_s,
@@ -185,9 +198,13 @@ void measure(RunResult& res, const std::vector<AirSample>& rows, double t_step, 
   res.hover_pwm_spread_us = meanSpread(t, pulses, -kSpreadWindowS, 0.0);
 }
 
-}  // namespace
+std::string runModeName(const RunSpec& r) {
+  return r.mode == Mode::kPeer ? "peer:" + r.peer : std::string(modeName(r.mode));
+}
 
 std::string runId(const RunSpec& r) {
+  if (r.mode == Mode::kPeer)  // its own gains
+    return fmt::format("{}_peer-{}_{}_{}_s{}", airRigName(r.rig), r.peer, r.part, r.axis, r.imu_seed);
   return fmt::format("{}_{}_{}_{}_{}_s{}", airRigName(r.rig), modeName(r.mode), gainsName(r.gains), r.part,
                      r.axis, r.imu_seed);
 }
@@ -206,15 +223,20 @@ RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, c
   mustSay(con, r.axis == "roll" ? fmt::format("sp {} 0", o.step_deg) : fmt::format("sp 0 {}", o.step_deg), r);
   flyFor(rig, t_step + o.window_s - rig.board().timeS());
   res.integrator_mnm = integratorOf(con, r);
+  finishRun(res, rig, t_step, settle_s, o, csv_path, wall0);
+  return res;
+}
+
+void finishRun(RunResult& res, AirframeRig& rig, double t_step, double settle_s, const SwapOptions& o,
+               const std::string& csv_path, std::chrono::steady_clock::time_point wall0) {
   const std::vector<AirSample> rows = windowOf(rig.samples(), t_step, settle_s, o.window_s);
   measure(res, rows, t_step, o);
   if (!csv_path.empty()) {
-    writeSeries(csv_path, rows, t_step, r, o.step_deg);
+    writeSeries(csv_path, rows, t_step, res.spec, o.step_deg);
     res.csv_path = csv_path;
   }
   res.simulated_s = rig.board().timeS();
   res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  return res;
 }
 
 }  // namespace sim::swap

@@ -14,9 +14,9 @@ nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlo
 nlohmann::json runJson(const RunResult& r, int step_deg) {
   const StepMetrics& m = r.metrics;
   return {{"rig", airRigName(r.spec.rig)},
-          {"mode", modeName(r.spec.mode)},
+          {"mode", runModeName(r.spec)},
           {"part", r.spec.part},
-          {"gains", gainsName(r.spec.gains)},
+          {"gains", r.spec.mode == Mode::kPeer ? "own" : gainsName(r.spec.gains)},
           {"axis", r.spec.axis},
           {"step_deg", step_deg},
           {"seed", r.spec.imu_seed},
@@ -54,7 +54,13 @@ nlohmann::json setupJson(const SwapOptions& o) {
           {"window_s", o.window_s},
           {"log_period_s", o.log_period_s},
           {"gimbal_layout", "plus"},
-          {"calibration_model", gatherModelName(o.model)}};
+          {"calibration_model", gatherModelName(o.model)},
+          {"peer", o.peer ? nlohmann::json({{"name", o.peer->name},
+                                            {"profile", o.peer->file},
+                                            {"elf", o.peer->elf},
+                                            {"layout", o.peer->layout},
+                                            {"rc", o.peer->rc.text}})
+                          : nlohmann::json(nullptr)}};
 }
 
 nlohmann::json calibrationJson(const Calibration& c) {

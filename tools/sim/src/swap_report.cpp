@@ -58,14 +58,14 @@ std::string fig(double v, int decimals) {
   return std::isfinite(v) ? fmt::format("{:.{}f}", v, decimals) : "-";
 }
 
-std::string tableRow(const Means& m, const Means* stock, Mode mode, const std::string& part) {
+std::string tableRow(const Means& m, const Means* stock, const std::string& mode, const std::string& part) {
   auto vs = [&](double v, double s, const char* how) -> std::string {
     if (!stock || !std::isfinite(v) || !std::isfinite(s) || s == 0) return "";
     if (std::string(how) == "%") return fmt::format(" ({:+.1f} %)", 100.0 * (v / s - 1.0));
     if (std::string(how) == "pp") return fmt::format(" ({:+.1f} pp)", v - s);
     return fmt::format(" ({:.2f}x)", v / s);
   };
-  return fmt::format("{:<10} {:<14} {:<17} {:<17} {:<11} {:<8} {:<15} {:<11} {}\n", modeName(mode), part,
+  return fmt::format("{:<10} {:<14} {:<17} {:<17} {:<11} {:<8} {:<15} {:<11} {}\n", mode, part,
                      fig(m.rise_s, 3) + vs(m.rise_s, stock ? stock->rise_s : 0, "%"),
                      fig(m.overshoot_pct, 1) + vs(m.overshoot_pct, stock ? stock->overshoot_pct : 0, "pp"),
                      fig(m.settling_s, 2), fig(m.sse_deg, 2),
@@ -126,7 +126,7 @@ std::string stepsScript(const SwapResult& res, Mode mode, const fs::path& png,
                        quote(fmt::format("{} {}", airRigName(rig), axis)), axis);
       std::string plot = "plot ";
       for (const std::string& p : parts) {
-        const RunSpec spec{rig, mode, p, Gains::kPd, axis, o.imu_seeds.front()};
+        const RunSpec spec{rig, mode, p, Gains::kPd, axis, o.imu_seeds.front(), ""};
         const fs::path csv = fs::path(o.out_dir) / "series" / (runId(spec) + ".csv");
         plot += fmt::format("{} using 1:3 with lines lw 2 title {}, ", quote(csv.string()), quote(p));
         if (p == kStock)
@@ -164,10 +164,33 @@ std::string barsScript(const SwapResult& res, Mode mode, const fs::path& tsv, co
   return s + "unset multiplot\nunset output\n";
 }
 
+std::string tableHead() {
+  return fmt::format("{:<10} {:<14} {:<17} {:<17} {:<11} {:<8} {:<15} {:<11} {}\n", "mode", "part", "rise_s",
+                     "overshoot_pct", "settling_s", "sse_deg", "itae_deg_s2", "integ_mNm", "spread_us");
+}
+
+// The peer's rows (the gimbal, its own gains), each part against its own stock runs.
+std::string peerTable(const SwapResult& res) {
+  const SwapOptions& o = res.options;
+  if (!o.peer) return "";
+  std::string out;
+  for (const std::string& axis : axesOf(AirRig::kGimbal)) {
+    out += fmt::format("\ngimbal {}, the peer {} with its own gains ({}), {}-degree step, mean of {} IMU unit(s)\n",
+                       axis, o.peer->name, o.peer->file, o.step_deg, o.imu_seeds.size());
+    out += tableHead();
+    const Means stock = meansOf(res, AirRig::kGimbal, axis, Gains::kPd, Mode::kPeer, kStock);
+    for (const std::string& p : partsOf(o))
+      out += tableRow(meansOf(res, AirRig::kGimbal, axis, Gains::kPd, Mode::kPeer, p), p == kStock ? nullptr : &stock,
+                      "peer:" + o.peer->name, p);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string formatTable(const SwapResult& res) {
   const SwapOptions& o = res.options;
+  if (o.modes.empty()) return peerTable(res);
   std::string out;
   for (AirRig rig : o.rigs)
     for (const std::string& axis : axesOf(rig))
@@ -178,16 +201,14 @@ std::string formatTable(const SwapResult& res) {
             "against stock in the same mode in brackets\n",
             airRigName(rig), axis, gains == Gains::kPid ? "PID" : "PD", o.pd_gains[0], ki, o.pd_gains[2],
             o.step_deg, o.imu_seeds.size());
-        out += fmt::format("{:<10} {:<14} {:<17} {:<17} {:<11} {:<8} {:<15} {:<11} {}\n", "mode", "part",
-                           "rise_s", "overshoot_pct", "settling_s", "sse_deg", "itae_deg_s2", "integ_mNm",
-                           "spread_us");
+        out += tableHead();
         for (Mode mode : o.modes) {
           const Means stock = meansOf(res, rig, axis, gains, mode, kStock);
           for (const std::string& p : partsOf(o))
-            out += tableRow(meansOf(res, rig, axis, gains, mode, p), p == kStock ? nullptr : &stock, mode, p);
+            out += tableRow(meansOf(res, rig, axis, gains, mode, p), p == kStock ? nullptr : &stock, modeName(mode), p);
         }
       }
-  return out;
+  return out + peerTable(res);
 }
 
 std::string formatTargets(const SwapResult& res) {

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "hal/board.hpp"
+#include "sim/ports.hpp"
 
 extern "C" {
 #include <simavr/avr_ioport.h>
@@ -343,17 +344,11 @@ void Twi::applyLines() {
   const uint8_t sda = static_cast<uint8_t>(1u << hal::kTwiPins.sda_bit);
   const uint8_t scl = static_cast<uint8_t>(1u << hal::kTwiPins.scl_bit);
   if (!pull_ups_) {  // nothing on the bus: the pins float as simavr has them
-    avr_ioport_external_t none{};
-    none.name = hal::kTwiPins.port;
-    avr_ioctl(avr_, AVR_IOCTL_IOPORT_SET_EXTERNAL(hal::kTwiPins.port), &none);
+    clearExternalLevels(avr_, hal::kTwiPins.port, sda | scl);
     return;
   }
   // INT0/INT1 share the pins: sim::ExtInt follows their levels without polling them.
-  avr_ioport_external_t ext{};
-  ext.name = hal::kTwiPins.port;
-  ext.mask = sda | scl;
-  ext.value = static_cast<uint8_t>((sda_low_ ? 0 : sda) | scl);
-  avr_ioctl(avr_, AVR_IOCTL_IOPORT_SET_EXTERNAL(hal::kTwiPins.port), &ext);
+  setExternalLevels(avr_, hal::kTwiPins.port, sda | scl, static_cast<uint8_t>((sda_low_ ? 0 : sda) | scl));
   avr_ioport_state_t st{};
   avr_ioctl(avr_, AVR_IOCTL_IOPORT_GETSTATE(hal::kTwiPins.port), &st);
   const bool scl_driven_low = (st.ddr & scl) && !(st.port & scl);

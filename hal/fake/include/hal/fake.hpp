@@ -25,6 +25,9 @@ void setAdcMillivolts(uint8_t channel, uint16_t mv);  // counts = round(mv * 102
 void setAdcCounts(uint8_t channel, uint16_t counts);
 void setAdcSource(std::function<uint16_t(uint8_t channel)> source);  // empty = fixed values
 uint32_t adcConversions();
+// Simulated time per conversion (0, the default: none). With it, Clock::micros() advances
+// within the millisecond and each whole millisecond runs the tick (gather_store's step logs).
+void setAdcConversionUs(uint16_t us);
 
 // ESC outputs as the code last wrote them (0 before Esc::init).
 uint16_t pulseUs(uint8_t channel);

@@ -58,7 +58,9 @@ std::string shownPath(const std::string& path);
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
 Section footprintSection(const AvrPaths& paths);
-Section calibrationSection(const AvrPaths& paths);
+// fast_sweeps: also 200 ms and 100 ms sweeps, as read and corrected with each motor's measured
+// dynamics (issue 26 item 2; several minutes more of simavr).
+Section calibrationSection(const AvrPaths& paths, bool fast_sweeps = false);
 // quick: 10 s hold instead of 60 s.
 Section liftoffSection(const AvrPaths& paths, bool quick);
 // read_run's CPU load, frame cycles and loop period in simavr at 50 and 400 Hz.
@@ -73,6 +75,9 @@ Section flySection(const AvrPaths& paths);
 // Issue 25 item 5 (sections_speed.cpp): simulated seconds per wall second for read_run, fly on
 // the gimbal and a firmware with phase-correct PWM on INT4/INT5 (target >= 5x real time).
 Section speedSection(const AvrPaths& paths);
+// Issue 26 item 1 (sections_dynamics.cpp): gather_store's dyn in simavr on the stock motors and
+// the swap parts, each time constant against the plant's own. quick: the KV900 part alone, a coarser calibration sweep.
+Section dynamicsSection(const AvrPaths& paths, bool quick);
 // Footprint rows: each image's stack never used after its deepest paths (simulated).
 void addStackHeadroom(const AvrPaths& paths, Table& table, nlohmann::json& json,
                       std::vector<TargetCheck>& targets);

@@ -10,6 +10,7 @@
 
 #include "plant/params.hpp"
 #include "plant/power_source.hpp"
+#include "thrustcal/dynamics.hpp"
 
 namespace bench {
 
@@ -25,6 +26,11 @@ struct SweepSpec {
   // gather_store's force reading with settle auto: the central mean (tc::kForceCentral of the
   // 201 readings, 1/16 count; tare too) instead of their median (the thesis's reading).
   bool fine_force = false;
+  // A fixed-settle sweep corrected with the motor's measured dynamics and the bench's response
+  // (tc::SweepLagCorrector, as gather_store corrects its own: issue 26 item 2). Ignored with
+  // settle_auto or when the dynamics are not present.
+  tc::MotorDynamics lag_dynamics;
+  tc::BenchResponse lag_bench;
 };
 
 struct SweepPoint {
@@ -37,6 +43,7 @@ struct SweepPoint {
 
 struct Sweep {
   std::vector<SweepPoint> points;
+  double largest_correction_g = 0;  // lag correction: the largest shift of a reading
   double rest_v = 0;  // source resting voltage before the sweep
   double simulated_s = 0;
 };

@@ -1,5 +1,5 @@
 // `thrustcal board`: a real (or simulated) Mega2560 on a serial port: flash, eeprom put|get,
-// calibrate, liftoff.
+// calibrate, liftoff, params pull|push|table.
 #pragma once
 #include <CLI/CLI.hpp>
 

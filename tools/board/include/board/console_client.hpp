@@ -44,8 +44,8 @@ void installInterruptHandler();
 bool interruptRequested();
 void clearInterrupt();
 
-enum class Image { kUnknown, kGatherStore, kReadRun };
-const char* imageName(Image image);  // "gather_store", "read_run", "an unknown image"
+enum class Image { kUnknown, kGatherStore, kReadRun, kFly };
+const char* imageName(Image image);  // "gather_store", "read_run", "fly", "an unknown image"
 
 // "XOR of the bytes" as two upper-case hex digits.
 std::string checksumHex(const std::string& line);

@@ -10,7 +10,8 @@
 //                firmware's `eeprom crc` (per slot and whole).
 //   eeprom get:  the firmware's `eeprom dump` (Intel HEX records on the console), checked
 //                against its `eeprom crc`; never through the bootloader.
-// The board must run gather_store or read_run for the EEPROM operations (it checks, and says so).
+// The board must run gather_store, read_run or fly for the EEPROM operations (it checks, and says
+// so).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -57,13 +58,28 @@ EepromCrcs boardEepromCrc(ConsoleClient& con);
 // `eeprom dump`, parsed, checked whole and against `eeprom crc`. Throws std::runtime_error.
 std::vector<uint8_t> boardEepromDump(ConsoleClient& con);
 
-// --- the three operations ---
+// --- the operations ---
 struct TransferOptions {
   double avrdude_timeout_s = 180.0;   // a 40 KB image takes ~15 s on a real board
   double boot_timeout_s = kBootTimeoutS;
   bool check_prompt = true;           // flash: wait for the image's prompt afterwards
   Progress progress;                  // one line per step
 };
+
+// --- writing through the bootloader (-V), verifying through the firmware ---
+// Runs avrdude on `hex_text`; throws AvrdudeError naming `source` and the `what` to run again.
+AvrdudeRun writeEepromHex(const std::string& port, const std::string& hex_text, const std::string& source,
+                          const std::string& what, const TransferOptions& o);
+struct Verified {
+  EepromCrcs crcs;
+  Image image = Image::kUnknown;
+  std::vector<std::string> boot;
+  double wall_s = 0;
+};
+// Opens the port (a reset), waits for the firmware and compares its CRCs with `want`'s;
+// throws std::runtime_error naming the slots that differ.
+Verified verifyEeprom(const std::string& port, const std::vector<uint8_t>& want, const std::string& what,
+                      const TransferOptions& o);
 
 struct FlashResult {
   AvrdudeRun avrdude;
@@ -87,6 +103,20 @@ struct EepromPutResult {
 // std::runtime_error (a bad file; the verify failed, naming the slots).
 EepromPutResult putEeprom(const std::string& port, const std::string& hex_path,
                           const TransferOptions& o = {});
+
+struct EepromRangeResult {
+  AvrdudeRun avrdude;
+  EepromCrcs crcs;                // verified on the board
+  Image image = Image::kUnknown;  // what answered after the write
+  std::vector<std::string> boot;  // what it printed booting (fly: its "params: ..." line)
+  double wall_s = 0;
+};
+// Writes only bytes [first, first + count) of `image` (whole 16-byte records: whole EEPROM
+// pages, so avrdude merges nothing read through the broken bootloader read) and verifies the
+// whole EEPROM through the firmware against `image` (the 4096 bytes the board should now hold).
+// `what` names the command in messages. Throws as putEeprom.
+EepromRangeResult putEepromRange(const std::string& port, const std::vector<uint8_t>& image, std::size_t first,
+                                 std::size_t count, const std::string& what, const TransferOptions& o = {});
 
 struct EepromGetResult {
   std::vector<uint8_t> bytes;

@@ -9,6 +9,7 @@
 #include "lab/evidence.hpp"
 #include "lab/model.hpp"
 #include "lab/noise.hpp"
+#include "lab/steps.hpp"
 
 namespace lab {
 
@@ -68,10 +69,14 @@ struct Region {
 // Up to three regions, the strongest first; none when the residual is at the noise floor.
 std::vector<Region> residualRegions(const Dataset& data, const FitResult& fit, const NoiseEstimate& noise);
 
-// The fit against the noise floor: at it (RMSE within the noise's 95 % upper bound), above it
-// with suspects (a logged variable or a finding in the responses explains part of it), or above
-// it with nothing logged to explain it.
+// The fit against the noise floor: at it (RMSE within the noise's 95 % upper bound, and where
+// the log repeats set points no significant lack of fit), above it with suspects (a logged
+// variable or a finding in the responses explains part of it), or above it with nothing logged
+// to explain it.
 enum class Verdict { kAtNoiseFloor, kSuspects, kUnexplained };
+// At the floor: RMSE within the noise's 95 % upper bound and, where the log repeats set points,
+// no significant lack of fit (`lof`, when given, gets the test).
+bool atNoiseFloor(const NoiseEstimate& noise, const FitResult& fit, LackOfFit* lof = nullptr);
 const char* verdictName(Verdict v);  // at_noise_floor, suspects, unexplained
 
 // What the diagnosis advises next: rows to drop (they do not measure the force), else the
@@ -90,6 +95,8 @@ struct Next {
 // the residual above the noise is, the verdict and the advice to follow.
 struct Assessment {
   NoiseEstimate noise;
+  LackOfFit lack_of_fit;               // the fit against the pure error (set points only)
+  std::vector<MotorDynamics> dynamics;  // what a fitted `lag` says of each motor (step logs)
   std::vector<Evidence> evidence;  // findings in the responses, scored
   std::vector<Region> regions;     // where the residual above the noise is (none at the floor)
   Verdict verdict = Verdict::kUnexplained;
@@ -123,7 +130,7 @@ struct LadderStep {
   bool earns = true;
   std::vector<std::string> at_bound;  // "r_sag_ohm at 0" for the added effect's parameters
   std::string verdict;                // the verdict in words
-  bool at_noise_floor = false;        // RMSE within the noise floor's 95 % upper bound
+  bool at_noise_floor = false;        // RMSE within the noise floor's 95 % upper bound (and no lack of fit)
   Assessment assessment;              // the last step's (the others' noise only)
 };
 std::vector<LadderStep> ladder(const Dataset& data, const ModelSpec& base,

@@ -50,6 +50,7 @@ struct ParamSpec {
   double lo = -kUnbounded, hi = kUnbounded;
   double neutral = 0;   // the value that switches the effect off (the warm start uses it)
   std::string from_data{};  // which numbers the data set, in words; empty: none
+  bool fixed = false;       // held at init, not fitted (a setting: --fix NAME=VALUE changes it)
 };
 
 // A parameter of one fitted model.
@@ -60,6 +61,7 @@ struct FitParam {
   // Scan the parameter from this value to its start with the linear solve before LM when it is
   // new in a fit (it has local minima); NaN: no scan.
   double scan_from = std::numeric_limits<double>::quiet_NaN();
+  bool fixed = false;  // held at init (a setting, or the user's --fix): not fitted, not counted
 };
 
 class Term;
@@ -151,6 +153,7 @@ class Setup {
   double pmin = 0, pmax = 0, span = 1, vref = 1, fmax = 0;
   std::vector<FitParam>& params;
   std::vector<long>& motor_ids;  // the motors rows are indexed by (Rows::motor_index)
+  const std::map<std::string, double>* fixes = nullptr;  // the user's --fix NAME=VALUE
 
   Setup(const Dataset& d, const EffectDef& e, std::vector<FitParam>& p, std::vector<long>& m)
       : train(d), def(e), params(p), motor_ids(m) {}
@@ -160,7 +163,7 @@ class Setup {
   double mean(const char* column) const;   // over the training rows
   // The fit parameter for spec `k` of the effect (its defaults), to adjust before add().
   FitParam param(std::size_t k) const;
-  int add(const FitParam& p);  // its index in the parameter vector
+  int add(const FitParam& p);  // its index in the parameter vector (held at a --fix value when one names it)
   int add(std::size_t k) { return add(param(k)); }
 };
 

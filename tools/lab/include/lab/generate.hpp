@@ -17,6 +17,8 @@ struct GenerateOptions {
   std::string preset = "kv1100_9x4.7";
   double log_hz = 0;    // 0: one row per PWM point at the end of its settling; else rows at this rate
   double settle_s = 0;  // time per PWM point; 0: the hidden effect's default (0.5 s, 2 s)
+  double noise_lag1 = 0;  // the noise's lag-1 autocorrelation between successive rows (AR(1)), 0..0.95
+  bool bench_filter = false;  // read the force through the plant's load-cell low-pass (three 30 ms stages)
 };
 
 struct HiddenEffectInfo {
@@ -30,6 +32,16 @@ const std::vector<HiddenEffectInfo>& hiddenEffects();
 
 // Throws std::invalid_argument for an unknown hidden effect.
 Dataset generate(const GenerateOptions& options, std::vector<std::string>* comments = nullptr);
+
+// The step log's truth (hidden effect `lag`): each motor's rotor-speed time constants for the
+// log's 100 us steps, as the plant measures them (plant::stepTimeConstant_s, what `thrustcal plant
+// step` prints for a stock motor).
+struct StepTruth {
+  int motor = 0;
+  double from_us = 0, to_us = 0, bus_v = 0;
+  double tau_up_s = 0, tau_down_s = 0;
+};
+std::vector<StepTruth> stepTruth(const GenerateOptions& options);
 
 // The same measurements as an RCbenchmark / Tyto Robotics export writes them (the layouts of
 // the RCbenchmark software's CSV logs, as published logs show them): every line ends with a

@@ -11,6 +11,7 @@
 //   A       = sum of the additive effects             (add:)
 #pragma once
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -46,6 +47,7 @@ struct ModelSpec {
   std::vector<std::string> effects;  // catalogue names, in order
   std::vector<UserEffect> user;
   std::vector<Probe> probes;
+  std::map<std::string, double> fixed;  // parameters held at a value (--fix NAME=VALUE): known, not fitted
   bool has(const std::string& effect) const;
   std::string text() const;  // "curve+deadband+voltage+mul: 1 + a*(temp_c-25)"
 };
@@ -54,6 +56,9 @@ struct ModelSpec {
 ModelSpec parseSpec(const std::string& spec);
 // spec + more, checked the same way.
 ModelSpec combine(const ModelSpec& base, const ModelSpec& more);
+// `--fix NAME=VALUE`: holds a parameter of the catalogue at a known value (a bench's filter, a
+// setting). Throws std::invalid_argument for a bad form or a name no effect has.
+void fixParameter(ModelSpec& spec, const std::string& text);
 
 struct Param {
   std::string name;
@@ -63,6 +68,7 @@ struct Param {
   double sigma = 0;  // one standard uncertainty from the Jacobian (NaN when not determined)
   bool at_bound = false;  // the fit stopped at a limit of the parameter's range
   double bound = 0;       // that limit
+  bool fixed = false;     // held at a known value (--fix or a setting), not fitted
 };
 
 struct FitResult {

@@ -9,7 +9,7 @@
 
 namespace lab::effects {
 
-extern const EffectDef kCurve, kDeadband, kVoltage, kSag, kMotor, kDrift, kLag, kThermal, kDensity,
+extern const EffectDef kCurve, kDeadband, kVoltage, kSag, kMotor, kDrift, kLag, kCell, kThermal, kDensity,
     kCurrentLimit, kThesis, kMul, kAdd;
 
 const std::vector<const EffectDef*>& registry() {
@@ -21,6 +21,7 @@ const std::vector<const EffectDef*>& registry() {
       &kMotor,    // motor.cpp: per-motor gain and Kv
       &kDrift,    // drift.cpp: grams per minute
       &kLag,      // lag.cpp: first-order low-pass of the drive
+      &kCell,     // cell.cpp: the bench's own response after the lag
       &kThermal,  // thermal.cpp: temperature factor
       &kDensity,  // density.cpp: air-density factor
       &kCurrentLimit,  // current_limit.cpp: the force a capped bus current allows
@@ -85,11 +86,18 @@ double Setup::mean(const char* column) const {
 
 FitParam Setup::param(std::size_t k) const {
   const ParamSpec& s = def.params.at(k);
-  return {s.name, s.unit, def.name, s.init, s.scale, s.lo, s.hi, s.neutral};
+  FitParam p{s.name, s.unit, def.name, s.init, s.scale, s.lo, s.hi, s.neutral};
+  p.fixed = s.fixed;
+  return p;
 }
 
 int Setup::add(const FitParam& p) {
   params.push_back(p);
+  if (fixes)
+    if (const auto it = fixes->find(p.name); it != fixes->end()) {
+      params.back().init = params.back().neutral = std::clamp(it->second, p.lo, p.hi);
+      params.back().fixed = true;
+    }
   return static_cast<int>(params.size()) - 1;
 }
 

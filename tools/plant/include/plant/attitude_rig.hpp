@@ -46,6 +46,10 @@ struct RigCommon {
   // Rotor imbalance: each motor shakes the IMU with a rotating acceleration in the body's x-y
   // plane at its rotor frequency, this amplitude at 10,000 rpm, scaling with rpm^2 (0: none).
   double vibration_g_at_10krpm = 0.0;
+  // Each motor's propeller direction, +1 counter-clockwise seen from above, -1 clockwise, in
+  // place of the rig's layout (firmware differ: MultiWii's QUADX turns its front-left propeller
+  // clockwise, the gimbal's X layout counter-clockwise). Empty: the layout's.
+  std::vector<int> spin;
 };
 
 // A rotation state the rigs report: body to world, body rates and angular acceleration.

@@ -23,7 +23,9 @@ int adcCountsFromMillivolts(double mv);
 // 208 counts), and the INA125P output saturates at 4250 mV = 869 counts (thesis: "870 values,
 // 650 g maximum"), so with the 60 g plate and a 81 g motor+prop the highest readable thrust is
 // about 640 g; at 0 mV it clips (weight above 156 g with no thrust).
-// Low-pass: `order` cascaded first-order stages (buffered), time constants lowpass_tau_s[i].
+// Low-pass: `order` cascaded first-order stages (buffered), time constants lowpass_tau_s[i],
+//   continuous (integrated in sub-steps of 125 us whatever the caller's step: a force step
+//   reaches the ADC as the analog cascade passes it).
 //   The thesis's 3rd-order RC (470k/1uF, 100k/2.2uF, 22k/10uF) as a loaded ladder would have an
 //   Elmore delay of several seconds, which contradicts its observation that 200 ms per PWM step
 //   settled; the default is three 30 ms stages (90 ms delay, settled to 0.1 % in ~0.5 s).
@@ -68,6 +70,8 @@ class LoadCellSensor {
   LoadCellParams p_;
   Rng rng_;
   std::array<double, 3> stage_mv_{};
+  std::array<double, 3> gain_{};  // each stage's exact gain for a sub-step of gain_h_s_
+  double gain_h_s_ = -1.0;
   double thrust_g_ = 0.0;
 };
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "sim/airframe.hpp"
+#include "sim/rc_input.hpp"
 
 namespace sim {
 
@@ -25,10 +26,18 @@ struct AirCliOptions {
   std::vector<std::string> motor_parts;  // "M:PRESET": motor M is another part
   double vibration_g = 0.0;        // rotor imbalance at 10,000 rpm
   std::string esc_pins;            // "D3,D5,D6,D2": ESC outputs 0..3 ("": the board table)
+  std::string spin;                // gimbal: "cw,ccw,cw,ccw" per motor ("" = the layout's)
+  std::string imu_mount = "yaw0";  // the IMU's rotation against the airframe (sim/imu_on_board.hpp)
+  std::string rc;                  // ppm:PIN | pwm:PIN,PIN,... ("" = no receiver)
+  std::string rc_script;           // CSV of channel values over simulated time
+  bool rc_pty = false;             // the live RC pty (sim console opens it whenever --rc is given)
 };
 
 // Adds the options above to a command.
 void addAirOptions(CLI::App* cmd, AirCliOptions& o);
+// "cw,ccw,cw,ccw": +1 (ccw) / -1 (cw) per motor, as many as `motors`. Throws
+// std::invalid_argument saying what to write.
+std::vector<int> parseSpin(const std::string& text, int motors);
 bool isAirRig(const std::string& rig);  // "seesaw" or "gimbal"
 // --esc-pins on a board of any rig (the bench, the tethered quad, none): its ESC outputs move.
 void applyEscPins(Board& board, const AirCliOptions& o);
@@ -40,6 +49,13 @@ std::unique_ptr<AirframeRig> makeAirframeRig(const std::string& elf, const std::
                                              const std::string& preset,
                                              const std::vector<uint64_t>& seeds,
                                              const AirCliOptions& o);
+// The RC receiver --rc asks for on `board` (null without --rc), playing --rc-script, with the live
+// pty open if `pty` (its path in RcOnBoard::ptyPath()). Throws std::invalid_argument saying
+// what was wrong (a bad spec, a script's file:line:column, --rc-script without --rc).
+std::unique_ptr<RcOnBoard> makeRcInput(Board& board, const AirCliOptions& o, bool pty);
+// "rc: 12 changes applied", then the first lines of RcOnBoard::applied(), for the end of a run.
+std::string rcSummary(const RcOnBoard& rc);
+
 // A board without an attitude rig (bench, quad, none): the IMU lying still if --imu asked for
 // it, and the IMU and bus faults applied at their cycle. Throws std::invalid_argument if an
 // option needs the seesaw or the gimbal (--log, motor faults).

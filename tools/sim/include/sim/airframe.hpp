@@ -57,7 +57,8 @@ extern const char* const kAirFaultSyntax;  // the list above, for --help
 struct AirframeOptions {
   AirRig rig = AirRig::kGimbal;
   plant::SeesawParams seesaw = plant::SeesawParams::benchRig();
-  plant::GimbalParams gimbal;   // its layout, inertia, damping, battery
+  plant::GimbalParams gimbal;   // its layout, inertia, damping, battery; common.spin for both
+                                // rigs: each motor's propeller direction (plant/attitude_rig.hpp)
   // ESC output i -> motor i (the seesaw uses 0 and 1). Default: four kv1100_9x4.7.
   std::array<plant::ActuatorParams, 4> motors;
   // The pins of ESC outputs 0..3: the board table (hal::kEscPins) unless a firmware drives its
@@ -65,6 +66,7 @@ struct AirframeOptions {
   std::array<hal::MegaPin, hal::kEscChannels> esc_pins = boardEscPins();
   bool imu = true;
   Mpu6050Params imu_params;
+  ImuMount imu_mount;           // the chip's rotation against the airframe (default: aligned)
   double imu_temp_c = 25.0;
   std::vector<AirFault> faults;
   double log_period_s = 0.0;    // a row of truth every so many seconds (0: no log)
@@ -119,7 +121,7 @@ class AirframeRig {
   void onSample(std::function<void(const AirSample&)> listener) { sample_listener_ = std::move(listener); }
   static std::string csvHeader(int motors);
   static std::string csvRow(const AirSample& s);
-  // "gimbal (X, 1.2 kg, I 0.018/0.018/0.032 kg m^2), motors ..., MPU-6050 seed 7"
+  // "gimbal (X, arm 0.225 m, I ...); motors kv1100_9x4.7#1 CCW, ...; MPU-6050 at 0x68 seed 7[, mounted yaw90]"
   std::string describe() const;
 
  private:

@@ -17,6 +17,8 @@
 //             bootloader (Intel HEX, e.g. Debian's STK500v2 for the Mega2560 at byte 0x3E000):
 //             then every reset() starts at the bootloader, as a board whose BOOTRST fuse is
 //             programmed (simavr ignores the fuses, so the harness sets the reset vector).
+//   PCINT     the chip's three pin-change interrupt groups (sim/pin_change.hpp), not simavr 1.6's
+//             one; inputs driven from outside (Ports::setInput, sim/rc_receiver.hpp) trigger them.
 //   TWI       the chip's TWI (sim/twi.hpp: status codes, TWINT, timing from TWBR/TWPS, its
 //             interrupt), not simavr 1.6's; I2C parts (sim/mpu6050.hpp) connect to twi().irq().
 //   Timers    the chip's Timer/Counters 0-5 (sim/timers.hpp: every waveform and compare-output
@@ -47,6 +49,7 @@ struct avr_irq_t;
 namespace sim {
 
 class Twi;
+class PinChange;
 class Ports;
 class ExtInt;
 class Timers;
@@ -136,6 +139,7 @@ class Board {
 
   // --- TWI (I2C master) ---
   Twi& twi() { return *twi_; }
+  PinChange& pinChange() { return *pin_change_; }
 
   // --- the chip's ports and timers ---
   Ports& ports() { return *ports_; }
@@ -289,6 +293,7 @@ class Board {
   std::unique_ptr<ExtInt> ext_int_;
   std::unique_ptr<Timers> timers_;
   std::unique_ptr<Twi> twi_;
+  std::unique_ptr<PinChange> pin_change_;
 };
 
 }  // namespace sim

@@ -10,4 +10,5 @@ void registerCommands(CLI::App& app);
 // (firmware/NAME/NAME.elf).
 std::string defaultElf(const std::string& name);
 void addSwapCommand(CLI::App& sim);  // thrustcal sim swap (swap_cli.cpp)
+void addDynCommand(CLI::App& sim);   // thrustcal sim dyn (dynamics_cli.cpp)
 }  // namespace sim

@@ -34,8 +34,11 @@ class Ports {
   // while `connected`; `cycle` is when it changed (its timer tick).
   void setOverride(char port, int bit, int source, bool connected, bool level, uint64_t cycle);
   // Something outside the chip drives (port, bit) to `level`, a change that happened at `cycle`
-  // (<= now; a part's cycle timer passes its `when`): listeners see that cycle.
+  // (<= now; a part's cycle timer passes its `when`): listeners see that cycle. The level is
+  // held as the pin's external level (setExternalLevels), so the firmware's pull-up does not
+  // show over a line driven low; releaseInput() lets the pin go.
   void setInput(char port, int bit, bool level, uint64_t cycle);
+  void releaseInput(char port, int bit);
   // The cycle of the pin change being delivered right now: for a compare output its timer
   // tick, for setInput its cycle (simavr runs both at the next instruction boundary), else the
   // current cycle.
@@ -67,5 +70,14 @@ class Ports {
   uint64_t delivering_cycle_ = 0;
   bool delivering_ = false;
 };
+
+// Pins of `port` in `mask` are held from outside the chip at the levels in `value` (a
+// receiver's output, a pull-up on the bus); the port's other pins keep what they had. An input
+// then shows that level whatever PORTx says (where simavr 1.6 showed the internal pull-up, a 1,
+// over a line driven low at every PORTx or DDRx write). The caller raises the pin's IRQ for a
+// level to reach PINx now (Ports::setInput does both).
+void setExternalLevels(avr_t* avr, char port, uint8_t mask, uint8_t value);
+// The pins in `mask` are no longer held from outside.
+void clearExternalLevels(avr_t* avr, char port, uint8_t mask);
 
 }  // namespace sim

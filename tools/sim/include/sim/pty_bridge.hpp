@@ -46,6 +46,16 @@ struct PtyOptions {
   std::function<bool()> real_time_while;
 };
 
+// A pseudo-terminal in raw mode: the master (non-blocking) for the simulator, the slave's path
+// for a client, and the slave held open here too, so that clients come and go without a
+// hang-up on the master. Throws std::runtime_error if the system has no ptys (/dev/ptmx).
+struct RawPty {
+  int master_fd = -1;
+  int slave_fd = -1;
+  std::string path;  // "/dev/pts/N"
+};
+RawPty openRawPty();
+
 // True while any ESC output pulses wider than `us` (a motor spins).
 bool anyEscAbove(const Board& board, double us = 1050.0);
 

@@ -32,5 +32,9 @@ StackHeadroom readRunDeepestPaths(const std::string& elf);
 // hook serves them inside the long replies), keep-alive lines between them. Call it after the
 // flight whose paths count (each mode its own); status reports the stack never used since reset.
 StackHeadroom flyDeepestPaths(const std::string& elf, Console& con);
+// fly disarmed, before that flight: `param list` and `param save` (its frames are served between
+// the EEPROM bytes, on top of the record's buffers), so the status flyDeepestPaths reads counts
+// their stack too. Throws std::runtime_error when fly refuses one.
+void flyDisarmedPaths(Console& con);
 
 }  // namespace sim

@@ -19,19 +19,23 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "plant/params.hpp"
 #include "sim/airframe.hpp"
+#include "sim/peer_profile.hpp"
 #include "sim/scenarios.hpp"
 #include "sim/step_metrics.hpp"
 
 namespace sim::swap {
 
-enum class Mode { kForce, kGeneric, kPwm, kArduPilot };
-const char* modeName(Mode mode);  // "force", "generic", "pwm", "ardupilot"
+// kPeer: another firmware flying with its own gains (SwapOptions::peer; its runs' mode in
+// runs[] is "peer:NAME", runModeName()).
+enum class Mode { kForce, kGeneric, kPwm, kArduPilot, kPeer };
+const char* modeName(Mode mode);  // "force", "generic", "pwm", "ardupilot", "peer"
 // Throws std::invalid_argument naming the modes.
 Mode parseMode(const std::string& name);
 
@@ -83,6 +87,9 @@ struct SwapOptions {
   double window_s = 2.5;      // after the step
   double log_period_s = 0.0025;
   int jobs = 1;  // flights at once (each its own simulated board)
+  // A peer (`--peer FILE`): flown on the gimbal with stock and every part, each IMU unit, roll
+  // and pitch, beside fly's modes. With no fly mode (`modes` empty) nothing is calibrated.
+  std::shared_ptr<const PeerProfile> peer;
   ProgressFn progress;
 };
 
@@ -132,8 +139,10 @@ struct RunSpec {
   Gains gains = Gains::kPd;
   std::string axis = "roll";  // roll | pitch
   uint64_t imu_seed = 1;
+  std::string peer;  // Mode::kPeer: the peer's name (its gains are its own; `gains` unused)
 };
-std::string runId(const RunSpec& spec);  // "gimbal_force_pd_stock_roll_s1"
+std::string runId(const RunSpec& spec);  // "gimbal_force_pd_stock_roll_s1", "gimbal_peer-NAME_stock_roll_s1"
+std::string runModeName(const RunSpec& spec);  // modeName(), or "peer:NAME"
 
 struct RunResult {
   RunSpec spec;
@@ -174,6 +183,11 @@ DynamicsReport measureDynamics(const SwapOptions& options);
 // step, the window; its time series written to `csv_path` ("" = none).
 RunResult flyRun(const SwapOptions& options, const Calibration& calibration, const RunSpec& spec,
                  const std::string& csv_path);
+// One flight of the peer (options.peer): booted on the gimbal with the profile's pins, spin,
+// IMU mount and EEPROM, the part in slot 1; its sticks from the RC receiver: neutral, the arming
+// sticks, hover, then the step (1500 + step x deg-us on the axis's channel). Throws
+// std::runtime_error if it never armed (its armed-text, or no motor above idle before the step).
+RunResult flyPeerRun(const SwapOptions& options, const RunSpec& spec, const std::string& csv_path);
 // The targets of force mode with PD gains, each swapped part against stock, run by run (same
 // rig, axis and IMU unit).
 std::vector<Target> swapTargets(const std::vector<RunResult>& runs, const std::vector<std::string>& parts);
