@@ -268,7 +268,11 @@ void FlyApp::cmdStream(bool on) {
   }
 }
 
-void FlyApp::cmdStatus() { view::status(*this, &FlyApp::serviceHook); }
+// The loop's figures as they stand when `status` is asked (its own printing runs frames too).
+void FlyApp::cmdStatus() {
+  const LoopStats asked = stats_;
+  view::status(*this, asked, &FlyApp::serviceHook);
+}
 
 void FlyApp::cmdStrict(bool on) { line_.strictCommand(on); }
 

@@ -64,8 +64,7 @@ void statusAttitude(const FlyApp& app) {
   sayLine(TC_FLASH_TEXT(" deg/s"));
 }
 
-void statusLoop(const FlyApp& app) {
-  const LoopStats& s = app.loopStats();
+void statusLoop(const FlyApp& app, const LoopStats& s) {
   say(TC_FLASH_TEXT("loop: "));
   sayFrameLayout(app);
   say(TC_FLASH_TEXT("; armed: computation at most "));
@@ -149,7 +148,7 @@ void statusReceiver(const FlyApp& app) {
 }  // namespace
 
 // `yield` (not null) between the lines: the frames run there.
-void status(const FlyApp& app, void (*yield)()) {
+void status(const FlyApp& app, const LoopStats& loop, void (*yield)()) {
   statusState(app);
   yield();
   statusImu(app);
@@ -166,7 +165,7 @@ void status(const FlyApp& app, void (*yield)()) {
   yield();
   statusIntegrators(app);
   yield();
-  statusLoop(app);
+  statusLoop(app, loop);
   for (uint8_t i = 0; i < kMotors; ++i) {
     yield();
     statusMotor(app, i);

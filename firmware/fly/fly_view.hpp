@@ -36,7 +36,7 @@ void hover(const FlyApp& app);
 void arduPilot(const FlyApp& app);
 void crashLimit(const FlyApp& app);
 // `status`: state, IMU, attitude, settings, loop timing, motors, battery, console health.
-void status(const FlyApp& app, void (*yield)());
+void status(const FlyApp& app, const LoopStats& loop, void (*yield)());
 void streamHeader();
 void streamRow(const StreamRow& row);
 // The rules after the command rows of `help`, with their constants.

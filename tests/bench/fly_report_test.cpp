@@ -43,11 +43,21 @@ TEST(FlyBenchReadToEdge, MatchesEachReadToTheEdgeAfterItsFirstWrite) {
        500,
        400},
       {"a read with no write before the next read",
+       {1600, 41600, 81600},
+       {9600, 89600},
+       {16000, 96000},
+       2,
+       1,
+       900,
+       900,
+       500,
+       400},
+      {"reads before the first write (disarmed) are no frames without pulses",
        {1600, 41600},
        {49600},
        {56000},
        1,
-       1,
+       0,
        900,
        900,
        500,
@@ -79,6 +89,8 @@ bench::FlyModeFigures figures(const std::string& key, double cpu_pct, double edg
   f.read_to_edge.frames = 999;
   f.read_to_edge.max_us = edge_max_us;
   f.read_to_edge.mean_us = edge_max_us - 5;
+  f.read_to_edge.compute_max_us = 600;
+  f.status_compute_max_us = 596;  // status's own clock, a few us short of the bench's
   f.stack_never_used_bytes = 4000;
   f.stack_bytes = 5800;
   f.awake_cycles_by_part = {{"fly::Mixer::mix", 800000}, {"ISR: TWI", 1700000}};
@@ -105,7 +117,8 @@ TEST(FlyBenchSection, HasEveryModeItsTargetsAndTheirVerdicts) {
     const auto& m = s.json["modes"][key];
     for (const char* field :
          {"cpu_load_pct", "cpu_load_stream_pct", "loop_period_max_ms", "frame_period_max_ms",
-          "frames_without_pulses", "compute_max_us", "stack_never_used_bytes", "budget_us"})
+          "frames_without_pulses", "compute_max_us", "status_compute_max_us", "stack_never_used_bytes",
+          "budget_us"})
       EXPECT_TRUE(m.contains(field)) << field;
     EXPECT_TRUE(m["read_to_edge_us"].contains("max"));
   }
@@ -115,13 +128,23 @@ TEST(FlyBenchSection, HasEveryModeItsTargetsAndTheirVerdicts) {
   EXPECT_FALSE(s.json["met"]["pwm"]["read_to_edge"].get<bool>());
   EXPECT_FALSE(s.json["met"]["generic"]["cpu_load"].get<bool>()) << "a disarmed flight meets nothing";
   EXPECT_EQ(s.json["breakdown"]["pwm"]["ISR: TWI"].get<double>(), 1700.0);
-  // and: per mode a CPU and an edge target, then the loop period, the stack and the SRAM
-  ASSERT_EQ(s.targets.size(), 2 * modes.size() + 3);
+  EXPECT_TRUE(s.json["met"]["force_v2"]["status_agrees"].get<bool>());
+  // and: per mode a CPU, an edge and a status-agrees target, then the loop period, the stack and
+  // the SRAM
+  ASSERT_EQ(s.targets.size(), 3 * modes.size() + 3);
   EXPECT_EQ(s.targets[0].what, "7. fly CPU load at 400 Hz, force_v2 mode");
   EXPECT_TRUE(s.targets.back().met);
   EXPECT_TRUE(s.targets[s.targets.size() - 2].met) << "4000 B of stack never used";
   ASSERT_EQ(s.tables.size(), 2u);
   EXPECT_NE(s.tables[0].str().find("NO (disarmed)"), std::string::npos);
+}
+
+TEST(FlyBenchSection, StatusDisagreeingWithTheBenchsComputationIsNotMet) {
+  std::vector<bench::FlyModeFigures> modes = {figures("force_v2", 45.0, 950)};
+  modes[0].status_compute_max_us = 560;  // status measured less than the bench (another span)
+  const bench::Section s = bench::flyReport(bench::FlyImage{}, modes);
+  EXPECT_FALSE(s.json["met"]["force_v2"]["status_agrees"].get<bool>());
+  EXPECT_FALSE(s.targets[2].met) << s.targets[2].what;
 }
 
 }  // namespace

@@ -28,9 +28,10 @@ void everyModeFliesTheWholeWindowWithEveryFigureMeasured(const nlohmann::json& j
     const nlohmann::json& m = j["modes"][key];
     ASSERT_TRUE(m.is_object());
     EXPECT_TRUE(m["stayed_armed"].get<bool>());
-    // the window: 1 s of hover and 1.5 s after the step, one armed frame each 2.5 ms
-    EXPECT_NEAR(m["window_s"].get<double>(), 2.5, 0.001);
-    EXPECT_NEAR(m["frames"].get<double>(), 1000, 3);
+    // the window: from `arm` (its reply), the 1.2 s spool-up, 1 s of hover and 1.5 s after the
+    // step, one armed frame each 2.5 ms
+    EXPECT_NEAR(m["window_s"].get<double>(), 3.7, 0.05);
+    EXPECT_NEAR(m["frames"].get<double>(), 400 * m["window_s"].get<double>(), 3);
     // CPU: awake / all cycles; a stream of rows costs more
     const double cpu = m["cpu_load_pct"];
     EXPECT_GT(cpu, 10.0);

@@ -3,8 +3,9 @@
 // bench/records.hpp, an MPU-6050 on the chip-true TWI), armed in each mode: force with v2
 // records, force with thesis records, generic (slot 0's v2 record for all four), pwm (the
 // thesis's pulses around hover) and ardupilot (one fitted curve). Per mode one boot: the
-// settings, `arm`, the spool-up, then the measured window: 1 s of hover, `sp 10 0`, 1.5 s; then
-// 0.5 s with `stream on`; then the deepest console paths and status's stack figure
+// settings, then the measured window from `arm`: the spool-up, 1 s of hover, `sp 10 0`, 1.5 s,
+// and status's own figures over it; then 0.5 s with `stream on`; then the deepest console paths
+// and status's stack figure
 // (sim/stack_scenario.hpp). In the windows (bench/fly.hpp says what each figure is):
 //   Board::sleptCycles         the CPU load;
 //   Board::setProfiling        each instruction's awake cycles at its address, summed per
@@ -233,8 +234,8 @@ void command(sim::Console& con, const std::string& line) {
       throw std::runtime_error(fmt::format("fly bench: fly refused `{}`: {}\n{}", line, reply, con.tail()));
 }
 
-// Boot, the mode's settings, arm and spool up.
-void armInMode(sim::AirframeRig& rig, sim::Console& con, const FlyMode& mode) {
+// Boot and the mode's settings.
+void setUpMode(sim::AirframeRig& rig, sim::Console& con, const FlyMode& mode) {
   con.expectText("imu: gyro bias", 6.0);
   con.waitPrompt(1.0);
   while (rig.truth().t_s < 2.1) flyFor(rig, 0.1);  // the ESCs' 2 s at the stop pulse
@@ -242,20 +243,25 @@ void armInMode(sim::AirframeRig& rig, sim::Console& con, const FlyMode& mode) {
   command(con, "thrust 1200");
   for (const std::string& line : mode.setup) command(con, line);
   sim::flyDisarmedPaths(con);  // `param save`'s stack counts in the figure flyDeepestPaths reads
+}
+
+void arm(sim::Console& con, const FlyMode& mode) {
   const std::vector<std::string> armed = con.command("arm");
   if (armed.empty() || armed[0].rfind("armed:", 0) != 0)
     throw std::runtime_error(fmt::format("fly bench: `arm` refused in mode {}:\n{}", mode.key, con.tail()));
-  flyFor(rig, 1.2);  // the spool-up (1 s)
 }
 
-// "loop: IMU read at P us of each 2500 us frame, computation budget B us; ..." from status,
-// waited for as a line of its own: the stream rows before it leave no prompt to go by.
+// "loop: IMU read at P us of each 2500 us frame, computation budget B us; armed: computation at
+// most C us, ..." from status (its figures count from the arm), waited for as a line of its own:
+// stream rows before it would leave no prompt to go by.
 void readLoopLine(sim::Console& con, FlyModeFigures& f) {
   con.send("status");
-  const std::vector<std::string> m =
-      con.expect(R"(loop: IMU read at (\d+) us of each \d+ us frame, computation budget (\d+) us)", 2.0);
+  const std::vector<std::string> m = con.expect(
+      R"(loop: IMU read at (\d+) us of each \d+ us frame, computation budget (\d+) us; armed: computation at most (\d+) us)",
+      2.0);
   f.read_phase_us = std::stoi(m[1]);
   f.budget_us = std::stoi(m[2]);
+  f.status_compute_max_us = std::stoi(m[3]);
   con.waitPrompt(2.0);
 }
 
@@ -268,22 +274,24 @@ FlyModeFigures flyMode(const std::string& elf, const FlyMode& mode, const BenchR
   rig.board().setEeprom(mode.thesis_records ? records.v1 : records.v2);
   sim::Console con(rig.board(), "fly> ");
   FlyMeter meter(rig, elf, symbols);
-  armInMode(rig, con, mode);
+  setUpMode(rig, con, mode);
   const std::size_t flight_from = rig.board().output().size();
-  meter.start(true);
+  meter.start(true);  // from the arm: the spool-up is part of the flight
+  arm(con, mode);
+  flyFor(rig, 1.2);  // the spool-up (1 s)
   flyFor(rig, 1.0);
   f.roll_before_step_deg = rig.truth().roll_deg;
   con.send("sp 10 0");
   flyFor(rig, 1.5);
   meter.stop(f, false);
   f.roll_after_step_deg = rig.truth().roll_deg;
+  readLoopLine(con, f);  // status over the same flight
   con.send("stream on");
   meter.start(false);
   flyFor(rig, 0.5);
   meter.stop(f, true);
   command(con, "stream off");
   f.stayed_armed = rig.board().output().find("disarmed", flight_from) == std::string::npos;
-  readLoopLine(con, f);
   const sim::StackHeadroom stack = sim::flyDeepestPaths(elf, con);
   f.stack_never_used_bytes = stack.untouched_bytes;
   f.stack_bytes = stack.stack_bytes;

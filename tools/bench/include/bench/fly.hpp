@@ -31,6 +31,7 @@ struct ReadToEdge {
 };
 
 // Each list in cycles, ascending: read ends, compare writes (entries of writeAll), rising edges.
+// Reads before the first write (disarmed) count for nothing.
 ReadToEdge matchReadsToEdges(const std::vector<uint64_t>& read_ends, const std::vector<uint64_t>& writes,
                              const std::vector<uint64_t>& rises, double cycles_per_us);
 
@@ -46,6 +47,7 @@ struct FlyModeFigures {
   uint64_t frames = 0;  // flyFrame calls in the window
   ReadToEdge read_to_edge;
   int read_phase_us = 0, budget_us = 0;  // as status shows them
+  int status_compute_max_us = -1;        // status's own worst computation over the same flight
   int stack_never_used_bytes = -1, stack_bytes = -1;
   double roll_before_step_deg = 0, roll_after_step_deg = 0;  // the airframe's truth
   std::map<std::string, uint64_t> awake_cycles_by_part;      // the window, by function
