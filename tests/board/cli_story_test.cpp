@@ -15,13 +15,8 @@
 namespace {
 
 using board_test::image;
+using board_test::slurp;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 int countLines(const std::string& text, const std::string& prefix) {
   int n = 0;

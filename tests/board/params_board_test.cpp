@@ -13,14 +13,9 @@
 namespace {
 
 using board_test::image;
+using board_test::slurp;
 using board_test::SimulatedBoard;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 TEST_F(SimulatedBoard, ParamsPushedAsAFileAreWhatFlyLoadsAndPullBringsThemBack) {
   if (!std::filesystem::exists(image("fly", ".hex"))) GTEST_SKIP() << "no fly image: build the AVR tree";
