@@ -29,6 +29,15 @@ TEST(DocBlocks, InlineValueIsRewrittenInItsSentence) {
             "flash <!-- generated: value fly.flash_bytes , -->66,714<!-- generated: end --> B.");
 }
 
+TEST(DocBlocks, MarkersInACodeExampleAreShownNotRewritten) {
+  const std::string fenced = "```\n<!-- generated: KIND ARG -->\n...\n<!-- generated: end -->\n```\n";
+  EXPECT_EQ(render(fenced), fenced);
+  const std::string span = "e.g. `<!-- generated: value fly.flash_bytes , -->1<!-- generated: end -->` and "
+                           "<!-- generated: value fly.flash_bytes , -->1<!-- generated: end -->";
+  EXPECT_EQ(render(span), "e.g. `<!-- generated: value fly.flash_bytes , -->1<!-- generated: end -->` and "
+                          "<!-- generated: value fly.flash_bytes , -->66,714<!-- generated: end -->");
+}
+
 TEST(DocBlocks, MinMaxRangeAndMaxabsOverAWildcard) {
   EXPECT_EQ(render("<!-- generated: range fly.modes.*.cpu_load_pct .1f -->?<!-- generated: end -->"),
             "<!-- generated: range fly.modes.*.cpu_load_pct .1f -->31.9-49.9<!-- generated: end -->");

@@ -205,11 +205,31 @@ std::vector<double> numbersAt(const nlohmann::json& j, const std::string& path) 
   return out;
 }
 
+// Whether `at` is inside a code example: a fenced block (between lines starting with ```) or a
+// code span (an odd number of backticks before it on its line). Markers there are shown, not
+// rewritten (docs/testing.md explains the markers with such examples).
+bool inCodeExample(const std::string& text, std::size_t at) {
+  bool fenced = false;
+  std::size_t line = 0;
+  while (line < at) {
+    if (text.compare(line, 3, "```") == 0) fenced = !fenced;
+    const std::size_t next = text.find('\n', line);
+    if (next == std::string::npos || next >= at) break;
+    line = next + 1;
+  }
+  if (fenced) return true;
+  return std::count(text.begin() + static_cast<long>(line), text.begin() + static_cast<long>(at), '`') % 2 == 1;
+}
+
 std::vector<DocBlock> findBlocks(const std::string& text, const std::string& file) {
   std::vector<DocBlock> blocks;
   const std::string begin = kBlockBegin, end = kBlockEnd;
   std::size_t at = 0;
   while ((at = text.find(begin, at)) != std::string::npos) {
+    if (inCodeExample(text, at)) {
+      at += begin.size();
+      continue;
+    }
     const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
     const std::string where = fmt::format("{}:{}", file, line);
     if (text.compare(at, end.size(), end) == 0)
