@@ -11,4 +11,5 @@ void registerCommands(CLI::App& app);
 std::string defaultElf(const std::string& name);
 void addSwapCommand(CLI::App& sim);  // thrustcal sim swap (swap_cli.cpp)
 void addDynCommand(CLI::App& sim);   // thrustcal sim dyn (dynamics_cli.cpp)
+void addFleetCommand(CLI::App& sim); // thrustcal sim fleet (fleet_cli.cpp)
 }  // namespace sim

@@ -1,0 +1,35 @@
+// Shared by the `thrustcal sim` commands' sources (internal): writing a JSON result and turning
+// an exception into a message and exit code 1.
+#pragma once
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace sim {
+
+inline void writeJson(const std::string& path, const nlohmann::json& j) {
+  if (path.empty()) return;
+  if (std::filesystem::path(path).has_parent_path()) std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  std::ofstream out(path, std::ios::trunc);
+  if (!out) throw std::runtime_error(fmt::format("{}: cannot write the JSON result", path));
+  out << j.dump(2) << "\n";
+}
+
+// Runs `body`, turning any exception into a message on stderr and exit code 1.
+template <class F>
+void guarded(F&& body) {
+  try {
+    body();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "thrustcal sim: error: {}\n", e.what());
+    std::exit(1);
+  }
+}
+
+}  // namespace sim
