@@ -36,13 +36,6 @@ struct Accum {
   ErrorStats stats() const { return {n ? std::sqrt(sum_sq / n) : 0.0, max_abs, n}; }
 };
 
-// What read_run's battery monitor reads for a bus voltage: the divider, the 10-bit ADC and the
-// thesis map() (no noise: the grid is about the model, not about one noisy sample).
-uint16_t monitorReading_mv(double bus_v) {
-  const plant::BatterySensorParams sensor;
-  const int counts = plant::adcCountsFromMillivolts(bus_v * 1000.0 * sensor.ratio());
-  return tc::BatteryMonitor().millivoltsFromCounts(static_cast<uint16_t>(counts));
-}
 
 // Everything fitted for one motor from its two sweeps.
 struct MotorModels {

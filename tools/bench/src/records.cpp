@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "bench/sweeps.hpp"
+#include "calibration_runs.hpp"
 #include "sim/board.hpp"
 #include "sim/scenarios.hpp"
 #include "thrustcal/curve_builder.hpp"
@@ -19,9 +20,6 @@ namespace bench {
 
 namespace {
 
-const uint64_t kSeeds[4] = {11, 12, 13, 14};
-const char* const kPreset = "kv1100_9x4.7";
-constexpr double kVariation = 0.03;
 
 struct ImageStorage {
   static std::vector<uint8_t>* image;

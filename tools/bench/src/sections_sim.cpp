@@ -28,6 +28,7 @@
 #include <fmt/format.h>
 
 #include "bench/sections.hpp"
+#include "bench/sweeps.hpp"
 #include "thrustcal/sweep_rules.hpp"
 
 #ifdef THRUSTCAL_BENCH_HAVE_SIM
@@ -88,14 +89,6 @@ Section liftoffSection(const AvrPaths&, bool) {
 #else
 
 namespace {
-
-
-uint16_t monitorReading_mv(double bus_v) {
-  const plant::BatterySensorParams sensor;
-  const int counts = plant::adcCountsFromMillivolts(bus_v * 1000.0 * sensor.ratio());
-  return tc::BatteryMonitor().millivoltsFromCounts(static_cast<uint16_t>(counts));
-}
-
 
 template <class PwmFor>
 CurveError curveError(const plant::Bench& bench, PwmFor pwm_for) {

@@ -123,4 +123,10 @@ Sweep simulateSweep(const plant::ActuatorParams& motor, const plant::BatteryPara
   return sweep;
 }
 
+uint16_t monitorReading_mv(double bus_v) {
+  const plant::BatterySensorParams sensor;
+  const int counts = plant::adcCountsFromMillivolts(bus_v * 1000.0 * sensor.ratio());
+  return tc::BatteryMonitor().millivoltsFromCounts(static_cast<uint16_t>(counts));
+}
+
 }  // namespace bench

@@ -1,4 +1,5 @@
 #include "board/calibrate.hpp"
+#include "elapsed.hpp"
 
 #include <cctype>
 #include <chrono>
@@ -14,12 +15,6 @@ namespace board {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-bool startsWith(const std::string& s, const char* prefix) {
-  return s.compare(0, std::char_traits<char>::length(prefix), prefix) == 0;
-}
-
 // Time limits a real board needs for a sweep: each step settles, then reads the cell (median
 // of 201) and the battery (median of 101), then prints its row; 2 s arming before it.
 CommandLimits sweepLimits(const CalibrateOptions& o) {
@@ -63,7 +58,7 @@ std::string SweepLog::csv(const std::string& first_comment) const {
     if (l == header) {
       out += l + "\n";
       header_written = true;
-    } else if (startsWith(l, "# ")) {
+    } else if (l.starts_with("# ")) {
       out += l + "\n";
     } else if (!l.empty() && std::isdigit(static_cast<unsigned char>(l[0]))) {
       out += l + "\n";
@@ -83,17 +78,17 @@ SweepLog runSweep(ConsoleClient& con, const CalibrateOptions& o, Operator& op, i
   const auto t0 = Clock::now();
   auto on_line = [&](const std::string& l) {
     log.lines.push_back(l);
-    if (startsWith(l, "pwm_us,")) {
+    if (l.starts_with("pwm_us,")) {
       log.header = l;
       return;
     }
-    if (startsWith(l, "# ")) {
+    if (l.starts_with("# ")) {
       std::sscanf(l.c_str(), "# max force %lf g", &log.max_force_g);
-      if (startsWith(l, "# done")) log.done = true;
+      if (l.starts_with("# done")) log.done = true;
       op.note(l);
       return;
     }
-    if (startsWith(l, "warning: ") || startsWith(l, "error: ")) {
+    if (l.starts_with("warning: ") || l.starts_with("error: ")) {
       op.note(l);
       return;
     }
@@ -104,7 +99,7 @@ SweepLog runSweep(ConsoleClient& con, const CalibrateOptions& o, Operator& op, i
       std::sscanf(l.c_str(), "%d,%lf", &p.pwm_us, &p.force_g);
       p.rows = static_cast<int>(log.rows.size());
       p.rows_total = planned;
-      const double per_row = since(t0) / p.rows;
+      const double per_row = secondsSince(t0) / p.rows;
       p.eta_s = per_row * (planned - p.rows);
       op.progress(p);
     }
@@ -122,12 +117,12 @@ SweepLog runSweep(ConsoleClient& con, const CalibrateOptions& o, Operator& op, i
         "{} us unless a key arrives. Cut the motor's power (or press the board's reset button).",
         e.what(), o.slot, o.pwm_max_us));
   }
-  log.wall_s = since(t0);
+  log.wall_s = secondsSince(t0);
   op.sweepEnded(sweep_no, log);
   for (const auto& l : log.lines) {
-    if (startsWith(l, "error: "))
+    if (l.starts_with("error: "))
       throw CommandRefused(fmt::format("gather_store refused the sweep: {}", l));
-    if (startsWith(l, "# aborted"))
+    if (l.starts_with("# aborted"))
       throw std::runtime_error(fmt::format("sweep {} on motor {} was aborted by the board: {}",
                                            sweep_no, o.slot, l.substr(2)));
   }
@@ -192,7 +187,7 @@ CalibrateResult calibrate(ConsoleClient& con, const CalibrateOptions& o, Operato
     store(2);
   }
   r.show = con.mustCommand("show", CommandLimits{10.0});
-  r.wall_s = since(t0);
+  r.wall_s = secondsSince(t0);
   return r;
 }
 

@@ -1,4 +1,5 @@
 #include "board/console_client.hpp"
+#include "elapsed.hpp"
 
 #include <algorithm>
 
@@ -15,14 +16,6 @@ using Clock = std::chrono::steady_clock;
 
 std::atomic<bool> g_interrupt{false};
 extern "C" void onInterrupt(int) { g_interrupt = true; }
-
-double since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-bool startsWith(const std::string& s, const std::string& prefix) {
-  return s.compare(0, prefix.size(), prefix) == 0;
-}
 
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -117,7 +110,7 @@ std::vector<std::string> ConsoleClient::waitForBoot(double timeout_s) {
       }
     }
     if (interruptRequested()) throw Interrupted("interrupted while waiting for the board to boot");
-    if (since(t0) > timeout_s)
+    if (secondsSince(t0) > timeout_s)
       throw BoardTimeout(fmt::format(
           "{}: no prompt (gs>, rr> or fly>) within {:.0f} s of the reset; the board is not running "
           "gather_store, read_run or fly (flash one: thrustcal board flash --port {} "
@@ -139,7 +132,7 @@ bool ConsoleClient::enableStrict() {
   }
   bool refused = false;
   for (const auto& l : lines)
-    if (startsWith(l, "error: ")) refused = true;
+    if (l.starts_with("error: ")) refused = true;
   checksums_ = !refused;
   return checksums_;
 }
@@ -173,7 +166,7 @@ std::vector<std::string> ConsoleClient::command(const std::string& line, const C
       }
       remember(l);
       lines.push_back(l);
-      if (keeping_alive && !limits.keep_alive_until.empty() && startsWith(l, limits.keep_alive_until))
+      if (keeping_alive && !limits.keep_alive_until.empty() && l.starts_with(limits.keep_alive_until))
         keeping_alive = false;
       if (on_line) on_line(l);
     }
@@ -184,7 +177,7 @@ std::vector<std::string> ConsoleClient::command(const std::string& line, const C
     if (interruptRequested())
       fail([&] { return Interrupted(fmt::format("interrupted during \"{}\"{}", line,
                                                 limits.abort_on_failure ? "; the abort key was sent" : "")); });
-    const double waited = since(t0), quiet = std::chrono::duration<double>(Clock::now() - last).count();
+    const double waited = secondsSince(t0), quiet = std::chrono::duration<double>(Clock::now() - last).count();
     if (waited > limits.total_s || (limits.silence_s > 0 && quiet > limits.silence_s))
       fail([&] {
         return BoardTimeout(fmt::format(
@@ -210,7 +203,7 @@ std::vector<std::string> ConsoleClient::mustCommand(const std::string& line,
                                                     const LineFn& on_line) {
   auto lines = command(line, limits, on_line);
   for (const auto& l : lines)
-    if (startsWith(l, "error: "))
+    if (l.starts_with("error: "))
       throw CommandRefused(fmt::format("{} ({}) refused \"{}\": {}", port_.path(),
                                        imageName(image_), line, l));
   return lines;
@@ -225,13 +218,13 @@ std::string ConsoleClient::sendUntil(const std::string& line, const std::string&
   for (;;) {
     for (std::string l = takeLine(); l != "\x01"; l = takeLine()) {
       remember(l);
-      if (startsWith(l, until)) return l;
-      if (startsWith(l, "error: "))
+      if (l.starts_with(until)) return l;
+      if (l.starts_with("error: "))
         throw CommandRefused(fmt::format("{} ({}) refused \"{}\": {}", port_.path(),
                                          imageName(image_), line, l));
     }
     if (interruptRequested()) throw Interrupted(fmt::format("interrupted during \"{}\"", line));
-    if (since(t0) > timeout_s)
+    if (secondsSince(t0) > timeout_s)
       throw BoardTimeout(fmt::format("{}: \"{}\" did not answer with \"{}...\" within {:.0f} s; "
                                      "last lines:\n{}",
                                      port_.path(), line, until, timeout_s, tail()));
@@ -250,7 +243,7 @@ void ConsoleClient::readLines(double timeout_s, const LineFn& on_line, bool stop
       buffer_.clear();
       return;
     }
-    if (since(t0) > timeout_s) return;
+    if (secondsSince(t0) > timeout_s) return;
     pumpOnce(std::min(0.1, timeout_s));
   }
 }
@@ -259,7 +252,7 @@ void ConsoleClient::abort() {
   try {
     port_.write("\r");
     const auto t0 = Clock::now();
-    while (since(t0) < 3.0) {
+    while (secondsSince(t0) < 3.0) {
       for (std::string l = takeLine(); l != "\x01"; l = takeLine()) remember(l);
       if (promptPending()) break;
       pumpOnce(0.1);

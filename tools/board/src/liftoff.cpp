@@ -9,10 +9,6 @@
 namespace board {
 namespace {
 
-bool startsWith(const std::string& s, const char* prefix) {
-  return s.compare(0, std::char_traits<char>::length(prefix), prefix) == 0;
-}
-
 // A stream row: 6 comma-separated numbers.
 bool isStreamRow(const std::string& l) {
   int commas = 0;
@@ -62,13 +58,13 @@ LiftoffLog flyLiftoff(ConsoleClient& con, const LiftoffOptions& o,
   log.header = con.sendUntil("stream on", "t_s,", 5.0);
   auto take = [&](const std::string& l) {
     if (on_line) on_line(l);
-    if (l.find("liftoff ") != std::string::npos && !startsWith(l, "# ")) return;  // the echo
+    if (l.find("liftoff ") != std::string::npos && !l.starts_with("# ")) return;  // the echo
     if (isStreamRow(l)) {
       log.rows.push_back(l);
-    } else if (startsWith(l, "# ")) {
+    } else if (l.starts_with("# ")) {
       log.info.push_back(l);
-      if (startsWith(l, "# liftoff done")) log.done = true;
-    } else if (startsWith(l, "error: ")) {
+      if (l.starts_with("# liftoff done")) log.done = true;
+    } else if (l.starts_with("error: ")) {
       log.info.push_back("# " + l);
     } else if (!l.empty()) {
       ++log.garbled;
@@ -97,7 +93,7 @@ LiftoffLog flyLiftoff(ConsoleClient& con, const LiftoffOptions& o,
                                 e.what(), o.ramp_ms, o.hold_ms));
   }
   for (const auto& l : lines)
-    if (startsWith(l, "error: ")) {
+    if (l.starts_with("error: ")) {
       con.command("stream off", CommandLimits{5.0});
       throw CommandRefused(fmt::format("read_run refused the lift-off: {}", l));
     }

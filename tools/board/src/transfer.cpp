@@ -1,4 +1,5 @@
 #include "board/transfer.hpp"
+#include "elapsed.hpp"
 
 #include <unistd.h>
 
@@ -18,8 +19,6 @@ namespace board {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
 void say(const Progress& p, const std::string& line) {
   if (p) p(line);
 }
@@ -131,7 +130,7 @@ Verified verifyEeprom(const std::string& port, const std::vector<uint8_t>& want,
   v.crcs = boardEepromCrc(*con);
   v.image = con->image();
   v.boot = boot;
-  v.wall_s = since(t0);
+  v.wall_s = secondsSince(t0);
   const EepromCrcs expect = EepromCrcs::of(want);
   if (v.crcs != expect)
     throw std::runtime_error(fmt::format(
@@ -268,7 +267,7 @@ FlashResult flashImage(const std::string& port, const std::string& hex_path,
     ConsoleClient con(sp);
     con.waitForBoot(o.boot_timeout_s);
     r.image = con.image();
-    r.check_wall_s = since(t0);
+    r.check_wall_s = secondsSince(t0);
     say(progress, fmt::format("{} answers ({}) {:.1f} s after the reset", imageName(r.image),
                               con.prompt(), r.check_wall_s));
   }
@@ -303,13 +302,13 @@ EepromPutResult putEeprom(const std::string& port, const std::string& hex_path,
     }
     if (EepromCrcs::of(image) == before) {
       r.crcs = before;
-      r.wall_s = r.prepare_wall_s = since(t0);
+      r.wall_s = r.prepare_wall_s = secondsSince(t0);
       say(progress, fmt::format("the board already holds this image ({}); nothing written",
                                 before.text()));
       return r;
     }
   }
-  r.prepare_wall_s = since(t0);
+  r.prepare_wall_s = secondsSince(t0);
   // The whole image, so avrdude has nothing to merge with what the broken read returns.
   say(progress, fmt::format("writing {} EEPROM bytes through the bootloader on {} (a real "
                             "board takes ~3.3 ms per byte: ~14 s)",
@@ -319,7 +318,7 @@ EepromPutResult putEeprom(const std::string& port, const std::string& hex_path,
   const Verified v = verifyEeprom(port, image, "eeprom put", o);
   r.crcs = v.crcs;
   r.verify_wall_s = v.wall_s;
-  r.wall_s = since(t0);
+  r.wall_s = secondsSince(t0);
   return r;
 }
 
@@ -346,7 +345,7 @@ EepromRangeResult putEepromRange(const std::string& port, const std::vector<uint
   r.crcs = v.crcs;
   r.image = v.image;
   r.boot = v.boot;
-  r.wall_s = since(t0);
+  r.wall_s = secondsSince(t0);
   return r;
 }
 
@@ -359,9 +358,9 @@ EepromGetResult getEeprom(const std::string& port, const TransferOptions& o) {
   r.image = con->image();
   const auto td = Clock::now();
   r.bytes = boardEepromDump(*con);
-  r.dump_wall_s = since(td);
+  r.dump_wall_s = secondsSince(td);
   r.crcs = EepromCrcs::of(r.bytes);
-  r.wall_s = since(t0);
+  r.wall_s = secondsSince(t0);
   say(progress, fmt::format("read {} bytes through {} in {:.1f} s (dump {:.1f} s): {}",
                             hal::kEepromBytes, imageName(r.image), r.wall_s, r.dump_wall_s,
                             r.crcs.text()));

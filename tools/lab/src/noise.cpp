@@ -18,7 +18,6 @@ constexpr std::size_t kWindow = 4;          // rows per contrast: orthogonal to 
 constexpr double kFeatureSd = 4.0;          // contrasts beyond this many robust SD are features
 constexpr double kMedianChi2One = 0.454936; // median of a chi-square with one degree of freedom
 constexpr double kMinDof = 5.0;
-constexpr double kMaxLag1 = 0.95;
 constexpr double kDenseShare = 0.005;       // neighbours this close in PWM (share of its span): a ramp
 constexpr std::size_t kMinLevelWindows = 30;  // level windows of each spacing before rho is estimated
 
@@ -201,7 +200,7 @@ double lag1Of(const Dataset& d, const std::vector<std::vector<std::size_t>>& gro
   };
   const double seen = s1 / s2;
   auto gap = [&](double rho) { return seen - poly(a1, rho) / poly(a2, rho * rho); };
-  double lo = 0, hi = kMaxLag1;
+  double lo = 0, hi = noise_rows::kMaxLag1;
   if (gap(lo) >= 0) return 0;
   if (gap(hi) <= 0) return hi;
   for (int it = 0; it < 50; ++it) {

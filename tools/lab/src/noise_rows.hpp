@@ -8,6 +8,10 @@
 
 namespace lab::noise_rows {
 
+// The largest lag-1 autocorrelation of neighbouring readings the noise estimators accept: past
+// it the correlated-sample correction (1 + rho) / (1 - rho) grows without bound.
+inline constexpr double kMaxLag1 = 0.95;
+
 // The logged conditions whose contrasts are regressed out: every other numeric column logged on
 // every row, not constant, and not one that may be computed from the force (a thrust in other
 // units, an efficiency in g/W).

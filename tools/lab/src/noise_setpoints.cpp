@@ -13,13 +13,13 @@
 #include "lab/noise.hpp"
 #include "lab/stats.hpp"
 #include "lab/steps.hpp"
+#include "noise_rows.hpp"
 
 namespace lab {
 
 namespace {
 
 constexpr std::size_t kMinSteadyRows = 8;     // of them, steady
-constexpr double kMaxLag1 = 0.95;
 constexpr double kSteadyShare = 0.5;          // steady once the settling is under this share of the noise
 constexpr int kSettlingGrid = 40;             // time constants tried for a set point's settling
 constexpr std::size_t kMinPureDof = 30;       // pooled degrees of freedom before pure error is used
@@ -110,7 +110,7 @@ NoiseEstimate pureErrorNoise(const Dataset& data) {
   }
   // The samples of a set point correlate (a filter, vibration): the scatter about a set point's own
   // mean misses the variance of that mean, (1 + r) / (1 - r) / n of the noise's for an AR(1) noise.
-  out.lag1 = std::clamp(c1 / ss, 0.0, kMaxLag1);
+  out.lag1 = std::clamp(c1 / ss, 0.0, noise_rows::kMaxLag1);
   const double vif = (1 + out.lag1) / (1 - out.lag1);
   const double rows_minus_means = dof + static_cast<double>(out.setpoints) * (1 - vif);
   out.sigma_g = std::sqrt(ss / std::max(rows_minus_means, 1.0));

@@ -1,4 +1,5 @@
 #include "plant/attitude_rig.hpp"
+#include "plant/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +10,6 @@
 namespace plant {
 
 namespace {
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr double kVibrationRefRadS = 10000.0 * 2.0 * std::numbers::pi / 60.0;
 
 std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {

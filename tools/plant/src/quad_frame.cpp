@@ -1,4 +1,5 @@
 #include "plant/quad_frame.hpp"
+#include "plant/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +8,6 @@
 namespace plant {
 
 namespace {
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr double kMaxSubstep_s = 0.001;
 }  // namespace
 

@@ -1,4 +1,5 @@
 #include "plant/seesaw.hpp"
+#include "plant/angles.hpp"
 
 #include <cmath>
 #include <limits>
@@ -7,7 +8,6 @@
 namespace plant {
 
 namespace {
-constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 std::vector<MotorMount> seesawMounts(double arm_m) { return {{0.0, arm_m, 1}, {0.0, -arm_m, -1}}; }
 

@@ -19,7 +19,7 @@ extern "C" {
 namespace sim {
 namespace {
 
-const char* kIrqNames[kRcChannels] = {">rc.line0", ">rc.line1", ">rc.line2", ">rc.line3",
+const char* kRcIrqNames[kRcChannels] = {">rc.line0", ">rc.line1", ">rc.line2", ">rc.line3",
                                       ">rc.line4", ">rc.line5", ">rc.line6", ">rc.line7"};
 
 uint64_t usToCycles(double us) { return static_cast<uint64_t>(std::llround(us * (kCpuHz / 1e6))); }
@@ -96,7 +96,7 @@ void rc_receiver_init(avr_t* avr, RcPart& part, RcSignal signal, int lines) {
   part.avr = avr;
   part.signal = signal;
   part.lines = lines;
-  part.irq = avr_alloc_irq(&avr->irq_pool, 0, static_cast<uint32_t>(lines), kIrqNames);
+  part.irq = avr_alloc_irq(&avr->irq_pool, 0, static_cast<uint32_t>(lines), kRcIrqNames);
   for (int i = 0; i < lines; ++i) part.level[i] = idleLevel(part);
   part.frame = part.next = RcFrame{};
   planFrame(part, avr->cycle);  // no signal yet: an empty frame keeps the clock

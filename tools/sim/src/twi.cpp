@@ -33,7 +33,7 @@ constexpr uint8_t kStart = 0x08, kRepStart = 0x10, kSlaWAck = 0x18, kSlaWNack = 
                   kSlaRAck = 0x40, kSlaRNack = 0x48, kDataRxAck = 0x50, kDataRxNack = 0x58,
                   kNoState = 0xF8;
 
-const char* kIrqNames[TWI_IRQ_COUNT] = {"8<twi.chip.in", "32>twi.chip.out", "8>twi.chip.status"};
+const char* kTwiIrqNames[TWI_IRQ_COUNT] = {"8<twi.chip.in", "32>twi.chip.out", "8>twi.chip.status"};
 
 avr_int_vector_t* coreTwiVector(avr_t* avr) {
   for (avr_io_t* io = avr->io_port; io; io = io->next)
@@ -54,7 +54,7 @@ int bitsUntilFirstOne(uint8_t byte) {
 Twi::Twi(avr_t* avr) : avr_(avr) {
   vector_ = coreTwiVector(avr_);
   if (!vector_) throw std::runtime_error("this simavr core has no TWI; the board must be an atmega2560");
-  irq_ = avr_alloc_irq(&avr_->irq_pool, 0, TWI_IRQ_COUNT, kIrqNames);
+  irq_ = avr_alloc_irq(&avr_->irq_pool, 0, TWI_IRQ_COUNT, kTwiIrqNames);
   avr_irq_register_notify(irq_ + TWI_IRQ_INPUT, &Twi::onSlaveAnswer, this);
   avr_irq_register_notify(vector_->irq + AVR_INT_IRQ_RUNNING, &Twi::onVectorRunning, this);
   const uint32_t port = AVR_IOCTL_IOPORT_GETIRQ(hal::kTwiPins.port);

@@ -54,4 +54,8 @@ plant::BatteryParams lipoAt(double rest_v);
 Sweep simulateSweep(const plant::ActuatorParams& motor, const plant::BatteryParams& power,
                     const SweepSpec& spec);
 
+// What read_run's battery monitor reads for a bus voltage: the divider, the 10-bit ADC and the
+// thesis map() (no noise: the grids built on it are about the model, not about one noisy sample).
+uint16_t monitorReading_mv(double bus_v);
+
 }  // namespace bench
