@@ -1,0 +1,260 @@
+// Issue 27 item 1: fly's receiver in simavr. The real fly.elf on the virtual airframe (the
+// gimbal, pwm mode: no calibrated slot needed) with the simulator's RC receiver on its pins
+// (sim/rc_input.hpp, as `sim console --rc`): a PPM sum on A8, and one pulse per channel on
+// A8..A12 (port K's pin-change interrupt). One simulation per test, each assertion at its stage:
+//  - out-of-range pulses are rejected and counted in `status`, and neither arm nor move anything;
+//  - stick arming (throttle low, yaw right) arms 1 s after the gesture's first frame, never
+//    before, and only when the other arming checks pass (force mode without records: refused);
+//  - the sticks fly: a roll (PPM) or pitch (PWM) stick tilts the gimbal by the angle angle mode
+//    gives that stick, with its sign; the mode switch (channel 5) gives rate mode;
+//  - stick disarm (throttle low, yaw left) stops every pulse;
+//  - `loss` in the RC script stops every ESC pulse within 100 ms of the last valid frame,
+//    measured on the ESC pins' edges and the receiver's own edges, in simulated time.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <memory>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "safety_support.hpp"
+#include "sim/airframe.hpp"
+#include "sim/rc_input.hpp"
+
+extern "C" {
+#include <simavr/sim_irq.h>
+}
+
+namespace {
+
+using safety::contains;
+
+constexpr double kStopUs = 1005.0;    // at or below: the stop pulse (1000 us + a tick)
+constexpr double kHoldS = 1.0;        // fly's kStickHoldMs: a gesture held this long acts
+constexpr double kFailsafeS = 0.100;  // the target: pulses stop within this of the last valid frame
+constexpr double kFullAngleDeg = 30;  // angle mode: full roll or pitch stick (default `rates`)
+
+// A stick `us` from the centre, as angle mode flies it (rc_input.cpp: 10 us dead band, the
+// remaining 490 us are the full angle).
+double angleOfStickDeg(double us_from_centre) { return (us_from_centre - 10) / 490 * kFullAngleDeg; }
+
+struct RcEdge {
+  int line;
+  int level;
+  double t_s;
+};
+
+class FlyReceiverHil : public ::testing::Test {
+ protected:
+  // fly booted on the gimbal with the receiver on `rc_spec`, sending the sticks at rest (AETR,
+  // throttle low, channel 5 low: angle mode), `rc_command` given, ESCs past their first 2 s.
+  void boot(const std::string& rc_spec, const std::string& rc_command) {
+    sim::AirframeOptions o;
+    o.imu_params.seed = 7;
+    o.log_period_s = 0.005;
+    rig_ = std::make_unique<sim::AirframeRig>(hil::imagePath("fly"), o);
+    rc_ = std::make_unique<sim::RcOnBoard>(rig_->board(), sim::parseRcSpec(rc_spec, &o.esc_pins));
+    for (int line = 0; line < rc_->part().lines; ++line)
+      avr_irq_register_notify(rc_->part().irq + line, &FlyReceiverHil::onRcEdge, this);
+    pulses_ = std::make_unique<safety::PulseLog>(rig_->board());
+    con_ = std::make_unique<sim::Console>(rig_->board(), "fly> ");
+    con_->onLine([this](const std::string& line) {  // a note fly prints unasked follows a prompt
+      const bool prompted = line.rfind("fly> ", 0) == 0;
+      lines_.push_back({rig_->board().timeS(), prompted ? line.substr(5) : line});
+    });
+    sticks(1500, 1500, 1000, 1500);
+    con_->expectText("imu: gyro bias", 5.0);
+    con_->waitPrompt(1.0);
+    const auto rc = con_->command(rc_command);
+    ASSERT_FALSE(rc.empty());
+    ASSERT_EQ(rc[0].rfind("rc: ", 0), 0u) << con_->tail();
+    while (rig_->truth().t_s < 2.1) rig_->run(0.1);  // the ESCs' 2 s at the stop pulse
+  }
+  void TearDown() override {
+    if (con_) con_->clearLineListeners();
+  }
+
+  // The transmitter's sticks from the receiver's next frame on (channel 5: the mode switch).
+  void sticks(double roll, double pitch, double throttle, double yaw, double mode = 1000) {
+    const std::string reply = rc_->command(fmt::format("ch {} {} {} {} {}", roll, pitch, throttle, yaw, mode));
+    ASSERT_EQ(reply.rfind("ok", 0), 0u) << reply;
+  }
+  void run(double s) { rig_->run(s); }
+  double now() { return rig_->board().timeS(); }
+
+  // When fly printed a line starting with `start` at or after `from_s` (-1: never).
+  double saidAt(const std::string& start, double from_s) const {
+    for (const auto& l : lines_)
+      if (l.first >= from_s && l.second.rfind(start, 0) == 0) return l.first;
+    return -1;
+  }
+  bool said(const std::string& text) const { return contains(rig_->board().output(), text); }
+  // Waits for a note fly prints unasked (an arm, a refusal, a disarm) and the prompt after it,
+  // so the next command's reply is its own.
+  void awaitNote(const std::string& text, double budget_s) {
+    con_->expectText(text, budget_s);
+    con_->waitPrompt(0.1);
+  }
+
+  // The widest ESC pulse that ended in [from_s, to_s).
+  double widest(double from_s, double to_s) const { return pulses_->widestBetween(from_s, to_s); }
+  // The end of the last pulse above the stop pulse; the end of the first one after `from_s`.
+  double lastSpinning() const { return pulses_->lastWiderThan(kStopUs); }
+  double firstSpinning(double from_s) const {
+    for (const sim::Pulse& p : pulses_->pulses())
+      if (p.end_s >= from_s && p.width_us > kStopUs) return p.end_s;
+    return -1;
+  }
+  // The rig's mean attitude over [from_s, to_s).
+  double meanDeg(double from_s, double to_s, double plant::RigTruth::*field) const {
+    double sum = 0;
+    int n = 0;
+    for (const sim::AirSample& s : rig_->samples())
+      if (s.truth.t_s >= from_s && s.truth.t_s < to_s) sum += s.truth.*field, ++n;
+    return n ? sum / n : NAN;
+  }
+
+  struct Receiver {
+    long frames = -1, rejected = -1, bad = -1, lost = -1, failsafes = -1;
+    std::string sticks;
+  };
+  // `status`'s receiver line.
+  Receiver status() {
+    Receiver r;
+    static const std::regex re(
+        "receiver: frames (\\d+), last \\d+ ms ago, rejected pulses (\\d+), bad frames (\\d+), lost edges "
+        "(\\d+), failsafes (\\d+); (sticks .*)");
+    for (const std::string& line : con_->command("status")) {
+      std::smatch m;
+      if (!std::regex_search(line, m, re)) continue;
+      r.frames = std::stol(m[1]);
+      r.rejected = std::stol(m[2]);
+      r.bad = std::stol(m[3]);
+      r.lost = std::stol(m[4]);
+      r.failsafes = std::stol(m[5]);
+      r.sticks = m[6];
+    }
+    return r;
+  }
+
+  // The receiver's last edge (its signal's end) and the end of its last complete frame: PPM,
+  // the falling edge that ends a sync gap (a decoder knows a frame is whole there); PWM, the
+  // last wired channel's falling edge.
+  double lastRcEdge() const { return rc_edges_.empty() ? -1 : rc_edges_.back().t_s; }
+  double lastCompleteFrame() const {
+    const int last_line = rc_->part().lines - 1;
+    double prev_fall = -1, found = -1;
+    for (const RcEdge& e : rc_edges_) {
+      if (e.level != 0 || e.line != last_line) continue;
+      if (rc_->part().signal == sim::RcSignal::kPwm) found = e.t_s;
+      if (rc_->part().signal == sim::RcSignal::kPpm && prev_fall >= 0 && e.t_s - prev_fall > 0.0027)
+        found = e.t_s;
+      prev_fall = e.t_s;
+    }
+    return found;
+  }
+
+  // `loss` in an RC script, `after_s` from now; runs 0.3 s. Returns the last valid frame's end.
+  void loseTheSignal(double after_s = 0.05) {
+    rc_->play(sim::parseRcScript(fmt::format("t_s,ch1\n{:.6f},loss\n", now() + after_s), "loss.csv"));
+    run(after_s + 0.3);
+  }
+
+  std::unique_ptr<sim::AirframeRig> rig_;
+  std::unique_ptr<sim::RcOnBoard> rc_;
+  std::unique_ptr<safety::PulseLog> pulses_;
+  std::unique_ptr<sim::Console> con_;
+  std::vector<std::pair<double, std::string>> lines_;
+  std::vector<RcEdge> rc_edges_;
+
+ private:
+  static void onRcEdge(avr_irq_t* irq, uint32_t value, void* param) {
+    auto* self = static_cast<FlyReceiverHil*>(param);
+    self->rc_edges_.push_back({static_cast<int>(irq - self->rc_->part().irq), value ? 1 : 0, self->now()});
+  }
+};
+
+TEST_F(FlyReceiverHil, APpmSumOnA8ArmsFromTheSticksFliesTheRollStickAndStopsOnLoss) {
+  HIL_REQUIRE_IMAGE("fly");
+  boot("ppm:A8", "rc ppm");
+  const Receiver at_rest = status();
+  EXPECT_GT(at_rest.frames, 20) << con_->tail();
+  EXPECT_EQ(at_rest.rejected, 0);
+  EXPECT_EQ(at_rest.bad, 0);
+
+  // the arming gesture in force mode, no slot calibrated: behind every check `arm` has
+  sticks(1500, 1500, 1000, 2000);
+  awaitNote("sticks: error: arm refused: ", kHoldS + 0.1);
+  EXPECT_LT(widest(0, now()), kStopUs);
+  sticks(1500, 1500, 1000, 1500);
+  run(0.1);
+  con_->command("mode pwm");
+  con_->command("hover 1480 1440");
+
+  // the gesture with an out-of-range pitch channel: every frame rejected, counted, not flown
+  sticks(1500, 2400, 1000, 2000);
+  const double noise_s = now();
+  run(kHoldS + 0.2);
+  const Receiver noisy = status();
+  EXPECT_GE(noisy.bad - at_rest.bad, 50) << "one bad frame per 22.5 ms";
+  EXPECT_EQ(noisy.rejected - at_rest.rejected, noisy.bad - at_rest.bad) << "one rejected pulse per frame";
+  EXPECT_EQ(noisy.sticks, "sticks roll 0 pitch 0 yaw 0 us, throttle 1000 us, angle mode");
+  EXPECT_LT(saidAt("armed:", noise_s), 0) << "noise armed it";
+  EXPECT_LT(widest(noise_s, now()), kStopUs);
+
+  // the gesture, valid: armed 1 s after it began, not before (measured on the ESC pins: the
+  // gesture's first frame comes within a frame, is decoded at the next one's start, and is
+  // checked at each frame after: at most three 22.5 ms frames on top of the second)
+  const double gesture_s = now();
+  sticks(1500, 1500, 1000, 2000);
+  awaitNote("armed: mode pwm, layout x, from the sticks", kHoldS + 0.2);
+  const double spins_s = firstSpinning(gesture_s);
+  ASSERT_GT(spins_s, 0) << con_->tail();
+  std::printf("ppm: the first pulse above the stop pulse ended %.1f ms after the gesture was set\n",
+              (spins_s - gesture_s) * 1000);
+  EXPECT_GE(spins_s - gesture_s, kHoldS) << "a motor spun before the gesture was held 1 s";
+  EXPECT_LE(spins_s - gesture_s, kHoldS + 0.070);
+
+  // half throttle, spooled up, level; then noise in flight moves nothing
+  sticks(1500, 1500, 1500, 1500);
+  run(1.5);
+  const double level_roll = meanDeg(now() - 0.3, now(), &plant::RigTruth::roll_deg);
+  EXPECT_NEAR(level_roll, 0.0, 3.0);
+  const Receiver before_noise = status();
+  sticks(2400, 1500, 1500, 1500);  // a roll of +2400 us: out of range, three frames
+  run(0.06);
+  sticks(1500, 1500, 1500, 1500);
+  const double noise_in_flight_s = now();
+  run(0.3);
+  const Receiver after_noise = status();
+  EXPECT_GE(after_noise.bad - before_noise.bad, 2);
+  EXPECT_LT(saidAt("disarmed", 0), 0) << con_->tail();
+  EXPECT_NEAR(meanDeg(noise_in_flight_s, now(), &plant::RigTruth::roll_deg), level_roll, 1.0)
+      << "an out-of-range roll stick moved the gimbal";
+
+  // a roll stick right: the gimbal rolls right (positive) by the stick's angle
+  sticks(1700, 1500, 1500, 1500);
+  run(1.5);
+  const double rolled = meanDeg(now() - 0.5, now(), &plant::RigTruth::roll_deg) - level_roll;
+  std::printf("ppm: +200 us roll stick -> %.2f deg (angle mode asks %.2f)\n", rolled, angleOfStickDeg(200));
+  EXPECT_NEAR(rolled, angleOfStickDeg(200), 2.0);
+
+  // the link lost: every pulse stops within 100 ms of the last valid frame
+  sticks(1500, 1500, 1500, 1500);
+  run(0.3);
+  loseTheSignal();
+  awaitNote("disarmed: receiver lost (no valid frame for 100 ms)", 0.1);
+  const double stop_s = lastSpinning();
+  std::printf("ppm: last pulse above the stop pulse ended %.1f ms after the last complete frame, "
+              "%.1f ms after the receiver's last edge\n",
+              (stop_s - lastCompleteFrame()) * 1000, (stop_s - lastRcEdge()) * 1000);
+  EXPECT_TRUE(said("disarmed: receiver lost (no valid frame for 100 ms)")) << con_->tail();
+  EXPECT_LE(stop_s - lastCompleteFrame(), kFailsafeS);
+  EXPECT_LE(widest(stop_s + 1e-6, now()), 1000.6);
+  EXPECT_GT(pulses_->countBetween(stop_s + 0.05, now()), 4 * 50) << "the ESCs keep their stop pulse";
+}
+
+}  // namespace
