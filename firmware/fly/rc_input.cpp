@@ -19,7 +19,14 @@ void RcDecoder::begin(RcProtocol protocol, uint8_t pwm_channels) {
   gap();
 }
 
+void RcDecoder::silence() {
+  gap();
+  resume_ = protocol_ == RcProtocol::kPpm && frame_.channels != 0;
+}
+
 void RcDecoder::gap() {
+  resume_ = false;
+  resumed_ = false;
   have_pins_ = false;
   have_last_ = false;
   index_ = -1;
@@ -36,10 +43,11 @@ bool RcDecoder::valid(uint16_t us) {
 }
 
 bool RcDecoder::edge(const RcEdge& e) {
-  if (!have_pins_) {  // the levels before this edge are unknown: it only tells them
+  if (!have_pins_) {  // the levels before this edge are unknown: it tells them
     have_pins_ = true;
     last_pins_ = e.pins;
-    return false;
+    if (!resume_) return false;
+    last_pins_ = static_cast<uint8_t>(e.pins ^ kPpmBit);  // after a silence: the PPM pin changed
   }
   bool done = false;
   if (protocol_ == RcProtocol::kPpm) done = ppmEdge(e);
@@ -56,6 +64,9 @@ bool RcDecoder::ppmEdge(const RcEdge& e) {
   if (!have_last_) {
     have_last_ = true;
     last_ticks_ = e.ticks;
+    if (resume_) index_ = 0;  // the silence before it was a sync gap
+    resumed_ = resume_;
+    resume_ = false;
     return false;
   }
   const uint16_t us = usOf(last_ticks_, e.ticks);
@@ -63,10 +74,12 @@ bool RcDecoder::ppmEdge(const RcEdge& e) {
   if (us >= kRcSyncMinUs) {
     const int8_t channels = index_;
     const bool was_bad = frame_bad_;
+    const bool cut = resumed_ && channels != static_cast<int8_t>(frame_.channels);  // came back mid-frame
     index_ = 0;
     frame_bad_ = false;
+    resumed_ = false;
     if (channels < 0) return false;  // the first gap: frames start here
-    if (was_bad || channels < static_cast<int8_t>(kRcMinChannels)) {
+    if (was_bad || cut || channels < static_cast<int8_t>(kRcMinChannels)) {
       ++bad_frames_;
       return false;
     }

@@ -14,6 +14,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <regex>
@@ -36,6 +37,7 @@ constexpr double kStopUs = 1005.0;    // at or below: the stop pulse (1000 us + 
 constexpr double kHoldS = 1.0;        // fly's kStickHoldMs: a gesture held this long acts
 constexpr double kFailsafeS = 0.100;  // the target: pulses stop within this of the last valid frame
 constexpr double kFullAngleDeg = 30;  // angle mode: full roll or pitch stick (default `rates`)
+constexpr double kFullRateDps = 200;  // rate mode: full roll or pitch stick
 
 // A stick `us` from the centre, as angle mode flies it (rc_input.cpp: 10 us dead band, the
 // remaining 490 us are the full angle).
@@ -117,6 +119,14 @@ class FlyReceiverHil : public ::testing::Test {
     return n ? sum / n : NAN;
   }
 
+  double meanRollRateDps(double from_s, double to_s) const {
+    double sum = 0;
+    int n = 0;
+    for (const sim::AirSample& s : rig_->samples())
+      if (s.truth.t_s >= from_s && s.truth.t_s < to_s) sum += s.truth.rate_dps[0], ++n;
+    return n ? sum / n : NAN;
+  }
+
   struct Receiver {
     long frames = -1, rejected = -1, bad = -1, lost = -1, failsafes = -1;
     std::string sticks;
@@ -143,6 +153,15 @@ class FlyReceiverHil : public ::testing::Test {
   // The receiver's last edge (its signal's end) and the end of its last complete frame: PPM,
   // the falling edge that ends a sync gap (a decoder knows a frame is whole there); PWM, the
   // last wired channel's falling edge.
+  double longestRcSilence(double from_s) const {
+    double longest = 0, prev = -1;
+    for (const RcEdge& e : rc_edges_) {
+      if (e.t_s < from_s) continue;
+      if (prev >= 0) longest = std::max(longest, e.t_s - prev);
+      prev = e.t_s;
+    }
+    return longest;
+  }
   double lastRcEdge() const { return rc_edges_.empty() ? -1 : rc_edges_.back().t_s; }
   double lastCompleteFrame() const {
     const int last_line = rc_->part().lines - 1;
@@ -161,6 +180,16 @@ class FlyReceiverHil : public ::testing::Test {
   void loseTheSignal(double after_s = 0.05) {
     rc_->play(sim::parseRcScript(fmt::format("t_s,ch1\n{:.6f},loss\n", now() + after_s), "loss.csv"));
     run(after_s + 0.3);
+  }
+
+  // The receiver sends no signal in the next `frames` frames, then the sticks again.
+  void dropFrames(int frames) {
+    const sim::RcPart& p = rc_->part();
+    const double frame_s = sim::cyclesToSeconds(p.frame_cycles);
+    const double next_s = sim::cyclesToSeconds(p.frame_start + p.frame_cycles);
+    rc_->play(sim::parseRcScript(fmt::format("t_s,ch1,ch2,ch3,ch4,ch5\n{:.6f},loss\n{:.6f},1500,1500,1500,1500,1000\n",
+                                             next_s - 0.001, next_s + (frames - 1) * frame_s + 0.001),
+                                 "dropout.csv"));
   }
 
   std::unique_ptr<sim::AirframeRig> rig_;
@@ -242,19 +271,123 @@ TEST_F(FlyReceiverHil, APpmSumOnA8ArmsFromTheSticksFliesTheRollStickAndStopsOnLo
   std::printf("ppm: +200 us roll stick -> %.2f deg (angle mode asks %.2f)\n", rolled, angleOfStickDeg(200));
   EXPECT_NEAR(rolled, angleOfStickDeg(200), 2.0);
 
-  // the link lost: every pulse stops within 100 ms of the last valid frame
+  // a frame lost: a dropout the failsafe rides through
   sticks(1500, 1500, 1500, 1500);
   run(0.3);
+  const double dropout_s = now();
+  dropFrames(1);
+  run(0.3);
+  EXPECT_GT(longestRcSilence(dropout_s), 0.030) << "the receiver sent every frame";
+  EXPECT_LT(saidAt("disarmed", 0), 0) << "a dropout of one frame disarmed it\n" << con_->tail();
+
+  // the link lost: every pulse stops within 100 ms of the last valid frame
   loseTheSignal();
-  awaitNote("disarmed: receiver lost (no valid frame for 100 ms)", 0.1);
+  awaitNote("disarmed: receiver lost (no valid frame for ", 0.1);
   const double stop_s = lastSpinning();
   std::printf("ppm: last pulse above the stop pulse ended %.1f ms after the last complete frame, "
               "%.1f ms after the receiver's last edge\n",
               (stop_s - lastCompleteFrame()) * 1000, (stop_s - lastRcEdge()) * 1000);
-  EXPECT_TRUE(said("disarmed: receiver lost (no valid frame for 100 ms)")) << con_->tail();
   EXPECT_LE(stop_s - lastCompleteFrame(), kFailsafeS);
   EXPECT_LE(widest(stop_s + 1e-6, now()), 1000.6);
   EXPECT_GT(pulses_->countBetween(stop_s + 0.05, now()), 4 * 50) << "the ESCs keep their stop pulse";
+}
+
+// One pulse per channel on A8..A12 (AETR and the mode switch), and the round trip of issue 27
+// item 4 from the sticks: armed, flown, disarmed from the sticks, the gimbal drifting off level
+// (arming refused), set level again (what `level` on `sim console`'s terminal does), armed
+// again and flown again in the same simulation.
+TEST_F(FlyReceiverHil, PwmPulsesOnA8ToA12ArmFlyDisarmAndArmAgainAfterTheRigIsLevelled) {
+  HIL_REQUIRE_IMAGE("fly");
+  boot("pwm:A8,A9,A10,A11,A12", "rc pwm 5");
+  con_->command("mode pwm");
+  con_->command("hover 1480 1440");
+  const Receiver at_rest = status();
+  EXPECT_GT(at_rest.frames, 20) << con_->tail();
+
+  // the gesture with an out-of-range pitch pulse: the pulse rejected every frame, no frame
+  // complete, nothing armed
+  const double noise_s = now();
+  sticks(1500, 600, 1000, 2000);
+  run(kHoldS + 0.2);
+  const Receiver noisy = status();
+  EXPECT_GE(noisy.rejected - at_rest.rejected, 50) << "one per 20 ms frame";
+  EXPECT_LE(noisy.frames - at_rest.frames, 2) << "frames completed with a pulse rejected";
+  EXPECT_LT(saidAt("armed:", noise_s), 0) << "noise armed it";
+  EXPECT_LT(widest(noise_s, now()), kStopUs);
+
+  // armed from the sticks after 1 s
+  const double gesture_s = now();
+  sticks(1500, 1500, 1000, 2000);
+  awaitNote("armed: mode pwm, layout x, from the sticks", kHoldS + 0.2);
+  const double spins_s = firstSpinning(gesture_s);
+  std::printf("pwm: the first pulse above the stop pulse ended %.1f ms after the gesture was set\n",
+              (spins_s - gesture_s) * 1000);
+  EXPECT_GE(spins_s - gesture_s, kHoldS);
+  EXPECT_LE(spins_s - gesture_s, kHoldS + 0.070);
+
+  // a pitch stick forward: the nose goes down (positive pitch) by the stick's angle
+  sticks(1500, 1500, 1500, 1500);
+  run(1.5);
+  const double level_pitch = meanDeg(now() - 0.3, now(), &plant::RigTruth::pitch_deg);
+  sticks(1500, 1700, 1500, 1500);
+  run(1.5);
+  const double pitched = meanDeg(now() - 0.5, now(), &plant::RigTruth::pitch_deg) - level_pitch;
+  std::printf("pwm: +200 us pitch stick -> %.2f deg (angle mode asks %.2f)\n", pitched, angleOfStickDeg(200));
+  EXPECT_NEAR(pitched, angleOfStickDeg(200), 2.0);
+
+  // the mode switch high: rate mode, a roll stick is a roll rate
+  sticks(1600, 1500, 1500, 1500, 2000);
+  run(0.3);
+  const double roll_rate = meanRollRateDps(now() - 0.15, now());
+  const double asked_dps = (100.0 - 10) / 490 * kFullRateDps;
+  std::printf("pwm: rate mode, +100 us roll stick -> %.1f deg/s (rate mode asks %.1f)\n", roll_rate, asked_dps);
+  EXPECT_GT(roll_rate, 0.6 * asked_dps) << "P only: the gimbal's friction keeps it a little short";
+  EXPECT_LT(roll_rate, 1.1 * asked_dps);
+
+  // disarmed from the sticks: every pulse stops
+  const double disarm_s = now();
+  sticks(1500, 1500, 1000, 1000);
+  awaitNote("disarmed: sticks (throttle low, yaw left)", kHoldS + 0.2);
+  const double stopped_s = lastSpinning();
+  EXPECT_GE(stopped_s - disarm_s, kHoldS - 0.1) << "disarmed before the gesture was held";
+  run(1.0);
+  EXPECT_LE(widest(stopped_s + 1e-6, now()), 1000.6);
+  sticks(1500, 1500, 1000, 1500);
+  run(0.1);
+  const plant::RigTruth off = rig_->truth();
+  std::printf("pwm: 1 s after the disarm the gimbal is at roll %.1f pitch %.1f deg\n", off.roll_deg, off.pitch_deg);
+
+  // off level, arming is refused; levelled, it arms again from the sticks and flies
+  sticks(1500, 1500, 1000, 2000);
+  awaitNote("sticks: error: arm refused: not level", kHoldS + 0.2);
+  sticks(1500, 1500, 1000, 1500);
+  rig_->levelNow();
+  const double levelled_s = now();
+  run(1.0);
+  sticks(1500, 1500, 1000, 2000);
+  awaitNote("armed: mode pwm, layout x, from the sticks", kHoldS + 0.2);
+  std::printf("pwm: armed again %.2f s after the rig was levelled\n", now() - levelled_s);
+  sticks(1500, 1500, 1500, 1500);
+  run(1.5);
+  const double level_again = meanDeg(now() - 0.3, now(), &plant::RigTruth::pitch_deg);
+  EXPECT_NEAR(level_again, level_pitch, 1.0) << "flies level again";
+  sticks(1500, 1700, 1500, 1500);
+  run(1.5);
+  const double pitched_again = meanDeg(now() - 0.5, now(), &plant::RigTruth::pitch_deg) - level_again;
+  EXPECT_NEAR(pitched_again, pitched, 0.5) << "the second flight answers the stick as the first";
+
+  // the link lost: every pulse stops within 100 ms of the last valid frame
+  sticks(1500, 1500, 1500, 1500);
+  run(0.3);
+  loseTheSignal();
+  awaitNote("disarmed: receiver lost (no valid frame for ", 0.1);
+  const double stop_s = lastSpinning();
+  std::printf("pwm: last pulse above the stop pulse ended %.1f ms after the last complete frame\n",
+              (stop_s - lastCompleteFrame()) * 1000);
+  EXPECT_LE(stop_s - lastCompleteFrame(), kFailsafeS);
+  EXPECT_LE(widest(stop_s + 1e-6, now()), 1000.6);
+  const Receiver end = status();
+  EXPECT_EQ(end.failsafes, 1);
 }
 
 }  // namespace

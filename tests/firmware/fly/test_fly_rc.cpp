@@ -115,6 +115,36 @@ TEST(RcPpm, AfterAGapNoIntervalIsTakenAcrossIt) {
   EXPECT_EQ(d.badFrames(), 0u);
 }
 
+TEST(RcPpm, AfterASilenceTheNextWholeFrameFliesAndOneCutShortIsBad) {
+  RcDecoder d;
+  d.begin(RcProtocol::kPpm, 0);
+  uint16_t t = 0;
+  feed(d, ppm(t, kSticks));
+  feed(d, ppm(t, kSticks));
+  ASSERT_EQ(feed(d, ppm(t, kSticks)).size(), 1u);
+  // a dropout: the line idle for more than kRcEdgeGapMs, which is a sync gap
+  d.silence();
+  t = static_cast<uint16_t>(t + 12345);
+  EXPECT_TRUE(feed(d, ppm(t, kSticks)).empty()) << "the frame ends at the next one's first edge";
+  EXPECT_EQ(feed(d, ppm(t, kSticks)).size(), 1u) << "the first frame after the silence flies";
+  // the line back in the middle of a frame (a loose plug): three channels short, not flown
+  d.silence();
+  t = static_cast<uint16_t>(t + 12345);
+  std::vector<RcEdge> cut = ppm(t, kSticks);
+  cut.erase(cut.begin(), cut.begin() + 6);
+  EXPECT_TRUE(feed(d, cut).empty());
+  EXPECT_TRUE(feed(d, ppm(t, kSticks)).empty()) << "five channels where the receiver sends eight";
+  EXPECT_EQ(d.badFrames(), 1u);
+  EXPECT_EQ(feed(d, ppm(t, kSticks)).size(), 1u);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(d.frame().us[i], kSticks[i]) << i;
+  // inverted polarity comes back alike
+  d.silence();
+  t = static_cast<uint16_t>(t + 12345);
+  EXPECT_TRUE(feed(d, ppm(t, kSticks, true)).empty());
+  EXPECT_EQ(feed(d, ppm(t, kSticks, true)).size(), 1u);
+  EXPECT_EQ(d.badFrames(), 1u);
+}
+
 // PWM: channel i on bit i, one after another.
 std::vector<RcEdge> pwm(uint16_t& t, const std::vector<uint16_t>& us, uint8_t& level) {
   std::vector<RcEdge> e;
