@@ -23,9 +23,12 @@
 
 #include "safety_support.hpp"
 #include "sim/airframe.hpp"
+#include "sim/ports.hpp"
 #include "sim/rc_input.hpp"
 
 extern "C" {
+#include <simavr/sim_avr.h>
+#include <simavr/sim_cycle_timers.h>
 #include <simavr/sim_irq.h>
 }
 
@@ -192,6 +195,22 @@ class FlyReceiverHil : public ::testing::Test {
                                  "dropout.csv"));
   }
 
+  // Noise on the wire: receiver line `line` flips for `width_us` at `offset_us` into each of the
+  // receiver's next `frames` frames, then goes back (a spike coupled into a long lead). The
+  // offset must fall where the line holds still for longer than the spike.
+  void spikes(int line, double offset_us, int frames, double width_us = 20) {
+    const sim::RcPart& p = rc_->part();
+    for (int k = 0; k < frames; ++k) {
+      auto spike = std::make_unique<Spike>();
+      spike->self = this;
+      spike->line = line;
+      spike->width = static_cast<uint64_t>(width_us * 16);
+      const uint64_t at = p.frame_start + (k + 1) * p.frame_cycles + static_cast<uint64_t>(offset_us * 16);
+      avr_cycle_timer_register(p.avr, at - p.avr->cycle, &FlyReceiverHil::onSpike, spike.get());
+      spikes_.push_back(std::move(spike));
+    }
+  }
+
   std::unique_ptr<sim::AirframeRig> rig_;
   std::unique_ptr<sim::RcOnBoard> rc_;
   std::unique_ptr<safety::PulseLog> pulses_;
@@ -200,6 +219,23 @@ class FlyReceiverHil : public ::testing::Test {
   std::vector<RcEdge> rc_edges_;
 
  private:
+  struct Spike {
+    FlyReceiverHil* self = nullptr;
+    int line = 0;
+    uint64_t width = 0;  // cycles
+    bool on = false;
+  };
+  std::vector<std::unique_ptr<Spike>> spikes_;
+  static avr_cycle_count_t onSpike(avr_t* avr, avr_cycle_count_t when, void* param) {
+    auto* sp = static_cast<Spike*>(param);
+    const sim::RcPart& p = sp->self->rc_->part();
+    const hal::MegaPin pin = p.pins[sp->line];
+    const bool level = p.level[sp->line] != 0;  // what the receiver holds the line at
+    sp->on = !sp->on;
+    p.ports->setInput(pin.port, pin.bit, sp->on ? !level : level, when);
+    (void)avr;
+    return sp->on ? when + sp->width : 0;
+  }
   static void onRcEdge(avr_irq_t* irq, uint32_t value, void* param) {
     auto* self = static_cast<FlyReceiverHil*>(param);
     self->rc_edges_.push_back({static_cast<int>(irq - self->rc_->part().irq), value ? 1 : 0, self->now()});
@@ -263,6 +299,14 @@ TEST_F(FlyReceiverHil, APpmSumOnA8ArmsFromTheSticksFliesTheRollStickAndStopsOnLo
   EXPECT_LT(saidAt("disarmed", 0), 0) << con_->tail();
   EXPECT_NEAR(meanDeg(noise_in_flight_s, now(), &plant::RigTruth::roll_deg), level_roll, 1.0)
       << "an out-of-range roll stick moved the gimbal";
+  // spikes on the wire, 20 us inside channel 1 of three frames: each splits it in two (one of
+  // them too short), so each frame has nine channels: bad, not flown
+  spikes(0, 900, 3);
+  run(0.1);
+  const Receiver spiked = status();
+  EXPECT_EQ(spiked.bad - after_noise.bad, 3) << con_->tail();
+  EXPECT_GE(spiked.rejected - after_noise.rejected, 3);
+  EXPECT_LT(saidAt("disarmed", 0), 0) << con_->tail();
 
   // a roll stick right: the gimbal rolls right (positive) by the stick's angle
   sticks(1700, 1500, 1500, 1500);
@@ -325,10 +369,18 @@ TEST_F(FlyReceiverHil, PwmPulsesOnA8ToA12ArmFlyDisarmAndArmAgainAfterTheRigIsLev
   EXPECT_GE(spins_s - gesture_s, kHoldS);
   EXPECT_LE(spins_s - gesture_s, kHoldS + 0.070);
 
-  // a pitch stick forward: the nose goes down (positive pitch) by the stick's angle
+  // a pitch stick forward: the nose goes down (positive pitch) by the stick's angle; before it,
+  // spikes of 20 us on the pitch pin between its pulses in three frames: rejected and counted
   sticks(1500, 1500, 1500, 1500);
-  run(1.5);
+  run(1.3);
+  const Receiver before_spikes = status();
+  spikes(1, 12000, 3);
+  run(0.2);
   const double level_pitch = meanDeg(now() - 0.3, now(), &plant::RigTruth::pitch_deg);
+  const Receiver spiked = status();
+  EXPECT_EQ(spiked.rejected - before_spikes.rejected, 3) << con_->tail();
+  EXPECT_GE(spiked.frames - before_spikes.frames, 8) << "the frames between flew on";
+  EXPECT_LT(saidAt("disarmed", 0), 0) << con_->tail();
   sticks(1500, 1700, 1500, 1500);
   run(1.5);
   const double pitched = meanDeg(now() - 0.5, now(), &plant::RigTruth::pitch_deg) - level_pitch;
