@@ -82,6 +82,21 @@ class FlyReceiverHil : public ::testing::Test {
     if (con_) con_->clearLineListeners();
   }
 
+  // Throttle low and yaw right: armed 1 s after the gesture was set, not before (measured on the
+  // ESC pins: the gesture's first frame comes within a frame, is decoded by the next one's start
+  // at the latest, and is checked at each frame after: at most three 22.5 ms frames on top).
+  void armFromTheSticks(const char* receiver) {
+    const double gesture_s = now();
+    sticks(1500, 1500, 1000, 2000);
+    awaitNote("armed: mode pwm, layout x, from the sticks", kHoldS + 0.2);
+    const double spins_s = firstSpinning(gesture_s);
+    ASSERT_GT(spins_s, 0) << con_->tail();
+    std::printf("%s: the first pulse above the stop pulse ended %.1f ms after the gesture was set\n", receiver,
+                (spins_s - gesture_s) * 1000);
+    EXPECT_GE(spins_s - gesture_s, kHoldS) << "a motor spun before the gesture was held 1 s";
+    EXPECT_LE(spins_s - gesture_s, kHoldS + 0.070);
+  }
+
   // The transmitter's sticks from the receiver's next frame on (channel 5: the mode switch).
   void sticks(double roll, double pitch, double throttle, double yaw, double mode = 1000) {
     const std::string reply = rc_->command(fmt::format("ch {} {} {} {} {}", roll, pitch, throttle, yaw, mode));
@@ -270,18 +285,8 @@ TEST_F(FlyReceiverHil, APpmSumOnA8ArmsFromTheSticksFliesTheRollStickAndStopsOnLo
   EXPECT_LT(saidAt("armed:", noise_s), 0) << "noise armed it";
   EXPECT_LT(widest(noise_s, now()), kStopUs);
 
-  // the gesture, valid: armed 1 s after it began, not before (measured on the ESC pins: the
-  // gesture's first frame comes within a frame, is decoded at the next one's start, and is
-  // checked at each frame after: at most three 22.5 ms frames on top of the second)
-  const double gesture_s = now();
-  sticks(1500, 1500, 1000, 2000);
-  awaitNote("armed: mode pwm, layout x, from the sticks", kHoldS + 0.2);
-  const double spins_s = firstSpinning(gesture_s);
-  ASSERT_GT(spins_s, 0) << con_->tail();
-  std::printf("ppm: the first pulse above the stop pulse ended %.1f ms after the gesture was set\n",
-              (spins_s - gesture_s) * 1000);
-  EXPECT_GE(spins_s - gesture_s, kHoldS) << "a motor spun before the gesture was held 1 s";
-  EXPECT_LE(spins_s - gesture_s, kHoldS + 0.070);
+  // the gesture, valid: armed 1 s after it began, not before
+  armFromTheSticks("ppm");
 
   // half throttle, spooled up, level; then noise in flight moves nothing
   sticks(1500, 1500, 1500, 1500);
@@ -360,14 +365,7 @@ TEST_F(FlyReceiverHil, PwmPulsesOnA8ToA12ArmFlyDisarmAndArmAgainAfterTheRigIsLev
   EXPECT_LT(widest(noise_s, now()), kStopUs);
 
   // armed from the sticks after 1 s
-  const double gesture_s = now();
-  sticks(1500, 1500, 1000, 2000);
-  awaitNote("armed: mode pwm, layout x, from the sticks", kHoldS + 0.2);
-  const double spins_s = firstSpinning(gesture_s);
-  std::printf("pwm: the first pulse above the stop pulse ended %.1f ms after the gesture was set\n",
-              (spins_s - gesture_s) * 1000);
-  EXPECT_GE(spins_s - gesture_s, kHoldS);
-  EXPECT_LE(spins_s - gesture_s, kHoldS + 0.070);
+  armFromTheSticks("pwm");
 
   // a pitch stick forward: the nose goes down (positive pitch) by the stick's angle; before it,
   // spikes of 20 us on the pitch pin between its pulses in three frames: rejected and counted
