@@ -26,7 +26,6 @@ void RcDecoder::silence() {
 
 void RcDecoder::gap() {
   resume_ = false;
-  resumed_ = false;
   have_pins_ = false;
   have_last_ = false;
   index_ = -1;
@@ -34,6 +33,19 @@ void RcDecoder::gap() {
   rising_ = 0;
   fresh_ = 0;
   building_ = RcFrame();
+}
+
+// A receiver sends every frame with the same number of channels; a frame with another count is
+// noise (a spike that split a channel in two halves both long enough, a line back in the middle
+// of a frame) unless the next frame has that count too (the receiver was set up anew).
+bool RcDecoder::countHolds(uint8_t channels) {
+  if (frame_.channels == 0 || channels == frame_.channels) {
+    new_count_ = 0;
+    return true;
+  }
+  const bool again = channels == new_count_;
+  new_count_ = again ? 0 : channels;
+  return again;
 }
 
 bool RcDecoder::valid(uint16_t us) {
@@ -65,7 +77,6 @@ bool RcDecoder::ppmEdge(const RcEdge& e) {
     have_last_ = true;
     last_ticks_ = e.ticks;
     if (resume_) index_ = 0;  // the silence before it was a sync gap
-    resumed_ = resume_;
     resume_ = false;
     return false;
   }
@@ -74,12 +85,10 @@ bool RcDecoder::ppmEdge(const RcEdge& e) {
   if (us >= kRcSyncMinUs) {
     const int8_t channels = index_;
     const bool was_bad = frame_bad_;
-    const bool cut = resumed_ && channels != static_cast<int8_t>(frame_.channels);  // came back mid-frame
     index_ = 0;
     frame_bad_ = false;
-    resumed_ = false;
     if (channels < 0) return false;  // the first gap: frames start here
-    if (was_bad || cut || channels < static_cast<int8_t>(kRcMinChannels)) {
+    if (was_bad || channels < static_cast<int8_t>(kRcMinChannels) || !countHolds(static_cast<uint8_t>(channels))) {
       ++bad_frames_;
       return false;
     }

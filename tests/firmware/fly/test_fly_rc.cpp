@@ -92,6 +92,31 @@ TEST(RcPpm, AGlitchOrAnOutOfRangePulseRejectsTheWholeFrameAndIsCounted) {
   EXPECT_EQ(d.frame().us[2], 1100);
 }
 
+TEST(RcPpm, ASpikeThatSplitsAChannelInTwoValidHalvesIsABadFrame) {
+  // a six-channel receiver: a split channel makes seven channels, every pulse in range
+  const std::vector<uint16_t> six = {1500, 1500, 2000, 1500, 1000, 1000};
+  RcDecoder d;
+  d.begin(RcProtocol::kPpm, 0);
+  uint16_t t = 0;
+  feed(d, ppm(t, six));
+  feed(d, ppm(t, six));
+  ASSERT_EQ(feed(d, ppm(t, six)).size(), 1u);
+  std::vector<RcEdge> split = ppm(t, six);  // a spike 1000 us into channel 3 (2000 us)
+  const uint16_t at = static_cast<uint16_t>(split[4].ticks + 2000);
+  split.insert(split.begin() + 6, {RcEdge{0, at}, RcEdge{1, static_cast<uint16_t>(at + 20)}});
+  EXPECT_EQ(feed(d, split).size(), 1u) << "the clean frame before it";
+  EXPECT_TRUE(feed(d, ppm(t, six)).empty()) << "seven channels where the receiver sends six: not flown";
+  EXPECT_EQ(d.badFrames(), 1u);
+  EXPECT_EQ(d.rejectedPulses(), 0u) << "both halves were in range";
+  EXPECT_EQ(feed(d, ppm(t, six)).size(), 1u);
+  EXPECT_EQ(d.frame().channels, 6);
+  // a receiver set up anew with eight channels: flown from the second frame that has them
+  feed(d, ppm(t, kSticks));
+  EXPECT_TRUE(feed(d, ppm(t, kSticks)).empty()) << "the first eight-channel frame";
+  EXPECT_EQ(feed(d, ppm(t, kSticks)).size(), 1u);
+  EXPECT_EQ(d.frame().channels, 8);
+}
+
 TEST(RcPpm, FewerThanFourChannelsIsNoFrame) {
   RcDecoder d;
   d.begin(RcProtocol::kPpm, 0);
