@@ -166,8 +166,10 @@ constexpr uint16_t kRcStopMs = 100;
 constexpr uint16_t kRcStopLatencyMs =
     static_cast<uint16_t>((2u * kFrameUs + 1000u + tc::kThrottleMaxUs + 999u) / 1000u);
 constexpr uint16_t kRcLossMs = kRcStopMs - kRcStopLatencyMs;  // no valid frame this long: disarm
-static_assert(kRcLossMs * 10u > 4u * 225u, "three PPM frames (22.5 ms each) lost in a row do not trip it");
-inline bool receiverLost(uint32_t now_ms, uint32_t last_frame_ms) { return now_ms - last_frame_ms >= kRcLossMs; }
+static_assert(kRcLossMs * 10u > 4u * 225u, "two PPM frames lost in a row leave 4 x 22.5 ms between valid ones");
+inline bool receiverLost(uint32_t now_ms, uint32_t last_frame_ms) {
+  return now_ms - last_frame_ms >= kRcLossMs;  // unsigned: right across the clock's wrap
+}
 
 enum class DisarmCause : uint8_t { kNone, kCommand, kCrash, kImu, kLink, kRcLost, kSticks };
 

@@ -88,7 +88,8 @@ bool RcDecoder::ppmEdge(const RcEdge& e) {
     index_ = 0;
     frame_bad_ = false;
     if (channels < 0) return false;  // the first gap: frames start here
-    if (was_bad || channels < static_cast<int8_t>(kRcMinChannels) || !countHolds(static_cast<uint8_t>(channels))) {
+    const bool too_few = channels < static_cast<int8_t>(kRcMinChannels);
+    if (was_bad || too_few || !countHolds(static_cast<uint8_t>(channels))) {
       ++bad_frames_;
       return false;
     }
