@@ -2,14 +2,17 @@
 // gimbal, pwm mode: no calibrated slot needed) with the simulator's RC receiver on its pins
 // (sim/rc_input.hpp, as `sim console --rc`): a PPM sum on A8, and one pulse per channel on
 // A8..A12 (port K's pin-change interrupt). One simulation per test, each assertion at its stage:
-//  - out-of-range pulses are rejected and counted in `status`, and neither arm nor move anything;
+//  - out-of-range pulses and 20 us spikes on the wire are rejected and counted in `status`, and
+//    neither arm nor move anything;
 //  - stick arming (throttle low, yaw right) arms 1 s after the gesture's first frame, never
 //    before, and only when the other arming checks pass (force mode without records: refused);
 //  - the sticks fly: a roll (PPM) or pitch (PWM) stick tilts the gimbal by the angle angle mode
 //    gives that stick, with its sign; the mode switch (channel 5) gives rate mode;
-//  - stick disarm (throttle low, yaw left) stops every pulse;
-//  - `loss` in the RC script stops every ESC pulse within 100 ms of the last valid frame,
-//    measured on the ESC pins' edges and the receiver's own edges, in simulated time.
+//  - stick disarm (throttle low, yaw left) stops every pulse; off level, arming is refused; the
+//    rig set level again (issue 27 item 4), the sticks arm and fly again in the same simulation;
+//  - a dropout of one receiver frame is ridden through; `loss` in the RC script stops every ESC
+//    pulse within 100 ms of the last valid frame, measured on the ESC pins' edges and the
+//    receiver's own edges, in simulated time.
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -33,8 +36,6 @@ extern "C" {
 }
 
 namespace {
-
-using safety::contains;
 
 constexpr double kStopUs = 1005.0;    // at or below: the stop pulse (1000 us + a tick)
 constexpr double kHoldS = 1.0;        // fly's kStickHoldMs: a gesture held this long acts
@@ -111,7 +112,6 @@ class FlyReceiverHil : public ::testing::Test {
       if (l.first >= from_s && l.second.rfind(start, 0) == 0) return l.first;
     return -1;
   }
-  bool said(const std::string& text) const { return contains(rig_->board().output(), text); }
   // Waits for a note fly prints unasked (an arm, a refusal, a disarm) and the prompt after it,
   // so the next command's reply is its own.
   void awaitNote(const std::string& text, double budget_s) {
