@@ -287,7 +287,7 @@ void FlyApp::checkFailsafes(uint32_t now_ms) {
   } else if (flight_.source == ArmSource::kConsole && link_.lost(now_ms)) {
     ++link_.trips;
     disarm(DisarmCause::kLink);
-  } else if (flight_.source == ArmSource::kSticks && now_ms - receiver_.last_frame_ms >= kRcLossMs) {
+  } else if (flight_.source == ArmSource::kSticks && receiverLost(now_ms, receiver_.last_frame_ms)) {
     if (receiver_.trips != 0xFFFF) ++receiver_.trips;
     disarm(DisarmCause::kRcLost);
   }

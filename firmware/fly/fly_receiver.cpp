@@ -11,7 +11,7 @@ namespace fly {
 
 void FlyApp::pollReceiver(uint32_t now_ms) {
   if (rc_settings_.protocol == RcProtocol::kOff) return;
-  if (now_ms - receiver_.last_edge_ms > kRcEdgeGapMs) rc_.gap();  // the ticks may have wrapped
+  if (now_ms - receiver_.last_edge_ms > kRcEdgeGapMs) rc_.silence();  // the ticks may have wrapped
   const uint16_t lost = hal::Rc::lostEdges();
   if (lost != receiver_.lost_edges) {  // edges missing: whatever was being timed is noise
     receiver_.lost_edges = lost;

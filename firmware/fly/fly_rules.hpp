@@ -8,6 +8,7 @@
 
 #include "flight_types.hpp"
 #include "link_watch.hpp"
+#include "thrustcal/record_limits.hpp"
 
 namespace fly {
 
@@ -153,10 +154,27 @@ inline ForceDg spooledForce(ForceDg full, uint32_t since_arm_ms) {
 }
 
 // ---- disarming ----
+
+// The receiver's failsafe. What it promises: armed from the sticks, every ESC is at the stop
+// pulse within kRcStopMs of the last valid receiver frame (the edge that completed it). Between
+// that edge and the pins lie: the loop takes the frame at its next pass (at most a frame), the
+// failsafe is checked once a frame (at most another) on the millisecond clock (1 ms), and the
+// pulse under way when it disarms runs to its end (at most the longest, tc::kThrottleMaxUs); the
+// next edge carries the stop pulse. So it disarms after kRcLossMs without a valid frame, early by
+// that latency (measured in simavr: tests/hil_safety/fly_receiver_hil_test.cpp).
+constexpr uint16_t kRcStopMs = 100;
+constexpr uint16_t kRcStopLatencyMs =
+    static_cast<uint16_t>((2u * kFrameUs + 1000u + tc::kThrottleMaxUs + 999u) / 1000u);
+constexpr uint16_t kRcLossMs = kRcStopMs - kRcStopLatencyMs;  // no valid frame this long: disarm
+static_assert(kRcLossMs * 10u > 4u * 225u, "two PPM frames lost in a row leave 4 x 22.5 ms between valid ones");
+inline bool receiverLost(uint32_t now_ms, uint32_t last_frame_ms) {
+  return now_ms - last_frame_ms >= kRcLossMs;  // unsigned: right across the clock's wrap
+}
+
 enum class DisarmCause : uint8_t { kNone, kCommand, kCrash, kImu, kLink, kRcLost, kSticks };
 
 // Who armed: the console's `arm` (its link failsafe applies: tc::kFailsafeMs without a line) or
-// the receiver's sticks (its failsafe applies: kRcLossMs without a valid frame, rc_input.hpp).
+// the receiver's sticks (its failsafe applies: kRcLossMs without a valid frame, below).
 enum class ArmSource : uint8_t { kConsole, kSticks };
 
 constexpr uint8_t kDefaultCrashDeg = 45;

@@ -19,7 +19,13 @@ void RcDecoder::begin(RcProtocol protocol, uint8_t pwm_channels) {
   gap();
 }
 
+void RcDecoder::silence() {
+  gap();
+  resume_ = protocol_ == RcProtocol::kPpm && frame_.channels != 0;
+}
+
 void RcDecoder::gap() {
+  resume_ = false;
   have_pins_ = false;
   have_last_ = false;
   index_ = -1;
@@ -29,6 +35,19 @@ void RcDecoder::gap() {
   building_ = RcFrame();
 }
 
+// A receiver sends every frame with the same number of channels; a frame with another count is
+// noise (a spike that split a channel in two halves both long enough, a line back in the middle
+// of a frame) unless the next frame has that count too (the receiver was set up anew).
+bool RcDecoder::countHolds(uint8_t channels) {
+  if (frame_.channels == 0 || channels == frame_.channels) {
+    new_count_ = 0;
+    return true;
+  }
+  const bool again = channels == new_count_;
+  new_count_ = again ? 0 : channels;
+  return again;
+}
+
 bool RcDecoder::valid(uint16_t us) {
   if (us >= kRcMinUs && us <= kRcMaxUs) return true;
   ++rejected_;
@@ -36,10 +55,11 @@ bool RcDecoder::valid(uint16_t us) {
 }
 
 bool RcDecoder::edge(const RcEdge& e) {
-  if (!have_pins_) {  // the levels before this edge are unknown: it only tells them
+  if (!have_pins_) {  // the levels before this edge are unknown: it tells them
     have_pins_ = true;
     last_pins_ = e.pins;
-    return false;
+    if (!resume_) return false;
+    last_pins_ = static_cast<uint8_t>(e.pins ^ kPpmBit);  // after a silence: the PPM pin changed
   }
   bool done = false;
   if (protocol_ == RcProtocol::kPpm) done = ppmEdge(e);
@@ -56,6 +76,8 @@ bool RcDecoder::ppmEdge(const RcEdge& e) {
   if (!have_last_) {
     have_last_ = true;
     last_ticks_ = e.ticks;
+    if (resume_) index_ = 0;  // the silence before it was a sync gap
+    resume_ = false;
     return false;
   }
   const uint16_t us = usOf(last_ticks_, e.ticks);
@@ -66,7 +88,8 @@ bool RcDecoder::ppmEdge(const RcEdge& e) {
     index_ = 0;
     frame_bad_ = false;
     if (channels < 0) return false;  // the first gap: frames start here
-    if (was_bad || channels < static_cast<int8_t>(kRcMinChannels)) {
+    const bool too_few = channels < static_cast<int8_t>(kRcMinChannels);
+    if (was_bad || too_few || !countHolds(static_cast<uint8_t>(channels))) {
       ++bad_frames_;
       return false;
     }

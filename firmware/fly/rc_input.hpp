@@ -10,9 +10,10 @@
 // pulse.
 // Noise is rejected and counted: a pulse outside kRcMinUs..kRcMaxUs (a glitch, a spike, a
 // receiver's own failsafe of 0 or 3000 us) is `rejected`; a PPM frame with such a pulse, with
-// fewer than kRcMinChannels or more than kRcMaxChannels channels is a `bad frame`, never
-// flown. Only whole, valid frames leave the decoder; the failsafe (no valid frame for
-// kRcLossMs) is the app's (fly_app.cpp).
+// fewer than kRcMinChannels or more than kRcMaxChannels channels, or with another number of
+// channels than the last valid frame (unless two frames in a row agree on it) is a `bad frame`,
+// never flown. Only whole, valid frames leave the decoder; the failsafe (every ESC at the stop
+// pulse within kRcStopMs of the last valid frame) is the app's (fly_rules.hpp, fly_app.cpp).
 #pragma once
 #include <stdint.h>
 
@@ -25,7 +26,6 @@ constexpr uint8_t kRcMinChannels = 4;      // roll, pitch, throttle, yaw
 constexpr uint16_t kRcMinUs = 800;         // a valid pulse (the usual 1000..2000 with margin)
 constexpr uint16_t kRcMaxUs = 2200;
 constexpr uint16_t kRcSyncMinUs = 2700;    // PPM: longer than any channel, shorter than any gap
-constexpr uint16_t kRcLossMs = 100;        // no valid frame this long: every ESC to the stop pulse
 constexpr uint16_t kRcEdgeGapMs = 25;      // no edge this long: the timestamps may have wrapped
 
 enum class RcProtocol : uint8_t { kOff, kPpm, kPwm };
@@ -49,9 +49,15 @@ class RcDecoder {
   uint8_t pwmChannels() const { return pwm_channels_; }
   // One edge; true when it completed a valid frame (frame() holds it).
   bool edge(const RcEdge& e);
-  // No edge came for kRcEdgeGapMs: the next edge starts afresh (the 16-bit ticks may have
-  // wrapped, so no interval is taken across the gap).
+  // Edges were lost: the next edge starts afresh, and PPM waits for a sync gap before it times
+  // a channel (no interval is taken across the gap).
   void gap();
+  // No edge came for kRcEdgeGapMs (the 16-bit ticks may have wrapped: no interval is taken
+  // across it). The line was idle, which for PPM is a sync gap: the next falling edge starts a
+  // frame (a line that comes back in the middle of a frame gives fewer channels than the
+  // receiver sends: a bad frame, below). So a dropout of one PPM frame costs one frame, not two
+  // more while the decoder waits for a sync gap.
+  void silence();
   const RcFrame& frame() const { return frame_; }
 
   uint32_t frames() const { return frames_; }            // valid frames decoded
@@ -62,11 +68,14 @@ class RcDecoder {
   bool ppmEdge(const RcEdge& e);
   bool pwmEdge(const RcEdge& e);
   bool valid(uint16_t us);
+  bool countHolds(uint8_t channels);
 
   RcProtocol protocol_ = RcProtocol::kOff;
   uint8_t pwm_channels_ = kRcMinChannels;
   uint8_t last_pins_ = 0;
   bool have_pins_ = false;       // last_pins_ is known (the first edge after a gap tells)
+  bool resume_ = false;          // PPM: after a silence, the next falling edge starts a frame
+  uint8_t new_count_ = 0;        // PPM: a channel count other than the last valid frame's, seen once
   bool have_last_ = false;
   uint16_t last_ticks_ = 0;      // PPM: the last falling edge
   int8_t index_ = -1;            // PPM: the channel being timed; -1: waiting for a sync gap

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,6 +66,11 @@ class FlyHil : public ::testing::Test {
     return since;
   }
   std::string output() const { return rig_->board().output(); }
+  static bool startsALine(const std::vector<std::string>& lines, const std::string& start) {
+    for (const std::string& line : lines)
+      if (line.rfind(start, 0) == 0) return true;
+    return false;
+  }
 
   std::unique_ptr<sim::AirframeRig> rig_;
   std::unique_ptr<sim::Console> con_;
@@ -90,6 +96,41 @@ TEST_F(FlyHil, TheSeesawFollowsARollStepOnMotorsZeroAndOne) {
   fly(2.0);
   EXPECT_NEAR(rig_->truth().roll_deg, 10.0, 3.0) << "its weight below the pivot pulls it back a little";
   EXPECT_LT(stoppedFrom(0.0), 0.0) << "never disarmed";
+}
+
+// Issue 27 item 4, from the console: after a disarm the gimbal falls off level and `arm` is
+// refused; the rig set level and still again (AirframeRig::levelNow, what `level` typed into
+// `sim console`'s terminal does), fly arms again and flies the same step in the same simulation.
+TEST_F(FlyHil, DisarmedLevelledAndArmedAgainItFliesTheSameStepInOneSession) {
+  HIL_REQUIRE_IMAGE("fly");
+  armedOnARig();
+  con_->command("sp 10 0");
+  fly(2.0);
+  const double first_roll = rig_->truth().roll_deg;
+  EXPECT_NEAR(first_roll, 10.0, 3.0);
+  ASSERT_TRUE(startsALine(con_->command("disarm"), "disarmed: command")) << con_->tail();
+  const double disarmed_s = rig_->truth().t_s;
+  fly(1.0, false);
+  EXPECT_GT(stoppedFrom(disarmed_s), 0) << con_->tail();
+  const plant::RigTruth off = rig_->truth();
+  EXPECT_GT(std::max(std::fabs(off.roll_deg), std::fabs(off.pitch_deg)), 5.0) << "the gimbal stayed level";
+  EXPECT_TRUE(startsALine(con_->command("arm"), "error: arm refused: not level")) << con_->tail();
+
+  rig_->levelNow();
+  EXPECT_LT(std::fabs(rig_->truth().roll_deg), 1e-9);
+  EXPECT_LT(std::fabs(rig_->truth().pitch_deg), 1e-9);
+  fly(1.0, false);  // the estimate follows the accelerometer (0.5 s time constant)
+  con_->command("sp 0 0");
+  ASSERT_TRUE(startsALine(con_->command("arm"), "armed:")) << con_->tail();
+  const double rearmed_s = rig_->truth().t_s;
+  fly(1.2);
+  EXPECT_LT(stoppedFrom(rearmed_s), 0.0) << "disarmed again";
+  con_->command("sp 10 0");
+  fly(2.0);
+  std::printf("fly: step to %.2f deg; 1 s after the disarm roll %.1f pitch %.1f deg; levelled, armed again: step to %.2f deg\n",
+              first_roll, off.roll_deg, off.pitch_deg, rig_->truth().roll_deg);
+  EXPECT_NEAR(rig_->truth().roll_deg, first_roll, 1.0) << "the second flight follows the step as the first";
+  EXPECT_LT(std::fabs(rig_->truth().pitch_deg), 3.0);
 }
 
 struct Fault {

@@ -92,6 +92,31 @@ TEST(RcPpm, AGlitchOrAnOutOfRangePulseRejectsTheWholeFrameAndIsCounted) {
   EXPECT_EQ(d.frame().us[2], 1100);
 }
 
+TEST(RcPpm, ASpikeThatSplitsAChannelInTwoValidHalvesIsABadFrame) {
+  // a six-channel receiver: a split channel makes seven channels, every pulse in range
+  const std::vector<uint16_t> six = {1500, 1500, 2000, 1500, 1000, 1000};
+  RcDecoder d;
+  d.begin(RcProtocol::kPpm, 0);
+  uint16_t t = 0;
+  feed(d, ppm(t, six));
+  feed(d, ppm(t, six));
+  ASSERT_EQ(feed(d, ppm(t, six)).size(), 1u);
+  std::vector<RcEdge> split = ppm(t, six);  // a spike 1000 us into channel 3 (2000 us)
+  const uint16_t at = static_cast<uint16_t>(split[4].ticks + 2000);
+  split.insert(split.begin() + 6, {RcEdge{0, at}, RcEdge{1, static_cast<uint16_t>(at + 20)}});
+  EXPECT_EQ(feed(d, split).size(), 1u) << "the clean frame before it";
+  EXPECT_TRUE(feed(d, ppm(t, six)).empty()) << "seven channels where the receiver sends six: not flown";
+  EXPECT_EQ(d.badFrames(), 1u);
+  EXPECT_EQ(d.rejectedPulses(), 0u) << "both halves were in range";
+  EXPECT_EQ(feed(d, ppm(t, six)).size(), 1u);
+  EXPECT_EQ(d.frame().channels, 6);
+  // a receiver set up anew with eight channels: flown from the second frame that has them
+  feed(d, ppm(t, kSticks));
+  EXPECT_TRUE(feed(d, ppm(t, kSticks)).empty()) << "the first eight-channel frame";
+  EXPECT_EQ(feed(d, ppm(t, kSticks)).size(), 1u);
+  EXPECT_EQ(d.frame().channels, 8);
+}
+
 TEST(RcPpm, FewerThanFourChannelsIsNoFrame) {
   RcDecoder d;
   d.begin(RcProtocol::kPpm, 0);
@@ -100,19 +125,52 @@ TEST(RcPpm, FewerThanFourChannelsIsNoFrame) {
   EXPECT_EQ(d.badFrames(), 1u);
 }
 
-TEST(RcPpm, AfterAGapNoIntervalIsTakenAcrossIt) {
-  RcDecoder d;
+// A PPM decoder that has flown a frame of kSticks; `t` where the next frame starts.
+void decodingPpm(RcDecoder& d, uint16_t& t) {
   d.begin(RcProtocol::kPpm, 0);
-  uint16_t t = 0;
+  t = 0;
   feed(d, ppm(t, kSticks));
   feed(d, ppm(t, kSticks));
   ASSERT_EQ(feed(d, ppm(t, kSticks)).size(), 1u);
-  d.gap();  // the signal was away for more than kRcEdgeGapMs
+}
+
+TEST(RcPpm, AfterAGapNoIntervalIsTakenAcrossIt) {
+  RcDecoder d;
+  uint16_t t;
+  decodingPpm(d, t);
+  d.gap();  // edges were lost (hal::Rc's queue was full)
   t = static_cast<uint16_t>(t + 12345);
   EXPECT_TRUE(feed(d, ppm(t, kSticks)).empty()) << "waits for a sync gap again";
   EXPECT_TRUE(feed(d, ppm(t, kSticks)).empty());
   EXPECT_EQ(feed(d, ppm(t, kSticks)).size(), 1u);
   EXPECT_EQ(d.badFrames(), 0u);
+}
+
+TEST(RcPpm, AfterASilenceTheNextWholeFrameFliesAndOneCutShortIsBad) {
+  RcDecoder d;
+  uint16_t t;
+  decodingPpm(d, t);
+  // a dropout: the line idle for more than kRcEdgeGapMs, which is a sync gap
+  d.silence();
+  t = static_cast<uint16_t>(t + 12345);
+  EXPECT_TRUE(feed(d, ppm(t, kSticks)).empty()) << "the frame ends at the next one's first edge";
+  EXPECT_EQ(feed(d, ppm(t, kSticks)).size(), 1u) << "the first frame after the silence flies";
+  // the line back in the middle of a frame (a loose plug): three channels short, not flown
+  d.silence();
+  t = static_cast<uint16_t>(t + 12345);
+  std::vector<RcEdge> cut = ppm(t, kSticks);
+  cut.erase(cut.begin(), cut.begin() + 6);
+  EXPECT_TRUE(feed(d, cut).empty());
+  EXPECT_TRUE(feed(d, ppm(t, kSticks)).empty()) << "five channels where the receiver sends eight";
+  EXPECT_EQ(d.badFrames(), 1u);
+  EXPECT_EQ(feed(d, ppm(t, kSticks)).size(), 1u);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(d.frame().us[i], kSticks[i]) << i;
+  // inverted polarity comes back alike
+  d.silence();
+  t = static_cast<uint16_t>(t + 12345);
+  EXPECT_TRUE(feed(d, ppm(t, kSticks, true)).empty());
+  EXPECT_EQ(feed(d, ppm(t, kSticks, true)).size(), 1u);
+  EXPECT_EQ(d.badFrames(), 1u);
 }
 
 // PWM: channel i on bit i, one after another.

@@ -66,6 +66,17 @@ TEST(FlyRules, ACrashIsRollOrPitchBeyondTheLimitEitherWay) {
   EXPECT_TRUE(crashed(-3.0f, 0, limit)) << "upside down";
 }
 
+TEST(FlyRules, TheReceiverFailsafeActsEarlyEnoughForTheStopPulseWithin100Ms) {
+  // the latency to the pins at 400 Hz: two 2.5 ms frames, the 1 ms clock, a 2 ms pulse
+  EXPECT_EQ(kRcStopMs, 100);
+  EXPECT_EQ(kRcStopLatencyMs, 8);
+  EXPECT_EQ(kRcLossMs, 92);
+  EXPECT_FALSE(receiverLost(1091, 1000));
+  EXPECT_TRUE(receiverLost(1092, 1000));
+  EXPECT_FALSE(receiverLost(50, 0xFFFFFFF0u)) << "66 ms across the clock's wrap";
+  EXPECT_TRUE(receiverLost(100, 0xFFFFFFF0u));
+}
+
 TEST(FlyRules, TheReadStartsAsLateAsTheBudgetAllowsSoTheResultMeetsTheNextEdge) {
   EXPECT_EQ(kFrameUs, 2500);
   EXPECT_EQ(readPhaseUs(500), 2500 - kImuReadUs - 500);
