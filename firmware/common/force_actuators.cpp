@@ -254,9 +254,13 @@ bool ForceActuators::configureShaping() {
     const uint16_t most = maxForceDg(i);
     if (most > max_dg) max_dg = most;
   }
+  // Float tables (expf, sqrtf per bin: tens of milliseconds on the AVR): the watchdog is kicked
+  // between the parts, each well inside its time-out.
+  hal::Watchdog::kick();
   if (!tc::buildShaperReference(reference_table_, reference_, laws, kMotors, max_dg, frame_hz_)) return false;
   uint8_t shaped = 0;
   for (uint8_t i = 0; i < kMotors; ++i) {
+    hal::Watchdog::kick();
     Motor& m = motors_[i];
     if (laws[i] == nullptr) {
       m.shaper.disable();

@@ -457,7 +457,8 @@ const fw::Command<FlyApp> kCommands[] TC_FLASH = {
     {{kRcMapName, kRcMapArgs, 1, 1, 0, kRcMapHelp}, &Commands::rcmap},
     {{kRatesName, kRatesArgs, 3, 3, 0, kRatesHelp}, &Commands::rates},
     {{kFmodeName, kFlightModeArgs, 1, 1, 0, kFmodeHelp}, &Commands::fmode},
-    {{fw::kDynName, fw::kDynArgs, fw::kDynMinArgs, fw::kDynMaxArgs, 0, fw::kDynHelp}, &Commands::dyn},
+    // Hidden like eeprom: armed, a longer help drops keep-alive lines (above); docs/fly.md has it.
+    {{fw::kDynName, fw::kDynArgs, fw::kDynMinArgs, fw::kDynMaxArgs, fw::kCmdHidden, kHiddenHelp}, &Commands::dyn},
 };
 
 }  // namespace
