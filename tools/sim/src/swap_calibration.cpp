@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
@@ -14,9 +15,13 @@
 #include "lab/autopilot_export.hpp"
 #include "lab/dataset.hpp"
 #include "plant/actuator.hpp"
+#include "plant/dynamics_record.hpp"
 #include "plant/fidelity.hpp"
 #include "plant/power_source.hpp"
+#include "sim/dynamics_session.hpp"
 #include "sim/swap.hpp"
+#include "thrustcal/board_settings.hpp"
+#include "thrustcal/record_v2.hpp"
 
 namespace sim::swap {
 
@@ -74,15 +79,19 @@ const PartCalibration& Calibration::of(const std::string& part) const {
 
 namespace {
 
-// FNV-1a of a file's bytes: the cache key changes when gather_store does.
+// FNV-1a of bytes: the cache key changes when gather_store (or the image dyn starts from) does.
+std::string bytesDigest(const std::vector<uint8_t>& bytes) {
+  uint64_t h = 1469598103934665603ULL;
+  for (uint8_t c : bytes) h = (h ^ c) * 1099511628211ULL;
+  return fmt::format("{:016x}", h);
+}
+
 std::string fileDigest(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in)
     throw std::runtime_error(
         fmt::format("{}: cannot read the image; build it (cmake --build --preset avr)", path));
-  uint64_t h = 1469598103934665603ULL;
-  for (char c; in.get(c);) h = (h ^ static_cast<uint8_t>(c)) * 1099511628211ULL;
-  return fmt::format("{:016x}", h);
+  return bytesDigest(std::vector<uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()));
 }
 
 void writeAtomically(const fs::path& path, const std::string& text) {
@@ -212,7 +221,110 @@ Calibration calibrate(const SwapOptions& o) {
     c.parts.push_back(std::move(pc));
   }
   c.modes = modeSettings(o, c.stock_sweeps);
+  if (std::find(o.modes.begin(), o.modes.end(), Mode::kForceDyn) != o.modes.end()) addDynamics(o, c, progress);
   return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+// force+dyn: the records with each motor's dynamics
+
+namespace {
+
+struct ImageStorage {  // an EEPROM image as the codecs' Storage
+  static std::vector<uint8_t>* image;
+  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
+  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
+};
+std::vector<uint8_t>* ImageStorage::image = nullptr;
+
+tc::ModelV2 slotModel(std::vector<uint8_t>& image, int slot) {
+  ImageStorage::image = &image;
+  tc::BoardSettings settings;
+  tc::readSettings<ImageStorage>(settings);
+  tc::ModelV2 model;
+  if (tc::readModelV2<ImageStorage>(static_cast<uint8_t>(slot), model, settings.recordLimits()).status !=
+      tc::DecodeStatus::kOk)
+    throw std::runtime_error(fmt::format("force+dyn: slot {} holds no model v2 to add dynamics to; the "
+                                         "swap's force+dyn mode needs --model v2",
+                                         slot));
+  return model;
+}
+
+// The plant's own dynamics into a slot's record (the power-fail-safe writer: its next copy).
+void storePlantDynamics(std::vector<uint8_t>& image, int slot, const plant::ActuatorParams& motor) {
+  tc::ModelV2 model = slotModel(image, slot);
+  model.dynamics = plant::recordDynamics(motor);
+  ImageStorage::image = &image;
+  if (tc::writeModelV2<ImageStorage>(static_cast<uint8_t>(slot), model).status != tc::WriteV2Status::kWritten)
+    throw std::runtime_error(fmt::format("force+dyn: slot {}'s record with dynamics was not written", slot));
+}
+
+plant::ActuatorParams motorInSlot(const SwapOptions& o, const std::string& part, int slot) {
+  if (part != kStock && slot == kSwapSlot) return actuatorOf(findPart(part), o.variation);
+  return actuatorOf({kStock, o.stock_preset, o.stock_seeds[static_cast<std::size_t>(slot)], 1.0, ""}, o.variation);
+}
+
+// gather_store's `dyn` on each of `slots` of `image` in turn (the first session also identifies
+// the bench's load cell, `dyn cell`, unless the board settings hold it), cached by what made it.
+std::vector<uint8_t> gatherDynamics(const SwapOptions& o, const std::string& part, std::vector<uint8_t> image,
+                                    const std::vector<int>& slots, const ProgressFn& progress) {
+  const fs::path dir = fs::path(o.out_dir) / "calibration";
+  const fs::path hex_path = dir / (part + ".dyn.hex"), key_path = dir / (part + ".dyn.key.json");
+  const nlohmann::json key = {{"gather_store", fileDigest(o.gather_elf)}, {"from_image", bytesDigest(image)},
+                              {"slots", slots}, {"part", part}};
+  if (fs::exists(hex_path) && fs::exists(key_path) && readText(key_path) == key.dump(2) + "\n") {
+    try {
+      std::vector<uint8_t> cached = hex::readIntelHexFile(hex_path.string(), kEepromBytes);
+      progress(fmt::format("dynamics of {}: cached ({})", part, hex_path.string()));
+      return cached;
+    } catch (const std::exception&) {
+      // a damaged image is measured again
+    }
+  }
+  for (int slot : slots) {
+    DynSessionOptions d;
+    d.elf_path = o.gather_elf;
+    d.motor = motorInSlot(o, part, slot);
+    d.slot = slot;
+    d.eeprom = image;
+    d.calibrate = false;  // the slot holds the swap's model
+    d.noise_seed = static_cast<uint64_t>(slot) + 1;
+    d.progress = [](const std::string&) {};
+    d.log_path = (dir / fmt::format("{}_slot{}.dyn.log", part, slot)).string();  // dyn's step log
+    progress(fmt::format("dynamics of {}: gather_store's dyn on slot {} (about 35 s simulated)", part, slot));
+    const DynSessionResult r = runDynSession(d);
+    if (!r.dynamics.isPresent())
+      throw std::runtime_error(fmt::format("dynamics of {}: gather_store's dyn stored none in slot {}:\n{}", part,
+                                           slot, fmt::join(r.summary, "\n")));
+    image = r.eeprom;
+  }
+  hex::writeIntelHexFile(hex_path.string() + ".new", image);
+  fs::rename(hex_path.string() + ".new", hex_path);
+  writeAtomically(key_path, key.dump(2) + "\n");
+  return image;
+}
+
+}  // namespace
+
+// Stock: every slot measured; a part: the stock image with dynamics, its slot 1 replaced by the
+// part's calibration and measured again (what a user does after the swap).
+void addDynamics(const SwapOptions& o, Calibration& c, const ProgressFn& progress) {
+  if (o.dyn_from != "gather" && o.dyn_from != "plant")
+    throw std::invalid_argument(fmt::format("--dyn-from {}: use gather (gather_store's dyn) or plant", o.dyn_from));
+  const std::size_t lo = static_cast<std::size_t>(kSwapSlot) * 1024, hi = lo + 1024;
+  for (PartCalibration& p : c.parts) {
+    const bool stock = p.part == kStock;
+    std::vector<uint8_t> image = stock ? p.eeprom : c.parts.front().eeprom_dyn;
+    if (!stock) std::copy(p.eeprom.begin() + lo, p.eeprom.begin() + hi, image.begin() + lo);
+    const std::vector<int> slots = stock ? std::vector<int>{0, 1, 2, 3} : std::vector<int>{kSwapSlot};
+    if (o.dyn_from == "plant") {
+      for (int slot : slots) storePlantDynamics(image, slot, motorInSlot(o, p.part, slot));
+    } else {
+      image = gatherDynamics(o, p.part, image, slots, progress);
+    }
+    p.eeprom_dyn = image;
+    for (int slot = 0; slot < 4; ++slot) p.dynamics[static_cast<std::size_t>(slot)] = slotModel(image, slot).dynamics;
+  }
 }
 
 }  // namespace sim::swap
