@@ -34,7 +34,7 @@ sim::swap::SwapOptions reducedSwapOptions() {
   return o;
 }
 
-TEST(SwapHil, ForceModeMeetsTheTargetsWithAKv900InSlot1) {
+TEST(SwapHil, ForceModeMeetsTheTargetsAndEqualDynamicsBringAKv900InSlot1CloserToStock) {
   HIL_REQUIRE_IMAGE("gather_store");
   HIL_REQUIRE_IMAGE("fly");
   // when
@@ -44,7 +44,9 @@ TEST(SwapHil, ForceModeMeetsTheTargetsWithAKv900InSlot1) {
   for (const sim::swap::RunResult& run : r.runs) {
     const std::string id = sim::swap::runId(run.spec);
     EXPECT_FALSE(std::isnan(run.metrics.rise_s)) << id;
-    EXPECT_FALSE(std::isnan(run.metrics.settling_s)) << id;
+    // force+dyn flies the reference's slower lag with force mode's gains: its steps ring
+    // longer and may not settle within 2 % in the window (docs/fly.md, "Equal dynamics")
+    if (run.spec.mode == sim::swap::Mode::kForce) EXPECT_FALSE(std::isnan(run.metrics.settling_s)) << id;
     EXPECT_GT(run.metrics.peak, run.y0_deg + 8.0) << id;  // it moved by about the 10 degrees asked
     EXPECT_DOUBLE_EQ(run.integrator_mnm, 0.0) << id;      // PD gains: no integral term
   }
