@@ -15,16 +15,18 @@ namespace {
 constexpr uint16_t kFrameHz = 400;
 constexpr uint16_t kMaxDg = 8000;  // the models' heaviest force: 800 g
 
-tc::MotorDynamics law(uint16_t up_lo_ms10, uint16_t up_hi_ms10, uint16_t down_lo_ms10, uint16_t down_hi_ms10) {
-  tc::MotorDynamics d;
-  d.points = 5;
-  d.lo_dg = 1000;
-  d.hi_dg = 4000;
-  d.up_lo_01ms = up_lo_ms10;
-  d.up_hi_01ms = up_hi_ms10;
-  d.down_lo_01ms = down_lo_ms10;
-  d.down_hi_01ms = down_hi_ms10;
-  return d;
+// Five points measured between 100 g and 400 g; time constants in 0.1 ms at the two ends.
+tc::MotorDynamics law(uint16_t up_lo_01ms, uint16_t up_hi_01ms, uint16_t down_lo_01ms, uint16_t down_hi_01ms) {
+  return tc::MotorDynamics{5, 1000, 4000, up_lo_01ms, up_hi_01ms, down_lo_01ms, down_hi_01ms};
+}
+
+// A fixed reference of `tau_ms` both ways, tabulated for kMaxDg at kFrameHz.
+tc::ShaperReferenceTable fixedReference(uint16_t tau_ms) {
+  tc::ShaperReference reference;
+  reference.tau_up_01ms = reference.tau_down_01ms = static_cast<uint16_t>(tau_ms * 10);
+  tc::ShaperReferenceTable table;
+  EXPECT_TRUE(tc::buildShaperReference(table, reference, nullptr, 0, kMaxDg, kFrameHz));
+  return table;
 }
 
 // A stock-like motor (about 89 ms light, 77 ms heavy) and a slower part (102 ms / 84 ms), each
@@ -98,11 +100,7 @@ TEST(DynShaper, TwoMotorsWithDifferentTimeConstantsFollowTheSameReference) {
 
 TEST(DynShaper, AFixedReferenceIsFollowedAsAFirstOrderLag) {
   // given: 120 ms both ways, slower than either motor
-  tc::ShaperReference reference;
-  reference.tau_up_01ms = 1200;
-  reference.tau_down_01ms = 1200;
-  tc::ShaperReferenceTable table;
-  ASSERT_TRUE(tc::buildShaperReference(table, reference, nullptr, 0, kMaxDg, kFrameHz));
+  const tc::ShaperReferenceTable table = fixedReference(120);
   for (const tc::MotorDynamics* motor : {&kStock, &kSlowPart}) {
     // when: 300 g -> 400 g
     std::vector<uint16_t> r(kFrameHz, 4000);
@@ -119,11 +117,7 @@ TEST(DynShaper, AFixedReferenceIsFollowedAsAFirstOrderLag) {
 
 TEST(DynShaper, SaturationDoesNotWindUp) {
   // given: a reference four times faster than the motor, which the commands cannot follow
-  tc::ShaperReference reference;
-  reference.tau_up_01ms = 200;
-  reference.tau_down_01ms = 200;
-  tc::ShaperReferenceTable table;
-  ASSERT_TRUE(tc::buildShaperReference(table, reference, nullptr, 0, kMaxDg, kFrameHz));
+  const tc::ShaperReferenceTable table = fixedReference(20);
   tc::DynShaper shaper;
   shaper.configure(kStock, table, kFrameHz, 3000);
   // when: 1 s asking for more than the model makes (900 g), then 200 g
