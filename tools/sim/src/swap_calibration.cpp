@@ -15,13 +15,10 @@
 #include "lab/autopilot_export.hpp"
 #include "lab/dataset.hpp"
 #include "plant/actuator.hpp"
-#include "plant/dynamics_record.hpp"
 #include "plant/fidelity.hpp"
 #include "plant/power_source.hpp"
 #include "sim/dynamics_session.hpp"
 #include "sim/swap.hpp"
-#include "thrustcal/board_settings.hpp"
-#include "thrustcal/record_v2.hpp"
 
 namespace sim::swap {
 
@@ -230,35 +227,6 @@ Calibration calibrate(const SwapOptions& o) {
 
 namespace {
 
-struct ImageStorage {  // an EEPROM image as the codecs' Storage
-  static std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
-};
-std::vector<uint8_t>* ImageStorage::image = nullptr;
-
-tc::ModelV2 slotModel(std::vector<uint8_t>& image, int slot) {
-  ImageStorage::image = &image;
-  tc::BoardSettings settings;
-  tc::readSettings<ImageStorage>(settings);
-  tc::ModelV2 model;
-  if (tc::readModelV2<ImageStorage>(static_cast<uint8_t>(slot), model, settings.recordLimits()).status !=
-      tc::DecodeStatus::kOk)
-    throw std::runtime_error(fmt::format("force+dyn: slot {} holds no model v2 to add dynamics to; the "
-                                         "swap's force+dyn mode needs --model v2",
-                                         slot));
-  return model;
-}
-
-// The plant's own dynamics into a slot's record (the power-fail-safe writer: its next copy).
-void storePlantDynamics(std::vector<uint8_t>& image, int slot, const plant::ActuatorParams& motor) {
-  tc::ModelV2 model = slotModel(image, slot);
-  model.dynamics = plant::recordDynamics(motor);
-  ImageStorage::image = &image;
-  if (tc::writeModelV2<ImageStorage>(static_cast<uint8_t>(slot), model).status != tc::WriteV2Status::kWritten)
-    throw std::runtime_error(fmt::format("force+dyn: slot {}'s record with dynamics was not written", slot));
-}
-
 plant::ActuatorParams motorInSlot(const SwapOptions& o, const std::string& part, int slot) {
   if (part != kStock && slot == kSwapSlot) return actuatorOf(findPart(part), o.variation);
   return actuatorOf({kStock, o.stock_preset, o.stock_seeds[static_cast<std::size_t>(slot)], 1.0, ""}, o.variation);
@@ -323,7 +291,7 @@ void addDynamics(const SwapOptions& o, Calibration& c, const ProgressFn& progres
       image = gatherDynamics(o, p.part, image, slots, progress);
     }
     p.eeprom_dyn = image;
-    for (int slot = 0; slot < 4; ++slot) p.dynamics[static_cast<std::size_t>(slot)] = slotModel(image, slot).dynamics;
+    for (int slot = 0; slot < 4; ++slot) p.dynamics[static_cast<std::size_t>(slot)] = storedDynamics(image, slot);
   }
 }
 
