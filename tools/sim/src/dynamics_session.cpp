@@ -89,17 +89,15 @@ tc::MotorDynamics storedDynamics(const std::vector<uint8_t>& eeprom, int slot) {
   return readSlotModel(slot, model) ? model.dynamics : tc::MotorDynamics();
 }
 
-void storePlantDynamics(std::vector<uint8_t>& eeprom, int slot, const plant::ActuatorParams& motor) {
+bool storePlantDynamics(std::vector<uint8_t>& eeprom, int slot, const plant::ActuatorParams& motor) {
   VecEeprom::image = &eeprom;
   tc::ModelV2 model;
-  if (!readSlotModel(slot, model))
-    throw std::runtime_error(fmt::format("slot {} holds no model v2 to add the motor's dynamics to; calibrate "
-                                         "it with model v2 (gather --model v2, store v2)",
-                                         slot));
+  if (!readSlotModel(slot, model)) return false;
   model.dynamics = plant::recordDynamics(motor);
   WritableEeprom::image = &eeprom;
   if (tc::writeModelV2<WritableEeprom>(static_cast<uint8_t>(slot), model).status != tc::WriteV2Status::kWritten)
     throw std::runtime_error(fmt::format("slot {}'s record with the motor's dynamics was not written", slot));
+  return true;
 }
 
 plant::BenchParams dynBenchParams(const plant::ActuatorParams& motor, double headroom_g, uint64_t noise_seed) {

@@ -318,8 +318,9 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
   if (o.dyn && o.link == GatherLink::kPty)
     throw std::invalid_argument("liftoff with dyn on runs in process only (--via in-process)");
   std::vector<uint8_t> eeprom = eepromToFly(o);
-  if (o.dyn)  // each record with its motor's dynamics: the plant's own (what gather_store's dyn measures)
-    for (int i = 0; i < 4; ++i) storePlantDynamics(eeprom, i, motorForSeed(o.preset, o.seeds[i], o.variation));
+  if (o.dyn)  // each v2 record with its motor's dynamics: the plant's own (what gather_store's dyn measures);
+    for (int i = 0; i < 4; ++i)  // a thesis record has none and flies unshaped
+      storePlantDynamics(eeprom, i, motorForSeed(o.preset, o.seeds[i], o.variation));
   plant::QuadFrameParams qp;
   qp.power = plant::BatteryParams::lipo3s(o.lipo_soc);
   std::array<plant::ActuatorParams, 4> motors;

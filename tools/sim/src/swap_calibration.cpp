@@ -286,7 +286,11 @@ void addDynamics(const SwapOptions& o, Calibration& c, const ProgressFn& progres
     if (!stock) std::copy(p.eeprom.begin() + lo, p.eeprom.begin() + hi, image.begin() + lo);
     const std::vector<int> slots = stock ? std::vector<int>{0, 1, 2, 3} : std::vector<int>{kSwapSlot};
     if (o.dyn_from == "plant") {
-      for (int slot : slots) storePlantDynamics(image, slot, motorInSlot(o, p.part, slot));
+      for (int slot : slots)
+        if (!storePlantDynamics(image, slot, motorInSlot(o, p.part, slot)))
+          throw std::runtime_error(fmt::format("force+dyn: slot {} of {} holds no model v2 to add dynamics to; "
+                                               "force+dyn needs --model v2",
+                                               slot, p.part));
     } else {
       image = gatherDynamics(o, p.part, image, slots, progress);
     }

@@ -143,8 +143,9 @@ struct LiftoffOptions {
   bool uncalibrated = false;
   std::string label;                          // names the run ("" = calibrated/uncalibrated)
   int reference_slot = 0;                     // uncalibrated: whose record all four use
-  bool dyn = false;                           // `dyn on` before the lift-off (equal dynamics; the
-                                              // records must hold dynamics; in-process only)
+  bool dyn = false;                           // equal dynamics: each v2 record gets its motor's
+                                              // dynamics (the plant's), `dyn on` before the
+                                              // lift-off; in-process only
   double settle_s = 1.0;                      // hold time skipped before averaging
   double sample_period_s = 0.01;              // CSV time step
   std::string csv_path;                       // "" = no CSV
