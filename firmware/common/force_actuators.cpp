@@ -254,8 +254,8 @@ bool ForceActuators::configureShaping() {
     const uint16_t most = maxForceDg(i);
     if (most > max_dg) max_dg = most;
   }
-  // Float tables (expf, sqrtf per bin: tens of milliseconds on the AVR): the watchdog is kicked
-  // between the parts, each well inside its time-out.
+  // Float tables (expf, sqrtf per bin): the watchdog is kicked between the parts, each well
+  // inside its time-out (fly reset without these kicks in simavr).
   hal::Watchdog::kick();
   if (!tc::buildShaperReference(reference_table_, reference_, laws, kMotors, max_dg, frame_hz_)) return false;
   uint8_t shaped = 0;
