@@ -98,6 +98,38 @@ static uint16_t busMv(uint16_t frame) {
   return static_cast<uint16_t>(12400 - frame + (frame * 37u) % 23u);  // draining, noisy
 }
 
+// Equal dynamics: four measured motors (about 89 ms light, 77 ms heavy, each a few ms apart),
+// the slowest as the reference, at 400 Hz (fly's rate); four DynShaper::step calls per frame, as
+// the force API makes them. Its own function, so main's measured code keeps its registers.
+// Returns the failures (a reference that could not be built).
+__attribute__((noinline)) static uint16_t measureShaping(uint16_t frames) {
+  uint16_t failures = 0;
+  tc::MotorDynamics laws[4];
+  const tc::MotorDynamics* law_ptrs[4];
+  for (uint8_t m = 0; m < 4; ++m) {
+    laws[m].points = 5;
+    laws[m].lo_dg = 1000;
+    laws[m].hi_dg = 4000;
+    laws[m].up_lo_01ms = static_cast<uint16_t>(890 - 40 * m);
+    laws[m].up_hi_01ms = static_cast<uint16_t>(770 - 30 * m);
+    laws[m].down_lo_01ms = static_cast<uint16_t>(900 - 40 * m);
+    laws[m].down_hi_01ms = static_cast<uint16_t>(790 - 30 * m);
+    law_ptrs[m] = &laws[m];
+  }
+  if (!tc::buildShaperReference(shaper_reference, tc::ShaperReference(), law_ptrs, 4, 7000, 400)) ++failures;
+  for (uint8_t m = 0; m < 4; ++m) shapers[m].configure(laws[m], shaper_reference, 400, 2000);
+  for (uint16_t frame = 0; frame < frames; ++frame) {
+    uint16_t shaped[4];
+    for (uint8_t m = 0; m < 4; ++m) shaped[m] = commandDg(frame, m);
+    ready(shaped[3]);
+    markStart(kShaping);
+    for (uint8_t m = 0; m < 4; ++m) shaped[m] = shapers[m].step(shaped[m], 7000, shaper_reference);
+    markEnd();
+    sink = shaped[0] + shaped[3];
+  }
+  return failures;
+}
+
 // One frame of bench_frame through the assembly and, from the same state, through the portable
 // C++: true when both leave the same filters, pulses and flags.
 static bool flyBothSame(uint16_t mv, uint8_t extra) {
@@ -219,33 +251,7 @@ int main() {
     markEnd();
     sink = bench_frame.lane[3].pwm_us;
   }
-  // ---- equal dynamics: four measured motors (about 89 ms light, 77 ms heavy, each a few ms
-  // apart), the slowest as the reference, at 400 Hz (fly's rate) --------------------------------
-  {
-    tc::MotorDynamics laws[4];
-    const tc::MotorDynamics* law_ptrs[4];
-    for (uint8_t m = 0; m < 4; ++m) {
-      laws[m].points = 5;
-      laws[m].lo_dg = 1000;
-      laws[m].hi_dg = 4000;
-      laws[m].up_lo_01ms = static_cast<uint16_t>(890 - 40 * m);
-      laws[m].up_hi_01ms = static_cast<uint16_t>(770 - 30 * m);
-      laws[m].down_lo_01ms = static_cast<uint16_t>(900 - 40 * m);
-      laws[m].down_hi_01ms = static_cast<uint16_t>(790 - 30 * m);
-      law_ptrs[m] = &laws[m];
-    }
-    if (!tc::buildShaperReference(shaper_reference, tc::ShaperReference(), law_ptrs, 4, 7000, 400)) ++failures;
-    for (uint8_t m = 0; m < 4; ++m) shapers[m].configure(laws[m], shaper_reference, 400, 2000);
-  }
-  for (uint16_t frame = 0; frame < kFramesRun; ++frame) {
-    uint16_t shaped[4];
-    for (uint8_t m = 0; m < 4; ++m) shaped[m] = commandDg(frame, m);
-    ready(shaped[3]);
-    markStart(kShaping);
-    for (uint8_t m = 0; m < 4; ++m) shaped[m] = shapers[m].step(shaped[m], 7000, shaper_reference);
-    markEnd();
-    sink = shaped[0] + shaped[3];
-  }
+  failures = static_cast<uint16_t>(failures + measureShaping(kFramesRun));
   for (uint16_t frame = 0; frame < kFramesRun; ++frame) {
     for (uint8_t m = 0; m < 4; ++m) bench_frame.lane[m].force_dg = static_cast<uint16_t>(1500 + 500 * m);
     const uint16_t mv = busMv(kFramesRun + frame);
