@@ -11,14 +11,17 @@ namespace {
 
 constexpr uint8_t kRefShift = 8;  // the reference in 1/256 dg
 
-// d * g / 2^16 for |d| < 2^31, rounded toward zero alike for both signs: two 16 x 16 -> 32
-// multiplications and byte-aligned shifts (avr-gcc would call its 32 x 32 multiply for the
-// plain expression, four times the cycles).
+// m * g / 2^16 (rounded down) for m < 2^31: two 16 x 16 -> 32 multiplications and
+// byte-aligned shifts (avr-gcc would call its 32 x 32 multiply for the plain expression, four
+// times the cycles).
+TC_INLINE uint32_t mulQ16(uint32_t m, uint16_t g) {
+  return mulU16(static_cast<uint16_t>(m >> 16), g) + (mulU16(static_cast<uint16_t>(m), g) >> 16);
+}
+
+// d * g / 2^16, rounded toward zero alike for both signs.
 TC_INLINE int32_t mulQ16(int32_t d, uint16_t g) {
-  const bool negative = d < 0;
-  const uint32_t m = static_cast<uint32_t>(negative ? -d : d);
-  const uint32_t p = mulU16(static_cast<uint16_t>(m >> 16), g) + (mulU16(static_cast<uint16_t>(m), g) >> 16);
-  return negative ? -static_cast<int32_t>(p) : static_cast<int32_t>(p);
+  const uint32_t p = mulQ16(static_cast<uint32_t>(d < 0 ? -d : d), g);
+  return d < 0 ? -static_cast<int32_t>(p) : static_cast<int32_t>(p);
 }
 
 // The bin of the reference (in 1/256 dg): its decigrams (a byte shift), then a 16-bit shift.
@@ -103,18 +106,23 @@ uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferen
     return 0;
   }
   if (force_dg > max_dg) force_dg = max_dg;
+  // |F - r| and its direction once; both products from the magnitude, rounded toward zero
   const int32_t d = (static_cast<int32_t>(force_dg) << kRefShift) - ref_q8_;
-  const uint8_t dir = d >= 0 ? kShaperUp : kShaperDown;
+  const bool down = d < 0;
+  const uint8_t dir = down ? kShaperDown : kShaperUp;
+  const uint32_t m = static_cast<uint32_t>(down ? -d : d);
+  uint32_t toward = mulQ16(m, gain_q14_[dir][bin]);  // Q14 gain: times 4 (1/64 dg lost)
+  toward += toward;
+  toward += toward;
   const int32_t hi = static_cast<int32_t>(max_dg) << kRefShift;
   const int32_t lo = 1l << kRefShift;
-  int32_t gd = mulQ16(d, gain_q14_[dir][bin]);  // Q14 gain: times 4 below (1/64 dg lost)
-  gd += gd;
-  int32_t u = ref_q8_ + gd + gd;
+  int32_t u = down ? ref_q8_ - static_cast<int32_t>(toward) : ref_q8_ + static_cast<int32_t>(toward);
   if (u > hi || u < lo) {  // beyond what the motor can be given: the reference follows the motor
     u = u > hi ? hi : lo;
     ref_q8_ += mulQ16(u - ref_q8_, a_motor_q16_[dir][bin]);
   } else {
-    ref_q8_ += mulQ16(d, table.a_ref_q16[dir][bin]);
+    const int32_t moved = static_cast<int32_t>(mulQ16(m, table.a_ref_q16[dir][bin]));
+    ref_q8_ += down ? -moved : moved;
   }
   return static_cast<uint16_t>((u + (1l << (kRefShift - 1))) >> kRefShift);
 }
