@@ -24,11 +24,13 @@ TC_INLINE int32_t mulQ16(int32_t d, uint16_t g) {
   return d < 0 ? -static_cast<int32_t>(p) : static_cast<int32_t>(p);
 }
 
-// The bin of the reference (in 1/256 dg): its decigrams (a byte shift), then a 16-bit shift.
-TC_INLINE uint8_t binOf(int32_t ref_q8, uint8_t bin_shift) {
+// The bin of the reference (in 1/256 dg): its decigrams (a byte shift) times 2^-bin_shift, as
+// one 16 x 16 multiplication by bin_scale_q16 (a variable shift is a loop on the AVR).
+TC_INLINE uint8_t binOf(int32_t ref_q8, uint16_t bin_scale_q16) {
   if (ref_q8 <= 0) return 0;
-  const uint16_t dg = static_cast<uint16_t>(static_cast<uint32_t>(ref_q8) >> kRefShift) >> bin_shift;
-  return dg < kShaperBins ? static_cast<uint8_t>(dg) : static_cast<uint8_t>(kShaperBins - 1);
+  const uint16_t dg = static_cast<uint16_t>(static_cast<uint32_t>(ref_q8) >> kRefShift);
+  const uint16_t bin = static_cast<uint16_t>(mulU16(dg, bin_scale_q16) >> 16);
+  return bin < kShaperBins ? static_cast<uint8_t>(bin) : static_cast<uint8_t>(kShaperBins - 1);
 }
 
 // The force a bin stands for (its centre), grams.
@@ -62,6 +64,7 @@ bool buildShaperReference(ShaperReferenceTable& table, const ShaperReference& re
   table = ShaperReferenceTable();
   if (!reference.isValid() || frame_hz == 0) return false;
   while ((static_cast<uint32_t>(max_dg) >> table.bin_shift) >= kShaperBins) ++table.bin_shift;
+  table.bin_scale_q16 = static_cast<uint16_t>(1ul << (16 - table.bin_shift));
   bool any = false;
   for (uint8_t i = 0; i < count; ++i) any = any || (motors[i] != nullptr && motors[i]->isValid());
   if (reference.isSlowest() && !any) return false;
@@ -100,7 +103,7 @@ void DynShaper::configure(const MotorDynamics& dynamics, const ShaperReferenceTa
 
 uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table) {
   if (!active_) return force_dg;
-  const uint8_t bin = binOf(ref_q8_, table.bin_shift);
+  const uint8_t bin = binOf(ref_q8_, table.bin_scale_q16);
   if (force_dg == 0) {  // a stop: at once; the reference spins down with the motor
     ref_q8_ += mulQ16(-ref_q8_, a_motor_q16_[kShaperDown][bin]);
     return 0;
@@ -109,9 +112,12 @@ uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferen
   // |F - r| and its direction once; both products from the magnitude, rounded toward zero
   const int32_t d = (static_cast<int32_t>(force_dg) << kRefShift) - ref_q8_;
   const bool down = d < 0;
-  const uint8_t dir = down ? kShaperDown : kShaperUp;
   const uint32_t m = static_cast<uint32_t>(down ? -d : d);
-  uint32_t toward = mulQ16(m, gain_q14_[dir][bin]);  // Q14 gain: times 4 (1/64 dg lost)
+  // the direction's rows by address (an index times 16 is a shift loop on the AVR)
+  const uint16_t* const gain = down ? gain_q14_[kShaperDown] : gain_q14_[kShaperUp];
+  const uint16_t* const a_motor = down ? a_motor_q16_[kShaperDown] : a_motor_q16_[kShaperUp];
+  const uint16_t* const a_ref = down ? table.a_ref_q16[kShaperDown] : table.a_ref_q16[kShaperUp];
+  uint32_t toward = mulQ16(m, gain[bin]);  // Q14 gain: times 4 (1/64 dg lost)
   toward += toward;
   toward += toward;
   const int32_t hi = static_cast<int32_t>(max_dg) << kRefShift;
@@ -119,9 +125,9 @@ uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferen
   int32_t u = down ? ref_q8_ - static_cast<int32_t>(toward) : ref_q8_ + static_cast<int32_t>(toward);
   if (u > hi || u < lo) {  // beyond what the motor can be given: the reference follows the motor
     u = u > hi ? hi : lo;
-    ref_q8_ += mulQ16(u - ref_q8_, a_motor_q16_[dir][bin]);
+    ref_q8_ += mulQ16(u - ref_q8_, a_motor[bin]);
   } else {
-    const int32_t moved = static_cast<int32_t>(mulQ16(m, table.a_ref_q16[dir][bin]));
+    const int32_t moved = static_cast<int32_t>(mulQ16(m, a_ref[bin]));
     ref_q8_ += down ? -moved : moved;
   }
   return static_cast<uint16_t>((u + (1l << (kRefShift - 1))) >> kRefShift);

@@ -49,9 +49,11 @@ struct ShaperReference {
 };
 
 // The reference's per-frame gains, shared by all motors: a_r per bin and direction (Q16), and
-// where the bins lie (bin = force_dg >> bin_shift, the last bin open-ended).
+// where the bins lie (bin = force_dg >> bin_shift, the last bin open-ended; bin_shift >= 1, and
+// bin_scale_q16 = 2^(16 - bin_shift), so the frame finds the bin by one multiplication).
 struct ShaperReferenceTable {
-  uint8_t bin_shift = 0;
+  uint8_t bin_shift = 1;
+  uint16_t bin_scale_q16 = 0x8000;
   uint16_t a_ref_q16[2][kShaperBins] = {};
 };
 
