@@ -105,9 +105,13 @@ jq '.ladder' "$OUT/lab_walk.json" > "$OUT/lab_ladder.json"
 say "swap experiment (issue 19): motor 1 replaced, only slot 1 recalibrated, fly's 10-degree steps with the same gains"
 # The reduced run (one IMU unit, PD gains, every mode; the full one is docs/fly.md's, about 3 min
 # on one core): four stock motors and each swapped part calibrated with gather_store, fly's steps
-# on the seesaw and the gimbal. Prints the table, the targets of force mode and the motors' time
-# constants; every run's time series in $OUT/swap/series.
-"$TC" sim swap --imu-seeds 1 --gains pd --jobs "$JOBS" --out-dir "$OUT/swap" --no-plots \
+# on the seesaw and the gimbal. Prints the table, the targets of force and force+dyn mode (force
+# with each motor's dynamics in its record and fly's `dyn on`: equal dynamics, issue 26) and the
+# motors' time constants; every run's time series in $OUT/swap/series. The dynamics here are the
+# plant's own (--dyn-from plant: seven gather_store dyn sessions would add about 50 s; the next
+# step shows dyn measuring them within a few percent); the force+dyn flights add about 6.5 s
+# (15.0 -> 21.5 s for this step with 2 jobs).
+"$TC" sim swap --imu-seeds 1 --gains pd --jobs "$JOBS" --dyn-from plant --out-dir "$OUT/swap" --no-plots \
   --json "$OUT/swap.json" 2> >(sed -u 's/^/   /' >&2) | tee "$OUT/swap.txt"
 # One plot: the gimbal's roll step (motor 1 sits on the roll axis) in each mode, stock and the
 # three parts overlaid.
@@ -116,8 +120,8 @@ set datafile separator ","
 set datafile commentschars "#"
 set terminal pngcairo size 1400,1000 noenhanced font ",11"
 set output "$OUT/swap_steps.png"
-set multiplot layout 2,2 title "Swap: gimbal roll, 10-degree step, PD gains, IMU unit 1; stock and motor 1 replaced (slot 1 recalibrated)"
-do for [mode in "force generic pwm ardupilot"] {
+set multiplot layout 2,3 title "Swap: gimbal roll, 10-degree step, PD gains, IMU unit 1; stock and motor 1 replaced (slot 1 recalibrated)"
+do for [mode in "force force+dyn generic pwm ardupilot"] {
   set title "mode ".mode; set xlabel "t from the step [s]"; set ylabel "roll (true) [deg]"
   set key right bottom; set grid; set autoscale y
   f(p) = sprintf("$OUT/swap/series/gimbal_%s_pd_%s_roll_s1.csv", mode, p)

@@ -33,6 +33,7 @@ void ForceActuators::loadSettings() {
 uint8_t ForceActuators::loadSlots(SlotReport report) {
   for (uint8_t i = 0; i < kMotors; ++i) loadSlot(i, report);
   assignLanes();
+  if (shaping_ && !configureShaping()) clearShaping();  // the new records' dynamics
   return armableCount();
 }
 
@@ -55,15 +56,20 @@ void ForceActuators::loadSlot(uint8_t index, SlotReport report) {
   m.why = load.why;
   m.source = index;
   m.model.clear();
+  m.dynamics.clear();
+  m.shaper.disable();
   if (m.record == tc::DecodeStatus::kOk) {
     const bool loaded = load.layout == tc::SlotLayout::kModelV2 ? m.model.setV2(v2)
                                                                 : m.model.setV1<hal::Eeprom>(v1, index);
     if (!loaded) {  // the EEPROM changed under the loader: never flown
       m.record = tc::DecodeStatus::kBadContent;
       m.model.clear();
+    } else if (load.layout == tc::SlotLayout::kModelV2) {
+      m.dynamics = v2.dynamics;
     }
   }
   m.force_dg = 0;
+  m.shaped_dg = 0;
   m.pwm_us = tc::kStopPwmUs;
   m.flags = m.isArmable() ? tc::kStopped : tc::kNotCalibrated;
   if (report != nullptr) report(index, m, v2, v1);
@@ -88,6 +94,7 @@ bool ForceActuators::setModelSource(uint8_t index, uint8_t slot) {
   if (slot != index && !motors_[slot].isArmable()) return false;
   motors_[index].source = slot;
   assignLanes();
+  if (shaping_ && !configureShaping()) clearShaping();  // the dynamics follow the model
   return true;
 }
 
@@ -133,6 +140,7 @@ void ForceActuators::stopAll() {
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
     m.force_dg = 0;
+    m.shaped_dg = 0;
     m.pwm_us = tc::kStopPwmUs;
     m.flags = isArmable(i) ? tc::kStopped : tc::kNotCalibrated;
     pulses_us[i] = tc::kStopPwmUs;
@@ -143,6 +151,10 @@ void ForceActuators::stopAll() {
 // A new filter constant re-seeds the filter at its value (one division) and rescales the
 // motors' seen forces.
 void ForceActuators::setFrameRate(uint16_t frame_hz) {
+  if (frame_hz != frame_hz_) {
+    frame_hz_ = frame_hz;
+    if (shaping_ && !configureShaping()) clearShaping();
+  }
   const uint8_t shift = filterShiftFor(frame_hz);
   if (shift == v2_.bus.shift) return;
   v2_.bus.shift = shift;
@@ -165,6 +177,7 @@ void ForceActuators::output() {
 }
 
 void ForceActuators::computePulses() {
+  shapeCommands();
   if (v2_.count != 0) flyV2Motors();
   for (uint8_t i = 0; i < kMotors; ++i) flyMotor(motors_[i]);
 }
@@ -181,7 +194,7 @@ void ForceActuators::writePulses() {
 void ForceActuators::flyV2Motors() {
   for (uint8_t i = 0; i < kMotors; ++i) {
     const Motor& m = motors_[i];
-    if (m.lane != kNoLane) v2_.lane[m.lane].force_dg = m.force_dg;
+    if (m.lane != kNoLane) v2_.lane[m.lane].force_dg = m.shaped_dg;
   }
   v2_.fly(battery_.frameMv(), battery_.frameSane() ? 0 : tc::kVoltageInvalid);
 }
@@ -192,6 +205,7 @@ void ForceActuators::flyMotor(Motor& m) {
   const Motor& source = motors_[m.source];
   if (!source.isArmable()) {
     m.force_dg = 0;
+    m.shaped_dg = 0;
     m.pwm_us = tc::kStopPwmUs;
     m.flags = tc::kNotCalibrated;
     m.vbat_mv = battery_.medianMv();
@@ -208,9 +222,78 @@ void ForceActuators::flyMotor(Motor& m) {
   // was last sent.
   const tc::ThesisRun& thesis = source.model.v1();
   m.vbat_mv = battery_.monitor().compensatedMillivolts(battery_.medianMv(), m.pwm_us, thesis.sag);
-  const tc::ForcePwmResult result = tc::forceToPwmDg<hal::Eeprom>(thesis, m.force_dg, m.vbat_mv);
+  const tc::ForcePwmResult result = tc::forceToPwmDg<hal::Eeprom>(thesis, m.shaped_dg, m.vbat_mv);
   m.pwm_us = result.pwm_us;
   m.flags = result.flags;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Equal dynamics (thrustcal/dyn_shaper.hpp)
+
+// Each motor's command through its filter (integer; a motor without dynamics, or shaping off:
+// as commanded). Every motor's shaped force goes to its model this frame.
+void ForceActuators::shapeCommands() {
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    Motor& m = motors_[i];
+    m.shaped_dg = m.force_dg;
+    if (shaping_ && m.shaper.isActive()) {
+      m.shaped_dg = m.shaper.step(m.force_dg, maxForceDg(i), reference_table_);
+    }
+  }
+}
+
+// The reference over the heaviest force any motor flies, each motor's filter against it; the
+// dynamics are those of the slot whose model the motor flies (fly's generic mode flies one
+// slot's model and dynamics for all four, as an uncalibrated aircraft would assume).
+bool ForceActuators::configureShaping() {
+  const tc::MotorDynamics* laws[kMotors];
+  uint16_t max_dg = 0;
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    const Motor& source = motors_[motors_[i].source];
+    laws[i] = isArmable(i) ? &source.dynamics : nullptr;
+    const uint16_t most = maxForceDg(i);
+    if (most > max_dg) max_dg = most;
+  }
+  // Float tables (expf, sqrtf per bin): the watchdog is kicked between the parts, each well
+  // inside its time-out (fly reset without these kicks in simavr).
+  hal::Watchdog::kick();
+  if (!tc::buildShaperReference(reference_table_, reference_, laws, kMotors, max_dg, frame_hz_)) return false;
+  uint8_t shaped = 0;
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    hal::Watchdog::kick();
+    Motor& m = motors_[i];
+    if (laws[i] == nullptr) {
+      m.shaper.disable();
+      continue;
+    }
+    m.shaper.configure(*laws[i], reference_table_, frame_hz_, m.force_dg);
+    shaped += m.shaper.isActive() ? 1 : 0;
+  }
+  return shaped != 0;
+}
+
+ForceActuators::Shaping ForceActuators::setShaping(const tc::ShaperReference& reference) {
+  if (!reference.isValid()) return Shaping::kBadReference;
+  const tc::ShaperReference before = reference_;
+  reference_ = reference;
+  if (!configureShaping()) {
+    reference_ = before;
+    if (shaping_ && !configureShaping()) clearShaping();
+    return Shaping::kNoDynamics;
+  }
+  shaping_ = true;
+  return Shaping::kOn;
+}
+
+void ForceActuators::clearShaping() {
+  shaping_ = false;
+  for (uint8_t i = 0; i < kMotors; ++i) motors_[i].shaper.disable();
+}
+
+uint8_t ForceActuators::shapedMotors() const {
+  uint8_t n = 0;
+  for (uint8_t i = 0; i < kMotors; ++i) n += (shaping_ && motors_[i].shaper.isActive()) ? 1 : 0;
+  return n;
 }
 
 }  // namespace fw

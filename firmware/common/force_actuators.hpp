@@ -29,6 +29,7 @@
 #include "frame_rules.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/board_settings.hpp"
+#include "thrustcal/dyn_shaper.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/limits.hpp"
 #include "thrustcal/median_filter.hpp"
@@ -55,6 +56,11 @@ struct Motor {
   uint8_t lane = kNoLane;           // flying a v2 model: its lane in the frame
   tc::Plausibility why;             // record kBadContent: the plausibility rule it broke
   uint16_t force_dg = 0;            // the force command in decigrams: the one place it is kept
+  uint16_t shaped_dg = 0;           // what the model flew this frame: force_dg, or shaped by
+                                    // equal dynamics (setShaping)
+  tc::MotorDynamics dynamics;       // the slot's measured lag (v2 records after `dyn`; none
+                                    // for thesis records)
+  tc::DynShaper shaper;             // equal dynamics: this motor's filter (setShaping)
   uint16_t pwm_us = tc::kStopPwmUs; // last pulse written to the ESC
   uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
                                     // v2 the bus filter's value
@@ -129,8 +135,21 @@ class ForceActuators {
   // The heaviest force motor `index`'s model makes, in decigrams (v1: the lighter of its curves'
   // heaviest gram; v2: its last knot); 0 when it is not armable.
   uint16_t maxForceDg(uint8_t index) const;
-  // The v2 bus filter's constant follows the frame rate (its time constant stays the same).
+  // The v2 bus filter's constant follows the frame rate (its time constant stays the same),
+  // and so do the shaping filters' gains.
   void setFrameRate(uint16_t frame_hz);
+
+  // Equal dynamics (issue 26; thrustcal/dyn_shaper.hpp): every motor whose model's slot holds
+  // dynamics gets its command shaped so that its force follows `reference` (slowest: the
+  // slowest of those motors at each force). Motors without dynamics fly their force as
+  // commanded. Each filter restarts at its motor's present command. kNoDynamics / kBadReference:
+  // nothing changed.
+  enum class Shaping : uint8_t { kOn, kNoDynamics, kBadReference };
+  Shaping setShaping(const tc::ShaperReference& reference);
+  void clearShaping();  // every force flown as commanded again
+  bool isShaping() const { return shaping_; }
+  const tc::ShaperReference& shapingReference() const { return reference_; }
+  uint8_t shapedMotors() const;  // motors whose command is shaped (0 when off)
 
   const Motor& motor(uint8_t index) const { return motors_[index]; }
   // Motor `index` can fly: the slot whose model it flies holds a valid record.
@@ -151,11 +170,17 @@ class ForceActuators {
   void assignLanes();
   void flyV2Motors();
   void flyMotor(Motor& m);
+  void shapeCommands();
+  bool configureShaping();
 
   Motor motors_[kMotors];
   tc::BoardSettings board_settings_;  // the divider (EEPROM)
   BatteryInput battery_;
   tc::V2Frame v2_;  // the motors flying v2: bus filter, sag, their lanes
+  uint16_t frame_hz_ = 400;  // the ESC frame rate the filters run at (setFrameRate)
+  bool shaping_ = false;
+  tc::ShaperReference reference_;
+  tc::ShaperReferenceTable reference_table_;
 };
 
 }  // namespace fw

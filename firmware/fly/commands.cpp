@@ -3,6 +3,7 @@
 // range-checks the arguments from the rows, refuses guarded rows without a checksum in strict
 // mode and prints `help` from them. docs/fly.md holds the help text a host test compares with
 // printHelp().
+#include "dyn_console.hpp"
 #include "eeprom_console.hpp"
 #include "fly_app.hpp"
 #include "fly_view.hpp"
@@ -72,7 +73,14 @@ struct Commands {
     app.cmdRates(static_cast<uint8_t>(a[0]), u16(a[1]), u16(a[2]));
   }
   static void fmode(App& app, const Args& a) { app.cmdFlightMode(static_cast<FlightMode>(a[0])); }
+  static void dyn(App& app, const Args& a) { app.cmdDyn(a); }
 };
+
+// `dyn`: the force API's shaping (force and generic modes; pwm and ardupilot fly pulses).
+void FlyApp::cmdDyn(const fw::ArgValues& args) {
+  if (refuseWhileArmed()) return;
+  fw::dynCommand(motors_, args);
+}
 
 bool FlyApp::refuseWhileArmed() const {
   if (!flight_.armed) return false;
@@ -449,6 +457,8 @@ const fw::Command<FlyApp> kCommands[] TC_FLASH = {
     {{kRcMapName, kRcMapArgs, 1, 1, 0, kRcMapHelp}, &Commands::rcmap},
     {{kRatesName, kRatesArgs, 3, 3, 0, kRatesHelp}, &Commands::rates},
     {{kFmodeName, kFlightModeArgs, 1, 1, 0, kFmodeHelp}, &Commands::fmode},
+    // Hidden like eeprom: armed, a longer help drops keep-alive lines (above); docs/fly.md has it.
+    {{fw::kDynName, fw::kDynArgs, fw::kDynMinArgs, fw::kDynMaxArgs, fw::kCmdHidden, kHiddenHelp}, &Commands::dyn},
 };
 
 }  // namespace

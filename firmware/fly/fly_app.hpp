@@ -44,6 +44,7 @@
 #include "flight_types.hpp"
 #include "fly_rules.hpp"
 #include "force_actuators.hpp"
+#include "shell.hpp"
 #include "mixer.hpp"
 #include "mpu6050.hpp"
 #include "output_stage.hpp"
@@ -192,6 +193,7 @@ class FlyApp {
   void cmdStream(bool on);
   void cmdStatus();
   void cmdStrict(bool on);
+  void cmdDyn(const fw::ArgValues& args);
   void cmdRc(RcProtocol protocol, uint8_t pwm_channels);
   void cmdRcMap(uint8_t which);
   void cmdRates(uint8_t angle_deg, uint16_t rate_dps, uint16_t yaw_dps);

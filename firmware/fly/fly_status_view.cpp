@@ -4,6 +4,7 @@
 
 #include "fly_view_parts.hpp"
 #include "params.hpp"
+#include "dyn_console.hpp"
 #include "slot_report.hpp"
 
 namespace fly {
@@ -170,6 +171,8 @@ void status(const FlyApp& app, const LoopStats& loop, void (*yield)()) {
     yield();
     statusMotor(app, i);
   }
+  yield();
+  fw::dynState(app.motors());
   yield();
   statusReceiver(app);
   yield();

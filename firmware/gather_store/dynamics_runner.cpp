@@ -260,11 +260,13 @@ void GatherStoreApp::cmdDyn() {
   stopMotor();
   const uint32_t session_ms = (hal::Clock::micros() - session_us) / 1000u;
   tc::MotorDynamics d;
+  hal::Watchdog::kick();  // the last step's fit and lines took most of a time-out
   if (law.size() < 2 || !law.build(d)) {
     view::sayDynFailed(slot, law.size());
     return;
   }
   model_.dynamics = d;
+  hal::Watchdog::kick();  // the store reads and checks the slot's copies and the host copies
   const tc::StoreReport report = tc::storeModelV2<hal::Eeprom>(slot, model_, limits);
   view::sayDynStored(slot, d, session_ms, report);
 }

@@ -4,6 +4,7 @@
 // handler runs only with arguments its row accepted. docs/read_run.md holds the help text a
 // host test compares with printHelp().
 #include "console_view.hpp"
+#include "dyn_console.hpp"
 #include "eeprom_console.hpp"
 #include "read_run_app.hpp"
 #include "record_report.hpp"
@@ -45,6 +46,7 @@ struct Commands {
     app.cmdDivider(static_cast<uint32_t>(a[0]), static_cast<uint32_t>(a[1]));
   }
   static void strict(App& app, const Args& a) { app.cmdStrict(a[0] == 0); }  // on|off
+  static void dyn(App& app, const Args& a) { app.cmdDyn(a); }
 };
 
 // f G: every calibrated motor; the others stay at 1000 us with a warning.
@@ -151,6 +153,14 @@ void ReadRunApp::cmdDivider(uint32_t top_ohm, uint32_t bottom_ohm) {
 
 void ReadRunApp::cmdStrict(bool on) { line_.strictCommand(on); }
 
+void ReadRunApp::cmdDyn(const fw::ArgValues& args) {
+  if (isRunning()) {
+    sayLine(TC_FLASH_TEXT("error: motors are running; send stop first, then dyn"));
+    return;
+  }
+  fw::dynCommand(motors_, args);
+}
+
 namespace {
 
 // Argument specs: names as `help` and the errors show them, ranges from the named limits.
@@ -223,6 +233,7 @@ const fw::Command<ReadRunApp> kCommands[] TC_FLASH = {
     {{kDividerName, nullptr, 0, 0, 0, kDividerShowHelp}, &Commands::dividerShow},
     {{kDividerName, kDividerArgs, 2, 2, fw::kCmdGuarded, kDividerSetHelp}, &Commands::dividerSet},
     {{kStrictName, kOnOffArgs, 1, 1, 0, kStrictHelp}, &Commands::strict},
+    {{fw::kDynName, fw::kDynArgs, fw::kDynMinArgs, fw::kDynMaxArgs, 0, fw::kDynHelp}, &Commands::dyn},
 };
 
 }  // namespace

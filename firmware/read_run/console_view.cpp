@@ -1,6 +1,7 @@
 // read_run's console view (console_view.hpp): what the image prints, nothing it decides.
 #include "console_view.hpp"
 
+#include "dyn_console.hpp"
 #include "slot_report.hpp"
 
 namespace rr {
@@ -111,6 +112,7 @@ void status(const ReadRunApp& app, void (*yield)()) {
     fw::printUint(bus.rejected);
     fw::newline();
   }
+  fw::dynState(app.motors());
   say(TC_FLASH_TEXT("battery "));
   sayVolts(app.batteryMv());
   say(TC_FLASH_TEXT(" raw (median of "));

@@ -55,6 +55,7 @@
 
 #include "console.hpp"
 #include "force_actuators.hpp"
+#include "shell.hpp"
 #include "hal/hal.hpp"
 #include "liftoff.hpp"
 #include "run_rules.hpp"
@@ -129,6 +130,7 @@ class ReadRunApp {
   void cmdDividerShow();
   void cmdDivider(uint32_t top_ohm, uint32_t bottom_ohm);
   void cmdStrict(bool on);
+  void cmdDyn(const fw::ArgValues& args);
 
   void handleLine(char* line);
   bool requireArmable(uint8_t index) const;  // prints the refusal when not

@@ -19,10 +19,10 @@ bench::AvrPaths flyAvrPaths() {
   return p;
 }
 
-const char* const kFlyModes[] = {"force_v2", "force_thesis", "generic", "pwm", "ardupilot"};
+const char* const kFlyModes[] = {"force_v2", "force_v2_dyn", "force_thesis", "generic", "pwm", "ardupilot"};
 
 void everyModeFliesTheWholeWindowWithEveryFigureMeasured(const nlohmann::json& j) {
-  ASSERT_EQ(j["modes"].size(), 5u);
+  ASSERT_EQ(j["modes"].size(), 6u);
   for (const char* key : kFlyModes) {
     SCOPED_TRACE(key);
     const nlohmann::json& m = j["modes"][key];
@@ -78,6 +78,8 @@ void whereTheCyclesGoAddsUpToTheCpuLoad(const nlohmann::json& j) {
   // each mode's own output path is where it shows
   EXPECT_GT(j["breakdown"]["force_thesis"].value("tc::forceToPwmWithDg<...>", 0.0), 0.0);
   EXPECT_GT(j["breakdown"]["force_v2"].value("tc::V2Frame::fly", 0.0), 0.0);
+  EXPECT_GT(j["breakdown"]["force_v2_dyn"].value("tc::DynShaper::step", 0.0), 0.0);  // dyn on shapes
+  EXPECT_FALSE(j["breakdown"]["force_v2"].contains("tc::DynShaper::step"));           // dyn off does not
   EXPECT_GT(j["breakdown"]["ardupilot"].value("fly::ArduPilotCurve::pulseUsDg", 0.0), 0.0);
   EXPECT_FALSE(j["breakdown"]["pwm"].contains("tc::V2Frame::fly"));
 }
@@ -88,6 +90,7 @@ void modesRankAsTheirOutputPathsCostAndTheImageFits(const nlohmann::json& j) {
   EXPECT_LT(cpu("pwm"), cpu("force_v2"));
   EXPECT_LT(cpu("force_v2"), cpu("force_thesis"));
   EXPECT_NEAR(cpu("generic"), cpu("force_v2"), 1.0) << "generic flies the same v2 arithmetic";
+  EXPECT_GT(cpu("force_v2_dyn"), cpu("force_v2")) << "dyn on adds four filters to the same frame";
   // flash and static SRAM of fly.elf, within the ATmega2560
   EXPECT_GT(j["flash_bytes"].get<int>(), 10000);
   EXPECT_LT(j["flash_bytes"].get<int>(), 256 * 1024);

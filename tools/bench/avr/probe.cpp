@@ -9,7 +9,9 @@
 //   - the v1 (thesis) motor as read_run's flyMotor flies it: the sag-compensated reading and
 //     tc::forceToPwm over tc::ThesisRun, its curves' steps read from the EEPROM through the
 //     real hal::Eeprom (hal/avr/eeprom.cpp is linked in);
-//   - the battery readings: the median of 101 (v1, status) and the middle two of four (v2).
+//   - the battery readings: the median of 101 (v1, status) and the middle two of four (v2);
+//   - equal dynamics (`dyn on`): four tc::DynShaper::step calls, as the force API shapes each
+//     motor's command before the frame above.
 // The frame's assembly is also checked against its portable C++ (V2Frame::flyPortable) on
 // frames with insane readings and jumps, and at the edges of the range (3.0 and 26.0 V, a 5 g
 // and a 5 kg motor) (key kFrameMismatches must read 0).
@@ -22,6 +24,7 @@
 #include "sim/cycle_probe_avr.hpp"
 #include "thrustcal/battery_monitor.hpp"
 #include "thrustcal/curve_builder.hpp"
+#include "thrustcal/dyn_shaper.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/force_pwm.hpp"
 #include "thrustcal/median_filter.hpp"
@@ -37,6 +40,7 @@ enum Label : uint8_t {
   kThesis = 3,         // 4 x (sag-compensated reading + forceToPwm over ThesisRun)
   kThesisMedian = 4,   // thesis battery reading: 4 pushes into the median of 101 + median()
   kV2Reading = 5,      // v2 battery reading: the middle two of four readings in mV
+  kShaping = 6,        // equal dynamics: 4 x DynShaper::step (commands change every frame)
 };
 enum Key : uint8_t {
   kSizeofModelV2 = 0x80,
@@ -70,6 +74,8 @@ static tc::CurveBuilder<81> builder;
 static tc::MedianFilter<101> battery_median;
 static const tc::BatteryMonitor monitor;
 static tc::V2Frame reference;
+static tc::DynShaper shapers[4];
+static tc::ShaperReferenceTable shaper_reference;
 volatile uint16_t sink;
 
 // Integer synthetic motor: force ~ ((pwm - start) * V)^2, about 700 g at 1800 us and 12.4 V.
@@ -90,6 +96,38 @@ static uint16_t commandDg(uint16_t frame, uint8_t m) {
 }
 static uint16_t busMv(uint16_t frame) {
   return static_cast<uint16_t>(12400 - frame + (frame * 37u) % 23u);  // draining, noisy
+}
+
+// Equal dynamics: four measured motors (about 89 ms light, 77 ms heavy, each a few ms apart),
+// the slowest as the reference, at 400 Hz (fly's rate); four DynShaper::step calls per frame, as
+// the force API makes them. Its own function, so main's measured code keeps its registers.
+// Returns the failures (a reference that could not be built).
+__attribute__((noinline)) static uint16_t measureShaping(uint16_t frames) {
+  uint16_t failures = 0;
+  tc::MotorDynamics laws[4];
+  const tc::MotorDynamics* law_ptrs[4];
+  for (uint8_t m = 0; m < 4; ++m) {
+    laws[m].points = 5;
+    laws[m].lo_dg = 1000;
+    laws[m].hi_dg = 4000;
+    laws[m].up_lo_01ms = static_cast<uint16_t>(890 - 40 * m);
+    laws[m].up_hi_01ms = static_cast<uint16_t>(770 - 30 * m);
+    laws[m].down_lo_01ms = static_cast<uint16_t>(900 - 40 * m);
+    laws[m].down_hi_01ms = static_cast<uint16_t>(790 - 30 * m);
+    law_ptrs[m] = &laws[m];
+  }
+  if (!tc::buildShaperReference(shaper_reference, tc::ShaperReference(), law_ptrs, 4, 7000, 400)) ++failures;
+  for (uint8_t m = 0; m < 4; ++m) shapers[m].configure(laws[m], shaper_reference, 400, 2000);
+  for (uint16_t frame = 0; frame < frames; ++frame) {
+    uint16_t shaped[4];
+    for (uint8_t m = 0; m < 4; ++m) shaped[m] = commandDg(frame, m);
+    ready(shaped[3]);
+    markStart(kShaping);
+    for (uint8_t m = 0; m < 4; ++m) shaped[m] = shapers[m].step(shaped[m], 7000, shaper_reference);
+    markEnd();
+    sink = shaped[0] + shaped[3];
+  }
+  return failures;
 }
 
 // One frame of bench_frame through the assembly and, from the same state, through the portable
@@ -213,6 +251,7 @@ int main() {
     markEnd();
     sink = bench_frame.lane[3].pwm_us;
   }
+  failures = static_cast<uint16_t>(failures + measureShaping(kFramesRun));
   for (uint16_t frame = 0; frame < kFramesRun; ++frame) {
     for (uint8_t m = 0; m < 4; ++m) bench_frame.lane[m].force_dg = static_cast<uint16_t>(1500 + 500 * m);
     const uint16_t mv = busMv(kFramesRun + frame);

@@ -7,6 +7,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "bench/accuracy.hpp"  // plantDynamics
 #include "bench/sweeps.hpp"
 #include "calibration_runs.hpp"
 #include "sim/board.hpp"
@@ -56,7 +57,8 @@ void writeV1(const Sweep& lipo, const Sweep& supply, int pwm_min_us, size_t moto
 }
 
 // store v2 after each sweep: fit on the LiPo's, refine with the supply's.
-void writeV2(const Sweep& lipo, const Sweep& supply, size_t motor, std::vector<uint8_t>& image) {
+void writeV2(const Sweep& lipo, const Sweep& supply, size_t motor, std::vector<uint8_t>& image,
+             const tc::MotorDynamics& dynamics = tc::MotorDynamics()) {
   auto fitter = std::make_unique<tc::ModelV2Fitter<161>>();
   tc::ModelV2 model;
   for (const SweepPoint& p : lipo.points) fitter->add(p.pwm_us, p.force_dg, p.vbat_mv);
@@ -65,6 +67,7 @@ void writeV2(const Sweep& lipo, const Sweep& supply, size_t motor, std::vector<u
   fitter->reset();
   for (const SweepPoint& p : supply.points) fitter->add(p.pwm_us, p.force_dg, p.vbat_mv);
   fitter->refine(model);
+  model.dynamics = dynamics;
   ImageStorage::image = &image;
   if (tc::writeModelV2<ImageStorage>(static_cast<uint8_t>(motor), model).status !=
       tc::WriteV2Status::kWritten)
@@ -78,6 +81,7 @@ const BenchRecords& benchRecords() {
   if (!r.v1.empty()) return r;
   r.v1.assign(sim::kEepromBytes, 0xFF);
   r.v2.assign(sim::kEepromBytes, 0xFF);
+  r.v2_dyn.assign(sim::kEepromBytes, 0xFF);
   std::vector<SweepPoint> all;  // ArduPilot: one fit for every motor
   for (size_t i = 0; i < 4; ++i) {
     r.motors[i] = sim::motorForSeed(kPreset, kSeeds[i], kVariation);
@@ -89,6 +93,7 @@ const BenchRecords& benchRecords() {
     const Sweep supply = simulateSweep(r.motors[i], plant::BatteryParams::benchSupply(10.5, 6.32), spec);
     writeV1(lipo, supply, spec.pwm_min_us, i, r.v1);
     writeV2(lipo, supply, i, r.v2);
+    writeV2(lipo, supply, i, r.v2_dyn, plantDynamics(r.motors[i]));
     all.insert(all.end(), lipo.points.begin(), lipo.points.end());
     all.insert(all.end(), supply.points.begin(), supply.points.end());
   }

@@ -20,7 +20,7 @@ constexpr uint64_t kCycleTarget = 1000;
 constexpr uint64_t kModelsSramTarget = 1024;
 // tools/bench/avr/probe.cpp's labels.
 constexpr int kLabelV2Frame = 1, kLabelV2Steady = 2, kLabelThesis = 3, kLabelThesisMedian = 4,
-              kLabelV2Reading = 5;
+              kLabelV2Reading = 5, kLabelShaping = 6;
 
 std::string shown(const std::string& path) { return shownPath(path); }
 
@@ -140,6 +140,23 @@ Table breakdownTable(const ProbeResult& r, const std::string& probe, nlohmann::j
   return b;
 }
 
+// Equal dynamics (`dyn on`): the force API shapes each command before the v2 frame; its cycles
+// and read_run's v2 frame with them.
+void addShapingRows(const ProbeResult& r, Table& t, nlohmann::json& json) {
+  auto shaping = r.sections.find(kLabelShaping);
+  if (shaping == r.sections.end()) throw std::runtime_error("the AVR probe did not measure the shaping (dyn on)");
+  const CycleStat& sh = shaping->second;
+  const CycleStat& v2 = r.sections.at(kLabelV2Frame);
+  t.addRow({"equal dynamics (dyn on): 4 x DynShaper::step", std::to_string(sh.mean), std::to_string(sh.min),
+            std::to_string(sh.max), "-", "-"});
+  t.addRow({"v2 as read_run flies it with dyn on (the frame + the shaping)", std::to_string(v2.mean + sh.mean), "",
+            std::to_string(v2.max + sh.max), "-", "-"});
+  json["updates"]["dyn_shaping"] = {{"name", "equal dynamics (dyn on): 4 x DynShaper::step"},
+                                    {"frames", sh.count}, {"mean_cycles", sh.mean},
+                                    {"min_cycles", sh.min}, {"max_cycles", sh.max}};
+  json["v2_read_run_with_dyn"] = {{"mean_cycles", v2.mean + sh.mean}, {"max_cycles", v2.max + sh.max}};
+}
+
 }  // namespace
 
 Section computeSection(const AvrPaths& paths) {
@@ -194,6 +211,7 @@ Section computeSection(const AvrPaths& paths) {
   const CycleStat& th = r.sections.at(kLabelThesis);
   const CycleStat& med = r.sections.at(kLabelThesisMedian);
   t.addRow({"thesis total (reading + controller)", std::to_string(th.mean + med.mean), "", "", "-", "-"});
+  addShapingRows(r, t, s.json);
   const uint16_t failures = r.values.count(0x83) ? r.values.at(0x83) : 0xFFFF;
   if (failures != 0) t.addNote(fmt::format("WARNING: {} model fits or loads failed inside the probe", failures));
   t.addNote(fmt::format("probe: {} (core/ and read_run's slot storage built with avr-g++ -Os as in the AVR "

@@ -51,7 +51,7 @@ constexpr uint8_t kStatusLastByteIn = 0x58;  // TWSR: data received, NACK return
 struct FlyMode {
   const char* key;
   const char* name;
-  bool thesis_records;
+  const std::vector<uint8_t> BenchRecords::*records;  // the EEPROM image it flies
   std::vector<std::string> setup;  // after `layout plus` and `thrust 1200`
 };
 
@@ -63,11 +63,12 @@ std::vector<FlyMode> flyModes(const BenchRecords& r) {
   const std::string volts = fmt::format("apvolt {} {}", std::lround(ap.bat_volt_max_v * 1000.0),
                                         std::lround(ap.bat_volt_min_v * 1000.0));
   return {
-      {"force_v2", "force, model v2 records", false, {"mode force"}},
-      {"force_thesis", "force, thesis records", true, {"mode force"}},
-      {"generic", "generic (slot 0's v2 record)", false, {"mode generic 0"}},
-      {"pwm", "pwm (hover 1480 us, 1.44 g/us)", false, {"mode pwm", "hover 1480 1440"}},
-      {"ardupilot", "ardupilot (one fitted curve)", false, {ap_line, volts, "mode ardupilot"}},
+      {"force_v2", "force, model v2 records", &BenchRecords::v2, {"mode force"}},
+      {"force_v2_dyn", "force, v2 records, dyn on", &BenchRecords::v2_dyn, {"mode force", "dyn on"}},
+      {"force_thesis", "force, thesis records", &BenchRecords::v1, {"mode force"}},
+      {"generic", "generic (slot 0's v2 record)", &BenchRecords::v2, {"mode generic 0"}},
+      {"pwm", "pwm (hover 1480 us, 1.44 g/us)", &BenchRecords::v2, {"mode pwm", "hover 1480 1440"}},
+      {"ardupilot", "ardupilot (one fitted curve)", &BenchRecords::v2, {ap_line, volts, "mode ardupilot"}},
   };
 }
 
@@ -271,7 +272,7 @@ FlyModeFigures flyMode(const std::string& elf, const FlyMode& mode, const BenchR
   f.key = mode.key;
   f.name = mode.name;
   sim::AirframeRig rig(elf, options);
-  rig.board().setEeprom(mode.thesis_records ? records.v1 : records.v2);
+  rig.board().setEeprom(records.*mode.records);
   sim::Console con(rig.board(), "fly> ");
   FlyMeter meter(rig, elf, symbols);
   setUpMode(rig, con, mode);

@@ -5,6 +5,7 @@
 // axis and gains, the motors' time constants); its JSON is `thrustcal sim swap --json`'s without
 // the machine's paths, plus each swapped run's change against its stock twin (`changes[]`), which
 // the docs' prose quotes.
+#include <algorithm>
 #include <fmt/format.h>
 
 #include <cmath>
@@ -59,26 +60,25 @@ nlohmann::json changesJson(const nlohmann::json& runs) {
   return out;
 }
 
-// The targets as the docs show them: a row per part and rig, a column per kind.
-Table targetsOf(const sw::SwapResult& res) {
+// The targets of one mode as the docs show them: a row per part and rig, a column per kind.
+Table targetsOf(const sw::SwapResult& res, const std::string& mode, const std::string& title) {
   const std::vector<std::string> kinds = {"overshoot vs stock", "rise time vs stock", "steady-state error",
                                           "ITAE vs stock"};
   std::vector<std::string> header = {"part in slot 1", "rig"};
   for (const std::string& k : kinds)
     for (const sw::Target& t : res.targets)
-      if (t.what == k) {
+      if (t.what == k && t.mode == mode) {
         header.push_back(fmt::format("{} ({})", k, t.wanted));
         break;
       }
-  Table table("8. Swap targets: force mode, PD gains, each swapped part against stock run by run (same rig, axis "
-              "and IMU unit); the worst run",
-              header);
+  Table table(title, header);
   for (const std::string& part : res.options.parts)
     for (const char* rig : {"seesaw", "gimbal"}) {
       std::vector<std::string> row = {part, rig};
       for (const std::string& k : kinds)
         for (const sw::Target& t : res.targets)
-          if (t.part == part && t.rig == rig && t.what == k) row.push_back(t.figure + (t.met ? ", met" : ", NOT met"));
+          if (t.part == part && t.rig == rig && t.what == k && t.mode == mode)
+            row.push_back(t.figure + (t.met ? ", met" : ", NOT met"));
       if (row.size() > 2) table.addRow(row);
     }
   return table;
@@ -126,7 +126,13 @@ Section swapSection(const AvrPaths& paths, const SwapBenchOptions& opt) {
   s.key = "swap";
   s.json = withoutPaths(res.toJson());
   s.json["changes"] = changesJson(s.json["runs"]);
-  s.tables.push_back(targetsOf(res));
+  s.tables.push_back(targetsOf(res, "force",
+                               "8. Swap targets: force mode, PD gains, each swapped part against stock run by run "
+                               "(same rig, axis and IMU unit); the worst run"));
+  if (std::find(res.options.modes.begin(), res.options.modes.end(), sw::Mode::kForceDyn) != res.options.modes.end())
+    s.tables.push_back(targetsOf(res, "force+dyn",
+                                 "8. Swap targets with equal dynamics: force+dyn mode (dyn on), PD gains, each "
+                                 "swapped part against stock in force+dyn run by run; the worst run"));
   for (const sw::FigureTable& f : sw::figureTables(res)) {
     Table t("8. Swap figures: " + f.title + "; a part's change against stock in the same mode in brackets", f.header);
     for (const auto& row : f.rows) t.addRow(row);

@@ -216,6 +216,7 @@ void declareLiftoffOptions(CLI::App* cmd, LiftoffArgs& a) {
                    ? std::string()
                    : std::string("use lower-case letters, digits and _ only");
       });
+  cmd->add_flag("--dyn", o->dyn, "equal dynamics: the v2 records with the plant's dynamics, read_run's dyn on");
   cmd->add_option("--reference-slot", o->reference_slot,
                   "uncalibrated: the slot whose record all four motors use")
       ->capture_default_str();
@@ -255,11 +256,10 @@ void runLiftoffCommand(const LiftoffArgs& a) {
     sim_s += r.simulated_s;
     wall_s += r.wall_s;
     session_s += r.session_wall_s;
-    fmt::print("liftoff {}: thrust {:.1f} {:.1f} {:.1f} {:.1f} g for {:.0f} g: spread {:.2f} %, "
-               "rms error {:.2f} %, tilt {:.2f} deg (max {:.2f})\n",
-               name, r.hold_thrust_g[0], r.hold_thrust_g[1], r.hold_thrust_g[2],
-               r.hold_thrust_g[3], r.force_g, r.thrust_spread_pct, r.force_error_rms_pct,
-               r.hold_tilt_deg, r.max_tilt_deg);
+    fmt::print("liftoff {}: thrust {:.1f} {:.1f} {:.1f} {:.1f} g for {:.0f} g: spread {:.2f} % "
+               "(ramp {:.2f} %), rms error {:.2f} %, tilt {:.2f} deg (max {:.2f})\n", name, r.hold_thrust_g[0],
+               r.hold_thrust_g[1], r.hold_thrust_g[2], r.hold_thrust_g[3], r.force_g, r.thrust_spread_pct,
+               r.ramp_spread_pct, r.force_error_rms_pct, r.hold_tilt_deg, r.max_tilt_deg);
   }
   j["sim"] = {{"realtime_factor", wall_s > 0 ? sim_s / wall_s : 0},
               {"simulated_s", sim_s},

@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "plant/dynamics_record.hpp"
 #include "plant/fidelity.hpp"
 #include "sim/console.hpp"
 #include "sim/rigs.hpp"
@@ -28,6 +29,21 @@ struct VecEeprom {  // an EEPROM image as the codecs' Storage
   static void updateByte(uint16_t, uint8_t) {}
 };
 const std::vector<uint8_t>* VecEeprom::image = nullptr;
+
+struct WritableEeprom {  // the same, written by the v2 record's writer
+  static std::vector<uint8_t>* image;
+  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
+  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
+};
+std::vector<uint8_t>* WritableEeprom::image = nullptr;
+
+// Slot's v2 record in the image VecEeprom reads; false when there is none valid.
+bool readSlotModel(int slot, tc::ModelV2& model) {
+  tc::BoardSettings settings;
+  tc::readSettings<VecEeprom>(settings);
+  return tc::readModelV2<VecEeprom>(static_cast<uint8_t>(slot), model, settings.recordLimits()).status ==
+         tc::DecodeStatus::kOk;
+}
 
 std::vector<std::string> must(Console& con, const std::string& line, double budget_s) {
   auto lines = con.command(line, budget_s);
@@ -66,6 +82,23 @@ void parseFit(const std::string& l, DynStep& s) {
 }
 
 }  // namespace
+
+tc::MotorDynamics storedDynamics(const std::vector<uint8_t>& eeprom, int slot) {
+  VecEeprom::image = &eeprom;
+  tc::ModelV2 model;
+  return readSlotModel(slot, model) ? model.dynamics : tc::MotorDynamics();
+}
+
+bool storePlantDynamics(std::vector<uint8_t>& eeprom, int slot, const plant::ActuatorParams& motor) {
+  VecEeprom::image = &eeprom;
+  tc::ModelV2 model;
+  if (!readSlotModel(slot, model)) return false;
+  model.dynamics = plant::recordDynamics(motor);
+  WritableEeprom::image = &eeprom;
+  if (tc::writeModelV2<WritableEeprom>(static_cast<uint8_t>(slot), model).status != tc::WriteV2Status::kWritten)
+    throw std::runtime_error(fmt::format("slot {}'s record with the motor's dynamics was not written", slot));
+  return true;
+}
 
 plant::BenchParams dynBenchParams(const plant::ActuatorParams& motor, double headroom_g, uint64_t noise_seed) {
   plant::BenchParams p = plant::BenchParams::thesis();
@@ -164,10 +197,7 @@ DynSessionResult runDynSession(const DynSessionOptions& o) {  // long: the sessi
   VecEeprom::image = &r.eeprom;
   tc::readSettings<VecEeprom>(settings);
   r.bench = settings.bench;
-  tc::ModelV2 model;
-  if (tc::readModelV2<VecEeprom>(static_cast<uint8_t>(o.slot), model, settings.recordLimits()).status ==
-      tc::DecodeStatus::kOk)
-    r.dynamics = model.dynamics;
+  r.dynamics = storedDynamics(r.eeprom, o.slot);
   r.simulated_s = rig->board.simulatedSeconds();
   r.wall_s = rig->board.wallSeconds();
   return r;

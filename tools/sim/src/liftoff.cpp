@@ -16,6 +16,7 @@
 #include "plant/sensors.hpp"
 #include "sim/board.hpp"
 #include "sim/console.hpp"
+#include "sim/dynamics_session.hpp"
 #include "sim/pty_bridge.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
@@ -113,6 +114,11 @@ Flight flyInProcess(const LiftoffOptions& o, const plant::QuadFrameParams& qp,
   progress(fmt::format("liftoff ({}): read_run booting, seeds {} {} {} {}", mode, o.seeds[0],
                        o.seeds[1], o.seeds[2], o.seeds[3]));
   f.boot = bootReadRun(con);
+  if (o.dyn) {
+    const std::vector<std::string> reply = con.command("dyn on", 2.0);
+    if (reply.empty() || reply[0].rfind("dyn on:", 0) != 0)
+      throw std::runtime_error("read_run refused `dyn on`: " + (reply.empty() ? con.tail() : reply[0]));
+  }
   con.onLine(phaseTimes(f, mode, progress));
   rig->recording = true;
   f.t_cmd = rig->board.timeS();
@@ -266,6 +272,20 @@ void summarizeHold(const LiftoffOptions& o, const std::vector<LiftoffSample>& sa
   r.hold_bus_v = bus / n;
 }
 
+// The ramp (before `t_hold`, once the four thrusts' mean passes 20 % of the force): the largest
+// spread of the four, relative to their mean.
+double rampSpreadPct(const LiftoffOptions& o, const std::vector<LiftoffSample>& samples, double t_hold) {
+  double worst = 0;
+  for (const auto& s : samples) {
+    if (s.t_s >= t_hold) break;
+    const double m = (s.thrust_g[0] + s.thrust_g[1] + s.thrust_g[2] + s.thrust_g[3]) / 4;
+    if (m < 0.2 * o.force_g) continue;
+    const auto [min_it, max_it] = std::minmax_element(s.thrust_g.begin(), s.thrust_g.end());
+    worst = std::max(worst, (*max_it - *min_it) / m * 100.0);
+  }
+  return worst;
+}
+
 // The 10 ms time series, t_s from the command.
 void writeLiftoffCsv(const LiftoffOptions& o, const LiftoffResult& r, double t_cmd, double t_hold) {
   std::ofstream out(o.csv_path, std::ios::trunc);
@@ -295,7 +315,12 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
   LiftoffResult r;
   r.mode = !o.label.empty() ? o.label : o.uncalibrated ? "uncalibrated" : "calibrated";
   r.force_g = o.force_g;
-  const std::vector<uint8_t> eeprom = eepromToFly(o);
+  if (o.dyn && o.link == GatherLink::kPty)
+    throw std::invalid_argument("liftoff with dyn on runs in process only (--via in-process)");
+  std::vector<uint8_t> eeprom = eepromToFly(o);
+  if (o.dyn)  // each v2 record with its motor's dynamics: the plant's own (what gather_store's dyn measures);
+    for (int i = 0; i < 4; ++i)  // a thesis record has none and flies unshaped
+      storePlantDynamics(eeprom, i, motorForSeed(o.preset, o.seeds[i], o.variation));
   plant::QuadFrameParams qp;
   qp.power = plant::BatteryParams::lipo3s(o.lipo_soc);
   std::array<plant::ActuatorParams, 4> motors;
@@ -315,6 +340,7 @@ LiftoffResult runLiftoff(const LiftoffOptions& o) {
                                          f.tail));
   if (t_hold < 0) t_hold = t_cmd + o.ramp_ms / 1000.0;
   summarizeHold(o, rig->samples, t_hold + o.settle_s, t_done - 0.02, r);
+  r.ramp_spread_pct = rampSpreadPct(o, rig->samples, t_hold);
   r.samples = std::move(rig->samples);
   r.simulated_s = rig->board.simulatedSeconds();
   r.wall_s = rig->board.wallSeconds();
@@ -337,6 +363,7 @@ nlohmann::json LiftoffResult::toJson() const {
           {"hold_thrust_g", hold_thrust_g},
           {"hold_pwm_us", hold_pwm_us},
           {"thrust_spread_pct", thrust_spread_pct},
+          {"ramp_spread_pct", ramp_spread_pct},
           {"force_error_rms_pct", force_error_rms_pct},
           {"hold_tilt_deg", hold_tilt_deg},
           {"max_tilt_deg", max_tilt_deg},

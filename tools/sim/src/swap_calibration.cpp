@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,6 +17,7 @@
 #include "plant/actuator.hpp"
 #include "plant/fidelity.hpp"
 #include "plant/power_source.hpp"
+#include "sim/dynamics_session.hpp"
 #include "sim/swap.hpp"
 
 namespace sim::swap {
@@ -74,15 +76,19 @@ const PartCalibration& Calibration::of(const std::string& part) const {
 
 namespace {
 
-// FNV-1a of a file's bytes: the cache key changes when gather_store does.
+// FNV-1a of bytes: the cache key changes when gather_store (or the image dyn starts from) does.
+std::string bytesDigest(const std::vector<uint8_t>& bytes) {
+  uint64_t h = 1469598103934665603ULL;
+  for (uint8_t c : bytes) h = (h ^ c) * 1099511628211ULL;
+  return fmt::format("{:016x}", h);
+}
+
 std::string fileDigest(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in)
     throw std::runtime_error(
         fmt::format("{}: cannot read the image; build it (cmake --build --preset avr)", path));
-  uint64_t h = 1469598103934665603ULL;
-  for (char c; in.get(c);) h = (h ^ static_cast<uint8_t>(c)) * 1099511628211ULL;
-  return fmt::format("{:016x}", h);
+  return bytesDigest(std::vector<uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()));
 }
 
 void writeAtomically(const fs::path& path, const std::string& text) {
@@ -212,7 +218,85 @@ Calibration calibrate(const SwapOptions& o) {
     c.parts.push_back(std::move(pc));
   }
   c.modes = modeSettings(o, c.stock_sweeps);
+  if (std::find(o.modes.begin(), o.modes.end(), Mode::kForceDyn) != o.modes.end()) addDynamics(o, c, progress);
   return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+// force+dyn: the records with each motor's dynamics
+
+namespace {
+
+plant::ActuatorParams motorInSlot(const SwapOptions& o, const std::string& part, int slot) {
+  if (part != kStock && slot == kSwapSlot) return actuatorOf(findPart(part), o.variation);
+  return actuatorOf({kStock, o.stock_preset, o.stock_seeds[static_cast<std::size_t>(slot)], 1.0, ""}, o.variation);
+}
+
+// gather_store's `dyn` on each of `slots` of `image` in turn (the first session also identifies
+// the bench's load cell, `dyn cell`, unless the board settings hold it), cached by what made it.
+std::vector<uint8_t> gatherDynamics(const SwapOptions& o, const std::string& part, std::vector<uint8_t> image,
+                                    const std::vector<int>& slots, const ProgressFn& progress) {
+  const fs::path dir = fs::path(o.out_dir) / "calibration";
+  const fs::path hex_path = dir / (part + ".dyn.hex"), key_path = dir / (part + ".dyn.key.json");
+  const nlohmann::json key = {{"gather_store", fileDigest(o.gather_elf)}, {"from_image", bytesDigest(image)},
+                              {"slots", slots}, {"part", part}};
+  if (fs::exists(hex_path) && fs::exists(key_path) && readText(key_path) == key.dump(2) + "\n") {
+    try {
+      std::vector<uint8_t> cached = hex::readIntelHexFile(hex_path.string(), kEepromBytes);
+      progress(fmt::format("dynamics of {}: cached ({})", part, hex_path.string()));
+      return cached;
+    } catch (const std::exception&) {
+      // a damaged image is measured again
+    }
+  }
+  for (int slot : slots) {
+    DynSessionOptions d;
+    d.elf_path = o.gather_elf;
+    d.motor = motorInSlot(o, part, slot);
+    d.slot = slot;
+    d.eeprom = image;
+    d.calibrate = false;  // the slot holds the swap's model
+    d.noise_seed = static_cast<uint64_t>(slot) + 1;
+    d.progress = [](const std::string&) {};
+    d.log_path = (dir / fmt::format("{}_slot{}.dyn.log", part, slot)).string();  // dyn's step log
+    progress(fmt::format("dynamics of {}: gather_store's dyn on slot {} (about 35 s simulated)", part, slot));
+    const DynSessionResult r = runDynSession(d);
+    if (!r.dynamics.isPresent())
+      throw std::runtime_error(fmt::format("dynamics of {}: gather_store's dyn stored none in slot {}:\n{}", part,
+                                           slot, fmt::join(r.summary, "\n")));
+    image = r.eeprom;
+  }
+  hex::writeIntelHexFile(hex_path.string() + ".new", image);
+  fs::rename(hex_path.string() + ".new", hex_path);
+  writeAtomically(key_path, key.dump(2) + "\n");
+  return image;
+}
+
+}  // namespace
+
+// Stock: every slot measured; a part: the stock image with dynamics, its slot 1 replaced by the
+// part's calibration and measured again (what a user does after the swap).
+void addDynamics(const SwapOptions& o, Calibration& c, const ProgressFn& progress) {
+  if (o.dyn_from != "gather" && o.dyn_from != "plant")
+    throw std::invalid_argument(fmt::format("--dyn-from {}: use gather (gather_store's dyn) or plant", o.dyn_from));
+  const std::size_t lo = static_cast<std::size_t>(kSwapSlot) * 1024, hi = lo + 1024;
+  for (PartCalibration& p : c.parts) {
+    const bool stock = p.part == kStock;
+    std::vector<uint8_t> image = stock ? p.eeprom : c.parts.front().eeprom_dyn;
+    if (!stock) std::copy(p.eeprom.begin() + lo, p.eeprom.begin() + hi, image.begin() + lo);
+    const std::vector<int> slots = stock ? std::vector<int>{0, 1, 2, 3} : std::vector<int>{kSwapSlot};
+    if (o.dyn_from == "plant") {
+      for (int slot : slots)
+        if (!storePlantDynamics(image, slot, motorInSlot(o, p.part, slot)))
+          throw std::runtime_error(fmt::format("force+dyn: slot {} of {} holds no model v2 to add dynamics to; "
+                                               "force+dyn needs --model v2",
+                                               slot, p.part));
+    } else {
+      image = gatherDynamics(o, p.part, image, slots, progress);
+    }
+    p.eeprom_dyn = image;
+    for (int slot = 0; slot < 4; ++slot) p.dynamics[static_cast<std::size_t>(slot)] = storedDynamics(image, slot);
+  }
 }
 
 }  // namespace sim::swap

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 struct SwapArgs {
   swap::SwapOptions o;
   std::string json, model = "v2";
-  std::vector<std::string> rigs = {"seesaw", "gimbal"}, modes = {"force", "generic", "pwm", "ardupilot"},
+  std::vector<std::string> rigs = {"seesaw", "gimbal"}, modes = {"force", "force+dyn", "generic", "pwm", "ardupilot"},
                            gains = {"pd", "pid"};
   bool quick = false, no_plots = false, peer_only = false;
   std::string peer;
@@ -43,9 +43,21 @@ void declareSwapOptions(CLI::App* cmd, SwapArgs& a) {
       ->delimiter(',')
       ->check(CLI::IsMember({"seesaw", "gimbal"}))
       ->capture_default_str();
-  cmd->add_option("--modes", a.modes, "fly's output modes to compare")
+  cmd->add_option("--modes", a.modes,
+                  "fly's output modes to compare (force+dyn: force with each motor's dynamics in its record "
+                  "and `dyn on`)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"force", "generic", "pwm", "ardupilot"}))
+      ->check(CLI::IsMember({"force", "force+dyn", "generic", "pwm", "ardupilot"}))
+      ->capture_default_str();
+  cmd->add_option("--dyn-from", o->dyn_from,
+                  "force+dyn: the records' dynamics from gather_store's dyn on the virtual bench (gather, "
+                  "cached in --out-dir) or the plant's own time constants (plant)")
+      ->check(CLI::IsMember({"gather", "plant"}))
+      ->capture_default_str();
+  cmd->add_option("--dyn-ref", o->dyn_reference_ms,
+                  "force+dyn: fly's `dyn on MS MS`, a fixed reference lag no faster than any motor's; 0: "
+                  "`dyn on`, the slowest motor's (which a swap changes)")
+      ->check(CLI::Range(0, 2000))
       ->capture_default_str();
   cmd->add_option("--parts", o->parts, "the parts that replace motor 1")
       ->delimiter(',')

@@ -33,6 +33,13 @@ std::vector<std::string> setupLines(const SwapOptions& o, const Calibration& c, 
     case Mode::kForce:
       lines.insert(lines.end(), {"mode force", fmt::format("thrust {}", thrust_g)});
       break;
+    case Mode::kForceDyn:
+      lines.insert(lines.end(), {"mode force",
+                                 o.dyn_reference_ms > 0
+                                     ? fmt::format("dyn on {} {}", o.dyn_reference_ms, o.dyn_reference_ms)
+                                     : std::string("dyn on"),
+                                 fmt::format("thrust {}", thrust_g)});
+      break;
     case Mode::kGeneric:
       lines.insert(lines.end(), {"mode generic 0", fmt::format("thrust {}", thrust_g)});
       break;
@@ -214,7 +221,7 @@ RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, c
   RunResult res;
   res.spec = r;
   AirframeRig rig(o.fly_elf, rigOptions(o, r));
-  rig.board().setEeprom(c.of(r.part).eeprom);
+  rig.board().setEeprom(r.mode == Mode::kForceDyn ? c.of(r.part).eeprom_dyn : c.of(r.part).eeprom);
   Console con(rig.board(), "fly> ");
   const double spool_s = armed(rig, con, setupLines(o, c, r), r, o.level);
   const double settle_s = settleOf(o, r);

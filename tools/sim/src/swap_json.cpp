@@ -55,6 +55,9 @@ nlohmann::json setupJson(const SwapOptions& o) {
           {"log_period_s", o.log_period_s},
           {"gimbal_layout", "plus"},
           {"calibration_model", gatherModelName(o.model)},
+          {"dyn", {{"from", o.dyn_from},
+                   {"reference_ms", o.dyn_reference_ms > 0 ? nlohmann::json(o.dyn_reference_ms)
+                                                           : nlohmann::json("slowest")}}},
           {"peer", o.peer ? nlohmann::json({{"name", o.peer->name},
                                             {"profile", o.peer->file},
                                             {"elf", o.peer->elf},
@@ -100,7 +103,8 @@ nlohmann::json SwapResult::toJson() const {
                             {"met", t.met},
                             {"what", t.what},
                             {"part", t.part},
-                            {"rig", t.rig}});
+                            {"rig", t.rig},
+                            {"mode", t.mode}});
   nlohmann::json dyn = nlohmann::json::array();
   for (const Dynamics& d : dynamics.parts)
     dyn.push_back({{"part", d.part},

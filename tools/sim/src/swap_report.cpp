@@ -228,8 +228,8 @@ std::string formatTable(const SwapResult& res) {
 }
 
 std::string formatTargets(const SwapResult& res) {
-  if (res.targets.empty()) return "targets: none (they need force mode, PD gains and a swapped part)\n";
-  std::string out = "targets (force mode, PD gains, each part against stock run by run; the worst run):\n";
+  if (res.targets.empty()) return "targets: none (they need force or force+dyn mode, PD gains and a swapped part)\n";
+  std::string out = "targets (force and force+dyn modes, PD gains, each part against stock run by run; the worst run):\n";
   for (const Target& t : res.targets)
     out += fmt::format("  {:<4} {:<78} {:<48} {}\n", t.met ? "met" : "NOT", t.target, t.figure, t.wanted);
   return out;

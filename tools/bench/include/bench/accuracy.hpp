@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/sweeps.hpp"
+#include "plant/dynamics_record.hpp"
 #include "lab/autopilot.hpp"
 
 namespace bench {
@@ -51,7 +52,9 @@ struct AccuracyConfig {
 
 // The dynamics gather_store's dyn would store for this motor, from the plant's own time
 // constants (plant::stepTimeConstant_s) at 20..80 % of its force, each scaled by `scale`.
-tc::MotorDynamics plantDynamics(const plant::ActuatorParams& motor, double scale = 1.0);
+inline tc::MotorDynamics plantDynamics(const plant::ActuatorParams& motor, double scale = 1.0) {
+  return plant::recordDynamics(motor, scale);
+}
 
 struct ErrorStats {
   double rms_pct = 0, max_pct = 0;  // of |thrust - command| / command

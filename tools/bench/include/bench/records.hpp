@@ -21,6 +21,9 @@ namespace bench {
 struct BenchRecords {
   std::array<plant::ActuatorParams, 4> motors;  // ESC output / slot i: motor i
   std::vector<uint8_t> v1, v2;                  // whole EEPROM images (sim::kEepromBytes)
+  std::vector<uint8_t> v2_dyn;                  // v2 with each motor's dynamics: the plant's own
+                                                // time constants (bench::plantDynamics; what
+                                                // gather_store's dyn measures within 5 %)
   ExpoModel ardupilot;                          // one fit over the four motors' sweeps
 };
 

@@ -60,6 +60,15 @@ struct DynSessionResult {
 // session does not finish.
 DynSessionResult runDynSession(const DynSessionOptions& options);
 
+// A slot's dynamics as its v2 record in `eeprom` holds them (the board settings' limits); none
+// when the slot holds no valid v2 record or no dynamics.
+tc::MotorDynamics storedDynamics(const std::vector<uint8_t>& eeprom, int slot);
+// The plant's own dynamics (plant::recordDynamics) into slot's v2 record in `eeprom`, as
+// gather_store's dyn stores them (the power-fail-safe writer: the next copy): what the swap's
+// force+dyn (--dyn-from plant) and `sim liftoff --dyn` fly without dyn sessions. False (nothing
+// written) when the slot holds no model v2; throws std::runtime_error when the write fails.
+bool storePlantDynamics(std::vector<uint8_t>& eeprom, int slot, const plant::ActuatorParams& motor);
+
 // The thesis bench with `motor` mounted, the amplifier's offset set for `headroom_g`.
 plant::BenchParams dynBenchParams(const plant::ActuatorParams& motor, double headroom_g, uint64_t noise_seed);
 

@@ -143,6 +143,9 @@ struct LiftoffOptions {
   bool uncalibrated = false;
   std::string label;                          // names the run ("" = calibrated/uncalibrated)
   int reference_slot = 0;                     // uncalibrated: whose record all four use
+  bool dyn = false;                           // equal dynamics: each v2 record gets its motor's
+                                              // dynamics (the plant's), `dyn on` before the
+                                              // lift-off; in-process only
   double settle_s = 1.0;                      // hold time skipped before averaging
   double sample_period_s = 0.01;              // CSV time step
   std::string csv_path;                       // "" = no CSV
@@ -162,6 +165,8 @@ struct LiftoffResult {
   std::array<double, 4> hold_thrust_g{};  // mean over the hold (after settle_s)
   std::array<double, 4> hold_pwm_us{};
   double thrust_spread_pct = 0;           // (max - min) / mean of hold_thrust_g
+  double ramp_spread_pct = 0;             // the ramp's largest (max - min) / mean of the four
+                                          // thrusts, where their mean is above 20 % of the force
   double force_error_rms_pct = 0;         // rms over motors of (thrust - command) / command
   double max_tilt_deg = 0, hold_tilt_deg = 0;
   double hold_roll_moment_nm = 0, hold_pitch_moment_nm = 0;

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "plant/params.hpp"
+#include "thrustcal/dynamics.hpp"
 #include "sim/airframe.hpp"
 #include "sim/peer_profile.hpp"
 #include "sim/scenarios.hpp"
@@ -32,10 +33,11 @@
 
 namespace sim::swap {
 
-// kPeer: another firmware flying with its own gains (SwapOptions::peer; its runs' mode in
-// runs[] is "peer:NAME", runModeName()).
-enum class Mode { kForce, kGeneric, kPwm, kArduPilot, kPeer };
-const char* modeName(Mode mode);  // "force", "generic", "pwm", "ardupilot", "peer"
+// kForceDyn: force mode with each motor's dynamics in its record and `dyn on` (equal dynamics,
+// SwapOptions::dyn_reference_ms). kPeer: another firmware flying with its own gains
+// (SwapOptions::peer; its runs' mode in runs[] is "peer:NAME", runModeName()).
+enum class Mode { kForce, kGeneric, kPwm, kArduPilot, kPeer, kForceDyn };
+const char* modeName(Mode mode);  // "force", "generic", "pwm", "ardupilot", "peer", "force+dyn"
 // Throws std::invalid_argument naming the modes.
 Mode parseMode(const std::string& name);
 
@@ -73,7 +75,15 @@ struct SwapOptions {
   std::array<uint64_t, 4> stock_seeds = {11, 12, 13, 14};
   double variation = 0.03;
   std::vector<AirRig> rigs = {AirRig::kSeesaw, AirRig::kGimbal};
-  std::vector<Mode> modes = {Mode::kForce, Mode::kGeneric, Mode::kPwm, Mode::kArduPilot};
+  std::vector<Mode> modes = {Mode::kForce, Mode::kForceDyn, Mode::kGeneric, Mode::kPwm, Mode::kArduPilot};
+  // force+dyn: where the records' dynamics come from: "gather" (gather_store's `dyn` on the
+  // virtual bench for each calibrated slot: about 35 simulated s a motor, cached like the
+  // calibrations) or "plant" (the plant's own time constants written into the records:
+  // plant::recordDynamics, for cheap tests). The reference fly's `dyn on` follows: a fixed
+  // first-order lag of this many ms both ways (no faster than any motor's at the forces flown),
+  // or 0: the slowest motor's (`dyn on` without arguments), which a swap changes.
+  std::string dyn_from = "gather";
+  int dyn_reference_ms = 95;
   std::vector<std::string> parts = {"kv1100_9x4.7", "kv900_11x4.7", "prop-8pct"};
   std::vector<Gains> gains = {Gains::kPd, Gains::kPid};
   std::vector<uint64_t> imu_seeds = {1, 2, 3};
@@ -108,6 +118,9 @@ struct ModeSettings {
 struct PartCalibration {
   std::string part;
   std::vector<uint8_t> eeprom;   // stock: four slots; a part: slot 1 calibrated again
+  std::vector<uint8_t> eeprom_dyn;  // force+dyn: the same with each slot's dynamics (the part's
+                                    // slot 1 measured again); empty without force+dyn
+  std::array<tc::MotorDynamics, 4> dynamics{};  // ... each slot's dynamics as stored
   bool cached = false;           // taken from the output folder
   double curve_error_max_g = 0;  // the stored model against the plant (runGather)
   std::string eeprom_path;
@@ -158,6 +171,7 @@ struct Target {
   std::string target, figure, wanted;
   bool met = false;
   std::string what, part, rig;  // "overshoot vs stock", the swapped part, "seesaw" | "gimbal"
+  std::string mode = "force";   // "force" | "force+dyn"
 };
 
 struct SwapResult {
@@ -178,6 +192,9 @@ SwapResult runSwap(const SwapOptions& options);
 
 // ---- pieces (sim/src/swap_*.cpp), public for the tests ----
 Calibration calibrate(const SwapOptions& options);
+// force+dyn: each calibration's image with the dynamics of every slot (options.dyn_from), into
+// PartCalibration::eeprom_dyn and ::dynamics (swap_dyn.cpp).
+void addDynamics(const SwapOptions& options, Calibration& calibration, const ProgressFn& progress);
 ModeSettings modeSettings(const SwapOptions& options, const std::vector<std::string>& stock_sweeps);
 DynamicsReport measureDynamics(const SwapOptions& options);
 // One flight: fly booted on the rig with the part in slot 1, the mode set, armed, settled, the
@@ -189,8 +206,8 @@ RunResult flyRun(const SwapOptions& options, const Calibration& calibration, con
 // sticks, hover, then the step (1500 + step x deg-us on the axis's channel). Throws
 // std::runtime_error if it never armed (its armed-text, or no motor above idle before the step).
 RunResult flyPeerRun(const SwapOptions& options, const RunSpec& spec, const std::string& csv_path);
-// The targets of force mode with PD gains, each swapped part against stock, run by run (same
-// rig, axis and IMU unit).
+// The targets of force mode (and force+dyn, tighter: 1 pp, 1 %, 1.05x) with PD gains, each
+// swapped part against stock in the same mode, run by run (same rig, axis and IMU unit).
 std::vector<Target> swapTargets(const std::vector<RunResult>& runs, const std::vector<std::string>& parts);
 
 }  // namespace sim::swap

@@ -1,0 +1,99 @@
+// Equal dynamics in flight (issue 26 item 3): each motor's force command shaped with its own
+// measured response (thrustcal/dynamics.hpp) so that every motor's force follows one common
+// reference response, whatever its own time constants.
+//
+// The motor's force follows its command u as a first-order lag, per frame of dt:
+//     y[k+1] = y[k] + a_m (u[k] - y[k]),   a_m = 1 - exp(-dt / tau_motor)
+// and the reference follows the requested force F the same way with the reference's constant:
+//     r[k+1] = r[k] + a_r (F[k] - r[k]),   a_r = 1 - exp(-dt / tau_ref)
+// With y == r, the command that makes the motor land on the reference next frame is
+//     u[k] = r[k] + (a_r / a_m) (F[k] - r[k])
+// (in continuous time u = r + tau_motor dr/dt, C(s) = (tau_motor s + 1) / (tau_ref s + 1)).
+// tau_motor and tau_ref each follow their law at the operating point (the reference's force),
+// spin-up or spin-down by the sign of F - r.
+//
+// Pulse limits: F is first limited to what the model makes (0..max); when u falls outside
+// 1 dg..max (a reference faster than the motor asks for more than the motor can be given), u
+// is held at the limit and the reference advances as the motor does under that command, so the
+// reference stays what the motor can achieve and nothing winds up. F == 0 is a stop: the
+// output is 0 at once (no shaping on the way to the stop pulse) and the reference decays as
+// the motor spins down.
+//
+// Split by cost: configure() (float, expf; when shaping is switched on, or the frame rate or
+// the records change) tabulates a_m, a_r / a_m and a_r over kShaperBins force bins per
+// direction; step() (every frame, integer only: two 32 x 16 multiplications, no division)
+// reads them. A motor without dynamics (a thesis record, a v2 record before `dyn`) is not
+// shaped: step() passes its force through unchanged.
+#pragma once
+#include <stdint.h>
+
+#include "thrustcal/dynamics.hpp"
+
+namespace tc {
+
+constexpr uint8_t kShaperBins = 16;      // force bins per direction
+constexpr uint8_t kShaperUp = 0;         // table index: F above the reference
+constexpr uint8_t kShaperDown = 1;       // ... below it
+constexpr uint16_t kShaperGainMaxQ14 = 0xFFFF;  // a_r / a_m at most ~4: a reference up to 4x faster
+
+// The common reference. Fixed: tau_up / tau_down in 0.1 ms for every force (both nonzero).
+// Slowest (both 0): at every force the slowest of the shaped motors' own laws there, so no
+// motor is asked for more than it can do.
+struct ShaperReference {
+  uint16_t tau_up_01ms = 0;
+  uint16_t tau_down_01ms = 0;
+
+  bool isSlowest() const { return tau_up_01ms == 0 && tau_down_01ms == 0; }
+  // Fixed reference within the records' range (kDynTauMin01ms..kDynTauMax01ms), or slowest.
+  bool isValid() const;
+};
+
+// The reference's per-frame gains, shared by all motors: a_r per bin and direction (Q16), and
+// where the bins lie (bin = force_dg >> bin_shift, the last bin open-ended; bin_shift >= 1, and
+// bin_scale_q16 = 2^(16 - bin_shift), so the frame finds the bin by one multiplication).
+struct ShaperReferenceTable {
+  uint8_t bin_shift = 1;
+  uint16_t bin_scale_q16 = 0x8000;
+  uint16_t a_ref_q16[2][kShaperBins] = {};
+};
+
+// One motor's shaping state and gains.
+class DynShaper {
+ public:
+  // Tabulates this motor's gains against `table` for frames of 1 / frame_hz. `dynamics` not
+  // present (or not valid): the motor is not shaped. The reference restarts at `force_dg` (the
+  // motor assumed settled at its present command).
+  void configure(const MotorDynamics& dynamics, const ShaperReferenceTable& table, uint16_t frame_hz,
+                 uint16_t force_dg);
+  void disable() { active_ = false; }
+  bool isActive() const { return active_; }
+
+  // One frame: the force to command now (decigrams) for the requested `force_dg`, the model
+  // making at most `max_dg`. Not active: `force_dg` unchanged.
+  uint16_t step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table);
+
+  // The reference's present value, decigrams (what the motor's force is expected to be).
+  uint16_t referenceDg() const { return static_cast<uint16_t>((ref_q8_ + 128) >> 8); }
+  // The table entries (tests, status): a_r / a_m in Q14, a_m in Q16.
+  uint16_t gainQ14(uint8_t dir, uint8_t bin) const { return gain_q14_[dir][bin]; }
+  uint16_t motorQ16(uint8_t dir, uint8_t bin) const { return a_motor_q16_[dir][bin]; }
+
+ private:
+  int32_t ref_q8_ = 0;  // the reference, 1/256 dg
+  bool active_ = false;
+  uint16_t a_motor_q16_[2][kShaperBins] = {};
+  uint16_t gain_q14_[2][kShaperBins] = {};
+};
+
+// The reference table for motors of at most `max_dg` (the bins cover 0..max_dg) at `frame_hz`:
+// fixed, or the slowest of `count` motors' laws (entries without dynamics skipped). False when
+// the reference is slowest and none of the motors has dynamics (nothing to shape), or the
+// reference is not valid.
+bool buildShaperReference(ShaperReferenceTable& table, const ShaperReference& reference,
+                          const MotorDynamics* const* motors, uint8_t count, uint16_t max_dg,
+                          uint16_t frame_hz);
+
+// Per-frame gain 1 - exp(-dt / tau) in Q16 for a frame of 1 / frame_hz (tests, tables).
+uint16_t frameGainQ16(float tau_s, uint16_t frame_hz);
+
+}  // namespace tc

@@ -1,0 +1,136 @@
+// Equal dynamics in flight: the per-motor shaping filter (thrustcal/dyn_shaper.hpp).
+#include "thrustcal/dyn_shaper.hpp"
+
+#include <math.h>
+
+#include "model_v2_fixed_point.hpp"  // mulU16: the AVR's 16 x 16 multiply inline
+
+namespace tc {
+
+namespace {
+
+constexpr uint8_t kRefShift = 8;  // the reference in 1/256 dg
+
+// m * g / 2^16 (rounded down) for m < 2^31: two 16 x 16 -> 32 multiplications and
+// byte-aligned shifts (avr-gcc would call its 32 x 32 multiply for the plain expression, four
+// times the cycles).
+TC_INLINE uint32_t mulQ16(uint32_t m, uint16_t g) {
+  return mulU16(static_cast<uint16_t>(m >> 16), g) + (mulU16(static_cast<uint16_t>(m), g) >> 16);
+}
+
+// d * g / 2^16, rounded toward zero alike for both signs.
+TC_INLINE int32_t mulQ16(int32_t d, uint16_t g) {
+  const uint32_t p = mulQ16(static_cast<uint32_t>(d < 0 ? -d : d), g);
+  return d < 0 ? -static_cast<int32_t>(p) : static_cast<int32_t>(p);
+}
+
+// The bin of the reference (in 1/256 dg): its decigrams (a byte shift) times 2^-bin_shift, as
+// one 16 x 16 multiplication by bin_scale_q16 (a variable shift is a loop on the AVR).
+TC_INLINE uint8_t binOf(int32_t ref_q8, uint16_t bin_scale_q16) {
+  if (ref_q8 <= 0) return 0;
+  const uint16_t dg = static_cast<uint16_t>(static_cast<uint32_t>(ref_q8) >> kRefShift);
+  const uint16_t bin = static_cast<uint16_t>(mulU16(dg, bin_scale_q16) >> 16);
+  return bin < kShaperBins ? static_cast<uint8_t>(bin) : static_cast<uint8_t>(kShaperBins - 1);
+}
+
+// The force a bin stands for (its centre), grams.
+float binForceG(uint8_t bin, uint8_t bin_shift) {
+  return (static_cast<float>(bin) + 0.5f) * static_cast<float>(1ul << bin_shift) * 0.1f;
+}
+
+float tauS(const MotorDynamics& d, uint8_t dir, float force_g) {
+  return dir == kShaperUp ? d.tauUpS(force_g) : d.tauDownS(force_g);
+}
+
+}  // namespace
+
+bool ShaperReference::isValid() const {
+  if (isSlowest()) return true;
+  return tau_up_01ms >= kDynTauMin01ms && tau_up_01ms <= kDynTauMax01ms && tau_down_01ms >= kDynTauMin01ms &&
+         tau_down_01ms <= kDynTauMax01ms;
+}
+
+uint16_t frameGainQ16(float tau_s, uint16_t frame_hz) {
+  if (!(tau_s > 0.0f) || frame_hz == 0) return 0xFFFF;
+  const float a = 1.0f - expf(-1.0f / (static_cast<float>(frame_hz) * tau_s));
+  const float q = a * 65536.0f + 0.5f;
+  if (q < 1.0f) return 1;
+  return q >= 65535.0f ? 0xFFFF : static_cast<uint16_t>(q);
+}
+
+bool buildShaperReference(ShaperReferenceTable& table, const ShaperReference& reference,
+                          const MotorDynamics* const* motors, uint8_t count, uint16_t max_dg,
+                          uint16_t frame_hz) {
+  table = ShaperReferenceTable();
+  if (!reference.isValid() || frame_hz == 0) return false;
+  while ((static_cast<uint32_t>(max_dg) >> table.bin_shift) >= kShaperBins) ++table.bin_shift;
+  table.bin_scale_q16 = static_cast<uint16_t>(1ul << (16 - table.bin_shift));
+  bool any = false;
+  for (uint8_t i = 0; i < count; ++i) any = any || (motors[i] != nullptr && motors[i]->isValid());
+  if (reference.isSlowest() && !any) return false;
+  for (uint8_t dir = 0; dir < 2; ++dir) {
+    for (uint8_t bin = 0; bin < kShaperBins; ++bin) {
+      const float force_g = binForceG(bin, table.bin_shift);
+      float tau = 1e-4f * static_cast<float>(dir == kShaperUp ? reference.tau_up_01ms : reference.tau_down_01ms);
+      if (reference.isSlowest()) {
+        for (uint8_t i = 0; i < count; ++i) {
+          if (motors[i] == nullptr || !motors[i]->isValid()) continue;
+          const float t = tauS(*motors[i], dir, force_g);
+          if (t > tau) tau = t;
+        }
+      }
+      table.a_ref_q16[dir][bin] = frameGainQ16(tau, frame_hz);
+    }
+  }
+  return true;
+}
+
+void DynShaper::configure(const MotorDynamics& dynamics, const ShaperReferenceTable& table, uint16_t frame_hz,
+                          uint16_t force_dg) {
+  active_ = dynamics.isValid() && frame_hz != 0 && table.a_ref_q16[kShaperUp][0] != 0;
+  ref_q8_ = static_cast<int32_t>(force_dg) << kRefShift;
+  if (!active_) return;
+  for (uint8_t dir = 0; dir < 2; ++dir) {
+    for (uint8_t bin = 0; bin < kShaperBins; ++bin) {
+      const uint16_t a_m = frameGainQ16(tauS(dynamics, dir, binForceG(bin, table.bin_shift)), frame_hz);
+      const float gain = static_cast<float>(table.a_ref_q16[dir][bin]) / static_cast<float>(a_m);
+      const float q = gain * 16384.0f + 0.5f;
+      a_motor_q16_[dir][bin] = a_m;
+      gain_q14_[dir][bin] = q >= 65535.0f ? kShaperGainMaxQ14 : static_cast<uint16_t>(q);
+    }
+  }
+}
+
+uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table) {
+  if (!active_) return force_dg;
+  const uint8_t bin = binOf(ref_q8_, table.bin_scale_q16);
+  if (force_dg == 0) {  // a stop: at once; the reference spins down with the motor
+    ref_q8_ += mulQ16(-ref_q8_, a_motor_q16_[kShaperDown][bin]);
+    return 0;
+  }
+  if (force_dg > max_dg) force_dg = max_dg;
+  // |F - r| and its direction once; both products from the magnitude, rounded toward zero
+  const int32_t d = (static_cast<int32_t>(force_dg) << kRefShift) - ref_q8_;
+  const bool down = d < 0;
+  const uint32_t m = static_cast<uint32_t>(down ? -d : d);
+  // the direction's rows by address (an index times 16 is a shift loop on the AVR)
+  const uint16_t* const gain = down ? gain_q14_[kShaperDown] : gain_q14_[kShaperUp];
+  const uint16_t* const a_motor = down ? a_motor_q16_[kShaperDown] : a_motor_q16_[kShaperUp];
+  const uint16_t* const a_ref = down ? table.a_ref_q16[kShaperDown] : table.a_ref_q16[kShaperUp];
+  uint32_t toward = mulQ16(m, gain[bin]);  // Q14 gain: times 4 (1/64 dg lost)
+  toward += toward;
+  toward += toward;
+  const int32_t hi = static_cast<int32_t>(max_dg) << kRefShift;
+  const int32_t lo = 1l << kRefShift;
+  int32_t u = down ? ref_q8_ - static_cast<int32_t>(toward) : ref_q8_ + static_cast<int32_t>(toward);
+  if (u > hi || u < lo) {  // beyond what the motor can be given: the reference follows the motor
+    u = u > hi ? hi : lo;
+    ref_q8_ += mulQ16(u - ref_q8_, a_motor[bin]);
+  } else {
+    const int32_t moved = static_cast<int32_t>(mulQ16(m, a_ref[bin]));
+    ref_q8_ += down ? -moved : moved;
+  }
+  return static_cast<uint16_t>((u + (1l << (kRefShift - 1))) >> kRefShift);
+}
+
+}  // namespace tc
