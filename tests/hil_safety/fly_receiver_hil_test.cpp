@@ -173,9 +173,8 @@ class FlyReceiverHil : public ::testing::Test {
   // last wired channel's falling edge.
   double longestRcSilence(double from_s) const {
     double longest = 0, prev = -1;
-    for (const RcEdge& e : rc_edges_) {
-      if (e.t_s < from_s) continue;
-      if (prev >= 0) longest = std::max(longest, e.t_s - prev);
+    for (const RcEdge& e : rc_edges_) {  // a silence that began before from_s counts whole
+      if (e.t_s >= from_s && prev >= 0) longest = std::max(longest, e.t_s - prev);
       prev = e.t_s;
     }
     return longest;
@@ -204,7 +203,10 @@ class FlyReceiverHil : public ::testing::Test {
   void dropFrames(int frames) {
     const sim::RcPart& p = rc_->part();
     const double frame_s = sim::cyclesToSeconds(p.frame_cycles);
-    const double next_s = sim::cyclesToSeconds(p.frame_start + p.frame_cycles);
+    // the first frame that starts after now (with a margin for the script's row before it):
+    // the frame under way when this is called may be about to end
+    double next_s = sim::cyclesToSeconds(p.frame_start + p.frame_cycles);
+    while (next_s - 0.002 < rig_->board().timeS()) next_s += frame_s;
     rc_->play(sim::parseRcScript(fmt::format("t_s,ch1,ch2,ch3,ch4,ch5\n{:.6f},loss\n{:.6f},1500,1500,1500,1500,1000\n",
                                              next_s - 0.001, next_s + (frames - 1) * frame_s + 0.001),
                                  "dropout.csv"));
@@ -278,6 +280,10 @@ TEST_F(FlyReceiverHil, APpmSumOnA8ArmsFromTheSticksFliesTheRollStickAndStopsOnLo
   sticks(1500, 2400, 1000, 2000);
   const double noise_s = now();
   run(kHoldS + 0.2);
+  // valid sticks again for a frame before reading the counters: a frame under way has its
+  // rejected pulse counted but is not yet judged bad
+  sticks(1500, 1500, 1000, 1500);
+  run(0.05);
   const Receiver noisy = status();
   EXPECT_GE(noisy.bad - at_rest.bad, 50) << "one bad frame per 22.5 ms";
   EXPECT_EQ(noisy.rejected - at_rest.rejected, noisy.bad - at_rest.bad) << "one rejected pulse per frame";
