@@ -4,9 +4,9 @@
 #  - Test code at -O0. A sanitized test file at -O1 costs about twice its -O0 compile, and a
 #    test body is not where the time goes when it runs: the code under test (core, firmware
 #    logic, plant, simulator harness, lab) is compiled in its libraries with the tree's flags.
-#  - Test executables as unity builds: every test file includes GoogleTest and the project's
-#    headers, and each file instantiates the same templates again; one translation unit per
-#    executable parses and instantiates them once.
+#  - Test executables as unity builds (in the plain tree too): every test file includes
+#    GoogleTest and the project's headers, and each file instantiates the same templates again;
+#    one translation unit per executable parses and instantiates them once.
 #  - Command-line front ends outside a unity library (thrustcal's main.cpp: CLI11 option tables,
 #    no computation) at -O0 too: CLI11's templates dominate them. The front ends inside the tool
 #    libraries (cli.cpp, *_cli.cpp) join their library's unity batches instead: one batch of six
@@ -32,16 +32,20 @@ function(thrustcal_targets_below dir out)
   set(${out} ${targets} PARENT_SCOPE)
 endfunction()
 
-# Test executables under DIR: -O0 and one unity translation unit each.
+# Test executables under DIR: one unity translation unit each, in every tree (so a name two
+# test files both define is a compile error in the developer's tree too, not first in CI's),
+# and -O0 in the checked tree.
 function(thrustcal_checked_tests dir)
-  if(NOT THRUSTCAL_SANITIZE OR NOT THRUSTCAL_FAST_CHECKED)
+  if(NOT THRUSTCAL_FAST_CHECKED)
     return()
   endif()
   thrustcal_targets_below(${dir} targets)
   foreach(t ${targets})
     get_target_property(type ${t} TYPE)
     if(type STREQUAL "EXECUTABLE")
-      target_compile_options(${t} PRIVATE -O0)
+      if(THRUSTCAL_SANITIZE)
+        target_compile_options(${t} PRIVATE -O0)
+      endif()
       set_target_properties(${t} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 0)
     endif()
   endforeach()

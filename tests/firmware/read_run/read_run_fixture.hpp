@@ -17,6 +17,9 @@ namespace rr_test {
 using namespace records_test;  // the plant, the record builders and the text helpers
 namespace fake = hal::fake;
 
+// The v2 tests' four motors (the plant's gain): ~650 g at 2000 us, 11.3 V.
+inline constexpr double kPlantK[rr::kMotors] = {6.0, 5.5, 6.5, 7.0};  // g/V^2
+
 class ReadRun : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -19,7 +19,6 @@ namespace {
 using namespace rr_test;
 namespace fake = hal::fake;
 
-constexpr double kPlantK[rr::kMotors] = {6.0, 5.5, 6.5, 7.0};
 
 tc::MotorDynamics lawMs(uint16_t up_ms, uint16_t down_ms) {
   tc::MotorDynamics d;

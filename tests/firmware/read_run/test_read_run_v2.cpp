@@ -17,7 +17,6 @@ namespace {
 using namespace rr_test;
 namespace fake = hal::fake;
 
-constexpr double kPlantK[rr::kMotors] = {6.0, 5.5, 6.5, 7.0};  // g/V^2: ~650 g at 2000 us, 11.3 V
 
 // The filters (bus voltage, seen force) are first order with ~150 ms time constant: 2 s
 // (13 time constants) brings them to the exact input, whatever the step.
