@@ -125,7 +125,17 @@ void FlyApp::runOnce() {
   printNotes();
 }
 
-bool FlyApp::hasWork() { return active_ != nullptr && (active_->imu_.frameDue() || hal::Uart::available()); }
+bool FlyApp::hasWork() {
+  if (active_ == nullptr) return false;
+  return active_->imu_.frameDue() || (hal::Uart::available() && active_->consoleMayRun());
+}
+
+// Armed, or able to arm (the estimate runs): a line may start a flight, so its handling keeps
+// out of the read like every armed line (the `arm` line handled across a read's end made the
+// first flown frame late). Until then the loop sleeps to the next tick, not spins.
+bool FlyApp::consoleMayRun() const {
+  return !estimator_.started() || consoleMayStart(hal::Esc::frameTimeUs(), stats_.phase_us);
+}
 
 void FlyApp::phaseHook() {
   if (active_ != nullptr) active_->imu_.onPhase();
@@ -150,7 +160,7 @@ void FlyApp::service() {
 }
 
 void FlyApp::handleInput() {
-  if (flight_.armed && !consoleMayStart(hal::Esc::frameTimeUs(), stats_.phase_us)) return;
+  if (!consoleMayRun()) return;
   const fw::LineEvent event = line_.poll(kRxBytesPerPass);
   if (event == fw::LineEvent::kRejected) {  // its error line is printed; no keep-alive
     prompt();

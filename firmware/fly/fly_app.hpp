@@ -205,6 +205,7 @@ class FlyApp {
 
   void handleLine(char* line);
   void handleInput();
+  bool consoleMayRun() const;  // a console line may be handled now (fly_rules.hpp)
   void printNotes();
   void prompt();
   void runUntil(bool (FlyApp::*done)() const, uint16_t max_ms);

@@ -89,9 +89,10 @@ inline uint16_t computeBudgetUs(OutputMode mode, uint8_t thesis_motors, uint8_t 
 }
 
 // A console line is handled in one go (parsing, the setting, the reply: ~800 us for `sp`), and
-// the frame's computation waits for it if the read ends meanwhile: armed, a line is taken only
-// early in the frame, at least kConsoleSliceUs before the read starts (the read then runs
-// ~500 us, so ~800 us of console work ends before the read does), else in a later frame.
+// the frame's computation waits for it if the read ends meanwhile: armed, or able to arm (the
+// estimate runs), a line is taken only early in the frame, at least kConsoleSliceUs before the
+// read starts (the read then runs ~500 us, so ~800 us of console work ends before the read
+// does), else in a later frame.
 // Where the read starts too early to leave such a window (thesis records) the line is taken
 // whenever it comes, as before.
 constexpr uint16_t kConsoleSliceUs = 300;
