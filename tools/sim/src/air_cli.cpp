@@ -1,5 +1,6 @@
 // The virtual airframe on the command line: see sim/air_cli.hpp.
 #include "sim/air_cli.hpp"
+#include "cli_support.hpp"
 
 #include <fmt/format.h>
 
@@ -367,14 +368,7 @@ void addRunCommand(CLI::App& sim) {
   addAirOptions(cmd, r->air);
   cmd->add_flag("--rc-pty", r->air.rc_pty, "with --rc: also open the live RC pseudo-terminal (sim console "
                                            "always does)");
-  cmd->callback([r] {
-    try {
-      runOnce(*r);
-    } catch (const std::exception& e) {
-      fmt::print(stderr, "thrustcal sim run: error: {}\n", e.what());
-      std::exit(1);
-    }
-  });
+  cmd->callback([r] { guarded("run", [&] { runOnce(*r); }); });
 }
 
 }  // namespace sim

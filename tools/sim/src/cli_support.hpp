@@ -8,6 +8,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -21,15 +22,20 @@ inline void writeJson(const std::string& path, const nlohmann::json& j) {
   out << j.dump(2) << "\n";
 }
 
-// Runs `body`, turning any exception into a message on stderr and exit code 1.
+// Runs `body`, turning any exception into a message on stderr ("thrustcal sim COMMAND: error:
+// ...", or "thrustcal sim: error: ..." without a command) and exit code 1.
 template <class F>
-void guarded(F&& body) {
+void guarded(const char* command, F&& body) {
   try {
     body();
   } catch (const std::exception& e) {
-    fmt::print(stderr, "thrustcal sim: error: {}\n", e.what());
+    fmt::print(stderr, "thrustcal sim{}{}: error: {}\n", *command ? " " : "", command, e.what());
     std::exit(1);
   }
+}
+template <class F>
+void guarded(F&& body) {
+  guarded("", std::forward<F>(body));
 }
 
 }  // namespace sim

@@ -12,6 +12,7 @@
 #include "sim/cli.hpp"
 #include "sim/dynamics_session.hpp"
 #include "sim/swap.hpp"
+#include "cli_support.hpp"
 
 namespace sim {
 
@@ -93,14 +94,7 @@ void addDynCommand(CLI::App& sim) {
   cmd->add_option("--json", a->json, "write the steps and the stored dynamics as JSON");
   cmd->add_option("--truth", a->o.truth_path, "write the plant every millisecond during dyn (t_s, pulse_us, rpm, "
                                              "thrust_g, bus_v; simulated time)");
-  cmd->callback([a] {
-    try {
-      runDynCommand(*a);
-    } catch (const std::exception& e) {
-      fmt::print(stderr, "thrustcal sim dyn: error: {}\n", e.what());
-      std::exit(1);
-    }
-  });
+  cmd->callback([a] { guarded("dyn", [&] { runDynCommand(*a); }); });
 }
 
 }  // namespace sim

@@ -9,6 +9,7 @@
 #include "sim/cli.hpp"
 #include "sim/swap.hpp"
 #include "sim/swap_report.hpp"
+#include "cli_support.hpp"
 
 namespace sim {
 
@@ -163,21 +164,14 @@ void addSwapCommand(CLI::App& sim) {
       "with gather_store on the virtual bench, fly 10-degree steps with fly on the seesaw and the gimbal\n"
       "(plus; roll and pitch) for each IMU unit, replace motor 1 (another KV1100 unit, a KV900 with an\n"
       "11x4.7 propeller, a propeller giving 8 % less thrust), calibrate only slot 1 again, fly again\n"
-      "with the same gains in every mode (force, generic, pwm, ardupilot). Prints stock and swapped side\n"
+      "with the same gains in every mode (force, force+dyn, generic, pwm, ardupilot). Prints stock and swapped side\n"
       "by side, the targets (force mode, PD) and the motors' time constants, which no static\n"
       "calibration equalises. Calibrations are cached in --out-dir.");
   auto a = std::make_shared<SwapArgs>();
   a->o.gather_elf = defaultElf("gather_store");
   a->o.fly_elf = defaultElf("fly");
   declareSwapOptions(cmd, *a);
-  cmd->callback([a] {
-    try {
-      runSwapCommand(*a);
-    } catch (const std::exception& e) {
-      fmt::print(stderr, "thrustcal sim swap: error: {}\n", e.what());
-      std::exit(1);
-    }
-  });
+  cmd->callback([a] { guarded("swap", [&] { runSwapCommand(*a); }); });
 }
 
 }  // namespace sim
