@@ -10,9 +10,17 @@
 // test binary, as `sim swap` caches them.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "hil_support.hpp"
 #include "sim/swap.hpp"
@@ -100,7 +108,8 @@ TEST(SwapHil, DynOnNarrowsTheStockMotorsSpreadDuringTheLiftoffRamp) {
   HIL_REQUIRE_IMAGE("gather_store");
   HIL_REQUIRE_IMAGE("read_run");
   const sim::swap::SwapOptions swap = reducedSwapOptions();
-  const sim::swap::Calibration c = sim::swap::calibrate(swap);  // cached by the test above
+  const sim::swap::Calibration c = sim::swap::calibrate(swap);  // cached by the test above, or
+                                                                  // waits for it (the folder lock)
   sim::LiftoffOptions o;
   o.elf_path = hil::imagePath("read_run");
   o.eeprom = c.of("stock").eeprom;
@@ -117,6 +126,52 @@ TEST(SwapHil, DynOnNarrowsTheStockMotorsSpreadDuringTheLiftoffRamp) {
               on.ramp_spread_pct, off.thrust_spread_pct, on.thrust_spread_pct);
   EXPECT_LT(on.ramp_spread_pct, 0.75 * off.ramp_spread_pct);  // measured: 4.71 -> 2.10 %
   EXPECT_NEAR(on.thrust_spread_pct, off.thrust_spread_pct, 0.1);
+}
+
+// Two swaps on one --out-dir (two terminals; ctest runs the two tests above at once): the second
+// waits for the first's calibrations instead of reading the sweeps it is writing. Here the
+// folder is held as the first swap holds it, and a swap with a missing image waits, says so,
+// and goes on (to its error) only once the folder is released.
+TEST(SwapCalibration, ASecondSwapOnTheSameFolderWaitsUntilTheFirstReleasesIt) {
+  // given: the calibration folder held
+  const std::filesystem::path out = std::filesystem::path(HIL_CACHE_DIR) / "swap_lock";
+  std::filesystem::create_directories(out / "calibration");
+  const int held = ::open((out / "calibration" / ".lock").c_str(), O_RDWR | O_CREAT, 0644);
+  ASSERT_GE(held, 0);
+  ASSERT_EQ(::flock(held, LOCK_EX), 0);
+  sim::swap::SwapOptions o = reducedSwapOptions();
+  o.out_dir = out.string();
+  o.gather_elf = (out / "no_such_gather_store.elf").string();
+  std::mutex m;
+  std::string said;
+  o.progress = [&](const std::string& line) {
+    const std::lock_guard<std::mutex> lock(m);
+    said += line + "\n";
+  };
+  std::atomic<bool> returned{false};
+  std::string error;
+  // when
+  std::thread second([&] {
+    try {
+      sim::swap::calibrate(o);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    returned = true;
+  });
+  bool waiting = false;
+  for (int i = 0; i < 500 && !waiting; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    const std::lock_guard<std::mutex> lock(m);
+    waiting = said.find("waiting for another sim swap") != std::string::npos;
+  }
+  // then: it waits while the folder is held, and goes on once it is released
+  EXPECT_TRUE(waiting) << said;
+  EXPECT_FALSE(returned.load());
+  ::close(held);
+  second.join();
+  EXPECT_TRUE(returned.load());
+  EXPECT_NE(error.find("cannot read the image"), std::string::npos) << error;
 }
 
 }  // namespace

@@ -1,7 +1,10 @@
 // The swap experiment's calibrations (sim/swap.hpp): the stock motors and each swapped part with
 // the real gather_store, cached in the output folder; the settings of the modes without records
 // (pwm's hover point, ArduPilot's fitted parameters); the motors' time constants.
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -180,6 +183,32 @@ void checkOtherSlots(const std::vector<uint8_t>& stock, const std::vector<uint8_
         fmt::format("calibrating {} left slot {} as it was: the store did not happen", part, kSwapSlot));
 }
 
+// The calibration folder held by one `sim swap` at a time: a second one on the same --out-dir
+// (two terminals, two tests, a script run twice) waits for the first and then finds its results
+// in the cache, instead of gathering into the files the first is writing or reading. An
+// advisory flock(2), released by the kernel however the holder ends.
+class FolderLock {
+ public:
+  FolderLock(const fs::path& dir, const ProgressFn& progress) {
+    const fs::path path = dir / ".lock";
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0)
+      throw std::runtime_error(fmt::format("{}: cannot create the lock file; check --out-dir", path.string()));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+    progress(fmt::format("calibrations: waiting for another sim swap using {}", dir.string()));
+    if (::flock(fd_, LOCK_EX) != 0) {
+      ::close(fd_);
+      throw std::runtime_error(fmt::format("{}: cannot lock the calibration folder", path.string()));
+    }
+  }
+  ~FolderLock() { ::close(fd_); }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 }  // namespace
 
 // The stock image and sweeps, then each part into slot 1 of a copy of it.
@@ -187,8 +216,9 @@ Calibration calibrate(const SwapOptions& o) {
   const fs::path dir = fs::path(o.out_dir) / "calibration";
   const fs::path sweeps = dir / "stock_sweeps";
   fs::create_directories(sweeps);
-  const std::string digest = fileDigest(o.gather_elf);
   const ProgressFn progress = o.progress ? o.progress : ProgressFn(stderrProgress);
+  const FolderLock lock(dir, progress);
+  const std::string digest = fileDigest(o.gather_elf);
   Calibration c;
   GatherOptions g = gatherBase(o);
   g.preset = o.stock_preset;
