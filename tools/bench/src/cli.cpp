@@ -239,7 +239,7 @@ void addDrift(CLI::App& bench) {
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime, "
-               "safety, fly, swap, speed; each figure next to its target");
+               "safety, fly, swap, speed, dynamics, rigs; each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -286,6 +286,10 @@ void registerCommands(CLI::App& app) {
       "each motor's spin-up and spin-down time constants as gather_store's dyn measures them in simavr, "
       "against the plant's own (stock motors and swap parts)",
       [](const Options& o) { return std::vector<Section>{dynamicsSection(o.paths, o.quick)}; });
+  add(*bench, o, "rigs",
+      "the seesaw's and the gimbal's physics against hand calculations: period, damping, end stop, "
+      "torque steps, precession, yaw (plant only, seconds)",
+      [](const Options&) { return std::vector<Section>{rigsSection()}; });
   addReport(*bench);
   addDrift(*bench);
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
@@ -302,6 +306,7 @@ void registerCommands(CLI::App& app) {
         all.push_back(swapSection(o.paths, swapOptions(o)));
         all.push_back(speedSection(o.paths));
         all.push_back(dynamicsSection(o.paths, o.quick));
+        all.push_back(rigsSection());
         return all;
       });
 }

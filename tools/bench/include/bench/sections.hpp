@@ -57,6 +57,9 @@ std::string shownPath(const std::string& path);
 // `rel` under the source tree this tool was built from ("build/avr" -> /.../build/avr).
 std::string sourcePath(const std::string& rel);
 
+// Benchmark 10 (sections_rigs.cpp): the seesaw's and the gimbal's physics against hand
+// calculations, plant only (docs/sim.md, "The rigs").
+Section rigsSection();
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
 Section footprintSection(const AvrPaths& paths);
