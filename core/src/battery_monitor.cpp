@@ -96,10 +96,7 @@ uint16_t BatteryMonitor::millivoltsFromCounts(uint16_t counts) const {
 
 uint16_t BatteryMonitor::compensatedMillivolts(uint16_t measured_mv, uint16_t last_pwm_us,
                                                const SagTable& sag) const {
-  const int32_t mv = static_cast<int32_t>(measured_mv) + sag.offsetFor(last_pwm_us);
-  if (mv < 0) return 0;
-  if (mv > 0xFFFFL) return 0xFFFF;
-  return static_cast<uint16_t>(mv);
+  return withSagOffset(measured_mv, sag.offsetFor(last_pwm_us));
 }
 
 void SagBuilder::reset(uint16_t base_pwm_us) {

@@ -15,8 +15,8 @@
 // also brings the step to the next gram (a decigram between two grams needs both); a jump walks
 // from the nearest checkpoint, at most 8 steps away but near the heaviest gram. The voltage
 // term is 16-bit arithmetic with the record's span's reciprocal (forceToPwmDg below): on the
-// ATmega2560 this took fly's thesis-record frames from about 11,000 cycles for four motors to
-// (thrustcal bench fly's breakdown; docs/fly.md, "Budgets").
+// ATmega2560 this took four motors' option 2.1 in fly (with their sag offsets) from about
+// 12,000 cycles a frame to about 5,800 (thrustcal bench fly's breakdown; docs/fly.md, "Budgets").
 //
 // Storage: static uint8_t readByte(uint16_t addr); static void readBlock(uint16_t addr,
 // void* dst, uint16_t length) (hal::Eeprom on the board, RAM arrays in tests).
@@ -202,6 +202,11 @@ struct ThesisRun {
   // m's low byte and the reciprocal's fraction) corrected by the remainder. Exact.
   uint16_t spanQuotient(uint32_t m) const {
     uint16_t q = thesis_detail::high16(thesis_detail::umul16(static_cast<uint16_t>(m >> 8), span_recip_));
+#ifdef __AVR__
+    // q as a plain 16-bit value: avr-gcc otherwise keeps it as the 32-bit product's shift and
+    // multiplies it by the span 32 x 32 (a library call twice as long as the widening one).
+    __asm__("" : "+r"(q));
+#endif
     uint32_t r = m - thesis_detail::umul16(q, span_x10_);
     while (r >= span_x10_) {
       r -= span_x10_;
@@ -249,53 +254,59 @@ __attribute__((noinline)) ForcePwmResult forceToPwmDgGeneral(const ThesisRun& ru
 // each: ThesisCurveRun::pwmTenths), the voltage term's two products as widening 16 x 16
 // multiplications, and its rounded division by the record's fixed 10 (V2 - V1) through a
 // reciprocal computed at load (ThesisRun::spanQuotient). A record off the 16-bit path
-// (isFast()), a reading more than 32.767 V from V1 or a quotient beyond 2^24 takes
-// forceToPwmWithDg itself.
+// (isFast()), a reading more than 32.767 V from V1 or a voltage term of 2^22 or more (a
+// quotient of 16,000 us) takes forceToPwmWithDg itself.
 template <class Storage>
 ForcePwmResult forceToPwmDg(const ThesisRun& run, uint16_t force_dg, uint16_t vbat_mv,
                             const ForcePwmLimits& limits = ForcePwmLimits()) {
   using namespace thesis_detail;
   if (!run.isFast()) return forceToPwmDgGeneral<Storage>(run, force_dg, vbat_mv, limits);
-  ForcePwmResult result{limits.pwm_min_us, 0};
-  if (!run.isCalibrated() || run.first.maxGrams() == 0) result.flags |= kNotCalibrated;
-  if (force_dg == 0) result.flags |= kStopped;
-  if (result.flags) return result;
+  uint8_t flags = 0;
+  if (!run.isCalibrated() || run.first.maxGrams() == 0) flags |= kNotCalibrated;
+  if (force_dg == 0) flags |= kStopped;
+  if (flags) return ForcePwmResult{limits.pwm_min_us, flags};
 
   static_assert(10u * kCurveGrams < 65536u, "a curve's heaviest force in decigrams fits 16 bits");
   const uint16_t grams = div10(force_dg);
   const uint8_t tenths = static_cast<uint8_t>(force_dg - static_cast<uint16_t>(10u * grams));
-  if (force_dg > static_cast<uint16_t>(10u * run.first.maxGrams())) result.flags |= kSaturated;
+  if (force_dg > static_cast<uint16_t>(10u * run.first.maxGrams())) flags |= kSaturated;
   const uint16_t c1_x10 = run.first.pwmTenths<Storage>(grams, tenths);
   const uint16_t c1_us = div10(c1_x10);
   const uint8_t c1_tenths = static_cast<uint8_t>(c1_x10 - static_cast<uint16_t>(10u * c1_us));
+  int16_t pwm_us = static_cast<int16_t>(c1_us + (c1_tenths >= 5 ? 1 : 0));  // the first curve alone
   if (vbat_mv < limits.v_min_mv || vbat_mv > limits.v_max_mv) {
-    result.flags |= kVoltageInvalid;
+    flags |= kVoltageInvalid;
   } else if (!run.hasSecondCurve() || run.second.maxGrams() == 0) {
-    result.flags |= kSingleCurve;
+    flags |= kSingleCurve;
   } else {
     const int16_t span_mv = run.spanMv();
     const int16_t min_span_mv = static_cast<int16_t>(limits.min_voltage_span_mv > 32767 ? 32767 : limits.min_voltage_span_mv);
     if (span_mv < min_span_mv && -span_mv < min_span_mv) {
-      result.flags |= kEqualVoltages;
+      flags |= kEqualVoltages;
     } else {
       const int32_t dv_mv = static_cast<int32_t>(vbat_mv) - run.first.start_mv;
       if (dv_mv > 32767 || dv_mv < -32767) return forceToPwmDgGeneral<Storage>(run, force_dg, vbat_mv, limits);
-      if (force_dg > static_cast<uint16_t>(10u * run.second.maxGrams())) result.flags |= kSaturated;
+      if (force_dg > static_cast<uint16_t>(10u * run.second.maxGrams())) flags |= kSaturated;
       const uint16_t c2_x10 = run.second.pwmTenths<Storage>(grams, tenths);
       const int16_t dc_x10 = static_cast<int16_t>(static_cast<int16_t>(c2_x10) - static_cast<int16_t>(c1_x10));
       // c1 + (c1_tenths span + dv dc) / (10 span), rounded to nearest, halves away from zero
       // (force_pwm_detail::divRound): |numerator| + 5 |span| over 10 |span|, then the sign.
-      const int32_t num = smul16(static_cast<int16_t>(c1_tenths), span_mv) + smul16(static_cast<int16_t>(dv_mv), dc_x10);
+      // A term of 2^22 or more (a quotient of 16,000 us or more) goes the 32-bit way, so c1 + q
+      // stays inside int16 (q < 2^22 / 260).
+      // c1_tenths |span| < 10 * 6554 fits 16 bits: an 8 x 16 product, no library call.
+      const uint16_t tenths_span = static_cast<uint16_t>(c1_tenths * static_cast<uint16_t>(span_mv < 0 ? -span_mv : span_mv));
+      const int32_t num = (span_mv < 0 ? -static_cast<int32_t>(tenths_span) : static_cast<int32_t>(tenths_span)) +
+                          smul16(static_cast<int16_t>(dv_mv), dc_x10);
       const bool negative = (num < 0) != (span_mv < 0);
       const uint32_t m = (num < 0 ? 0u - static_cast<uint32_t>(num) : static_cast<uint32_t>(num)) + (run.spanX10() >> 1);
-      const uint32_t q = m < (1ul << 24) ? run.spanQuotient(m) : m / run.spanX10();
-      const int32_t pwm_us = static_cast<int32_t>(c1_us) + (negative ? -static_cast<int32_t>(q) : static_cast<int32_t>(q));
-      result.pwm_us = force_pwm_detail::clampPwm(pwm_us, limits, result.flags);
-      return result;
+      if (m >= (1ul << 22)) return forceToPwmDgGeneral<Storage>(run, force_dg, vbat_mv, limits);
+      const int16_t q = static_cast<int16_t>(run.spanQuotient(m));
+      pwm_us = static_cast<int16_t>(c1_us + (negative ? -q : q));
     }
   }
-  result.pwm_us = force_pwm_detail::clampPwm(static_cast<int32_t>(c1_us) + (c1_tenths >= 5 ? 1 : 0), limits, result.flags);
-  return result;
+  if (pwm_us < static_cast<int32_t>(limits.pwm_min_us)) return ForcePwmResult{limits.pwm_min_us, static_cast<uint8_t>(flags | kClamped)};
+  if (pwm_us > static_cast<int32_t>(limits.pwm_max_us)) return ForcePwmResult{limits.pwm_max_us, static_cast<uint8_t>(flags | kClamped)};
+  return ForcePwmResult{static_cast<uint16_t>(pwm_us), flags};
 }
 
 // The same for a force in whole grams (the thesis's own commands).
