@@ -69,9 +69,8 @@ inline uint16_t readPhaseUs(uint16_t budget_us) {
 // (measured 560 / 543 us), ardupilot 500 + 4 x 65 = 760 us (699 us), pwm 750 us (431 us). For
 // ardupilot the margin is what the 1 ms target leaves (760 + 220 is 980 us), not a choice; it
 // is ~8 % of its computation, the others have more. Thesis records: 500 + 260 + 4 x 110 =
-// 1200 us (measured 1031 us; 1202 us in the frame that handles the `arm` line, whose reply
-// overlaps the read in every mode): their computation alone exceeds 1 ms, they cannot meet it
-// (four motors' option 2.1 take ~5,800 cycles a frame, 16-bit as it is: thesis_runtime.hpp).
+// 1200 us (measured 1027 us): their computation alone exceeds 1 ms, they cannot meet it (four
+// motors' option 2.1 take ~5,800 cycles a frame, 16-bit as it is: thesis_runtime.hpp).
 constexpr uint16_t kControlBudgetUs = 500;         // taking the sample, estimator, controller, mixer
 constexpr uint16_t kForceApiBudgetUs = 260;        // forces to grams, the v2 frame, the pulses
 constexpr uint16_t kThesisMotorBudgetUs = 110;     // option 2.1 on one motor, its sag offset
