@@ -104,8 +104,8 @@ TEST(FlyRules, TheReadStartsAsLateAsTheBudgetAllowsSoTheResultMeetsTheNextEdge) 
 TEST(FlyRules, TheBudgetsOfForceGenericArduPilotAndPwmKeepReadToEdgeWithinAMillisecond) {
   for (OutputMode mode : {OutputMode::kForce, OutputMode::kGeneric, OutputMode::kPwm, OutputMode::kArduPilot})
     EXPECT_LE(computeBudgetUs(mode, 0, 4), 780) << static_cast<int>(mode);
-  EXPECT_EQ(computeBudgetUs(OutputMode::kForce, 4, 4), 1200)
-      << "thesis records: 4 x 110 us of option 2.1 on the 16-bit path (was 4 x 225 us)";
+  EXPECT_EQ(computeBudgetUs(OutputMode::kForce, 4, 4), 1120)
+      << "thesis records: 4 x 90 us of option 2.1 on the 16-bit path (was 4 x 225 us)";
 }
 
 // Armed, a console line starts only early enough to end before the read does.
