@@ -55,6 +55,7 @@ void ForceActuators::loadSlot(uint8_t index, SlotReport report) {
   m.v2_copy_status[1] = load.v2.copy_status[1];
   m.why = load.why;
   m.source = index;
+  m.sag_pwm_us = 0;  // the offset kept was the old model's
   m.model.clear();
   m.dynamics.clear();
   m.shaper.disable();
@@ -93,6 +94,7 @@ bool ForceActuators::setModelSource(uint8_t index, uint8_t slot) {
   if (index >= kMotors || slot >= kMotors || isRunning()) return false;
   if (slot != index && !motors_[slot].isArmable()) return false;
   motors_[index].source = slot;
+  motors_[index].sag_pwm_us = 0;  // its sag offset comes from the new model's table
   assignLanes();
   if (shaping_ && !configureShaping()) clearShaping();  // the dynamics follow the model
   return true;
@@ -219,9 +221,13 @@ void ForceActuators::flyMotor(Motor& m) {
     return;
   }
   // Thesis fig. 6.9: the reading sags under this motor's load; add the offset of the PWM it
-  // was last sent.
+  // was last sent (looked up again only when that pulse changed).
   const tc::ThesisRun& thesis = source.model.v1();
-  m.vbat_mv = battery_.monitor().compensatedMillivolts(battery_.medianMv(), m.pwm_us, thesis.sag);
+  if (m.sag_pwm_us != m.pwm_us) {
+    m.sag_offset_mv = thesis.sag.offsetFor(m.pwm_us);
+    m.sag_pwm_us = m.pwm_us;
+  }
+  m.vbat_mv = tc::BatteryMonitor::withSagOffset(battery_.medianMv(), m.sag_offset_mv);
   const tc::ForcePwmResult result = tc::forceToPwmDg<hal::Eeprom>(thesis, m.shaped_dg, m.vbat_mv);
   m.pwm_us = result.pwm_us;
   m.flags = result.flags;

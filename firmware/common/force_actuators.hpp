@@ -65,6 +65,8 @@ struct Motor {
   uint16_t vbat_mv = 0;             // voltage used for that pulse: v1 sag-compensated median,
                                     // v2 the bus filter's value
   uint8_t flags = 0;                // tc::ForcePwmFlag bits of that pulse
+  uint16_t sag_pwm_us = 0;          // v1: the pulse whose sag offset is kept (0: none yet)
+  int16_t sag_offset_mv = 0;        // v1: that offset (its model's sag table at that pulse)
 
   // The slot's own record (what the start-up report and status describe).
   bool isArmable() const { return record == tc::DecodeStatus::kOk; }

@@ -98,6 +98,7 @@ ArmRefusal FlyApp::arm(ArmSource source) {
   flight_.source = source;
   flight_.armed_ms = now_ms;
   flight_.mix_limits = 0;
+  flown_since_arm_ = false;
   link_.heard(now_ms);
   if (source == ArmSource::kSticks) {
     flyTheSticks();
@@ -107,13 +108,17 @@ ArmRefusal FlyApp::arm(ArmSource source) {
   return ArmRefusal::kNone;
 }
 
+// The reply (~1 ms of formatting and printing) waits for the first flown frame (printNotes): said
+// at once, it ran across that frame's read whenever the line came late in consoleMayStart's
+// window, and held the frame's computation up by as much (thrustcal bench fly: 160-280 us).
 void FlyApp::cmdArm() {
   const ArmRefusal why = arm(ArmSource::kConsole);
   if (why != ArmRefusal::kNone) {
     view::armRefused(why, *this);
     return;
   }
-  view::armed(*this);
+  notes_ |= kNoteArmed;
+  hold_prompt_ = true;  // printNotes prompts after the reply
 }
 
 // While the sticks fly, the setpoint and the thrust are theirs.

@@ -182,9 +182,14 @@ void FlyApp::handleInput() {
 // What service() had to say; a prompt after it unless stream rows follow. During start-up
 // startImu() and calibrateGyro() say it themselves.
 void FlyApp::printNotes() {
-  const uint8_t notes = notes_;
+  uint8_t notes = notes_;
   notes_ = 0;
+  if ((notes & kNoteArmed) && flight_.armed && !flown_since_arm_) {  // not yet: see cmdArm
+    notes_ = kNoteArmed;
+    notes = static_cast<uint8_t>(notes & ~kNoteArmed);
+  }
   if (notes == 0 || starting_) return;
+  if (notes & kNoteArmed) view::armed(*this);
   if (notes & kNoteImuFault) view::imuFault(imu_);
   if (notes & kNoteImuRunning) view::imuRunningAgain();
   if (notes & kNoteLevel) view::levelResult(*this);
@@ -244,6 +249,7 @@ void FlyApp::flyFrame(uint8_t frames, uint16_t t0_us) {
   // The computation ends where the write begins (thrustcal bench fly measures the same span).
   const uint16_t t1_us = hal::Esc::frameTimeUs();
   output_.commit();
+  flown_since_arm_ = true;
 
   // The read started at the phase: pulses written before the frame's end (at or after the
   // phase) meet the next rising edge; written after it (before the phase), the one after.

@@ -272,7 +272,9 @@ class FlyApp {
   static constexpr uint8_t kNoteImuRunning = 0x10;
   static constexpr uint8_t kNoteLevel = 0x20;
   static constexpr uint8_t kNoteStickArm = 0x40;  // the sticks armed, or were refused (receiver_.refused)
+  static constexpr uint8_t kNoteArmed = 0x80;     // `arm` armed: said after the first flown frame
   uint8_t notes_ = 0;
+  bool flown_since_arm_ = false;  // a frame computed its pulses since the last arm
   static FlyApp* active_;  // the instance the hooks serve
 };
 

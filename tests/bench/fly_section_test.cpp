@@ -76,7 +76,7 @@ void whereTheCyclesGoAddsUpToTheCpuLoad(const nlohmann::json& j) {
     EXPECT_GT(parts.value("ISR: TWI", 0.0), 0.0) << "the IMU read is interrupt-driven";
   }
   // each mode's own output path is where it shows
-  EXPECT_GT(j["breakdown"]["force_thesis"].value("tc::forceToPwmWithDg<...>", 0.0), 0.0);
+  EXPECT_GT(j["breakdown"]["force_thesis"].value("tc::forceToPwmDg<...>", 0.0), 0.0);  // the 16-bit path
   EXPECT_GT(j["breakdown"]["force_v2"].value("tc::V2Frame::fly", 0.0), 0.0);
   EXPECT_GT(j["breakdown"]["force_v2_dyn"].value("tc::DynShaper::step", 0.0), 0.0);  // dyn on shapes
   EXPECT_FALSE(j["breakdown"]["force_v2"].contains("tc::DynShaper::step"));           // dyn off does not
@@ -86,7 +86,7 @@ void whereTheCyclesGoAddsUpToTheCpuLoad(const nlohmann::json& j) {
 
 void modesRankAsTheirOutputPathsCostAndTheImageFits(const nlohmann::json& j) {
   const auto cpu = [&](const char* key) { return j["modes"][key]["cpu_load_pct"].get<double>(); };
-  // pwm has no record; v2 one multiply-only frame; thesis records EEPROM steps and a division
+  // pwm has no record; v2 one multiply-only frame; thesis records EEPROM steps and two curves
   EXPECT_LT(cpu("pwm"), cpu("force_v2"));
   EXPECT_LT(cpu("force_v2"), cpu("force_thesis"));
   EXPECT_NEAR(cpu("generic"), cpu("force_v2"), 1.0) << "generic flies the same v2 arithmetic";

@@ -49,9 +49,11 @@ struct RecordCase {
 
 class ThesisRuntime : public ::testing::TestWithParam<RecordCase> {};
 
-TEST_P(ThesisRuntime, GivesOption21sPwmForEveryGramAndBatteryReading) {
-  const RecordCase& c = GetParam();
-  // given: a v1 record written to the EEPROM image and decoded as read_run decodes it
+tc::MotorCalibration g_decoded;
+
+// The case's record written to slot 2 of the EEPROM image, decoded into g_decoded and loaded
+// into `run` as read_run and fly load it.
+void storeAndLoad(const RecordCase& c, tc::ThesisRun& run) {
   g_eeprom.fill(0xFF);
   static tc::MotorCalibration cal;
   cal.clear();
@@ -62,10 +64,20 @@ TEST_P(ThesisRuntime, GivesOption21sPwmForEveryGramAndBatteryReading) {
     cal.sag.offset_mv[i] = static_cast<int16_t>(i == 0 ? 0 : i * c.sag_scale);
   const uint8_t slot = 2;
   tc::writeRecord<RamStorage>(slot, cal);
-  static tc::MotorCalibration decoded;
-  ASSERT_EQ(tc::readRecord<RamStorage>(slot, decoded), tc::DecodeStatus::kOk);
+  ASSERT_EQ(tc::readRecord<RamStorage>(slot, g_decoded), tc::DecodeStatus::kOk);
+  ASSERT_TRUE(run.load<RamStorage>(g_decoded, slot));
+  ASSERT_TRUE(run.isFast()) << "a record the codec passes is on the 16-bit path";
+}
+
+// The voltages of the decigram sweeps: both curves' own, between, beyond them on both sides
+// (extrapolated), the sane range's ends and just outside them (first curve alone).
+const uint16_t kSweepMv[] = {5999, 6000, 9000, 10500, 11000, 11350, 12400, 13000, 14800, 17500, 17501};
+
+TEST_P(ThesisRuntime, GivesOption21sPwmForEveryGramAndBatteryReading) {
+  // given: a v1 record written to the EEPROM image and decoded as read_run decodes it
   tc::ThesisRun run;
-  ASSERT_TRUE(run.load<RamStorage>(decoded, slot));
+  ASSERT_NO_FATAL_FAILURE(storeAndLoad(GetParam(), run));
+  const tc::MotorCalibration& decoded = g_decoded;
 
   // when / then: every gram, every ADC count of the monitor, and the sag offsets of the last
   // pulses 900..2100 us (read_run adds the offset of the motor's last pulse to the reading)
@@ -95,6 +107,45 @@ TEST_P(ThesisRuntime, GivesOption21sPwmForEveryGramAndBatteryReading) {
     x = x * 1103515245u + 12345u;
     const uint16_t g = static_cast<uint16_t>((x >> 16) % 520);
     ASSERT_EQ(tc::forceToPwm<RamStorage>(run, g, mv).pwm_us, tc::forceToPwm(decoded, g, mv).pwm_us) << g << " g";
+  }
+}
+
+TEST_P(ThesisRuntime, GivesOption21sPwmForEveryDecigramInAnyOrder) {
+  // given
+  tc::ThesisRun run;
+  ASSERT_NO_FATAL_FAILURE(storeAndLoad(GetParam(), run));
+  const tc::MotorCalibration& decoded = g_decoded;
+  const auto check = [&](uint16_t dg, uint16_t mv) {
+    const tc::ForcePwmResult want = tc::forceToPwmDg(decoded, dg, mv);
+    const tc::ForcePwmResult got = tc::forceToPwmDg<RamStorage>(run, dg, mv);
+    ASSERT_EQ(got.pwm_us, want.pwm_us) << dg << " dg at " << mv << " mV";
+    ASSERT_EQ(got.flags, want.flags) << dg << " dg at " << mv << " mV";
+  };
+
+  // when / then: every decigram 0..520 g, up and down (the walk from the last gram, both ways),
+  // at each voltage
+  for (const uint16_t mv : kSweepMv) {
+    for (uint16_t dg = 0; dg <= 5200; ++dg) ASSERT_NO_FATAL_FAILURE(check(dg, mv));
+    for (uint16_t dg = 5200; dg > 0; --dg) ASSERT_NO_FATAL_FAILURE(check(dg, mv));
+  }
+  // and: jumps of any size in a scattered order (the walk from the nearest checkpoint), at
+  // scattered readings across the sane range
+  uint32_t x = 777;
+  for (int i = 0; i < 200000; ++i) {
+    x = x * 1103515245u + 12345u;
+    const uint16_t dg = static_cast<uint16_t>((x >> 8) % 5300);
+    const uint16_t mv = static_cast<uint16_t>(5900 + (x >> 20) % 11700);
+    ASSERT_NO_FATAL_FAILURE(check(dg, mv));
+  }
+  // and: the voltage term's division by the reciprocal is floor division over its whole range
+  if (run.hasSecondCurve()) {
+    const uint32_t d = run.spanX10();
+    for (uint32_t m = 0; m < (1ul << 24); m += 61) ASSERT_EQ(run.spanQuotient(m), m / d) << m;
+    for (uint32_t q = 0; q * d < (1ul << 24); ++q) {
+      for (const uint32_t m : {q * d, q * d + d - 1}) {
+        if (m < (1ul << 24)) ASSERT_EQ(run.spanQuotient(m), m / d) << m;
+      }
+    }
   }
 }
 

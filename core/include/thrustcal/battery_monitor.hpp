@@ -52,6 +52,14 @@ class BatteryMonitor {
   // Reading + sag offset of the last PWM sent (thesis fig. 6.9). Saturates at 0 and 65535.
   uint16_t compensatedMillivolts(uint16_t measured_mv, uint16_t last_pwm_us,
                                  const SagTable& sag) const;
+  // The same with the sag offset already looked up (a caller that keeps it while the pulse
+  // stays the same): reading + offset, saturated at 0 and 65535.
+  static uint16_t withSagOffset(uint16_t measured_mv, int16_t offset_mv) {
+    const int32_t mv = static_cast<int32_t>(measured_mv) + offset_mv;
+    if (mv < 0) return 0;
+    if (mv > 0xFFFFL) return 0xFFFF;
+    return static_cast<uint16_t>(mv);
+  }
   bool isSane(uint16_t mv) const { return mv >= config_.min_sane_mv && mv <= config_.max_sane_mv; }
   const BatteryConfig& config() const { return config_; }
 
