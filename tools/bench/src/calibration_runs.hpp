@@ -21,6 +21,7 @@ struct CurveError {
   double max_pct = 0, rms_pct = 0;
   int worst_g = 0;  // gram of the largest error
   double max_flight_pct = 0;  // largest error over kFlightLoG..kBandHiG
+  double rms_flight_pct = 0;  // RMS over kFlightLoG..kBandHiG (bench accuracy's band)
 };
 
 struct MethodRun {

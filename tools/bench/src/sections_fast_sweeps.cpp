@@ -5,19 +5,23 @@
 // (sim/dynamics_session.hpp); that EEPROM is where the corrected calibrations start from, so
 // gather_store corrects its own readings with the dynamics its slots hold.
 #ifdef THRUSTCAL_BENCH_HAVE_SIM
-#include <algorithm>
 #include <iostream>
 
 #include <fmt/format.h>
 
 #include "calibration_runs.hpp"
 #include "sim/dynamics_session.hpp"
+#include "thrustcal/sweep_rules.hpp"
 
 namespace bench {
 
 namespace {
 
+// Issue 26 item 2: calibration at least this much faster than settle auto, model v2 within
+// these over 100-450 g (bench accuracy's band).
 constexpr double kSpeedupTarget = 2.5;
+constexpr double kFastRmsPct = 0.35;
+constexpr double kFastMaxPct = 1.2;
 
 // The board's EEPROM after dyn cell and, per slot, a calibration and dyn.
 std::vector<uint8_t> measureDynamics(const AvrPaths& paths) {
@@ -41,41 +45,54 @@ std::vector<uint8_t> measureDynamics(const AvrPaths& paths) {
 void addFastSweepRows(const AvrPaths& paths, const MethodRun& settle_auto, Table& t, nlohmann::json& json,
                       std::vector<TargetCheck>& targets) {
   const std::vector<uint8_t> with_dynamics = measureDynamics(paths);
-  const auto run = [&](const char* key, int settle_ms, bool corrected) {
+  const auto run = [&](const char* key, int step_us, int settle_ms, bool corrected) {
     MethodRun m = gatherWith(paths, key,
-                             fmt::format("v2: 10 us, settle {} ms, store v2{}", settle_ms,
+                             fmt::format("v2: {} us, settle {} ms, store v2{}", step_us, settle_ms,
                                          corrected ? ", corrected with the slots' dynamics" : ", as read"),
-                             10, settle_ms, sim::GatherModel::kModelV2, false,
+                             step_us, settle_ms, sim::GatherModel::kModelV2, false,
                              corrected ? with_dynamics : std::vector<uint8_t>());
     checkStoredV2(m);
     return m;
   };
-  const MethodRun runs[] = {run("v2_200ms_raw", 200, false), run("v2_200ms_corrected", 200, true),
-                            run("v2_100ms_corrected", 100, true)};
-  const nlohmann::json auto_json = methodJson(settle_auto);
+  const MethodRun runs[] = {run("v2_200ms_raw", 10, 200, false), run("v2_200ms_corrected", 10, 200, true),
+                            run("v2_100ms_corrected", 10, 100, true),
+                            run("v2_fast_corrected", tc::kFastSweepStepUs, tc::kFastSweepSettleMs, true)};
   const double auto_s = settle_auto.sweep_s_max;
-  const double auto_max = auto_json["curve_error_max_pct_100_450g"];
   for (const MethodRun& m : runs) {
     const nlohmann::json j = methodJson(m);
-    const double worst = j["curve_error_max_pct_100_450g"];
+    const double rms = j["curve_error_rms_pct_100_450g"], worst = j["curve_error_max_pct_100_450g"];
     const double speedup = m.sweep_s_max > 0 ? auto_s / m.sweep_s_max : 0.0;
+    const bool accurate = rms <= kFastRmsPct && worst <= kFastMaxPct;
+    // The 200 ms sweeps: the issue's accuracy target for them; the quicker ones: the speed too.
+    const bool judged = m.key != "v2_200ms_raw";
+    const bool speed_judged = judged && m.key != "v2_200ms_corrected";
+    const bool met = accurate && (!speed_judged || speedup >= kSpeedupTarget);
+    const std::string target =
+        !judged ? "-"
+                : fmt::format("{}RMS <= {:.2f}, max <= {:.1f} % (100-450 g)",
+                              speed_judged ? fmt::format(">= {:.1f}x faster, ", kSpeedupTarget) : "", kFastRmsPct,
+                              kFastMaxPct);
     t.addRow({m.name, fmt::format("{:.1f} ({:.1f}x faster)", m.sweep_s_max, speedup),
               fixed(j["curve_error_rms_pct"].get<double>(), 2), fixed(j["curve_error_max_pct"].get<double>(), 2),
-              fixed(worst, 2), "-", "-"});
+              fixed(rms, 2), fixed(worst, 2), target, judged ? verdict(met) : "-"});
     json[m.key] = j;
     json[m.key]["speedup_over_settle_auto"] = speedup;
-    if (m.key != "v2_200ms_corrected") continue;
-    const bool met = speedup >= kSpeedupTarget && worst <= std::max(1.0, auto_max);
+    if (!judged) continue;
     json["met"][m.key] = met;
-    targets.push_back({"4. calibration, 200 ms sweeps corrected with the measured dynamics",
-                       fmt::format("{:.1f}x faster than settle auto, max {:.2f} % (auto: {:.2f} %)", speedup, worst,
-                                   auto_max),
-                       fmt::format(">= {:.1f}x faster, max <= 1 % or auto's", kSpeedupTarget), met});
+    targets.push_back({fmt::format("4. calibration, {} us steps, {} ms settle, corrected with the measured dynamics",
+                                   m.step_us, m.settle_ms),
+                       fmt::format("{:.1f} s ({:.1f}x faster than settle auto), RMS {:.2f} %, max {:.2f} %",
+                                   m.sweep_s_max, speedup, rms, worst),
+                       target, met});
   }
   t.addNote("fast rows (issue 26 item 2): the EEPROM of the corrected rows holds each slot's dynamics, measured by "
             "gather_store's dyn cell and dyn first (bench dynamics); a fixed-settle sweep of such a slot corrects "
             "its readings for the lag (docs/model_v2.md, \"Dynamics\"); \"x faster\": settle auto's longest first "
             "sweep over this row's");
+  t.addNote(fmt::format("fast calibration (gather_store: step {}, settle {} on a slot with dyn): issue 26's target, "
+                        "at least {:.1f}x faster than settle auto with model v2 within {:.2f} % RMS and {:.1f} % max "
+                        "over 100-450 g; 200 ms sweeps corrected: the same accuracy",
+                        tc::kFastSweepStepUs, tc::kFastSweepSettleMs, kSpeedupTarget, kFastRmsPct, kFastMaxPct));
 }
 
 }  // namespace bench
