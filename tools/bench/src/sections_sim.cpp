@@ -152,7 +152,8 @@ void summarizeSweeps(MethodRun& m) {
 }  // namespace
 
 MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::string& name, int step_us,
-                     int settle_ms, sim::GatherModel model, bool settle_auto, const std::vector<uint8_t>& eeprom) {
+                     int settle_ms, sim::GatherModel model, bool settle_auto, const std::vector<uint8_t>& eeprom,
+                     const std::vector<uint64_t>& seeds) {
   MethodRun m;
   m.key = key;
   m.name = name;
@@ -162,8 +163,9 @@ MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::s
   sim::GatherOptions o;
   o.elf_path = paths.elf("gather_store");
   o.preset = kPreset;
-  o.seeds = kSeeds;
-  o.slots = {0, 1, 2, 3};
+  o.seeds = seeds;
+  o.slots.clear();
+  for (std::size_t i = 0; i < seeds.size(); ++i) o.slots.push_back(static_cast<int>(i));
   o.variation = kVariation;
   o.pwm_min_us = 1000;
   o.pwm_max_us = 1800;
@@ -176,8 +178,9 @@ MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::s
   // byte (the pty path of `sim gather` paces idle time by the wall clock) and 4x quicker.
   o.link = sim::GatherLink::kInProcess;
   o.progress = [](const std::string&) {};
-  std::cerr << fmt::format("bench: gather_store in simavr, {} ({} us steps, {}{} ms settle, store {}), 4 motors\n",
-                           key, step_us, settle_auto ? "auto, cap " : "", settle_ms, sim::gatherModelName(model));
+  std::cerr << fmt::format("bench: gather_store in simavr, {} ({} us steps, {}{} ms settle, store {}), {} motors\n",
+                           key, step_us, settle_auto ? "auto, cap " : "", settle_ms, sim::gatherModelName(model),
+                           seeds.size());
   m.gather = sim::runGather(o);
   for (const sim::GatherMotorResult& r : m.gather.motors) m.sweep_s.push_back(r.curve1.sweep_simulated_s);
   summarizeSweeps(m);
@@ -187,12 +190,12 @@ MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::s
 
 // Decodes the v2 records gather_store wrote and checks each against its first sweep's bench.
 void checkStoredV2(MethodRun& m) {
-  for (size_t i = 0; i < kSeeds.size(); ++i) {
+  for (const sim::GatherMotorResult& r : m.gather.motors) {
     tc::ModelV2 model;
-    const std::string status = sim::decodeSlotV2(m.eeprom, static_cast<int>(i), model);
+    const std::string status = sim::decodeSlotV2(m.eeprom, r.slot, model);
     if (status != "ok")
-      throw std::runtime_error(fmt::format("{}: slot {} holds no model v2 after store v2 ({})", m.key, i, status));
-    const plant::Bench bench = benchAtStartOfFirstSweep(kSeeds[i]);
+      throw std::runtime_error(fmt::format("{}: slot {} holds no model v2 after store v2 ({})", m.key, r.slot, status));
+    const plant::Bench bench = benchAtStartOfFirstSweep(r.seed);
     m.errors.push_back(curveError(bench, v2PwmFor(bench, model)));
     m.v2.push_back(model);
   }
