@@ -11,6 +11,7 @@
 #include "bench/sections.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/record_v2.hpp"
+#include "thrustcal/source_tree.hpp"
 
 namespace bench {
 
@@ -85,10 +86,10 @@ uint64_t symbolSize(const std::string& elf, const std::string& demangled) {
 
 }  // namespace
 
-std::string sourcePath(const std::string& rel) { return std::string(THRUSTCAL_SOURCE_DIR) + "/" + rel; }
+std::string sourcePath(const std::string& rel) { return thrustcal::sourceTree() + "/" + rel; }
 
 std::string shownPath(const std::string& path) {
-  const std::string root = std::string(THRUSTCAL_SOURCE_DIR) + "/";
+  const std::string root = thrustcal::sourceTree() + "/";
   return path.rfind(root, 0) == 0 ? path.substr(root.size()) : path;
 }
 

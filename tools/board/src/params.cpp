@@ -11,6 +11,7 @@
 
 #include "hal/board.hpp"
 #include "hex/intel_hex.hpp"
+#include "thrustcal/source_tree.hpp"
 
 namespace board {
 namespace {
@@ -165,9 +166,7 @@ ParamTableCopy copyParamTable(const tc::ParamDef* rows, uint8_t count, uint8_t l
 }
 
 std::string defaultFlyHex() {
-  std::vector<fs::path> dirs;
-  if (const char* env = std::getenv("THRUSTCAL_AVR_BUILD_DIR")) dirs.emplace_back(env);
-  dirs.emplace_back((fs::path(THRUSTCAL_SOURCE_DIR) / "build" / "avr").lexically_normal());
+  const std::vector<fs::path> dirs = thrustcal::avrBuildDirs();
   for (const auto& d : dirs)
     if (fs::exists(d / "firmware" / "fly" / "fly.hex")) return (d / "firmware" / "fly" / "fly.hex").string();
   return (dirs.back() / "firmware" / "fly" / "fly.hex").string();

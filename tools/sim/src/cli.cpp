@@ -21,6 +21,7 @@
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
 #include "sim/sim_board.hpp"
+#include "thrustcal/source_tree.hpp"
 
 namespace sim {
 
@@ -28,9 +29,7 @@ namespace fs = std::filesystem;
 
 // Where the AVR images are by default: $THRUSTCAL_AVR_BUILD_DIR, else <source>/build/avr.
 std::string defaultElf(const std::string& name) {
-  std::vector<fs::path> dirs;
-  if (const char* env = std::getenv("THRUSTCAL_AVR_BUILD_DIR")) dirs.emplace_back(env);
-  dirs.emplace_back((fs::path(THRUSTCAL_SOURCE_DIR) / "build" / "avr").lexically_normal());
+  const std::vector<fs::path> dirs = thrustcal::avrBuildDirs();
   for (const auto& d : dirs)
     for (const auto& p : {d / "firmware" / name / (name + ".elf"), d / "firmware" / (name + ".elf")})
       if (fs::exists(p)) return p.string();
