@@ -167,15 +167,15 @@ void GatherStoreApp::cmdSweep() {
   startLagCorrection(slot);
   sayLine(TC_FLASH_TEXT("pwm_us,force_g,vbat_v,t_s,motor,dir"));
   const uint32_t start_ms = hal::Clock::millis();
-  sweep_start_us_ = hal::Clock::micros();
-  has_pending_ = false;
+  const uint32_t start_us = hal::Clock::micros();
+  pending_.pwm_us = 0;
   uint16_t pwm = sweep_settings_.pwm_min_us;
   int16_t max_force_dg = 0;
   for (uint16_t done = 1; done <= planned;
        ++done, pwm = static_cast<uint16_t>(pwm + sweep_settings_.step_us)) {
     int16_t force_dg;
     uint16_t vbat_mv;
-    if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
+    if (!measureStep(pwm, start_us, force_dg, vbat_mv)) return;  // aborted, motor already stopped
     keepSample({pwm, force_dg, vbat_mv});
     if (force_dg > max_force_dg) max_force_dg = force_dg;
     view::printCsvRow(pwm, force_dg, vbat_mv, hal::Clock::millis() - start_ms, slot);
@@ -183,7 +183,7 @@ void GatherStoreApp::cmdSweep() {
   }
   stopMotor();
   last_end_ = SweepEnd::kDone;
-  keepPendingSample();
+  keepPendingSample(start_us);
   tc::SweepPointV2 last;
   if (sweep_.lag_corrected && lag_.finish(last)) addToBuilders(last);
   finishSweep(slot, hal::Clock::millis() - start_ms);
@@ -214,18 +214,15 @@ void GatherStoreApp::keepSample(const tc::SweepPointV2& raw) {
     return;
   }
   pending_ = raw;
-  pending_edge_us_ = step_edge_us_;
-  pending_read_us_ = step_read_us_;
-  has_pending_ = true;
 }
 
-void GatherStoreApp::keepPendingSample() {
-  if (!has_pending_) return;
-  has_pending_ = false;
+void GatherStoreApp::keepPendingSample(uint32_t start_us) {
+  if (pending_.pwm_us == 0) return;
   tc::SweepPointV2 before;
-  const float edge_s = static_cast<float>(pending_edge_us_ - sweep_start_us_) * 1e-6f;
-  const float read_s = static_cast<float>(pending_read_us_ - sweep_start_us_) * 1e-6f;
+  const float edge_s = static_cast<float>(step_edge_us_ - start_us) * 1e-6f;
+  const float read_s = static_cast<float>(step_read_us_ - start_us) * 1e-6f;
   if (lag_.push(edge_s, read_s, pending_, before)) addToBuilders(before);
+  pending_.pwm_us = 0;
 }
 
 bool GatherStoreApp::swallowLineFeed() {
@@ -242,15 +239,15 @@ bool GatherStoreApp::swallowLineFeed() {
   return false;
 }
 
-bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {
+bool GatherStoreApp::measureStep(uint16_t pwm_us, uint32_t start_us, int16_t& force_dg, uint16_t& vbat_mv) {
   hal::Esc::writePulse(sweep_settings_.slot, pwm_us);
   const uint32_t written_us = hal::Clock::micros();
+  keepPendingSample(start_us);  // the step before's correction (none with settle auto), while this one settles
   step_edge_us_ = written_us + escEdgeAfterWriteUs(pwm_us);
   uint16_t force_counts;
   if (sweep_settings_.settle_auto) {
     if (!settleForce(force_counts)) return false;
   } else {
-    keepPendingSample();  // the step before's correction, while this one settles
     const uint32_t busy_ms = (hal::Clock::micros() - written_us) / 1000u;  // whole ms: 0 without a correction
     const uint16_t settle_ms = sweep_settings_.settle_ms;
     if (!waitOrAbort(busy_ms < settle_ms ? static_cast<uint16_t>(settle_ms - busy_ms) : 0)) return false;
