@@ -32,8 +32,9 @@ constexpr uint16_t kDefaultSettleCapMs = 500;
 // (`dyn`) and a bench whose settings hold the load cell's response (`dyn cell`), a sweep with
 // `step 15` and `settle 150` reads each step before it has settled and gather_store corrects the
 // reading for the lag (thrustcal/sweep_lag.hpp). Model v2 is a fitted curve, so 54 corrected
-// steps serve as well as 81 settled ones: at least 2.5x quicker than the default sweep at its
-// accuracy (`thrustcal bench calibration`, docs/model_v2.md "Dynamics").
+// steps do instead of 81 settled ones: at least 2.5x quicker than the default sweep with model
+// v2 within issue 26's accuracy target (`thrustcal bench calibration`, docs/model_v2.md
+// "Dynamics").
 constexpr uint16_t kFastSweepStepUs = 15;
 constexpr uint16_t kFastSweepSettleMs = 150;
 
