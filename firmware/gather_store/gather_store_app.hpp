@@ -258,12 +258,17 @@ class GatherStoreApp {
   bool swallowLineFeed();
   // One step: pulse, settle, force and battery medians, checks. False: aborted (the motor
   // is already at 1000 us and the reason printed).
-  bool measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv);
+  // start_us: the sweep's start (Clock::micros), the lag correction's time origin.
+  bool measureStep(uint16_t pwm_us, uint32_t start_us, int16_t& force_dg, uint16_t& vbat_mv);
   // A fixed-settle sweep of a slot whose record holds dynamics, with the bench's response in the
   // settings: its readings are corrected for the lag (issue 26 item 2). Prints a line when on.
   void startLagCorrection(uint8_t slot);
-  // A step's sample into the curve, the sag table and the v2 fitter (corrected one step late).
-  void keepSample(const tc::SweepPointV2& raw, uint32_t start_us);
+  // A step's sample into the curve, the sag table and the v2 fitter. A lag-corrected sweep holds
+  // it (pending_) until the next step's pulse is out: its correction (float, ~15 ms on the
+  // chip) then runs inside that step's settle time instead of after it, with the step's edge
+  // and reading times still in step_edge_us_ / step_read_us_.
+  void keepSample(const tc::SweepPointV2& raw);
+  void keepPendingSample(uint32_t start_us);
   void addToBuilders(const tc::SweepPointV2& p);
   // Builds the curve and the sag table from the samples and prints the summary.
   void finishSweep(uint8_t slot, uint32_t elapsed_ms);
@@ -331,6 +336,8 @@ class GatherStoreApp {
   tc::SweepLagCorrector lag_;
   tc::MotorDynamics lag_dynamics_;
   uint32_t step_edge_us_ = 0, step_read_us_ = 0;
+  // The sample held for the lag correction; pwm_us 0: none (a sweep's pulses are >= 1000 us).
+  tc::SweepPointV2 pending_ = {0, 0, 0};
 };
 
 }  // namespace gs

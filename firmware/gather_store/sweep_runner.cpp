@@ -168,20 +168,22 @@ void GatherStoreApp::cmdSweep() {
   sayLine(TC_FLASH_TEXT("pwm_us,force_g,vbat_v,t_s,motor,dir"));
   const uint32_t start_ms = hal::Clock::millis();
   const uint32_t start_us = hal::Clock::micros();
+  pending_.pwm_us = 0;
   uint16_t pwm = sweep_settings_.pwm_min_us;
   int16_t max_force_dg = 0;
   for (uint16_t done = 1; done <= planned;
        ++done, pwm = static_cast<uint16_t>(pwm + sweep_settings_.step_us)) {
     int16_t force_dg;
     uint16_t vbat_mv;
-    if (!measureStep(pwm, force_dg, vbat_mv)) return;  // aborted, motor already stopped
-    keepSample({pwm, force_dg, vbat_mv}, start_us);
+    if (!measureStep(pwm, start_us, force_dg, vbat_mv)) return;  // aborted, motor already stopped
+    keepSample({pwm, force_dg, vbat_mv});
     if (force_dg > max_force_dg) max_force_dg = force_dg;
     view::printCsvRow(pwm, force_dg, vbat_mv, hal::Clock::millis() - start_ms, slot);
     if (done % kProgressEvery == 0 && done != planned) view::sayProgress(done, planned, max_force_dg);
   }
   stopMotor();
   last_end_ = SweepEnd::kDone;
+  keepPendingSample(start_us);
   tc::SweepPointV2 last;
   if (sweep_.lag_corrected && lag_.finish(last)) addToBuilders(last);
   finishSweep(slot, hal::Clock::millis() - start_ms);
@@ -206,15 +208,21 @@ void GatherStoreApp::addToBuilders(const tc::SweepPointV2& p) {
   fitter_.add(p.pwm_us, p.force_dg, p.vbat_mv);  // false once full: store v2 then refuses the sweep
 }
 
-void GatherStoreApp::keepSample(const tc::SweepPointV2& raw, uint32_t start_us) {
+void GatherStoreApp::keepSample(const tc::SweepPointV2& raw) {
   if (!sweep_.lag_corrected) {
     addToBuilders(raw);
     return;
   }
+  pending_ = raw;
+}
+
+void GatherStoreApp::keepPendingSample(uint32_t start_us) {
+  if (pending_.pwm_us == 0) return;
   tc::SweepPointV2 before;
   const float edge_s = static_cast<float>(step_edge_us_ - start_us) * 1e-6f;
   const float read_s = static_cast<float>(step_read_us_ - start_us) * 1e-6f;
-  if (lag_.push(edge_s, read_s, raw, before)) addToBuilders(before);
+  if (lag_.push(edge_s, read_s, pending_, before)) addToBuilders(before);
+  pending_.pwm_us = 0;
 }
 
 bool GatherStoreApp::swallowLineFeed() {
@@ -231,14 +239,18 @@ bool GatherStoreApp::swallowLineFeed() {
   return false;
 }
 
-bool GatherStoreApp::measureStep(uint16_t pwm_us, int16_t& force_dg, uint16_t& vbat_mv) {
+bool GatherStoreApp::measureStep(uint16_t pwm_us, uint32_t start_us, int16_t& force_dg, uint16_t& vbat_mv) {
   hal::Esc::writePulse(sweep_settings_.slot, pwm_us);
-  step_edge_us_ = hal::Clock::micros() + escEdgeAfterWriteUs(pwm_us);
+  const uint32_t written_us = hal::Clock::micros();
+  keepPendingSample(start_us);  // the step before's correction (none with settle auto), while this one settles
+  step_edge_us_ = written_us + escEdgeAfterWriteUs(pwm_us);
   uint16_t force_counts;
   if (sweep_settings_.settle_auto) {
     if (!settleForce(force_counts)) return false;
   } else {
-    if (!waitOrAbort(sweep_settings_.settle_ms)) return false;
+    const uint32_t busy_ms = (hal::Clock::micros() - written_us) / 1000u;  // whole ms: 0 without a correction
+    const uint16_t settle_ms = sweep_settings_.settle_ms;
+    if (!waitOrAbort(busy_ms < settle_ms ? static_cast<uint16_t>(settle_ms - busy_ms) : 0)) return false;
     const uint32_t read_from_us = hal::Clock::micros();
     if (!readForceCounts(force_counts)) return false;
     step_read_us_ = read_from_us + (hal::Clock::micros() - read_from_us) / 2u;

@@ -21,6 +21,7 @@ struct CurveError {
   double max_pct = 0, rms_pct = 0;
   int worst_g = 0;  // gram of the largest error
   double max_flight_pct = 0;  // largest error over kFlightLoG..kBandHiG
+  double rms_flight_pct = 0;  // RMS over kFlightLoG..kBandHiG (bench accuracy's band)
 };
 
 struct MethodRun {
@@ -36,11 +37,11 @@ struct MethodRun {
   double sweep_s_max = 0, sweep_s_mean = 0;
 };
 
-// gather_store in simavr on the four motors (slots 0-3), a LiPo sweep then a 10 V one, starting
-// from `eeprom` (empty: erased).
+// gather_store in simavr on the motors of `seeds` (slots 0, 1, ...; benchmark 4: the four of
+// kSeeds), a LiPo sweep then a 10 V one, starting from `eeprom` (empty: erased).
 MethodRun gatherWith(const AvrPaths& paths, const std::string& key, const std::string& name, int step_us,
                      int settle_ms, sim::GatherModel model, bool settle_auto = false,
-                     const std::vector<uint8_t>& eeprom = {});
+                     const std::vector<uint8_t>& eeprom = {}, const std::vector<uint64_t>& seeds = kSeeds);
 // Decodes the v2 records gather_store wrote and checks each against its first sweep's bench.
 void checkStoredV2(MethodRun& m);
 // The run's figures: sweep time, curve error per motor and worst.

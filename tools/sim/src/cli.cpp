@@ -38,12 +38,6 @@ std::string defaultElf(const std::string& name) {
 
 namespace {
 
-std::vector<uint8_t> loadEepromOrErased(const std::string& path, bool must_exist) {
-  if (path.empty() || (!must_exist && !fs::exists(path)))
-    return std::vector<uint8_t>(kEepromBytes, 0xFF);
-  return hex::readIntelHexFile(path, kEepromBytes);
-}
-
 std::atomic<bool> g_stop{false};
 extern "C" void onSignal(int) { g_stop = true; }
 

@@ -9,8 +9,12 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "hex/intel_hex.hpp"
+#include "sim/board.hpp"
 
 namespace sim {
 
@@ -20,6 +24,14 @@ inline void writeJson(const std::string& path, const nlohmann::json& j) {
   std::ofstream out(path, std::ios::trunc);
   if (!out) throw std::runtime_error(fmt::format("{}: cannot write the JSON result", path));
   out << j.dump(2) << "\n";
+}
+
+// An EEPROM image from an Intel HEX file; erased (all 0xFF) when `path` is empty, or when it does
+// not exist and need not.
+inline std::vector<uint8_t> loadEepromOrErased(const std::string& path, bool must_exist) {
+  if (path.empty() || (!must_exist && !std::filesystem::exists(path)))
+    return std::vector<uint8_t>(kEepromBytes, 0xFF);
+  return hex::readIntelHexFile(path, kEepromBytes);
 }
 
 // Runs `body`, turning any exception into a message on stderr ("thrustcal sim COMMAND: error:

@@ -11,6 +11,7 @@
 
 #include "sim/cli.hpp"
 #include "sim/dynamics_session.hpp"
+#include "sim/eeprom_motors.hpp"
 #include "sim/swap.hpp"
 #include "cli_support.hpp"
 
@@ -23,7 +24,7 @@ struct DynArgs {
   std::string part = swap::kStock;
   uint64_t seed = 11;
   std::string preset = "kv1100_9x4.7";
-  std::string json;
+  std::string json, eeprom;
 };
 
 nlohmann::json toJson(const DynSessionResult& r, const DynArgs& a) {
@@ -51,7 +52,13 @@ void runDynCommand(DynArgs& a) {
     a.seed = p.seed;
   }
   a.o.noise_seed = a.seed;
+  a.o.eeprom = loadEepromOrErased(a.eeprom, false);
   const DynSessionResult r = runDynSession(a.o);
+  if (!a.eeprom.empty()) {
+    hex::writeIntelHexFile(a.eeprom, r.eeprom);
+    if (a.part == swap::kStock) recordGatheredMotors(a.eeprom, a.preset, 0.03, {a.o.slot}, {a.seed});
+    fmt::print("EEPROM saved: {}\n", a.eeprom);
+  }
   fmt::print("{:>4} {:>12} {:>8} {:>9} {:>9} {:>8}\n", "dir", "pulses us", "force g", "tau ms", "plant ms", "error");
   for (const DynStep& s : r.steps) {
     if (!s.ok) {
@@ -91,6 +98,9 @@ void addDynCommand(CLI::App& sim) {
   cmd->add_option("--sweep-settle-ms", a->o.sweep_settle_ms, "the calibration sweep's settle time per step")
       ->capture_default_str();
   cmd->add_option("--sweep-step-us", a->o.sweep_step_us, "the calibration sweep's step")->capture_default_str();
+  cmd->add_option("--eeprom", a->eeprom,
+                  "Intel HEX EEPROM image: read if it exists (other slots and a bench's dyn cell are kept), "
+                  "written after the session (sim gather --eeprom then sweeps with these dynamics)");
   cmd->add_option("--json", a->json, "write the steps and the stored dynamics as JSON");
   cmd->add_option("--truth", a->o.truth_path, "write the plant every millisecond during dyn (t_s, pulse_us, rpm, "
                                              "thrust_g, bus_v; simulated time)");

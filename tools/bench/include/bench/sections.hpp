@@ -66,6 +66,13 @@ Section footprintSection(const AvrPaths& paths);
 // fast_sweeps: also 200 ms and 100 ms sweeps, as read and corrected with each motor's measured
 // dynamics (issue 26 item 2; several minutes more of simavr).
 Section calibrationSection(const AvrPaths& paths, bool fast_sweeps = false);
+// Issue 26 item 2's fast calibration on the motors of `seeds` (slots 0, 1, ...): gather_store's
+// default sweep (settle auto) from an erased EEPROM; then, on the models it stored, `dyn cell`
+// and per slot `dyn`, and the fast sweep (tc::kFastSweepStepUs, tc::kFastSweepSettleMs) corrected with the
+// measured dynamics; store v2 after each sweep. JSON: `settle_auto` and `fast` as benchmark 4's
+// rows, `speedup_over_settle_auto` (first sweeps, simulated), `met` (issue 26's target). Needs
+// tools/sim; throws std::runtime_error when a session fails.
+nlohmann::json fastCalibrationCheck(const AvrPaths& paths, const std::vector<uint64_t>& seeds);
 // quick: 10 s hold instead of 60 s.
 Section liftoffSection(const AvrPaths& paths, bool quick);
 // read_run's CPU load, frame cycles and loop period in simavr at 50 and 400 Hz.
