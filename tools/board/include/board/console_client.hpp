@@ -53,6 +53,9 @@ std::string checksumHex(const std::string& line);
 std::string withChecksum(const std::string& line);
 
 struct CommandLimits {
+  CommandLimits() = default;
+  explicit CommandLimits(double total, double silence = 0.0, bool abort = false)
+      : total_s(total), silence_s(silence), abort_on_failure(abort) {}
   double total_s = 10.0;    // the whole answer
   double silence_s = 0.0;   // longest gap between two lines (0: only the total counts)
   bool abort_on_failure = false;  // send the abort key on a time-out, Ctrl-C or error: motors spin
