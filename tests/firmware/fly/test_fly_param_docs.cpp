@@ -48,7 +48,9 @@ TEST(FlyParamDocs, TheTableInFlyHexIsTheOneCompiledHere) {
     EXPECT_STREQ(a.unit, h.unit);
     EXPECT_STREQ(a.help, h.help);
     EXPECT_EQ(a.words == nullptr, h.words == nullptr);
-    if (a.words && h.words) EXPECT_STREQ(a.words, h.words);
+    if (a.words && h.words) {
+      EXPECT_STREQ(a.words, h.words);
+    }
     EXPECT_EQ(a.min, h.min) << h.name;
     EXPECT_EQ(a.max, h.max) << h.name;
     EXPECT_EQ(a.def, h.def) << h.name;

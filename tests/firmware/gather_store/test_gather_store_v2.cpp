@@ -16,90 +16,15 @@
 #include <string>
 #include <vector>
 
-#include "gather_store_fixture.hpp"
-#include "thrustcal/model_v2.hpp"
-#include "thrustcal/record_v2.hpp"
+#include "gather_store_v2_fixture.hpp"
 
 namespace {
 
 using gs_test::FakeStorage;
+using gs_test::GatherStoreV2;
+using gs_test::kOneSweepTolerancePct;
 using gs_test::startsWith;
 
-class GatherStoreV2 : public gs_test::GatherStore {
- protected:
-  // cal, tare and one complete sweep at the plant's present voltage.
-  void sweepAt(double vbat_v) {
-    plant_.vbat_v = vbat_v;
-    hal::fake::advanceMs(2000);  // the propeller runs down while the pack is swapped
-    if (!app_->loadCell().isTared()) {
-      ASSERT_NE(run("cal 95").find("calibrated"), std::string::npos);
-    } else {
-      ASSERT_NE(run("tare").find("tared"), std::string::npos);
-    }
-    ASSERT_NE(sweep().find("# done"), std::string::npos);
-  }
-
-  // The response's lines (no echo, no prompt), and the writes the fake HAL counted for it.
-  struct Response {
-    std::vector<std::string> lines;
-    uint32_t physical_writes;
-    std::string text() const {
-      std::string t;
-      for (const auto& l : lines) t += l + "\n";
-      return t;
-    }
-  };
-  Response command(const std::string& line) {
-    hal::fake::resetEepromWrites();
-    Response r{responseLines(run(line)), 0};
-    r.physical_writes = hal::fake::eepromWrites();
-    return r;
-  }
-
-  // The "wrote N bytes" figure of a response; -1 if absent.
-  static int wroteBytes(const Response& r) {
-    static const std::regex re(R"(wrote (\d+) bytes?$)");
-    for (const auto& l : r.lines) {
-      std::smatch m;
-      if (std::regex_search(l, m, re)) return std::stoi(m[1]);
-    }
-    return -1;
-  }
-
-  tc::SlotLoad load(uint8_t slot, tc::ModelV2& v2) {
-    tc::MotorCalibration v1;
-    return tc::loadSlot<FakeStorage>(slot, v2, v1);
-  }
-
-  // Largest |thrust - command| / command over `grams`, flying `model` at the plant's present
-  // pack voltage (bus = the monitor reading at that thrust, as read_run's filter settles to).
-  double worstForceErrorPct(const tc::ModelV2& model, const std::vector<double>& grams) const {
-    double worst = 0;
-    for (double g : grams) {
-      const double read_v = plant_.vbat_v - plant_.sag_v_at_full * g / plant_.full_g;
-      tc::BusVoltageFilter bus;
-      bus.reset(static_cast<uint16_t>(std::lround(read_v * 1000.0)));
-      const tc::ForcePwmResult r =
-          tc::forceToPwmV2(model, static_cast<uint16_t>(std::lround(g * 10.0)), bus);
-      EXPECT_EQ(r.flags & (tc::kSaturated | tc::kNotCalibrated), 0) << g << " g";
-      const double thrust = plant_.steadyThrust(r.pwm_us);
-      worst = std::max(worst, std::abs(thrust - g) / g * 100.0);
-    }
-    return worst;
-  }
-
-  static std::vector<double> gramsUpTo(double top_g) {
-    std::vector<double> g;
-    for (double f = 50; f <= top_g + 1e-9; f += 25) g.push_back(f);
-    return g;
-  }
-};
-
-// One PWM step is up to 0.9 % of force at 50 g on this plant (thrust ~ x^2, x = 0.19 at
-// 50 g: 2 * 0.5 us / 110 us); the sweep's 10 us grid and the median add a little. Measured
-// (test properties): one sweep 0.81 % at its voltage; refined 1.36 % worst over 10.2..12.6 V
-// (10.2 V lies outside both sweeps).
-constexpr double kOneSweepTolerancePct = 2.0;
 
 TEST_F(GatherStoreV2, StoreV2AfterOneSweepWritesARecordThatFliesThePlant) {
   // given
@@ -415,106 +340,6 @@ TEST_F(GatherStoreV2, StoreV2AfterAnAbortedSweepIsRefused) {
   ASSERT_EQ(out.lines.size(), 1u);
   EXPECT_EQ(out.lines[0], "error: nothing to store: run a complete sweep first");
   EXPECT_EQ(out.physical_writes, 0u);
-}
-
-// ---- records that cannot be right, power-fail-safe switches, the divider ---------------------
-
-TEST_F(GatherStoreV2, ShowSaysWhichRuleAStoredRecordBreaks) {
-  // given: a thesis record that puts 1 g at 2500 us (right CRC) in slot 0, a v2 model with
-  // every drive knot 0xFFFF in slot 1 (issue 8's examples)
-  hal::fake::advanceMs(gs::kArmMs);
-  sweepAt(12.6);
-  command("store 1");
-  tc::MotorCalibration cal;
-  ASSERT_EQ(tc::readRecord<FakeStorage>(0, cal), tc::DecodeStatus::kOk);
-  cal.first.pwm_at_1g_us = 2500;
-  tc::writeRecord<FakeStorage>(0, cal);
-  command("store v2");  // slot 0 again: model v2, then spoil a copy of it into slot 1
-  tc::ModelV2 m;
-  ASSERT_EQ(tc::readModelV2<FakeStorage>(0, m).status, tc::DecodeStatus::kOk);
-  for (uint8_t k = 0; k < m.knots; ++k) m.drive_512usmv[k] = 0xFFFF;
-  uint8_t image[tc::kRecordV2Bytes];
-  tc::serializeModelV2(m, 1, image);
-  std::copy(image, image + sizeof image, hal::fake::eeprom() + tc::copyAddressV2(1, 0));
-  tc::writeRecord<FakeStorage>(2, cal);
-  // when / then
-  command("motor 1");
-  EXPECT_EQ(command("show").lines.at(0),
-            "motor 1 (EEPROM 1024..2047): not calibrated: v2 record, both copies bad (copy A implausible "
-            "values, copy B erased (never calibrated)): implausible: flat curve (force without drive) (0 %; at least 25 %)");
-  command("motor 2");
-  EXPECT_EQ(command("show").lines.at(0),
-            "motor 2 (EEPROM 2048..3071): not calibrated: implausible: pulse outside the ESC range (curve 1: "
-            "2500 us; allowed 1000..2000 us)");
-}
-
-TEST_F(GatherStoreV2, StoreV2OverAThesisRecordKeepsItLoadableUntilModelV2IsWhole) {
-  // given: motor 0 holds the thesis record; slot 1 is free
-  hal::fake::advanceMs(gs::kArmMs);
-  sweepAt(12.6);
-  command("store 1");
-  // when
-  const Response out = command("store v2");
-  // then: the store says how it stayed power-fail safe and counts every byte it wrote
-  ASSERT_EQ(out.lines.size(), 3u) << out.text();
-  EXPECT_TRUE(startsWith(out.lines[0], "stored model v2 of motor 0 (EEPROM 0..1023, copy A, sequence 1)"))
-      << out.lines[0];
-  EXPECT_NE(out.lines[0].find("; replaced the thesis record"), std::string::npos);
-  EXPECT_EQ(out.lines[1], "# power-fail safe: the old calibration stayed loadable (a copy in motor 1's "
-                          "slot) until the new one was complete");
-  EXPECT_EQ(wroteBytes(out), static_cast<int>(out.physical_writes));
-  tc::ModelV2 v2;
-  const tc::SlotLoad slot = load(0, v2);
-  EXPECT_EQ(slot.layout, tc::SlotLayout::kModelV2);
-  EXPECT_EQ(slot.v2.copy, 0) << "the spare in slot 1 is erased";
-}
-
-TEST_F(GatherStoreV2, StoreV2OverAThesisRecordWithNoSlotToSpareSaysItWasUnprotected) {
-  // given: thesis records in all four slots
-  hal::fake::advanceMs(gs::kArmMs);
-  sweepAt(12.6);
-  command("store 1");
-  tc::MotorCalibration cal;
-  ASSERT_EQ(tc::readRecord<FakeStorage>(0, cal), tc::DecodeStatus::kOk);
-  for (uint8_t s = 1; s < 4; ++s) tc::writeRecord<FakeStorage>(s, cal);
-  // when
-  const Response out = command("store v2");
-  // then
-  ASSERT_GE(out.lines.size(), 2u);
-  EXPECT_TRUE(startsWith(out.lines[0], "stored model v2 of motor 0")) << out.lines[0];
-  EXPECT_EQ(out.lines[1], "warning: motor 0 was switched in place: the other three slots hold thesis records, "
-                          "so no slot could keep the old calibration meanwhile (a power cut then leaves the "
-                          "motor not calibrated, never flown wrong)");
-}
-
-TEST_F(GatherStoreV2, TheDividerSettingScalesTheMonitorAndDropsASweepMeasuredWithTheOldOne) {
-  // given
-  hal::fake::advanceMs(gs::kArmMs);
-  sweepAt(12.6);
-  const auto banner_lines = gs_test::splitLines(banner_);
-  EXPECT_TRUE(std::any_of(banner_lines.begin(), banner_lines.end(), [](const std::string& l) {
-    return startsWith(l, "battery monitor: divider 100000/47000 ohm");
-  })) << banner_;
-  // when
-  const Response set = command("divider 100000 22000");
-  // then: stored, and the last sweep (volts through 100k/47k) is gone
-  ASSERT_EQ(set.lines.size(), 2u) << set.text();
-  EXPECT_EQ(set.lines[0], "divider 100000/22000 ohm, full scale 27.727 V, stored (motor 3's slot, copy A)");
-  EXPECT_EQ(set.lines[1], "note: the last sweep was measured with the old divider and is dropped: sweep again "
-                          "before store");
-  EXPECT_EQ(command("store v2").lines.at(0), "error: nothing to store: run a complete sweep first");
-  // the plant's A1 still carries the pack through 100k/47k: read through 100k/22k every volt
-  // reads 27.727 / 15.638 = 1.77 V
-  const Response status = command("status");
-  std::smatch m;
-  const std::string text = status.text();
-  ASSERT_TRUE(std::regex_search(text, m, std::regex(R"(battery (\d+\.\d+) V)"))) << text;
-  EXPECT_NEAR(std::stod(m[1]), plant_.vbat_v * 27727.0 / 15638.0, 1.5) << text;
-  // a new app (a reboot) reads it back
-  app_ = std::make_unique<gs::GatherStoreApp>();
-  app_->begin();
-  EXPECT_NE(hal::fake::takeOutput().find("battery monitor: divider 100000/22000 ohm, full scale 27.727 V"),
-            std::string::npos);
 }
 
 }  // namespace
