@@ -24,6 +24,7 @@
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
 #include "thrustcal/model_v2.hpp"
+#include "gather_checks.hpp"
 
 namespace sim {
 
@@ -77,126 +78,6 @@ std::vector<std::string> mustCommand(Console& con, const std::string& line, doub
 }
 
 std::string fmtCsvNumber(double v, int decimals) { return fmt::format("{:.{}f}", v, decimals); }
-
-// The plant's steady-state thrust at every whole PWM 1000..2000 us on a frozen bench (power
-// source and winding temperature as when the snapshot was taken): stored PWMs are whole
-// microseconds, so the thrust at a stored PWM is an exact lookup.
-struct TruthTable {
-  static constexpr int kLo = 1000, kHi = 2000;
-  std::vector<double> thrust_g, bus_v;
-  explicit TruthTable(const plant::Bench& bench) {
-    thrust_g.reserve(kHi - kLo + 1);
-    bus_v.reserve(kHi - kLo + 1);
-    for (int p = kLo; p <= kHi; ++p) {
-      const plant::OperatingPoint op = bench.steadyState(p);
-      thrust_g.push_back(op.thrust_g);
-      bus_v.push_back(op.bus_v);
-    }
-  }
-  static std::size_t index(int pwm_us) {
-    return static_cast<std::size_t>(std::clamp(pwm_us, kLo, kHi) - kLo);
-  }
-  double thrustAt(int pwm_us) const { return thrust_g[index(pwm_us)]; }
-  double busVoltsAt(int pwm_us) const { return bus_v[index(pwm_us)]; }
-  // Smallest PWM (interpolated) whose thrust reaches `grams`; NaN when out of reach.
-  double pwmFor(double grams) const {
-    for (std::size_t i = 1; i < thrust_g.size(); ++i)
-      if (thrust_g[i] >= grams && thrust_g[i - 1] < grams)
-        return kLo + (i - 1) + (grams - thrust_g[i - 1]) / (thrust_g[i] - thrust_g[i - 1]);
-    return std::nan("");
-  }
-};
-
-std::string truePwm(const TruthTable& t, double grams) {
-  const double p = t.pwmFor(grams);
-  return std::isnan(p) ? std::string() : fmt::format("{:.1f}", p);
-}
-
-// A stored model as the checks see it: the PWM it gives for each whole gram at one sweep's
-// conditions, up to the heaviest gram it reaches there.
-struct StoredCurve {
-  double start_v = 0;
-  int max_g = 0;
-  std::function<int(int)> pwm_us_for_g;
-};
-
-StoredCurve thesisCurve(const tc::ThesisCurve& curve) {
-  return {curve.start_mv / 1000.0, curve.maxGrams(),
-          [curve](int g) { return static_cast<int>(curve.pwmForGrams(static_cast<uint16_t>(g))); }};
-}
-
-// Model v2 at a sweep's conditions, in steady state as read_run holds a force: the bus
-// voltage is what the plant settles at for the PWM sent (a fixed point, found by iterating
-// from the resting voltage; the motor's own command does not change, so no sag prediction).
-// The curve refers to `truth`, which must outlive it.
-StoredCurve modelV2Curve(const tc::ModelV2& model, uint16_t rest_mv, const TruthTable& truth) {
-  auto pwm = [model, rest_mv, &truth](int g) {
-    tc::BusVoltageFilter bus;
-    bus.reset(rest_mv);
-    uint16_t pwm_us = 0;
-    for (int i = 0; i < 6; ++i) {
-      pwm_us = tc::forceToPwmV2(model, static_cast<uint16_t>(g * 10), bus).pwm_us;
-      bus.reset(static_cast<uint16_t>(std::lround(truth.busVoltsAt(pwm_us) * 1000)));
-    }
-    return static_cast<int>(pwm_us);
-  };
-  return {rest_mv / 1000.0, model.maxForceDg() / 10, pwm};
-}
-
-// Error of a stored curve against the truth over band_min_g .. band_top_frac * its heaviest
-// gram, no heavier than the sweep measured (v1's curve ends there anyway; v2's curve, shared
-// by both sweeps, goes on where the sweep's supply could not follow).
-void checkCurve(const StoredCurve& curve, const TruthTable& truth, const GatherOptions& o,
-                CurveCheck& out) {
-  out.start_v = curve.start_v;
-  out.max_g = std::min(curve.max_g, static_cast<int>(std::floor(out.sweep_max_g)));
-  out.band_lo_g = o.band_min_g;
-  out.band_hi_g = std::floor(o.band_top_frac * out.max_g);
-  double sum2 = 0;
-  int n = 0;
-  out.error_max_g = 0;
-  out.error_max_pct = 0;
-  for (int g = static_cast<int>(out.band_lo_g); g <= static_cast<int>(out.band_hi_g); ++g) {
-    const double thrust = truth.thrustAt(curve.pwm_us_for_g(g));
-    const double err = std::fabs(thrust - g);
-    out.error_max_g = std::max(out.error_max_g, err);
-    if (g >= 50) out.error_max_pct = std::max(out.error_max_pct, 100.0 * err / g);
-    sum2 += err * err;
-    ++n;
-  }
-  out.error_rms_g = n > 0 ? std::sqrt(sum2 / n) : 0;
-}
-
-// The slot's stored model as two curves, one per sweep's conditions; throws when the slot
-// does not hold what the store commands should have written.
-std::array<StoredCurve, 2> storedCurves(const std::vector<uint8_t>& eeprom,
-                                        const GatherOptions& o,
-                                        const std::array<TruthTable, 2>& truth,
-                                        GatherMotorResult& mr) {
-  std::string shown;
-  for (const auto& l : mr.show) shown += "  | " + l + "\n";
-  if (o.model == GatherModel::kThesisV1) {
-    tc::MotorCalibration calib;
-    const std::string status = decodeSlot(eeprom, mr.slot, calib);
-    if (status != "ok" || !calib.hasSecondCurve())
-      throw std::runtime_error(fmt::format(
-          "slot {}: the EEPROM record after store 1/2 decodes as '{}'{}; show said:\n{}", mr.slot,
-          status, calib.hasSecondCurve() ? "" : " without a second curve", shown));
-    return {thesisCurve(calib.first), thesisCurve(calib.second)};
-  }
-  tc::ModelV2 model;
-  const std::string status = decodeSlotV2(eeprom, mr.slot, model);
-  if (status != "ok" || model.second_mv == 0)
-    throw std::runtime_error(fmt::format(
-        "slot {}: the EEPROM after two store v2 holds {}; the second sweep must rest >= 0.5 V "
-        "away from the first to refine the model (try another --supply-v); show said:\n{}",
-        mr.slot, status != "ok" ? "no v2 model (" + status + ")" : "an unrefined model v2",
-        shown));
-  mr.v2_start_us = model.start_q4_us / 16.0;
-  mr.v2_knots = model.knots;
-  return {modelV2Curve(model, model.rest_mv, truth[0]),
-          modelV2Curve(model, model.second_mv, truth[1])};
-}
 
 struct SweepCapture {
   std::ofstream csv;
@@ -533,29 +414,6 @@ void gatherOverPty(const GatherOptions& o, const plant::BenchParams& params,
   wall_s = rig->board.wallSeconds();
 }
 
-// gather_slotK_curves.csv: the stored model's PWM per gram at each sweep's conditions beside
-// the plant's true PWM for the same thrust.
-void writeCurvesCsv(const GatherOptions& o, const std::array<StoredCurve, 2>& stored,
-                    const std::array<TruthTable, 2>& tables, GatherMotorResult& mr) {
-  mr.curves_csv_path =
-      (std::filesystem::path(o.log_dir) / fmt::format("gather_slot{}_curves.csv", mr.slot)).string();
-  std::ofstream out(mr.curves_csv_path, std::ios::trunc);
-  out << fmt::format("# stored {} (PWM per gram, from EEPROM) and the plant's true PWM for "
-                     "the same thrust at each sweep's starting conditions\n",
-                     o.model == GatherModel::kModelV2
-                         ? "model v2 holding each force at each sweep's conditions"
-                         : "curves");
-  out << "force_g,curve1_pwm_us,curve2_pwm_us,true1_pwm_us,true2_pwm_us\n";
-  const int top = std::max(stored[0].max_g, stored[1].max_g);
-  for (int g = 1; g <= top; ++g) {
-    auto pwm = [g](const StoredCurve& c) {
-      return g <= c.max_g ? std::to_string(c.pwm_us_for_g(g)) : "";
-    };
-    out << g << "," << pwm(stored[0]) << "," << pwm(stored[1]) << "," << truePwm(tables[0], g)
-        << "," << truePwm(tables[1], g) << "\n";
-  }
-}
-
 }  // namespace
 
 GatherResult runGather(const GatherOptions& o) {
@@ -593,11 +451,11 @@ GatherResult runGather(const GatherOptions& o) {
     else
       gatherInProcess(o, params, progress, mr, truth1, truth2, result.eeprom, sim_s, wall_s);
     // Compare the stored curves with the plant.
-    const std::array<TruthTable, 2> tables = {TruthTable(*truth1), TruthTable(*truth2)};
-    const TruthTable &table1 = tables[0], &table2 = tables[1];
-    const std::array<StoredCurve, 2> stored = storedCurves(result.eeprom, o, tables, mr);
-    checkCurve(stored[0], table1, o, mr.curve1);
-    checkCurve(stored[1], table2, o, mr.curve2);
+    namespace gc = gather_checks;
+    const std::array<gc::TruthTable, 2> tables = {gc::TruthTable(*truth1), gc::TruthTable(*truth2)};
+    const std::array<gc::StoredCurve, 2> stored = gc::storedCurves(result.eeprom, o, tables, mr);
+    gc::checkCurve(stored[0], tables[0], o, mr.curve1);
+    gc::checkCurve(stored[1], tables[1], o, mr.curve2);
     sweep_sim += mr.curve1.sweep_simulated_s + mr.curve2.sweep_simulated_s;
     sweep_wall += mr.curve1.sweep_wall_s + mr.curve2.sweep_wall_s;
     result.curve_error_max_g =
@@ -609,7 +467,7 @@ GatherResult runGather(const GatherOptions& o) {
         mr.curve1.max_g, mr.curve1.error_max_g, mr.curve2.start_v, mr.curve2.max_g,
         mr.curve2.error_max_g));
 
-    if (!o.log_dir.empty()) writeCurvesCsv(o, stored, tables, mr);
+    if (!o.log_dir.empty()) gc::writeCurvesCsv(o, stored, tables, mr);
     result.simulated_s += sim_s;
     result.wall_s += wall_s;
     result.motors.push_back(std::move(mr));
@@ -619,48 +477,6 @@ GatherResult runGather(const GatherOptions& o) {
   result.session_wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - session0).count();
   return result;
-}
-
-namespace {
-nlohmann::json curveJson(const CurveCheck& c) {
-  return {{"start_v", c.start_v},           {"max_g", c.max_g},
-          {"band_g", {c.band_lo_g, c.band_hi_g}}, {"error_max_g", c.error_max_g},
-          {"error_rms_g", c.error_rms_g},   {"error_max_pct_above_50g", c.error_max_pct},
-          {"samples", c.samples},           {"sweep_max_g", c.sweep_max_g},           {"sweep_simulated_s", c.sweep_simulated_s},
-          {"sweep_wall_s", c.sweep_wall_s}, {"csv", c.csv_path}};
-}
-}  // namespace
-
-nlohmann::json GatherResult::toJson() const {
-  const bool v2 = model == GatherModel::kModelV2;
-  nlohmann::json motors_json = nlohmann::json::array();
-  for (const auto& m : motors) {
-    nlohmann::json mj = {{"slot", m.slot},
-                         {"seed", m.seed},
-                         {"mount_weight_g", m.mount_weight_g},
-                         {"curve1", curveJson(m.curve1)},
-                         {"curve2", curveJson(m.curve2)},
-                         {"second_source", m.second_source},
-                         {"curves_csv", m.curves_csv_path},
-                         {"store", m.store},
-                         {"show", m.show}};
-    if (v2) {
-      mj["start_us"] = m.v2_start_us;
-      mj["knots"] = m.v2_knots;
-    }
-    motors_json.push_back(std::move(mj));
-  }
-  const nlohmann::json calibration = {{"model", gatherModelName(model)},
-                                      {"curve_error_max_g", curve_error_max_g},
-                                      {"motors", motors_json}};
-  return {{"calibration", v2 ? nlohmann::json{{"v2", calibration}} : calibration},
-          {"sim",
-           {{"link", gatherLinkName(link)},
-            {"session_wall_s", session_wall_s},
-            {"realtime_factor", realtime_factor},
-            {"sweep_realtime_factor", sweep_realtime_factor},
-            {"simulated_s", simulated_s},
-            {"wall_s", wall_s}}}};
 }
 
 }  // namespace sim

@@ -136,7 +136,7 @@ std::string stepsScript(const SwapResult& res, Mode mode, const fs::path& png,
                        quote(fmt::format("{} {}", airRigName(rig), axis)), axis);
       std::string plot = "plot ";
       for (const std::string& p : parts) {
-        const RunSpec spec{rig, mode, p, Gains::kPd, axis, o.imu_seeds.front()};
+        const RunSpec spec{rig, mode, p, Gains::kPd, axis, o.imu_seeds.front(), ""};
         const fs::path csv = fs::path(o.out_dir) / "series" / (runId(spec) + ".csv");
         plot += fmt::format("{} using 1:3 with lines lw 2 title {}, ", quote(csv.string()), quote(p));
         if (p == kStock)
