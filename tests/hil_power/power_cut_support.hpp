@@ -28,6 +28,7 @@
 #include <unistd.h>
 
 #include "eeprom_write_recorder.hpp"
+#include "hil_support.hpp"
 #include "plant/bench.hpp"
 #include "sim/board.hpp"
 #include "sim/console.hpp"
@@ -41,17 +42,9 @@ namespace power_cut {
 
 namespace fs = std::filesystem;
 
-inline std::string imagePath(const std::string& name) {
-  return (fs::path(THRUSTCAL_AVR_BUILD_DIR) / "firmware" / name / (name + ".elf")).string();
-}
-
-#define REQUIRE_IMAGE(name)                                                                      \
-  do {                                                                                           \
-    if (!std::filesystem::exists(power_cut::imagePath(name)))                                    \
-      GTEST_SKIP() << "no AVR image " << power_cut::imagePath(name)                              \
-                   << ": build the AVR tree first (tools/test.sh does; or cmake --preset avr && " \
-                      "cmake --build build/avr), or set THRUSTCAL_AVR_BUILD_DIR";                \
-  } while (0)
+// The images as every HIL test finds them (THRUSTCAL_AVR_BUILD_DIR, the environment variable of
+// that name first), and HIL_REQUIRE_IMAGE to skip without them: tests/hil/hil_support.hpp.
+using hil::imagePath;
 
 // ---- EEPROM as codec Storage over a byte vector ----------------------------------------------
 

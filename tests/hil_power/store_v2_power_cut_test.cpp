@@ -39,7 +39,7 @@ using namespace power_cut;
 class StoreV2PowerCut : public ::testing::TestWithParam<SecondStore> {};
 
 TEST_P(StoreV2PowerCut, TheSecondStoreWritesOnlyTheSpareCopyBodyThenSequenceThenCrc) {
-  REQUIRE_IMAGE("gather_store");
+  HIL_REQUIRE_IMAGE("gather_store");
   // given / when: the recorded second store
   const StoreRecording& rec = recording(GetParam());
   ASSERT_FALSE(rec.writes.empty()) << "no EEPROM write observed on EECR: " << rec.second_store_line;
@@ -98,8 +98,8 @@ TEST_P(StoreV2PowerCut, TheSecondStoreWritesOnlyTheSpareCopyBodyThenSequenceThen
 }
 
 TEST_P(StoreV2PowerCut, EveryCutLeavesReadRunArmedAndFlyingTheOldOrTheNewModel) {
-  REQUIRE_IMAGE("gather_store");
-  REQUIRE_IMAGE("read_run");
+  HIL_REQUIRE_IMAGE("gather_store");
+  HIL_REQUIRE_IMAGE("read_run");
   // given: the old and the new model, as the codec decodes the images before and after
   const StoreRecording& rec = recording(GetParam());
   ASSERT_FALSE(rec.writes.empty());

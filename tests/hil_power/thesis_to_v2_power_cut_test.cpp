@@ -100,8 +100,8 @@ std::string v1ReportFor(const tc::MotorCalibration& cal) {
 }
 
 TEST(ThesisToV2PowerCut, EveryCutLeavesReadRunFlyingTheThesisRecordOrModelV2Whole) {
-  REQUIRE_IMAGE("gather_store");
-  REQUIRE_IMAGE("read_run");
+  HIL_REQUIRE_IMAGE("gather_store");
+  HIL_REQUIRE_IMAGE("read_run");
   // given: the recorded store and both calibrations as the codec decodes them
   const ThesisToV2Recording& rec = thesisToV2Recording();
   ASSERT_FALSE(rec.writes.empty());
