@@ -33,6 +33,7 @@ void ForceActuators::loadSettings() {
 uint8_t ForceActuators::loadSlots(SlotReport report) {
   for (uint8_t i = 0; i < kMotors; ++i) loadSlot(i, report);
   assignLanes();
+  cursorsToFirstGram();
   if (shaping_ && !configureShaping()) clearShaping();  // the new records' dynamics
   return armableCount();
 }
@@ -148,6 +149,17 @@ void ForceActuators::stopAll() {
     pulses_us[i] = tc::kStopPwmUs;
   }
   hal::Esc::writeAll(pulses_us);
+  // The next start's first frame then finds the stop pulse's sag offset and each thesis
+  // curve's cursor near its first grams (ForceActuators::keepSagOffsets, cursorsToFirstGram).
+  keepSagOffsets();
+  cursorsToFirstGram();
+}
+
+void ForceActuators::cursorsToFirstGram() {
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    const Motor& m = motors_[i];
+    if (m.isArmable() && !m.model.holdsV2()) m.model.v1().cursorsToFirstGram<hal::Eeprom>();
+  }
 }
 
 // A new filter constant re-seeds the filter at its value (one division) and rescales the
@@ -188,6 +200,21 @@ void ForceActuators::writePulses() {
   uint16_t pulses_us[kMotors];
   for (uint8_t i = 0; i < kMotors; ++i) pulses_us[i] = motors_[i].pwm_us;
   hal::Esc::writeAll(pulses_us);  // the four outputs back to back
+  keepSagOffsets();
+}
+
+// Each thesis motor's sag offset for the pulse it was just sent, looked up now, after the write,
+// so that the next frame's computation (between the IMU read and the write) does not: flyMotor
+// finds it kept. The same offset flyMotor would look up (it still does for a pulse set without
+// a write, stopAll's), so the pulses are the same to the bit.
+void ForceActuators::keepSagOffsets() {
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    Motor& m = motors_[i];
+    const Motor& source = motors_[m.source];
+    if (m.lane != kNoLane || !source.isArmable() || m.sag_pwm_us == m.pwm_us) continue;
+    m.sag_offset_mv = source.model.v1().sag.offsetFor(m.pwm_us);
+    m.sag_pwm_us = m.pwm_us;
+  }
 }
 
 // The v2 motors in one pass (tc::V2Frame: the bus filter, the sag prediction, every v2 motor's
@@ -221,7 +248,8 @@ void ForceActuators::flyMotor(Motor& m) {
     return;
   }
   // Thesis fig. 6.9: the reading sags under this motor's load; add the offset of the PWM it
-  // was last sent (looked up again only when that pulse changed).
+  // was last sent (looked up again only when that pulse changed; after a write keepSagOffsets
+  // has done it).
   const tc::ThesisRun& thesis = source.model.v1();
   if (m.sag_pwm_us != m.pwm_us) {
     m.sag_offset_mv = thesis.sag.offsetFor(m.pwm_us);

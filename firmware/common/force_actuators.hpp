@@ -127,8 +127,11 @@ class ForceActuators {
   // written back to back: computePulses() then writePulses().
   void output();
   // The two halves of output(), for a loop that times its computation up to the write (fly).
+  // writePulses() then keeps each thesis motor's sag offset for the pulse written
+  // (keepSagOffsets): a loop that writes the pulses itself calls that after its write.
   void computePulses();
   void writePulses();
+  void keepSagOffsets();
 
   // Motor `index` flies the model of slot `slot` from now on (slot == index: its own again,
   // whatever it holds). Only while no motor runs; false (nothing changed) then, for an index or
@@ -172,6 +175,7 @@ class ForceActuators {
   void assignLanes();
   void flyV2Motors();
   void flyMotor(Motor& m);
+  void cursorsToFirstGram();  // every thesis motor's curves (a start from a stop walks little)
   void shapeCommands();
   bool configureShaping();
 

@@ -117,8 +117,12 @@ void OutputStage::compute(const Forces& force, uint8_t mask) {
   }
 }
 
-// The pulses compute() worked out, all four at once (the force API's motors keep theirs).
-void OutputStage::commit() { hal::Esc::writeAll(pulse_us_); }
+// The pulses compute() worked out, all four at once (the force API's motors keep theirs, and
+// their thesis motors' sag offsets for the next frame are looked up after the write).
+void OutputStage::commit() {
+  hal::Esc::writeAll(pulse_us_);
+  if (mode() == OutputMode::kForce || mode() == OutputMode::kGeneric) motors_.keepSagOffsets();
+}
 
 void OutputStage::stop() {
   motors_.stopAll();

@@ -128,6 +128,19 @@ TEST_P(ThesisRuntime, GivesOption21sPwmForEveryDecigramInAnyOrder) {
     for (uint16_t dg = 0; dg <= 5200; ++dg) ASSERT_NO_FATAL_FAILURE(check(dg, mv));
     for (uint16_t dg = 5200; dg > 0; --dg) ASSERT_NO_FATAL_FAILURE(check(dg, mv));
   }
+  // and: a force wandering a few grams a call, up and down across the whole curve (the byte by
+  // byte walk of 1..kThesisNearGrams grams from the last gram, and just beyond it), at each voltage
+  for (const uint16_t mv : kSweepMv) {
+    uint32_t y = 4242;
+    int32_t dg = 0;
+    for (int i = 0; i < 6000; ++i) {
+      y = y * 1103515245u + 12345u;
+      const int32_t move_dg = static_cast<int32_t>((y >> 16) % 81) - 40;  // -4.0..+4.0 g
+      dg += (i / 1500) % 2 == 0 ? move_dg + 4 : move_dg - 4;  // drift up, then down, twice
+      dg = dg < 0 ? 0 : (dg > 5300 ? 5300 : dg);
+      ASSERT_NO_FATAL_FAILURE(check(static_cast<uint16_t>(dg), mv));
+    }
+  }
   // and: jumps of any size in a scattered order (the walk from the nearest checkpoint), at
   // scattered readings across the sane range
   uint32_t x = 777;

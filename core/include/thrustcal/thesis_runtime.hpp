@@ -31,6 +31,7 @@ namespace tc {
 
 constexpr uint8_t kThesisCheckpointEvery = 16;  // grams between the PWMs kept in SRAM
 constexpr uint8_t kThesisCheckpoints = (kCurveGrams - 1) / kThesisCheckpointEvery + 1;
+constexpr uint8_t kThesisNearGrams = 3;  // a cursor move walkNear makes byte by byte
 
 struct ThesisCurveRun {
   uint16_t start_mv = 0;    // 0: no curve
@@ -59,7 +60,20 @@ struct ThesisCurveRun {
   uint16_t pwmTenths(uint16_t grams, uint8_t tenths) const {
     // The gram walked to last again (a motor holding its force): its PWM and step are kept.
     if (grams == cursor_g_ && grams != 0) return static_cast<uint16_t>(10u * cursor_us_ + static_cast<uint16_t>(tenths * cursor_step_));
+    // A few grams from it below the heaviest (a motor changing its force): walkNear.
+    if (cursor_g_ != 0 && grams != 0 && grams < max_grams &&
+        static_cast<uint16_t>(grams - cursor_g_ + kThesisNearGrams) <= 2 * kThesisNearGrams) {
+      walkNear<Storage>(grams);
+      return static_cast<uint16_t>(10u * cursor_us_ + static_cast<uint16_t>(tenths * cursor_step_));
+    }
     return pwmTenthsWalked<Storage>(grams, tenths);
+  }
+
+  // The cursor on the first gram (one walk of at most one EEPROM byte): a motor that starts
+  // from a stop (a few grams first) then walks walkNear's few bytes, not walkTo's block.
+  template <class Storage>
+  void cursorToFirstGram() const {
+    if (maxGrams() != 0) walkTo<Storage>(1);
   }
 
   // From a decoded curve whose steps lie at `steps_addr` in Storage: checkpoints summed from
@@ -100,6 +114,34 @@ struct ThesisCurveRun {
     if (grams == 0) return static_cast<uint16_t>(10u * walkTo<Storage>(1));
     const uint16_t lo = walkTo<Storage>(grams);
     return static_cast<uint16_t>(10u * lo + static_cast<uint16_t>(tenths * cursor_step_));
+  }
+
+  // The cursor moved to `grams` (1..max_grams - 1, 1..kThesisNearGrams from the cursor) one
+  // EEPROM byte a step, without walkTo's block: forward the PWM adds the cursor's step and the
+  // bytes between, backward it takes off the bytes from `grams` up; the last byte read is the
+  // new gram's step (the byte at steps_addr + g - 1 is pwm(g + 1) - pwm(g)). The same bytes
+  // walkTo adds, so the same PWM and step.
+  template <class Storage>
+  void walkNear(uint16_t grams) const {
+    uint16_t pwm = cursor_us_;
+    uint8_t step;
+    if (grams > cursor_g_) {
+      step = cursor_step_;
+      for (uint16_t g = cursor_g_; g != grams; ++g) {
+        pwm = static_cast<uint16_t>(pwm + step);
+        step = Storage::readByte(static_cast<uint16_t>(steps_addr + g));
+      }
+    } else {
+      step = 0;
+      for (uint16_t g = static_cast<uint16_t>(cursor_g_ - 1); g >= grams; --g) {
+        step = Storage::readByte(static_cast<uint16_t>(steps_addr + g - 1));
+        pwm = static_cast<uint16_t>(pwm - step);
+        if (g == grams) break;
+      }
+    }
+    cursor_g_ = grams;
+    cursor_us_ = pwm;
+    cursor_step_ = step;
   }
 
   // The PWM at `grams` (1..max_grams), walked from the nearest known PWM: a checkpoint (at most
@@ -169,6 +211,12 @@ struct ThesisRun {
   SagTable sag;
 
   bool isCalibrated() const { return first.isPresent(); }
+  // Both curves' cursors on their first gram (ThesisCurveRun::cursorToFirstGram): for a stop.
+  template <class Storage>
+  void cursorsToFirstGram() const {
+    first.cursorToFirstGram<Storage>();
+    second.cursorToFirstGram<Storage>();
+  }
   bool hasSecondCurve() const { return second.isPresent(); }
   void clear() { *this = ThesisRun(); }
 
