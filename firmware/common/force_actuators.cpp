@@ -33,7 +33,7 @@ void ForceActuators::loadSettings() {
 uint8_t ForceActuators::loadSlots(SlotReport report) {
   for (uint8_t i = 0; i < kMotors; ++i) loadSlot(i, report);
   assignLanes();
-  cursorsToFirstGram();
+  placeCursors(10);
   if (shaping_ && !configureShaping()) clearShaping();  // the new records' dynamics
   return armableCount();
 }
@@ -97,6 +97,7 @@ bool ForceActuators::setModelSource(uint8_t index, uint8_t slot) {
   motors_[index].source = slot;
   motors_[index].sag_pwm_us = 0;  // its sag offset comes from the new model's table
   assignLanes();
+  keepSagOffsets();  // now, not in the first frame's computation
   if (shaping_ && !configureShaping()) clearShaping();  // the dynamics follow the model
   return true;
 }
@@ -150,15 +151,15 @@ void ForceActuators::stopAll() {
   }
   hal::Esc::writeAll(pulses_us);
   // The next start's first frame then finds the stop pulse's sag offset and each thesis
-  // curve's cursor near its first grams (ForceActuators::keepSagOffsets, cursorsToFirstGram).
+  // curve's cursor near its first grams (keepSagOffsets, placeCursors).
   keepSagOffsets();
-  cursorsToFirstGram();
+  placeCursors(10);
 }
 
-void ForceActuators::cursorsToFirstGram() {
+void ForceActuators::placeCursors(uint16_t force_dg) {
   for (uint8_t i = 0; i < kMotors; ++i) {
     const Motor& m = motors_[i];
-    if (m.isArmable() && !m.model.holdsV2()) m.model.v1().cursorsToFirstGram<hal::Eeprom>();
+    if (m.isArmable() && !m.model.holdsV2()) m.model.v1().placeCursors<hal::Eeprom>(static_cast<uint16_t>(force_dg / 10u));
   }
 }
 
@@ -256,7 +257,8 @@ void ForceActuators::flyMotor(Motor& m) {
     m.sag_pwm_us = m.pwm_us;
   }
   m.vbat_mv = tc::BatteryMonitor::withSagOffset(battery_.medianMv(), m.sag_offset_mv);
-  const tc::ForcePwmResult result = tc::forceToPwmDg<hal::Eeprom>(thesis, m.shaped_dg, m.vbat_mv);
+  static const tc::ForcePwmLimits kLimits;  // the defaults, made once, not on every call
+  const tc::ForcePwmResult result = tc::forceToPwmDg<hal::Eeprom>(thesis, m.shaped_dg, m.vbat_mv, kLimits);
   m.pwm_us = result.pwm_us;
   m.flags = result.flags;
 }

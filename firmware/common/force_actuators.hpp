@@ -132,6 +132,10 @@ class ForceActuators {
   void computePulses();
   void writePulses();
   void keepSagOffsets();
+  // Every thesis motor's curves ready at `force_dg` (their walk there done now): the first frame
+  // of a start near it walks a few EEPROM bytes, not from a checkpoint. A stop (stopAll) and
+  // loadSlots place them at 1 g; a loop that starts at an idle force places them there.
+  void placeCursors(uint16_t force_dg);
 
   // Motor `index` flies the model of slot `slot` from now on (slot == index: its own again,
   // whatever it holds). Only while no motor runs; false (nothing changed) then, for an index or
@@ -175,7 +179,6 @@ class ForceActuators {
   void assignLanes();
   void flyV2Motors();
   void flyMotor(Motor& m);
-  void cursorsToFirstGram();  // every thesis motor's curves (a start from a stop walks little)
   void shapeCommands();
   bool configureShaping();
 

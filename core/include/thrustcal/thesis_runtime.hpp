@@ -69,11 +69,13 @@ struct ThesisCurveRun {
     return pwmTenthsWalked<Storage>(grams, tenths);
   }
 
-  // The cursor on the first gram (one walk of at most one EEPROM byte): a motor that starts
-  // from a stop (a few grams first) then walks walkNear's few bytes, not walkTo's block.
+  // The cursor on `grams` (1 at the least, the heaviest gram at the most), walked now: a motor
+  // that starts from a stop near there (a few grams first, or a flight loop's idle force) then
+  // walks walkNear's few bytes in its first frame, not walkTo's block.
   template <class Storage>
-  void cursorToFirstGram() const {
-    if (maxGrams() != 0) walkTo<Storage>(1);
+  void placeCursor(uint16_t grams) const {
+    if (maxGrams() == 0) return;
+    walkTo<Storage>(grams == 0 ? 1 : (grams > maxGrams() ? maxGrams() : grams));
   }
 
   // From a decoded curve whose steps lie at `steps_addr` in Storage: checkpoints summed from
@@ -211,11 +213,11 @@ struct ThesisRun {
   SagTable sag;
 
   bool isCalibrated() const { return first.isPresent(); }
-  // Both curves' cursors on their first gram (ThesisCurveRun::cursorToFirstGram): for a stop.
+  // Both curves' cursors on `grams` (ThesisCurveRun::placeCursor): for a start from a stop.
   template <class Storage>
-  void cursorsToFirstGram() const {
-    first.cursorToFirstGram<Storage>();
-    second.cursorToFirstGram<Storage>();
+  void placeCursors(uint16_t grams) const {
+    first.placeCursor<Storage>(grams);
+    second.placeCursor<Storage>(grams);
   }
   bool hasSecondCurve() const { return second.isPresent(); }
   void clear() { *this = ThesisRun(); }
