@@ -97,7 +97,7 @@ bool ForceActuators::setModelSource(uint8_t index, uint8_t slot) {
   motors_[index].source = slot;
   motors_[index].sag_pwm_us = 0;  // its sag offset comes from the new model's table
   assignLanes();
-  keepSagOffsets();  // now, not in the first frame's computation
+  prepareNextFrame();  // now, not in the first frame's computation
   if (shaping_ && !configureShaping()) clearShaping();  // the dynamics follow the model
   return true;
 }
@@ -151,8 +151,8 @@ void ForceActuators::stopAll() {
   }
   hal::Esc::writeAll(pulses_us);
   // The next start's first frame then finds the stop pulse's sag offset and each thesis
-  // curve's cursor near its first grams (keepSagOffsets, placeCursors).
-  keepSagOffsets();
+  // curve's cursor near its first grams (prepareNextFrame, placeCursors).
+  prepareNextFrame();
   placeCursors(10);
 }
 
@@ -201,14 +201,15 @@ void ForceActuators::writePulses() {
   uint16_t pulses_us[kMotors];
   for (uint8_t i = 0; i < kMotors; ++i) pulses_us[i] = motors_[i].pwm_us;
   hal::Esc::writeAll(pulses_us);  // the four outputs back to back
-  keepSagOffsets();
+  prepareNextFrame();
 }
 
-// Each thesis motor's sag offset for the pulse it was just sent, looked up now, after the write,
-// so that the next frame's computation (between the IMU read and the write) does not: flyMotor
-// finds it kept. The same offset flyMotor would look up (it still does for a pulse set without
-// a write, stopAll's), so the pulses are the same to the bit.
-void ForceActuators::keepSagOffsets() {
+// Between frames, after the write, what the next frame's computation (between the IMU read and
+// the write) would otherwise do for each thesis motor: the sag offset of the pulse it was just
+// sent (flyMotor finds it kept; it still looks it up for a pulse set without a write, stopAll's).
+// The same offset, only earlier: the pulses are the same to the bit.
+void ForceActuators::prepareNextFrame() {
+  if (v2_.count == kMotors) return;  // every motor flies v2: nothing to prepare
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
     const Motor& source = motors_[m.source];
@@ -249,8 +250,8 @@ void ForceActuators::flyMotor(Motor& m) {
     return;
   }
   // Thesis fig. 6.9: the reading sags under this motor's load; add the offset of the PWM it
-  // was last sent (looked up again only when that pulse changed; after a write keepSagOffsets
-  // has done it).
+  // was last sent (looked up again only when that pulse changed; after a write
+  // prepareNextFrame has done it).
   const tc::ThesisRun& thesis = source.model.v1();
   if (m.sag_pwm_us != m.pwm_us) {
     m.sag_offset_mv = thesis.sag.offsetFor(m.pwm_us);

@@ -127,11 +127,12 @@ class ForceActuators {
   // written back to back: computePulses() then writePulses().
   void output();
   // The two halves of output(), for a loop that times its computation up to the write (fly).
-  // writePulses() then keeps each thesis motor's sag offset for the pulse written
-  // (keepSagOffsets): a loop that writes the pulses itself calls that after its write.
+  // writePulses() then prepares the next frame's thesis motors (prepareNextFrame: the sag
+  // offset of the pulse written): a loop that writes the pulses itself calls that after its
+  // write.
   void computePulses();
   void writePulses();
-  void keepSagOffsets();
+  void prepareNextFrame();
   // Every thesis motor's curves ready at `force_dg` (their walk there done now): the first frame
   // of a start near it walks a few EEPROM bytes, not from a checkpoint. A stop (stopAll) and
   // loadSlots place them at 1 g; a loop that starts at an idle force places them there.

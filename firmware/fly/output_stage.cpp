@@ -121,7 +121,7 @@ void OutputStage::compute(const Forces& force, uint8_t mask) {
 // their thesis motors' sag offsets for the next frame are looked up after the write).
 void OutputStage::commit() {
   hal::Esc::writeAll(pulse_us_);
-  if (mode() == OutputMode::kForce || mode() == OutputMode::kGeneric) motors_.keepSagOffsets();
+  if (mode() == OutputMode::kForce || mode() == OutputMode::kGeneric) motors_.prepareNextFrame();
 }
 
 void OutputStage::stop() {

@@ -10,13 +10,16 @@
 // EEPROM does not change while read_run or fly flies (neither writes it), and load() checks
 // every checkpoint it computes from the EEPROM against the decoded, CRC-checked record.
 //
-// Each curve remembers the gram it walked to last and its PWM (4 bytes): a motor holding or
-// slowly changing its force walks from there, 0-2 steps a frame, in one EEPROM block read that
-// also brings the step to the next gram (a decigram between two grams needs both); a jump walks
-// from the nearest checkpoint, at most 8 steps away but near the heaviest gram. The voltage
+// Each curve remembers the gram it walked to last, its PWM and its step to the next gram (5
+// bytes): a motor holding its force reads nothing, one changing it by 1-3 g reads those step
+// bytes one by one (walkNear); a longer jump walks from the nearest checkpoint, at most 8 steps
+// away but near the heaviest gram, in one EEPROM block read (walkTo). placeCursor walks there
+// ahead of a start (a stop's 1 g, fly's idle force at the arm). The voltage
 // term is 16-bit arithmetic with the record's span's reciprocal (forceToPwmDg below): on the
 // ATmega2560 this took four motors' option 2.1 in fly (with their sag offsets) from about
-// 12,000 cycles a frame to about 5,800 (thrustcal bench fly's breakdown; docs/fly.md, "Budgets").
+// 12,000 cycles a frame to about 5,800, walkNear and the sag offsets kept after the write
+// (fw::ForceActuators::keepSagOffsets) to about 4,600 (thrustcal bench fly's breakdown;
+// docs/fly.md, "Budgets").
 //
 // Storage: static uint8_t readByte(uint16_t addr); static void readBlock(uint16_t addr,
 // void* dst, uint16_t length) (hal::Eeprom on the board, RAM arrays in tests).
@@ -56,18 +59,23 @@ struct ThesisCurveRun {
   // PWM below it, the heaviest's at and beyond it, the straight line between two grams), from
   // one walk: the gram's PWM and its step to the next gram come from one EEPROM block. Fits
   // 16 bits for a curve whose PWMs are at most 6553 us.
+  // Inlined: the gram walked to last again (a motor holding its force) costs a comparison.
   template <class Storage>
-  uint16_t pwmTenths(uint16_t grams, uint8_t tenths) const {
-    // The gram walked to last again (a motor holding its force): its PWM and step are kept.
-    if (grams == cursor_g_ && grams != 0) return static_cast<uint16_t>(10u * cursor_us_ + static_cast<uint16_t>(tenths * cursor_step_));
-    // A few grams from it below the heaviest (a motor changing its force): walkNear.
-    if (cursor_g_ != 0 && grams != 0 && grams < max_grams &&
-        static_cast<uint16_t>(grams - cursor_g_ + kThesisNearGrams) <= 2 * kThesisNearGrams) {
-      walkNear<Storage>(grams);
-      return static_cast<uint16_t>(10u * cursor_us_ + static_cast<uint16_t>(tenths * cursor_step_));
-    }
-    return pwmTenthsWalked<Storage>(grams, tenths);
+  __attribute__((always_inline)) uint16_t pwmTenths(uint16_t grams, uint8_t tenths) const {
+    // The gram walked to last again: its PWM and step are kept.
+    if (grams != cursor_g_ || grams == 0) return pwmTenthsMoved<Storage>(grams, tenths);
+    return static_cast<uint16_t>(10u * cursor_us_ + static_cast<uint16_t>(tenths * cursor_step_));
   }
+
+  // pwmTenths's value split into whole microseconds and a tenth (0..9), without dividing it by
+  // 10: the cursor's PWM plus tenths x its step, whose tenths come from 8-bit products
+  // (thesis_detail::div10Small). For a curve with a heaviest gram (maxGrams() != 0).
+  template <class Storage>
+  inline __attribute__((always_inline)) void pwmSplit(uint16_t grams, uint8_t tenths, uint16_t& us, uint8_t& tenth) const;
+
+  // The gram the cursor is on (0: none yet): a force near it splits into grams and tenths
+  // without a division (forceToPwmDg).
+  uint16_t cursorGrams() const { return cursor_g_; }
 
   // The cursor on `grams` (1 at the least, the heaviest gram at the most), walked now: a motor
   // that starts from a stop near there (a few grams first, or a flight loop's idle force) then
@@ -109,8 +117,20 @@ struct ThesisCurveRun {
  private:
   static_assert((kThesisCheckpointEvery & (kThesisCheckpointEvery - 1)) == 0, "a power of two: the walk shifts");
 
+  // pwmTenths for another gram than the cursor's: a few grams from it below the heaviest (a
+  // motor changing its force) walkNear, else the walk from the nearest known PWM.
   template <class Storage>
-  __attribute__((noinline)) uint16_t pwmTenthsWalked(uint16_t grams, uint8_t tenths) const {
+  __attribute__((noinline)) uint16_t pwmTenthsMoved(uint16_t grams, uint8_t tenths) const {
+    if (cursor_g_ != 0 && grams != 0 && grams < max_grams &&
+        static_cast<uint16_t>(grams - cursor_g_ + kThesisNearGrams) <= 2 * kThesisNearGrams) {
+      walkNear<Storage>(grams);
+      return static_cast<uint16_t>(10u * cursor_us_ + static_cast<uint16_t>(tenths * cursor_step_));
+    }
+    return pwmTenthsWalked<Storage>(grams, tenths);
+  }
+
+  template <class Storage>
+  uint16_t pwmTenthsWalked(uint16_t grams, uint8_t tenths) const {
     const uint16_t max = maxGrams();
     if (grams >= max) return static_cast<uint16_t>(10u * pwmForGrams<Storage>(max));
     if (grams == 0) return static_cast<uint16_t>(10u * walkTo<Storage>(1));
@@ -198,6 +218,8 @@ struct ThesisCurveRun {
 };
 
 namespace thesis_detail {
+// floor(x / 10) for x <= 255 by an 8 x 8 product: x * 205 / 2^11 (tests/core: every x).
+inline uint8_t div10Small(uint8_t x) { return static_cast<uint8_t>(static_cast<uint16_t>(x * 205u) >> 11); }
 // Widening 16 x 16 -> 32 bit products (the AVR's MUL four times, not a 32 x 32 library call).
 inline uint32_t umul16(uint16_t a, uint16_t b) { return static_cast<uint32_t>(a) * static_cast<uint32_t>(b); }
 inline int32_t smul16(int16_t a, int16_t b) { return static_cast<int32_t>(a) * static_cast<int32_t>(b); }
@@ -206,6 +228,25 @@ inline uint16_t high16(uint32_t x) { return static_cast<uint16_t>(x >> 16); }
 // floor(x / 10) for every uint16_t, by a product: x * 52429 / 2^19.
 inline uint16_t div10(uint16_t x) { return static_cast<uint16_t>(high16(umul16(x, 52429u)) >> 3); }
 }  // namespace thesis_detail
+
+// After the lookup the cursor is on `grams` (on 1 for gram 0, whose value has no tenths; on the
+// heaviest gram at and beyond it, whose step is 0), so the value is 10 cursor_us + t step with
+// t = tenths (0 for gram 0): t step = 10 (t floor(step / 10)) + t (step mod 10), the last
+// at most 81.
+template <class Storage>
+inline void ThesisCurveRun::pwmSplit(uint16_t grams, uint8_t tenths, uint16_t& us, uint8_t& tenth) const {
+  using thesis_detail::div10Small;
+  if (grams != cursor_g_ || grams == 0) {
+    pwmTenthsMoved<Storage>(grams, tenths);
+    if (grams == 0) tenths = 0;
+  }
+  const uint8_t step_tens = div10Small(cursor_step_);
+  const uint8_t step_ones = static_cast<uint8_t>(cursor_step_ - static_cast<uint8_t>(10u * step_tens));
+  const uint8_t ones = static_cast<uint8_t>(tenths * step_ones);  // <= 81
+  const uint8_t carry = div10Small(ones);
+  us = static_cast<uint16_t>(cursor_us_ + static_cast<uint8_t>(tenths * step_tens) + carry);
+  tenth = static_cast<uint8_t>(ones - static_cast<uint8_t>(10u * carry));
+}
 
 struct ThesisRun {
   ThesisCurveRun first;   // first.start_mv == 0: not calibrated
@@ -317,12 +358,23 @@ ForcePwmResult forceToPwmDg(const ThesisRun& run, uint16_t force_dg, uint16_t vb
   if (flags) return ForcePwmResult{limits.pwm_min_us, flags};
 
   static_assert(10u * kCurveGrams < 65536u, "a curve's heaviest force in decigrams fits 16 bits");
-  const uint16_t grams = div10(force_dg);
-  const uint8_t tenths = static_cast<uint8_t>(force_dg - static_cast<uint16_t>(10u * grams));
+  // The force's grams and tenths: near the first curve's cursor (a motor holding or slowly
+  // changing its force) by at most three subtractions, else a division.
+  uint16_t grams = run.first.cursorGrams();
+  int16_t below = static_cast<int16_t>(force_dg - static_cast<uint16_t>(10u * grams));
+  if (below >= 10 * (kThesisNearGrams + 1) || below < -10 * kThesisNearGrams) {
+    grams = div10(force_dg);
+    below = static_cast<int16_t>(force_dg - static_cast<uint16_t>(10u * grams));
+  } else {
+    for (; below >= 10; below = static_cast<int16_t>(below - 10)) ++grams;
+    for (; below < 0; below = static_cast<int16_t>(below + 10)) --grams;
+  }
+  const uint8_t tenths = static_cast<uint8_t>(below);
   if (force_dg > static_cast<uint16_t>(10u * run.first.maxGrams())) flags |= kSaturated;
-  const uint16_t c1_x10 = run.first.pwmTenths<Storage>(grams, tenths);
-  const uint16_t c1_us = div10(c1_x10);
-  const uint8_t c1_tenths = static_cast<uint8_t>(c1_x10 - static_cast<uint16_t>(10u * c1_us));
+  uint16_t c1_us;
+  uint8_t c1_tenths;
+  run.first.pwmSplit<Storage>(grams, tenths, c1_us, c1_tenths);
+  const uint16_t c1_x10 = static_cast<uint16_t>(10u * c1_us + c1_tenths);
   int16_t pwm_us = static_cast<int16_t>(c1_us + (c1_tenths >= 5 ? 1 : 0));  // the first curve alone
   if (vbat_mv < limits.v_min_mv || vbat_mv > limits.v_max_mv) {
     flags |= kVoltageInvalid;
