@@ -170,11 +170,6 @@ INSTANTIATE_TEST_SUITE_P(
                       RecordCase{"sag offsets at the record's limits", 0.0035, 13000, 1.6, 5, 105}),
     [](const ::testing::TestParamInfo<RecordCase>& info) { return std::string("case") + std::to_string(info.index); });
 
-TEST(ThesisRun, DividesEveryByteByTenWithAnEightBitProduct) {
-  for (unsigned x = 0; x <= 255; ++x)
-    ASSERT_EQ(tc::thesis_detail::div10Small(static_cast<uint8_t>(x)), x / 10) << x;
-}
-
 TEST(ThesisRun, KeepsTheFourSlotsInAQuarterOfTheThesisRecordsSram) {
   EXPECT_LT(sizeof(tc::ThesisRun) * 4, sizeof(tc::MotorCalibration));
 }

@@ -57,21 +57,20 @@ struct ThesisCurveRun {
 
   // The PWM at `grams` + `tenths` / 10 in 0.1 us: tc::pwmTenthsAt's value (the first gram's
   // PWM below it, the heaviest's at and beyond it, the straight line between two grams), from
-  // one walk: the gram's PWM and its step to the next gram come from one EEPROM block. Fits
-  // 16 bits for a curve whose PWMs are at most 6553 us.
-  // Inlined: the gram walked to last again (a motor holding its force) costs a comparison.
+  // the cursor's PWM and its step to the next gram. Fits 16 bits for a curve whose PWMs are at
+  // most 6553 us. Inlined into forceToPwmDg: the gram walked to last again (a motor holding its force) costs
+  // a comparison, a few grams from it below the heaviest (a motor changing its force) a walk of
+  // those few EEPROM bytes (walkNear), anything else the walk from the nearest known PWM.
   template <class Storage>
   __attribute__((always_inline)) uint16_t pwmTenths(uint16_t grams, uint8_t tenths) const {
-    // The gram walked to last again: its PWM and step are kept.
-    if (grams != cursor_g_ || grams == 0) return pwmTenthsMoved<Storage>(grams, tenths);
+    if (grams != cursor_g_ || grams == 0) {
+      if (static_cast<uint16_t>(grams - cursor_g_ + kThesisNearGrams) > 2 * kThesisNearGrams || cursor_g_ == 0 ||
+          grams == 0 || grams >= max_grams)
+        return pwmTenthsWalked<Storage>(grams, tenths);
+      walkNear<Storage>(grams);
+    }
     return static_cast<uint16_t>(10u * cursor_us_ + static_cast<uint16_t>(tenths * cursor_step_));
   }
-
-  // pwmTenths's value split into whole microseconds and a tenth (0..9), without dividing it by
-  // 10: the cursor's PWM plus tenths x its step, whose tenths come from 8-bit products
-  // (thesis_detail::div10Small). For a curve with a heaviest gram (maxGrams() != 0).
-  template <class Storage>
-  inline __attribute__((always_inline)) void pwmSplit(uint16_t grams, uint8_t tenths, uint16_t& us, uint8_t& tenth) const;
 
   // The gram the cursor is on (0: none yet): a force near it splits into grams and tenths
   // without a division (forceToPwmDg).
@@ -117,20 +116,8 @@ struct ThesisCurveRun {
  private:
   static_assert((kThesisCheckpointEvery & (kThesisCheckpointEvery - 1)) == 0, "a power of two: the walk shifts");
 
-  // pwmTenths for another gram than the cursor's: a few grams from it below the heaviest (a
-  // motor changing its force) walkNear, else the walk from the nearest known PWM.
   template <class Storage>
-  __attribute__((noinline)) uint16_t pwmTenthsMoved(uint16_t grams, uint8_t tenths) const {
-    if (cursor_g_ != 0 && grams != 0 && grams < max_grams &&
-        static_cast<uint16_t>(grams - cursor_g_ + kThesisNearGrams) <= 2 * kThesisNearGrams) {
-      walkNear<Storage>(grams);
-      return static_cast<uint16_t>(10u * cursor_us_ + static_cast<uint16_t>(tenths * cursor_step_));
-    }
-    return pwmTenthsWalked<Storage>(grams, tenths);
-  }
-
-  template <class Storage>
-  uint16_t pwmTenthsWalked(uint16_t grams, uint8_t tenths) const {
+  __attribute__((noinline)) uint16_t pwmTenthsWalked(uint16_t grams, uint8_t tenths) const {
     const uint16_t max = maxGrams();
     if (grams >= max) return static_cast<uint16_t>(10u * pwmForGrams<Storage>(max));
     if (grams == 0) return static_cast<uint16_t>(10u * walkTo<Storage>(1));
@@ -144,7 +131,7 @@ struct ThesisCurveRun {
   // new gram's step (the byte at steps_addr + g - 1 is pwm(g + 1) - pwm(g)). The same bytes
   // walkTo adds, so the same PWM and step.
   template <class Storage>
-  void walkNear(uint16_t grams) const {
+  __attribute__((noinline)) void walkNear(uint16_t grams) const {
     uint16_t pwm = cursor_us_;
     uint8_t step;
     if (grams > cursor_g_) {
@@ -218,8 +205,6 @@ struct ThesisCurveRun {
 };
 
 namespace thesis_detail {
-// floor(x / 10) for x <= 255 by an 8 x 8 product: x * 205 / 2^11 (tests/core: every x).
-inline uint8_t div10Small(uint8_t x) { return static_cast<uint8_t>(static_cast<uint16_t>(x * 205u) >> 11); }
 // Widening 16 x 16 -> 32 bit products (the AVR's MUL four times, not a 32 x 32 library call).
 inline uint32_t umul16(uint16_t a, uint16_t b) { return static_cast<uint32_t>(a) * static_cast<uint32_t>(b); }
 inline int32_t smul16(int16_t a, int16_t b) { return static_cast<int32_t>(a) * static_cast<int32_t>(b); }
@@ -228,25 +213,6 @@ inline uint16_t high16(uint32_t x) { return static_cast<uint16_t>(x >> 16); }
 // floor(x / 10) for every uint16_t, by a product: x * 52429 / 2^19.
 inline uint16_t div10(uint16_t x) { return static_cast<uint16_t>(high16(umul16(x, 52429u)) >> 3); }
 }  // namespace thesis_detail
-
-// After the lookup the cursor is on `grams` (on 1 for gram 0, whose value has no tenths; on the
-// heaviest gram at and beyond it, whose step is 0), so the value is 10 cursor_us + t step with
-// t = tenths (0 for gram 0): t step = 10 (t floor(step / 10)) + t (step mod 10), the last
-// at most 81.
-template <class Storage>
-inline void ThesisCurveRun::pwmSplit(uint16_t grams, uint8_t tenths, uint16_t& us, uint8_t& tenth) const {
-  using thesis_detail::div10Small;
-  if (grams != cursor_g_ || grams == 0) {
-    pwmTenthsMoved<Storage>(grams, tenths);
-    if (grams == 0) tenths = 0;
-  }
-  const uint8_t step_tens = div10Small(cursor_step_);
-  const uint8_t step_ones = static_cast<uint8_t>(cursor_step_ - static_cast<uint8_t>(10u * step_tens));
-  const uint8_t ones = static_cast<uint8_t>(tenths * step_ones);  // <= 81
-  const uint8_t carry = div10Small(ones);
-  us = static_cast<uint16_t>(cursor_us_ + static_cast<uint8_t>(tenths * step_tens) + carry);
-  tenth = static_cast<uint8_t>(ones - static_cast<uint8_t>(10u * carry));
-}
 
 struct ThesisRun {
   ThesisCurveRun first;   // first.start_mv == 0: not calibrated
@@ -371,10 +337,9 @@ ForcePwmResult forceToPwmDg(const ThesisRun& run, uint16_t force_dg, uint16_t vb
   }
   const uint8_t tenths = static_cast<uint8_t>(below);
   if (force_dg > static_cast<uint16_t>(10u * run.first.maxGrams())) flags |= kSaturated;
-  uint16_t c1_us;
-  uint8_t c1_tenths;
-  run.first.pwmSplit<Storage>(grams, tenths, c1_us, c1_tenths);
-  const uint16_t c1_x10 = static_cast<uint16_t>(10u * c1_us + c1_tenths);
+  const uint16_t c1_x10 = run.first.pwmTenths<Storage>(grams, tenths);
+  const uint16_t c1_us = div10(c1_x10);
+  const uint8_t c1_tenths = static_cast<uint8_t>(c1_x10 - static_cast<uint16_t>(10u * c1_us));
   int16_t pwm_us = static_cast<int16_t>(c1_us + (c1_tenths >= 5 ? 1 : 0));  // the first curve alone
   if (vbat_mv < limits.v_min_mv || vbat_mv > limits.v_max_mv) {
     flags |= kVoltageInvalid;
