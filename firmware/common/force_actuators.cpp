@@ -33,7 +33,7 @@ void ForceActuators::loadSettings() {
 uint8_t ForceActuators::loadSlots(SlotReport report) {
   for (uint8_t i = 0; i < kMotors; ++i) loadSlot(i, report);
   assignLanes();
-  placeCursors(10);
+  placeCursors(start_dg_);
   if (shaping_ && !configureShaping()) clearShaping();  // the new records' dynamics
   return armableCount();
 }
@@ -151,9 +151,14 @@ void ForceActuators::stopAll() {
   }
   hal::Esc::writeAll(pulses_us);
   // The next start's first frame then finds the stop pulse's sag offset and each thesis
-  // curve's cursor near its first grams (prepareNextFrame, placeCursors).
+  // curve's lookup at the force it starts from (prepareNextFrame, placeCursors).
   prepareNextFrame();
-  placeCursors(10);
+  placeCursors(start_dg_);
+}
+
+void ForceActuators::setStartForceDg(uint16_t force_dg) {
+  start_dg_ = force_dg;
+  placeCursors(start_dg_);
 }
 
 void ForceActuators::placeCursors(uint16_t force_dg) {

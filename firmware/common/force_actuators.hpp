@@ -133,10 +133,10 @@ class ForceActuators {
   void computePulses();
   void writePulses();
   void prepareNextFrame();
-  // Every thesis motor's curves ready at `force_dg` (their walk there done now): the first frame
-  // of a start near it walks a few EEPROM bytes, not from a checkpoint. A stop (stopAll) and
-  // loadSlots place them at 1 g; a loop that starts at an idle force places them there.
-  void placeCursors(uint16_t force_dg);
+  // The force a start from a stop begins at (fly: its idle force; 1 g unless set): a stop
+  // (stopAll) and loadSlots leave every thesis curve's lookup there (placeCursors), so the
+  // first frame of a start walks a few EEPROM bytes, not from a checkpoint, in its computation.
+  void setStartForceDg(uint16_t force_dg);
 
   // Motor `index` flies the model of slot `slot` from now on (slot == index: its own again,
   // whatever it holds). Only while no motor runs; false (nothing changed) then, for an index or
@@ -180,6 +180,7 @@ class ForceActuators {
   void assignLanes();
   void flyV2Motors();
   void flyMotor(Motor& m);
+  void placeCursors(uint16_t force_dg);  // every thesis motor's curves walked to force_dg now
   void shapeCommands();
   bool configureShaping();
 
@@ -188,6 +189,7 @@ class ForceActuators {
   BatteryInput battery_;
   tc::V2Frame v2_;  // the motors flying v2: bus filter, sag, their lanes
   uint16_t frame_hz_ = 400;  // the ESC frame rate the filters run at (setFrameRate)
+  uint16_t start_dg_ = 10;   // where a start from a stop begins (setStartForceDg)
   bool shaping_ = false;
   tc::ShaperReference reference_;
   tc::ShaperReferenceTable reference_table_;

@@ -105,7 +105,6 @@ ArmRefusal FlyApp::arm(ArmSource source) {
   } else {
     updateOutputLimits();
   }
-  motors_.placeCursors(static_cast<uint16_t>(flight_.limits.min));  // the spool-up starts at the idle force
   return ArmRefusal::kNone;
 }
 

@@ -68,15 +68,16 @@ inline uint16_t readPhaseUs(uint16_t budget_us) {
 // behind that before a frame's pulses would go out one frame late: force v2 and generic 760 us
 // (measured 560 / 543 us), ardupilot 500 + 4 x 65 = 760 us (699 us), pwm 750 us (431 us). For
 // ardupilot the margin is what the 1 ms target leaves (760 + 220 is 980 us), not a choice; it
-// is ~8 % of its computation, the others have more. Thesis records: 500 + 260 + 4 x 5 =
-// 780 us, what the 1 ms target leaves, not a cover: their worst computation measured is 824 us
-// (865 us in the frame that takes the roll step's `sp` line), above the budget, so their worst
-// frames take up to ~90 us of the read's ~220 us spare (written at least 131 us before their
-// edge, none late; four motors' option 2.1 take ~4,400 cycles a frame where v2's frame takes
-// ~1,800: thesis_runtime.hpp, docs/fly.md "Budgets"). status counts a frame that goes late.
+// is ~8 % of its computation, the others have more. Thesis records: 500 + 260 + 4 x 2 =
+// 768 us, what the 1 ms target leaves with ~12 us for the read's own jitter, not a cover: their
+// worst computation measured is 849 us (the frame that takes the `arm` line; 806 us outside the
+// frames that take a console line), above the budget, so their worst frames take up to ~80 us
+// of the read's ~220 us spare (written at least 139 us before their edge, none late; four
+// motors' option 2.1 take ~4,500 cycles a frame where v2's frame takes ~1,700:
+// thesis_runtime.hpp, docs/fly.md "Budgets"). status counts a frame that goes late.
 constexpr uint16_t kControlBudgetUs = 500;         // taking the sample, estimator, controller, mixer
 constexpr uint16_t kForceApiBudgetUs = 260;        // forces to grams, the v2 frame, the pulses
-constexpr uint16_t kThesisMotorBudgetUs = 5;       // option 2.1 on one motor beyond the v2 frame's share
+constexpr uint16_t kThesisMotorBudgetUs = 2;       // option 2.1 on one motor beyond the v2 frame's share
 constexpr uint16_t kArduPilotMotorBudgetUs = 65;   // one square root and a few products
 constexpr uint16_t kPwmBudgetUs = 250;
 // thesis_motors: the motors that fly a v1 record (force, generic modes); motors: the layout's.

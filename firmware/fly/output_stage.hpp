@@ -23,7 +23,8 @@ namespace fly {
 
 static_assert(kMotors == fw::ForceActuators::kMotors, "one flight motor per force-API motor");
 
-constexpr float kIdleForceG = 20.0f;  // force and generic modes: armed motors never go below
+constexpr uint16_t kIdleForceDg = 200;  // force and generic modes: armed motors never go below
+constexpr float kIdleForceG = kIdleForceDg / 10.0f;  // the same in grams
 
 struct PwmModeParams {
   uint16_t hover_us = 0;     // 0: not given (pwm mode refuses to arm)
@@ -40,7 +41,8 @@ struct OutputSettings {
 
 class OutputStage {
  public:
-  explicit OutputStage(fw::ForceActuators& motors) : motors_(motors) {}
+  // A start from a stop begins at the idle force: the force API keeps its thesis curves ready there.
+  explicit OutputStage(fw::ForceActuators& motors) : motors_(motors) { motors_.setStartForceDg(kIdleForceDg); }
 
   // Only while stopped: generic mode points every motor at slot `generic_slot`'s model (the
   // others back at their own). False (nothing changed) when that slot holds no valid record.

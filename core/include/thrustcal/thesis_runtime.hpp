@@ -17,9 +17,9 @@
 // ahead of a start (a stop's 1 g, fly's idle force at the arm). The voltage
 // term is 16-bit arithmetic with the record's span's reciprocal (forceToPwmDg below): on the
 // ATmega2560 this took four motors' option 2.1 in fly (with their sag offsets) from about
-// 12,000 cycles a frame to about 5,800, walkNear and the sag offsets kept after the write
-// (fw::ForceActuators::keepSagOffsets) to about 4,600 (thrustcal bench fly's breakdown;
-// docs/fly.md, "Budgets").
+// 12,000 cycles a frame to about 5,800, walkNear and the sag offsets looked up after the write
+// (fw::ForceActuators::prepareNextFrame) to about 4,500 between the IMU read and the write
+// (thrustcal bench fly's breakdown; docs/fly.md, "Budgets").
 //
 // Storage: static uint8_t readByte(uint16_t addr); static void readBlock(uint16_t addr,
 // void* dst, uint16_t length) (hal::Eeprom on the board, RAM arrays in tests).

@@ -106,8 +106,8 @@ TEST(FlyRules, TheBudgetsOfEveryModeKeepReadToEdgeWithinAMillisecond) {
     EXPECT_LE(computeBudgetUs(mode, 0, 4), 780) << static_cast<int>(mode);
     EXPECT_LE(computeBudgetUs(mode, 4, 4), 780) << static_cast<int>(mode) << ", thesis records";
   }
-  EXPECT_EQ(computeBudgetUs(OutputMode::kForce, 4, 4), 780)
-      << "thesis records: 4 x 5 us of option 2.1 beyond the v2 frame's share (was 4 x 90 us, "
+  EXPECT_EQ(computeBudgetUs(OutputMode::kForce, 4, 4), 768)
+      << "thesis records: 4 x 2 us of option 2.1 beyond the v2 frame's share (was 4 x 90 us, "
          "before that 4 x 225 us)";
 }
 
