@@ -239,7 +239,7 @@ void addDrift(CLI::App& bench) {
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime, "
-               "safety, fly, swap, speed, dynamics, rigs; each figure next to its target");
+               "safety, fly, swap, speed, dynamics, rigs, twi, imu; each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -290,6 +290,14 @@ void registerCommands(CLI::App& app) {
       "the seesaw's and the gimbal's physics against hand calculations: period, damping, end stop, "
       "torque steps, precession, yaw (plant only, seconds)",
       [](const Options&) { return std::vector<Section>{rigsSection()}; });
+  add(*bench, o, "twi",
+      "the test image air_probe reading the MPU-6050 in simavr at 400 and 100 kHz: the TWI's bus time against "
+      "the datasheet's formula, the polled and the interrupt-driven driver's cycles (a second)",
+      [](const Options&) { return std::vector<Section>{twiSection()}; });
+  add(*bench, o, "imu",
+      "the MPU-6050 model's DLPF settings measured on the chip model (delay, -3 dB, noise at rest) beside the "
+      "datasheet's table (a second)",
+      [](const Options&) { return std::vector<Section>{imuSection()}; });
   addReport(*bench);
   addDrift(*bench);
   add(*bench, o, "all", "every benchmark, in order, one JSON file",
@@ -307,6 +315,8 @@ void registerCommands(CLI::App& app) {
         all.push_back(speedSection(o.paths));
         all.push_back(dynamicsSection(o.paths, o.quick));
         all.push_back(rigsSection());
+        all.push_back(twiSection());
+        all.push_back(imuSection());
         return all;
       });
 }
