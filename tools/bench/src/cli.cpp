@@ -198,6 +198,8 @@ void runDrift(const DriftArgs& a) {
   now["footprint"] = measured(footprintSection(a.paths));
   const ImageSize fly = imageSize(a.paths.elf("fly"));
   now["fly"] = {{"flash_bytes", fly.flash_bytes}, {"sram_static_bytes", fly.sram_static_bytes}};
+  now["twi"] = measured(twiSection());
+  now["imu"] = measured(imuSection());
   SwapBenchOptions so;
   so.out_dir = a.swap_dir.empty() ? sourcePath("build/bench/swap-drift") : a.swap_dir;
   so.reduced = true;
@@ -215,7 +217,7 @@ void runDrift(const DriftArgs& a) {
 
 void addDrift(CLI::App& bench) {
   CLI::App* sub = bench.add_subcommand(
-      "drift", "measure the cheap figures again (compute cycles, image sizes, footprint, a reduced swap) and "
+      "drift", "measure the cheap figures again (compute cycles, image sizes, footprint, TWI and DLPF, a reduced swap) and "
                "fail when one moved past its tolerance from the docs' JSON");
   auto a = std::make_shared<DriftArgs>();
   sub->add_option("--from", a->from, "the JSON the docs are generated from (docs/results.json)")->required();
