@@ -236,6 +236,26 @@ void addDrift(CLI::App& bench) {
   });
 }
 
+// `bench all`: every benchmark, in order.
+std::vector<Section> allSections(const Options& o) {
+  std::vector<Section> all;
+  all.push_back(accuracySection(accuracyConfig(o)));
+  all.push_back(computeSection(o.paths));
+  all.push_back(footprintSection(o.paths));
+  all.push_back(calibrationSection(o.paths, !o.quick));
+  all.push_back(liftoffSection(o.paths, o.quick));
+  all.push_back(runtimeSection(o.paths));
+  all.push_back(safetySection(o.paths));
+  all.push_back(flySection(o.paths));
+  all.push_back(swapSection(o.paths, swapOptions(o)));
+  all.push_back(speedSection(o.paths));
+  all.push_back(dynamicsSection(o.paths, o.quick));
+  all.push_back(rigsSection());
+  all.push_back(twiSection());
+  all.push_back(imuSection());
+  return all;
+}
+
 }  // namespace
 
 void registerCommands(CLI::App& app) {
@@ -302,25 +322,7 @@ void registerCommands(CLI::App& app) {
       [](const Options&) { return std::vector<Section>{imuSection()}; });
   addReport(*bench);
   addDrift(*bench);
-  add(*bench, o, "all", "every benchmark, in order, one JSON file",
-      [](const Options& o) {
-        std::vector<Section> all;
-        all.push_back(accuracySection(accuracyConfig(o)));
-        all.push_back(computeSection(o.paths));
-        all.push_back(footprintSection(o.paths));
-        all.push_back(calibrationSection(o.paths, !o.quick));
-        all.push_back(liftoffSection(o.paths, o.quick));
-        all.push_back(runtimeSection(o.paths));
-        all.push_back(safetySection(o.paths));
-        all.push_back(flySection(o.paths));
-        all.push_back(swapSection(o.paths, swapOptions(o)));
-        all.push_back(speedSection(o.paths));
-        all.push_back(dynamicsSection(o.paths, o.quick));
-        all.push_back(rigsSection());
-        all.push_back(twiSection());
-        all.push_back(imuSection());
-        return all;
-      });
+  add(*bench, o, "all", "every benchmark, in order, one JSON file", allSections);
 }
 
 }  // namespace bench
