@@ -1,11 +1,12 @@
 # Included by ctest after each test folder's GoogleTest discovery scripts: gives the tests that
 # take seconds a COST, so that ctest starts them first (the shards and the unit-test executables
-# get theirs in CMake). ctest orders a parallel run by cost, most expensive first; it learns
-# costs from earlier runs of the same tree (Testing/Temporary/CTestCostData.txt), but a clean clone has none, and then the folders' tests
-# start in declaration order: in the clean-clone CI the read_run console fuzz (15 s) started last
-# and ran alone on one core at the end (docs/testing.md, "Test order"). The figures are seconds of
-# the checked tree's tests on two cores, a scheduling hint only: a renamed test merely loses its
-# place in the order, and ctest replaces these figures by what it measured once a tree has run.
+# get theirs in CMake). ctest orders a parallel run by cost, most expensive first; it learns costs
+# from earlier runs of the same tree (Testing/Temporary/CTestCostData.txt), but a clean clone has
+# none, and then the folders' tests start in declaration order: in the clean-clone CI the read_run
+# console fuzz (15 s) started last and ran alone on one core at the end (docs/testing.md, "Test
+# order"). The figures are seconds of the checked tree's tests on two cores, a scheduling hint
+# only: a renamed test merely loses its place in the order, and ctest replaces these figures by
+# what it measured once a tree has run.
 set(thrustcal_test_costs
   # CPU-bound simulations (ctest -LE realtime)
   "^BenchSimulatedSections\\.Calibration" 30
