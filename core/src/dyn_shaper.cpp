@@ -14,8 +14,12 @@ constexpr uint8_t kRefShift = 8;  // the reference in 1/256 dg
 // m * g / 2^16 (rounded down) for m < 2^31: two 16 x 16 -> 32 multiplications and
 // byte-aligned shifts (avr-gcc would call its 32 x 32 multiply for the plain expression, four
 // times the cycles).
+// A difference under 256 dg (the usual frame: the reference trails a command that moves a few
+// grams) takes one multiplication.
 TC_INLINE uint32_t mulQ16(uint32_t m, uint16_t g) {
-  return mulU16(static_cast<uint16_t>(m >> 16), g) + (mulU16(static_cast<uint16_t>(m), g) >> 16);
+  const uint16_t high = static_cast<uint16_t>(m >> 16);
+  const uint32_t low = mulU16(static_cast<uint16_t>(m), g) >> 16;
+  return high == 0 ? low : low + mulU16(high, g);
 }
 
 // d * g / 2^16, rounded toward zero alike for both signs.
@@ -85,6 +89,7 @@ bool buildShaperReference(ShaperReferenceTable& table, const ShaperReference& re
                           uint16_t frame_hz) {
   table = ShaperReferenceTable();
   if (!reference.isValid() || frame_hz == 0) return false;
+  table.fixed = reference.isSlowest() ? 0 : 1;
   while ((static_cast<uint32_t>(max_dg) >> table.bin_shift) >= kShaperBins) ++table.bin_shift;
   table.bin_scale_q16 = static_cast<uint16_t>(1ul << (16 - table.bin_shift));
   bool any = false;
@@ -126,7 +131,7 @@ void DynShaper::configure(const MotorDynamics& dynamics, const ShaperReferenceTa
   }
 }
 
-uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table) {
+TC_INLINE uint16_t DynShaper::frame(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table) {
   if (!active_) return force_dg;
   const Place at = placeOf(ref_q8_, table.bin_scale_q16);
   if (force_dg == 0) {  // a stop: at once; the reference spins down with the motor
@@ -152,10 +157,23 @@ uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferen
     u = u > hi ? hi : lo;
     ref_q8_ += mulQ16(u - ref_q8_, lerp(a_motor, at));
   } else {
-    const int32_t moved = static_cast<int32_t>(mulQ16(m, lerp(a_ref, at)));
+    const uint16_t a_r = table.fixed ? a_ref[0] : lerp(a_ref, at);
+    const int32_t moved = static_cast<int32_t>(mulQ16(m, a_r));
     ref_q8_ += down ? -moved : moved;
   }
   return static_cast<uint16_t>((u + (1l << (kRefShift - 1))) >> kRefShift);
+}
+
+uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table) {
+  return frame(force_dg, max_dg, table);
+}
+
+#if defined(__AVR__)
+__attribute__((optimize("O2")))  // the per-frame loop: -Os spills the 32-bit state to the stack
+#endif
+void DynShaper::stepAll(DynShaper* const* shapers, const uint16_t* force_dg, const uint16_t* max_dg, uint16_t* out_dg,
+                        uint8_t count, const ShaperReferenceTable& table) {
+  for (uint8_t i = 0; i < count; ++i) out_dg[i] = shapers[i]->frame(force_dg[i], max_dg[i], table);
 }
 
 }  // namespace tc

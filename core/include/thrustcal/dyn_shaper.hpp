@@ -59,6 +59,7 @@ struct ShaperReference {
 // force is in and its place in it from one multiplication by bin_scale_q16 = 2^(16 - bin_shift);
 // at and beyond point kShaperBins the last point's value).
 struct ShaperReferenceTable {
+  uint8_t fixed = 0;  // 1: a fixed reference, a_r the same at every point (the frame reads point 0)
   uint8_t bin_shift = 1;
   uint16_t bin_scale_q16 = 0x8000;
   uint16_t a_ref_q16[2][kShaperPoints] = {};
@@ -78,6 +79,10 @@ class DynShaper {
   // One frame: the force to command now (decigrams) for the requested `force_dg`, the model
   // making at most `max_dg`. Not active: `force_dg` unchanged.
   uint16_t step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table);
+  // Every motor's frame in one call: out_dg[i] = shapers[i]->step(force_dg[i], max_dg[i], table).
+  // The same results; on the AVR the registers are saved once a frame, not once a motor.
+  static void stepAll(DynShaper* const* shapers, const uint16_t* force_dg, const uint16_t* max_dg, uint16_t* out_dg,
+                      uint8_t count, const ShaperReferenceTable& table);
 
   // The reference's present value, decigrams (what the motor's force is expected to be).
   uint16_t referenceDg() const { return static_cast<uint16_t>((ref_q8_ + 128) >> 8); }
@@ -86,6 +91,8 @@ class DynShaper {
   uint16_t motorQ16(uint8_t dir, uint8_t point) const { return a_motor_q16_[dir][point]; }
 
  private:
+  uint16_t frame(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table);  // step()'s body
+
   int32_t ref_q8_ = 0;  // the reference, 1/256 dg
   bool active_ = false;
   uint16_t a_motor_q16_[2][kShaperPoints] = {};
