@@ -14,7 +14,7 @@ set(thrustcal_test_costs
   "^ConsoleFuzz\\.ReadRun" 16
   "^ThesisToV2PowerCut\\." 10
   "^BenchFastCalibration\\." 9
-  "^SwapHil\\.ForceMode" 7
+  "^SwapHil\\.ForceMode" 14
   "^.*StoreV2PowerCut\\.EveryCut" 6.5
   "^ConsoleFuzz\\.GatherStore" 6.4
   "^(BenchFlySection|BenchDynamicsSection)\\." 5.8
