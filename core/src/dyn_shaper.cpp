@@ -14,8 +14,12 @@ constexpr uint8_t kRefShift = 8;  // the reference in 1/256 dg
 // m * g / 2^16 (rounded down) for m < 2^31: two 16 x 16 -> 32 multiplications and
 // byte-aligned shifts (avr-gcc would call its 32 x 32 multiply for the plain expression, four
 // times the cycles).
+// A difference under 256 dg (the usual frame: the reference trails a command that moves a few
+// grams) takes one multiplication.
 TC_INLINE uint32_t mulQ16(uint32_t m, uint16_t g) {
-  return mulU16(static_cast<uint16_t>(m >> 16), g) + (mulU16(static_cast<uint16_t>(m), g) >> 16);
+  const uint16_t high = static_cast<uint16_t>(m >> 16);
+  const uint32_t low = mulU16(static_cast<uint16_t>(m), g) >> 16;
+  return high == 0 ? low : low + mulU16(high, g);
 }
 
 // d * g / 2^16, rounded toward zero alike for both signs.
@@ -24,18 +28,40 @@ TC_INLINE int32_t mulQ16(int32_t d, uint16_t g) {
   return d < 0 ? -static_cast<int32_t>(p) : static_cast<int32_t>(p);
 }
 
-// The bin of the reference (in 1/256 dg): its decigrams (a byte shift) times 2^-bin_shift, as
-// one 16 x 16 multiplication by bin_scale_q16 (a variable shift is a loop on the AVR).
-TC_INLINE uint8_t binOf(int32_t ref_q8, uint16_t bin_scale_q16) {
-  if (ref_q8 <= 0) return 0;
+// Where the reference (in 1/256 dg) lies among the table's points: its interval (0..kShaperBins,
+// the last at and beyond the last point) and its place in it (1/256 of the interval). Its
+// decigrams (a byte shift) times 2^-bin_shift as one 16 x 16 multiplication by bin_scale_q16 (a
+// variable shift is a loop on the AVR).
+struct Place {
+  uint8_t bin;
+  uint8_t frac;
+};
+
+TC_INLINE Place placeOf(int32_t ref_q8, uint16_t bin_scale_q16) {
+  Place p = {0, 0};
+  if (ref_q8 <= 0) return p;
   const uint16_t dg = static_cast<uint16_t>(static_cast<uint32_t>(ref_q8) >> kRefShift);
-  const uint16_t bin = static_cast<uint16_t>(mulU16(dg, bin_scale_q16) >> 16);
-  return bin < kShaperBins ? static_cast<uint8_t>(bin) : static_cast<uint8_t>(kShaperBins - 1);
+  const uint32_t pos = mulU16(dg, bin_scale_q16);
+  const uint16_t bin = static_cast<uint16_t>(pos >> 16);
+  if (bin >= kShaperBins) {
+    p.bin = kShaperBins;  // the last point (the table repeats it: frac 0 reads it alone)
+    return p;
+  }
+  p.bin = static_cast<uint8_t>(bin);
+  p.frac = static_cast<uint8_t>(pos >> 8);
+  return p;
 }
 
-// The force a bin stands for (its centre), grams.
-float binForceG(uint8_t bin, uint8_t bin_shift) {
-  return (static_cast<float>(bin) + 0.5f) * static_cast<float>(1ul << bin_shift) * 0.1f;
+// The table's value at `p`: linear between the interval's two points (16 x 8 multiplication).
+TC_INLINE uint16_t lerp(const uint16_t* t, Place p) {
+  const uint16_t a = t[p.bin], b = t[p.bin + 1];
+  return b >= a ? static_cast<uint16_t>(a + static_cast<uint16_t>(mulU16(static_cast<uint16_t>(b - a), p.frac) >> 8))
+                : static_cast<uint16_t>(a - static_cast<uint16_t>(mulU16(static_cast<uint16_t>(a - b), p.frac) >> 8));
+}
+
+// The force a table point stands for, grams.
+float pointForceG(uint8_t point, uint8_t bin_shift) {
+  return static_cast<float>(point) * static_cast<float>(1ul << bin_shift) * 0.1f;
 }
 
 float tauS(const MotorDynamics& d, uint8_t dir, float force_g) {
@@ -63,14 +89,15 @@ bool buildShaperReference(ShaperReferenceTable& table, const ShaperReference& re
                           uint16_t frame_hz) {
   table = ShaperReferenceTable();
   if (!reference.isValid() || frame_hz == 0) return false;
+  table.fixed = reference.isSlowest() ? 0 : 1;
   while ((static_cast<uint32_t>(max_dg) >> table.bin_shift) >= kShaperBins) ++table.bin_shift;
   table.bin_scale_q16 = static_cast<uint16_t>(1ul << (16 - table.bin_shift));
   bool any = false;
   for (uint8_t i = 0; i < count; ++i) any = any || (motors[i] != nullptr && motors[i]->isValid());
   if (reference.isSlowest() && !any) return false;
   for (uint8_t dir = 0; dir < 2; ++dir) {
-    for (uint8_t bin = 0; bin < kShaperBins; ++bin) {
-      const float force_g = binForceG(bin, table.bin_shift);
+    for (uint8_t point = 0; point <= kShaperBins; ++point) {
+      const float force_g = pointForceG(point, table.bin_shift);
       float tau = 1e-4f * static_cast<float>(dir == kShaperUp ? reference.tau_up_01ms : reference.tau_down_01ms);
       if (reference.isSlowest()) {
         for (uint8_t i = 0; i < count; ++i) {
@@ -79,8 +106,9 @@ bool buildShaperReference(ShaperReferenceTable& table, const ShaperReference& re
           if (t > tau) tau = t;
         }
       }
-      table.a_ref_q16[dir][bin] = frameGainQ16(tau, frame_hz);
+      table.a_ref_q16[dir][point] = frameGainQ16(tau, frame_hz);
     }
+    table.a_ref_q16[dir][kShaperBins + 1] = table.a_ref_q16[dir][kShaperBins];
   }
   return true;
 }
@@ -91,21 +119,23 @@ void DynShaper::configure(const MotorDynamics& dynamics, const ShaperReferenceTa
   ref_q8_ = static_cast<int32_t>(force_dg) << kRefShift;
   if (!active_) return;
   for (uint8_t dir = 0; dir < 2; ++dir) {
-    for (uint8_t bin = 0; bin < kShaperBins; ++bin) {
-      const uint16_t a_m = frameGainQ16(tauS(dynamics, dir, binForceG(bin, table.bin_shift)), frame_hz);
-      const float gain = static_cast<float>(table.a_ref_q16[dir][bin]) / static_cast<float>(a_m);
+    for (uint8_t point = 0; point <= kShaperBins; ++point) {
+      const uint16_t a_m = frameGainQ16(tauS(dynamics, dir, pointForceG(point, table.bin_shift)), frame_hz);
+      const float gain = static_cast<float>(table.a_ref_q16[dir][point]) / static_cast<float>(a_m);
       const float q = gain * 16384.0f + 0.5f;
-      a_motor_q16_[dir][bin] = a_m;
-      gain_q14_[dir][bin] = q >= 65535.0f ? kShaperGainMaxQ14 : static_cast<uint16_t>(q);
+      a_motor_q16_[dir][point] = a_m;
+      gain_q14_[dir][point] = q >= 65535.0f ? kShaperGainMaxQ14 : static_cast<uint16_t>(q);
     }
+    a_motor_q16_[dir][kShaperBins + 1] = a_motor_q16_[dir][kShaperBins];
+    gain_q14_[dir][kShaperBins + 1] = gain_q14_[dir][kShaperBins];
   }
 }
 
-uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table) {
+TC_INLINE uint16_t DynShaper::frame(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table) {
   if (!active_) return force_dg;
-  const uint8_t bin = binOf(ref_q8_, table.bin_scale_q16);
+  const Place at = placeOf(ref_q8_, table.bin_scale_q16);
   if (force_dg == 0) {  // a stop: at once; the reference spins down with the motor
-    ref_q8_ += mulQ16(-ref_q8_, a_motor_q16_[kShaperDown][bin]);
+    ref_q8_ += mulQ16(-ref_q8_, lerp(a_motor_q16_[kShaperDown], at));
     return 0;
   }
   if (force_dg > max_dg) force_dg = max_dg;
@@ -117,7 +147,7 @@ uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferen
   const uint16_t* const gain = down ? gain_q14_[kShaperDown] : gain_q14_[kShaperUp];
   const uint16_t* const a_motor = down ? a_motor_q16_[kShaperDown] : a_motor_q16_[kShaperUp];
   const uint16_t* const a_ref = down ? table.a_ref_q16[kShaperDown] : table.a_ref_q16[kShaperUp];
-  uint32_t toward = mulQ16(m, gain[bin]);  // Q14 gain: times 4 (1/64 dg lost)
+  uint32_t toward = mulQ16(m, lerp(gain, at));  // Q14 gain: times 4 (1/64 dg lost)
   toward += toward;
   toward += toward;
   const int32_t hi = static_cast<int32_t>(max_dg) << kRefShift;
@@ -125,12 +155,25 @@ uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferen
   int32_t u = down ? ref_q8_ - static_cast<int32_t>(toward) : ref_q8_ + static_cast<int32_t>(toward);
   if (u > hi || u < lo) {  // beyond what the motor can be given: the reference follows the motor
     u = u > hi ? hi : lo;
-    ref_q8_ += mulQ16(u - ref_q8_, a_motor[bin]);
+    ref_q8_ += mulQ16(u - ref_q8_, lerp(a_motor, at));
   } else {
-    const int32_t moved = static_cast<int32_t>(mulQ16(m, a_ref[bin]));
+    const uint16_t a_r = table.fixed ? a_ref[0] : lerp(a_ref, at);
+    const int32_t moved = static_cast<int32_t>(mulQ16(m, a_r));
     ref_q8_ += down ? -moved : moved;
   }
   return static_cast<uint16_t>((u + (1l << (kRefShift - 1))) >> kRefShift);
+}
+
+uint16_t DynShaper::step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table) {
+  return frame(force_dg, max_dg, table);
+}
+
+#if defined(__AVR__)
+__attribute__((optimize("O2")))  // the per-frame loop: -Os spills the 32-bit state to the stack
+#endif
+void DynShaper::stepAll(DynShaper* const* shapers, const uint16_t* force_dg, const uint16_t* max_dg, uint16_t* out_dg,
+                        uint8_t count, const ShaperReferenceTable& table) {
+  for (uint8_t i = 0; i < count; ++i) out_dg[i] = shapers[i]->frame(force_dg[i], max_dg[i], table);
 }
 
 }  // namespace tc

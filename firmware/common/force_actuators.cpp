@@ -274,14 +274,22 @@ void ForceActuators::flyMotor(Motor& m) {
 
 // Each motor's command through its filter (integer; a motor without dynamics, or shaping off:
 // as commanded). Every motor's shaped force goes to its model this frame.
+// The four filters in one call (tc::DynShaper::stepAll: one register save a frame), each motor's
+// largest force as configureShaping found it.
 void ForceActuators::shapeCommands() {
-  for (uint8_t i = 0; i < kMotors; ++i) {
-    Motor& m = motors_[i];
-    m.shaped_dg = m.force_dg;
-    if (shaping_ && m.shaper.isActive()) {
-      m.shaped_dg = m.shaper.step(m.force_dg, maxForceDg(i), reference_table_);
-    }
+  if (!shaping_) {
+    for (uint8_t i = 0; i < kMotors; ++i) motors_[i].shaped_dg = motors_[i].force_dg;
+    return;
   }
+  tc::DynShaper* shapers[kMotors];
+  uint16_t force_dg[kMotors];
+  uint16_t shaped_dg[kMotors];
+  for (uint8_t i = 0; i < kMotors; ++i) {
+    shapers[i] = &motors_[i].shaper;
+    force_dg[i] = motors_[i].force_dg;
+  }
+  tc::DynShaper::stepAll(shapers, force_dg, shaping_max_dg_, shaped_dg, kMotors, reference_table_);
+  for (uint8_t i = 0; i < kMotors; ++i) motors_[i].shaped_dg = shaped_dg[i];
 }
 
 // The reference over the heaviest force any motor flies, each motor's filter against it; the
@@ -294,6 +302,7 @@ bool ForceActuators::configureShaping() {
     const Motor& source = motors_[motors_[i].source];
     laws[i] = isArmable(i) ? &source.dynamics : nullptr;
     const uint16_t most = maxForceDg(i);
+    shaping_max_dg_[i] = most;  // the model's, fixed until the next configureShaping
     if (most > max_dg) max_dg = most;
   }
   // Float tables (expf, sqrtf per bin): the watchdog is kicked between the parts, each well

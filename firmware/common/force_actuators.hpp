@@ -193,6 +193,7 @@ class ForceActuators {
   bool shaping_ = false;
   tc::ShaperReference reference_;
   tc::ShaperReferenceTable reference_table_;
+  uint16_t shaping_max_dg_[kMotors] = {};  // each motor's largest force (configureShaping)
 };
 
 }  // namespace fw

@@ -128,4 +128,29 @@ TEST(Drift, SwapRunsAreComparedWithTheSameRunOfTheDocs) {
   EXPECT_EQ(bench::compareDrift({{"swap", {{"runs", {other}}}}}, now, figures).missing, 1);
 }
 
+TEST(Drift, TwiRowsAndDlpfSettingsAreComparedRowByRow) {
+  const auto twi_row = [](uint64_t twps, uint64_t polled) {
+    return nlohmann::json{{"scl_hz", 100000}, {"twps", twps},          {"bytes", 14},
+                          {"bus_cycles_model", 24960}, {"polled_cycles", polled}, {"interrupt_cycles", 26899}};
+  };
+  const auto dlpf = [](double gyro_delay_ms) {
+    return nlohmann::json{{"cfg", 5},
+                          {"gyro", {{"delay_ms", gyro_delay_ms}, {"noise_rms", 0.022}, {"bandwidth_hz", 11.8}}},
+                          {"accel", {{"delay_ms", 13.82}, {"noise_rms", 1.5}}}};  // no -3 dB: unfiltered
+  };
+  const nlohmann::json docs = {{"twi", {{"rows", {twi_row(0, 26756), twi_row(1, 26749)}}}},
+                               {"imu", {{"dlpf", {dlpf(13.41)}}}}};
+  nlohmann::json now = {{"twi", {{"rows", {twi_row(1, 26749 + 200)}}}}, {"imu", {{"dlpf", {dlpf(13.414)}}}}};
+  const std::vector<bench::DriftFigure> figures = bench::driftFigures(now);
+  ASSERT_EQ(figures.size(), 3u + 5u);  // bus, polled, interrupt; gyro delay, noise, -3 dB; accel delay, noise
+  EXPECT_EQ(figures[1].path, "twi.rows[scl_hz=100000,twps=1,bytes=14].polled_cycles");
+  bench::DriftResult r = bench::compareDrift(docs, now, figures);
+  EXPECT_EQ(r.drifted, 0);  // 200 cycles within 1 % of 26,749; 0.004 ms within 0.005 ms
+  EXPECT_EQ(r.missing, 0);
+  now["twi"]["rows"][0]["bus_cycles_model"] = 24961;  // the bus time is exact
+  now["imu"]["dlpf"][0]["gyro"]["delay_ms"] = 13.42;
+  r = bench::compareDrift(docs, now, figures);
+  EXPECT_EQ(r.drifted, 2);
+}
+
 }  // namespace

@@ -78,8 +78,8 @@ void whereTheCyclesGoAddsUpToTheCpuLoad(const nlohmann::json& j) {
   // each mode's own output path is where it shows
   EXPECT_GT(j["breakdown"]["force_thesis"].value("tc::forceToPwmDg<...>", 0.0), 0.0);  // the 16-bit path
   EXPECT_GT(j["breakdown"]["force_v2"].value("tc::V2Frame::fly", 0.0), 0.0);
-  EXPECT_GT(j["breakdown"]["force_v2_dyn"].value("tc::DynShaper::step", 0.0), 0.0);  // dyn on shapes
-  EXPECT_FALSE(j["breakdown"]["force_v2"].contains("tc::DynShaper::step"));           // dyn off does not
+  EXPECT_GT(j["breakdown"]["force_v2_dyn"].value("tc::DynShaper::stepAll", 0.0), 0.0);  // dyn on shapes
+  EXPECT_FALSE(j["breakdown"]["force_v2"].contains("tc::DynShaper::stepAll"));           // dyn off does not
   EXPECT_GT(j["breakdown"]["ardupilot"].value("fly::ArduPilotCurve::pulseUsDg", 0.0), 0.0);
   EXPECT_FALSE(j["breakdown"]["pwm"].contains("tc::V2Frame::fly"));
 }

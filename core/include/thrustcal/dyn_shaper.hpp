@@ -20,10 +20,14 @@
 // the motor spins down.
 //
 // Split by cost: configure() (float, expf; when shaping is switched on, or the frame rate or
-// the records change) tabulates a_m, a_r / a_m and a_r over kShaperBins force bins per
-// direction; step() (every frame, integer only: two 32 x 16 multiplications, no division)
-// reads them. A motor without dynamics (a thesis record, a v2 record before `dyn`) is not
-// shaped: step() passes its force through unchanged.
+// the records change) tabulates a_m, a_r / a_m and a_r at kShaperBins + 1 forces per direction,
+// evenly spaced over the motors' range; step() (every frame, integer only: 32 x 16 and 16 x 8
+// multiplications, no division) interpolates them linearly at the reference's force. Taking the
+// value of the bin the reference is in instead moved a motor's gain by up to the law's change
+// over half a bin (51-102 g bins: about 1 % of tau), so a motor hovering a few grams either side
+// of a bin edge followed the reference up to 1 % faster or slower. A motor without dynamics (a
+// thesis record, a v2 record before `dyn`) is not shaped: step() passes its force through
+// unchanged.
 #pragma once
 #include <stdint.h>
 
@@ -31,7 +35,9 @@
 
 namespace tc {
 
-constexpr uint8_t kShaperBins = 16;      // force bins per direction
+constexpr uint8_t kShaperBins = 16;      // force intervals per direction (kShaperBins + 1 points)
+constexpr uint8_t kShaperPoints = kShaperBins + 2;  // the points, and the last repeated (the
+                                                    // open-ended interval interpolates to it)
 constexpr uint8_t kShaperUp = 0;         // table index: F above the reference
 constexpr uint8_t kShaperDown = 1;       // ... below it
 constexpr uint16_t kShaperGainMaxQ14 = 0xFFFF;  // a_r / a_m at most ~4: a reference up to 4x faster
@@ -48,13 +54,15 @@ struct ShaperReference {
   bool isValid() const;
 };
 
-// The reference's per-frame gains, shared by all motors: a_r per bin and direction (Q16), and
-// where the bins lie (bin = force_dg >> bin_shift, the last bin open-ended; bin_shift >= 1, and
-// bin_scale_q16 = 2^(16 - bin_shift), so the frame finds the bin by one multiplication).
+// The reference's per-frame gains, shared by all motors: a_r at each point and direction (Q16),
+// and where the points lie (point i at force i << bin_shift dg, bin_shift >= 1; the interval a
+// force is in and its place in it from one multiplication by bin_scale_q16 = 2^(16 - bin_shift);
+// at and beyond point kShaperBins the last point's value).
 struct ShaperReferenceTable {
+  uint8_t fixed = 0;  // 1: a fixed reference, a_r the same at every point (the frame reads point 0)
   uint8_t bin_shift = 1;
   uint16_t bin_scale_q16 = 0x8000;
-  uint16_t a_ref_q16[2][kShaperBins] = {};
+  uint16_t a_ref_q16[2][kShaperPoints] = {};
 };
 
 // One motor's shaping state and gains.
@@ -71,21 +79,27 @@ class DynShaper {
   // One frame: the force to command now (decigrams) for the requested `force_dg`, the model
   // making at most `max_dg`. Not active: `force_dg` unchanged.
   uint16_t step(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table);
+  // Every motor's frame in one call: out_dg[i] = shapers[i]->step(force_dg[i], max_dg[i], table).
+  // The same results; on the AVR the registers are saved once a frame, not once a motor.
+  static void stepAll(DynShaper* const* shapers, const uint16_t* force_dg, const uint16_t* max_dg, uint16_t* out_dg,
+                      uint8_t count, const ShaperReferenceTable& table);
 
   // The reference's present value, decigrams (what the motor's force is expected to be).
   uint16_t referenceDg() const { return static_cast<uint16_t>((ref_q8_ + 128) >> 8); }
-  // The table entries (tests, status): a_r / a_m in Q14, a_m in Q16.
-  uint16_t gainQ14(uint8_t dir, uint8_t bin) const { return gain_q14_[dir][bin]; }
-  uint16_t motorQ16(uint8_t dir, uint8_t bin) const { return a_motor_q16_[dir][bin]; }
+  // The table entries (tests, status) at point 0..kShaperBins: a_r / a_m in Q14, a_m in Q16.
+  uint16_t gainQ14(uint8_t dir, uint8_t point) const { return gain_q14_[dir][point]; }
+  uint16_t motorQ16(uint8_t dir, uint8_t point) const { return a_motor_q16_[dir][point]; }
 
  private:
+  uint16_t frame(uint16_t force_dg, uint16_t max_dg, const ShaperReferenceTable& table);  // step()'s body
+
   int32_t ref_q8_ = 0;  // the reference, 1/256 dg
   bool active_ = false;
-  uint16_t a_motor_q16_[2][kShaperBins] = {};
-  uint16_t gain_q14_[2][kShaperBins] = {};
+  uint16_t a_motor_q16_[2][kShaperPoints] = {};
+  uint16_t gain_q14_[2][kShaperPoints] = {};
 };
 
-// The reference table for motors of at most `max_dg` (the bins cover 0..max_dg) at `frame_hz`:
+// The reference table for motors of at most `max_dg` (the points cover 0..max_dg) at `frame_hz`:
 // fixed, or the slowest of `count` motors' laws (entries without dynamics skipped). False when
 // the reference is slowest and none of the motors has dynamics (nothing to shape), or the
 // reference is not valid.

@@ -10,7 +10,7 @@
 //     tc::forceToPwm over tc::ThesisRun, its curves' steps read from the EEPROM through the
 //     real hal::Eeprom (hal/avr/eeprom.cpp is linked in);
 //   - the battery readings: the median of 101 (v1, status) and the middle two of four (v2);
-//   - equal dynamics (`dyn on`): four tc::DynShaper::step calls, as the force API shapes each
+//   - equal dynamics (`dyn on`): tc::DynShaper::stepAll over four motors, as the force API shapes each
 //     motor's command before the frame above.
 // The frame's assembly is also checked against its portable C++ (V2Frame::flyPortable) on
 // frames with insane readings and jumps, and at the edges of the range (3.0 and 26.0 V, a 5 g
@@ -40,7 +40,7 @@ enum Label : uint8_t {
   kThesis = 3,         // 4 x (sag-compensated reading + forceToPwm over ThesisRun)
   kThesisMedian = 4,   // thesis battery reading: 4 pushes into the median of 101 + median()
   kV2Reading = 5,      // v2 battery reading: the middle two of four readings in mV
-  kShaping = 6,        // equal dynamics: 4 x DynShaper::step (commands change every frame)
+  kShaping = 6,        // equal dynamics: DynShaper::stepAll, 4 motors (commands change every frame)
 };
 enum Key : uint8_t {
   kSizeofModelV2 = 0x80,
@@ -75,6 +75,8 @@ static tc::MedianFilter<101> battery_median;
 static const tc::BatteryMonitor monitor;
 static tc::V2Frame reference;
 static tc::DynShaper shapers[4];
+static tc::DynShaper* const shaper_ptrs[4] = {&shapers[0], &shapers[1], &shapers[2], &shapers[3]};
+static const uint16_t kShapingMaxDg[4] = {7000, 7000, 7000, 7000};
 static tc::ShaperReferenceTable shaper_reference;
 volatile uint16_t sink;
 
@@ -99,8 +101,8 @@ static uint16_t busMv(uint16_t frame) {
 }
 
 // Equal dynamics: four measured motors (about 89 ms light, 77 ms heavy, each a few ms apart),
-// the slowest as the reference, at 400 Hz (fly's rate); four DynShaper::step calls per frame, as
-// the force API makes them. Its own function, so main's measured code keeps its registers.
+// the slowest as the reference, at 400 Hz (fly's rate); one DynShaper::stepAll over the four per
+// frame, as the force API makes it. Its own function, so main's measured code keeps its registers.
 // Returns the failures (a reference that could not be built).
 __attribute__((noinline)) static uint16_t measureShaping(uint16_t frames) {
   uint16_t failures = 0;
@@ -120,10 +122,11 @@ __attribute__((noinline)) static uint16_t measureShaping(uint16_t frames) {
   for (uint8_t m = 0; m < 4; ++m) shapers[m].configure(laws[m], shaper_reference, 400, 2000);
   for (uint16_t frame = 0; frame < frames; ++frame) {
     uint16_t shaped[4];
-    for (uint8_t m = 0; m < 4; ++m) shaped[m] = commandDg(frame, m);
-    ready(shaped[3]);
+    uint16_t commands[4];
+    for (uint8_t m = 0; m < 4; ++m) commands[m] = commandDg(frame, m);
+    ready(commands[3]);
     markStart(kShaping);
-    for (uint8_t m = 0; m < 4; ++m) shaped[m] = shapers[m].step(shaped[m], 7000, shaper_reference);
+    tc::DynShaper::stepAll(shaper_ptrs, commands, kShapingMaxDg, shaped, 4, shaper_reference);
     markEnd();
     sink = shaped[0] + shaped[3];
   }

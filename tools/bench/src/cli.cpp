@@ -198,6 +198,8 @@ void runDrift(const DriftArgs& a) {
   now["footprint"] = measured(footprintSection(a.paths));
   const ImageSize fly = imageSize(a.paths.elf("fly"));
   now["fly"] = {{"flash_bytes", fly.flash_bytes}, {"sram_static_bytes", fly.sram_static_bytes}};
+  now["twi"] = measured(twiSection());
+  now["imu"] = measured(imuSection());
   SwapBenchOptions so;
   so.out_dir = a.swap_dir.empty() ? sourcePath("build/bench/swap-drift") : a.swap_dir;
   so.reduced = true;
@@ -215,7 +217,7 @@ void runDrift(const DriftArgs& a) {
 
 void addDrift(CLI::App& bench) {
   CLI::App* sub = bench.add_subcommand(
-      "drift", "measure the cheap figures again (compute cycles, image sizes, footprint, a reduced swap) and "
+      "drift", "measure the cheap figures again (compute cycles, image sizes, footprint, TWI and DLPF, a reduced swap) and "
                "fail when one moved past its tolerance from the docs' JSON");
   auto a = std::make_shared<DriftArgs>();
   sub->add_option("--from", a->from, "the JSON the docs are generated from (docs/results.json)")->required();
@@ -234,12 +236,32 @@ void addDrift(CLI::App& bench) {
   });
 }
 
+// `bench all`: every benchmark, in order.
+std::vector<Section> allSections(const Options& o) {
+  std::vector<Section> all;
+  all.push_back(accuracySection(accuracyConfig(o)));
+  all.push_back(computeSection(o.paths));
+  all.push_back(footprintSection(o.paths));
+  all.push_back(calibrationSection(o.paths, !o.quick));
+  all.push_back(liftoffSection(o.paths, o.quick));
+  all.push_back(runtimeSection(o.paths));
+  all.push_back(safetySection(o.paths));
+  all.push_back(flySection(o.paths));
+  all.push_back(swapSection(o.paths, swapOptions(o)));
+  all.push_back(speedSection(o.paths));
+  all.push_back(dynamicsSection(o.paths, o.quick));
+  all.push_back(rigsSection());
+  all.push_back(twiSection());
+  all.push_back(imuSection());
+  return all;
+}
+
 }  // namespace
 
 void registerCommands(CLI::App& app) {
   CLI::App* bench = app.add_subcommand(
       "bench", "Benchmarks: accuracy, AVR compute and footprint, calibration, lift-off, runtime, "
-               "safety, fly, swap, speed, dynamics, rigs; each figure next to its target");
+               "safety, fly, swap, speed, dynamics, rigs, twi, imu; each figure next to its target");
   bench->require_subcommand(1);
   auto o = std::make_shared<Options>();
   add(*bench, o, "accuracy",
@@ -290,25 +312,17 @@ void registerCommands(CLI::App& app) {
       "the seesaw's and the gimbal's physics against hand calculations: period, damping, end stop, "
       "torque steps, precession, yaw (plant only, seconds)",
       [](const Options&) { return std::vector<Section>{rigsSection()}; });
+  add(*bench, o, "twi",
+      "the test image air_probe reading the MPU-6050 in simavr at 400 and 100 kHz: the TWI's bus time against "
+      "the datasheet's formula, the polled and the interrupt-driven driver's cycles (a second)",
+      [](const Options&) { return std::vector<Section>{twiSection()}; });
+  add(*bench, o, "imu",
+      "the MPU-6050 model's DLPF settings measured on the chip model (delay, -3 dB, noise at rest) beside the "
+      "datasheet's table (a second)",
+      [](const Options&) { return std::vector<Section>{imuSection()}; });
   addReport(*bench);
   addDrift(*bench);
-  add(*bench, o, "all", "every benchmark, in order, one JSON file",
-      [](const Options& o) {
-        std::vector<Section> all;
-        all.push_back(accuracySection(accuracyConfig(o)));
-        all.push_back(computeSection(o.paths));
-        all.push_back(footprintSection(o.paths));
-        all.push_back(calibrationSection(o.paths, !o.quick));
-        all.push_back(liftoffSection(o.paths, o.quick));
-        all.push_back(runtimeSection(o.paths));
-        all.push_back(safetySection(o.paths));
-        all.push_back(flySection(o.paths));
-        all.push_back(swapSection(o.paths, swapOptions(o)));
-        all.push_back(speedSection(o.paths));
-        all.push_back(dynamicsSection(o.paths, o.quick));
-        all.push_back(rigsSection());
-        return all;
-      });
+  add(*bench, o, "all", "every benchmark, in order, one JSON file", allSections);
 }
 
 }  // namespace bench

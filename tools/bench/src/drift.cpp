@@ -50,12 +50,34 @@ std::string tolerance(const DriftFigure& f) {
   return "exact";
 }
 
+// Benchmarks 11 and 12 (docs/sim.md's TWI and DLPF tables): simulated cycles of air_probe's reads
+// (the bus time exact, the drivers 1 % or 2 cycles, as compute) and the DLPF model's figures as
+// the table prints them (delay 0.005 ms, -3 dB and noise 1 %).
+void airframeFigures(const nlohmann::json& now, std::vector<DriftFigure>& out) {
+  if (now.contains("twi") && now["twi"].contains("rows"))
+    for (const auto& r : now["twi"]["rows"]) {
+      const std::string row = fmt::format("twi.rows[scl_hz={},twps={},bytes={}]", r.at("scl_hz").dump(),
+                                          r.at("twps").dump(), r.at("bytes").dump());
+      out.push_back({row + ".bus_cycles_model", 0, 0, "cycles"});
+      for (const char* k : {"polled_cycles", "interrupt_cycles"}) out.push_back({row + "." + k, 2, 0.01, "cycles"});
+    }
+  if (!now.contains("imu") || !now["imu"].contains("dlpf")) return;
+  for (const auto& r : now["imu"]["dlpf"])
+    for (const char* sensor : {"gyro", "accel"}) {
+      const std::string at = fmt::format("imu.dlpf[cfg={}].{}", r.at("cfg").dump(), sensor);
+      out.push_back({at + ".delay_ms", 0.005, 0, "ms"});
+      out.push_back({at + ".noise_rms", 0, 0.01, sensor == std::string("gyro") ? "deg/s" : "mg"});
+      if (r.at(sensor).contains("bandwidth_hz")) out.push_back({at + ".bandwidth_hz", 0, 0.01, "Hz"});
+    }
+}
+
 }  // namespace
 
 std::vector<DriftFigure> driftFigures(const nlohmann::json& now) {
   std::vector<DriftFigure> out;
   for (const DriftFigure& f : fixedFigures())
     if (has(now, f.path)) out.push_back(f);
+  airframeFigures(now, out);
   if (!now.contains("swap") || !now["swap"].contains("runs")) return out;
   // The swap's figures are means over a 2.5 s window of a closed loop: a few digits of the
   // docs' tables, no more.

@@ -148,11 +148,11 @@ void addShapingRows(const ProbeResult& r, Table& t, nlohmann::json& json) {
   if (shaping == r.sections.end()) throw std::runtime_error("the AVR probe did not measure the shaping (dyn on)");
   const CycleStat& sh = shaping->second;
   const CycleStat& v2 = r.sections.at(kLabelV2Frame);
-  t.addRow({"equal dynamics (dyn on): 4 x DynShaper::step", std::to_string(sh.mean), std::to_string(sh.min),
+  t.addRow({"equal dynamics (dyn on): DynShaper::stepAll, 4 motors", std::to_string(sh.mean), std::to_string(sh.min),
             std::to_string(sh.max), "-", "-"});
   t.addRow({"v2 as read_run flies it with dyn on (the frame + the shaping)", std::to_string(v2.mean + sh.mean), "",
             std::to_string(v2.max + sh.max), "-", "-"});
-  json["updates"]["dyn_shaping"] = {{"name", "equal dynamics (dyn on): 4 x DynShaper::step"},
+  json["updates"]["dyn_shaping"] = {{"name", "equal dynamics (dyn on): DynShaper::stepAll, 4 motors"},
                                     {"frames", sh.count}, {"mean_cycles", sh.mean},
                                     {"min_cycles", sh.min}, {"max_cycles", sh.max}};
   json["v2_read_run_with_dyn"] = {{"mean_cycles", v2.mean + sh.mean}, {"max_cycles", v2.max + sh.max}};

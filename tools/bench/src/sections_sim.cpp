@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
 #include <sstream>
 
 #include <unistd.h>
@@ -133,12 +134,15 @@ auto v2PwmFor(const plant::Bench& bench, const tc::ModelV2& model) {
 }
 
 
-// The calibrations, run once per `thrustcal bench` call and shared by sections 4 and 5.
+// The calibrations, each run at most once per `thrustcal bench` call and shared by sections 4
+// and 5; a section asks for the ones it shows (the lift-off flies two of the four, so run alone,
+// as a test does, it pays for those two only).
 struct CalibrationRuns {
   MethodRun thesis;         // gather_store's default sweep (settle auto), store 1 / store 2
   MethodRun thesis_200ms;   // the thesis's timing (settle 200): lift-off flies these records
   MethodRun v2;             // 15 us, 500 ms, store v2 (fit + refine): lift-off flies these records
   MethodRun v2_default;     // gather_store's default sweep, store v2 (fit + refine)
+  std::string done_for;     // the gather_store image these runs are of
   std::string error;  // non-empty: not available, and why
 };
 
@@ -203,53 +207,70 @@ void checkStoredV2(MethodRun& m) {
 
 namespace {
 
-// Cached per gather_store image: `bench all` runs the gathers once for sections 4 and 5.
-CalibrationRuns& calibrationRuns(const AvrPaths& paths) {
-  static CalibrationRuns runs;
-  static std::string done_for;
-  const std::string elf = paths.elf("gather_store");
-  if (done_for == elf) return runs;
-  done_for = elf;
-  runs = CalibrationRuns();
-  if (!std::filesystem::exists(elf)) {
-    runs.error = elf + " not found: build the AVR tree (--target gather_store) or pass --avr-build DIR";
-    return runs;
-  }
-  try {
+// Runs the calibration `key` names (one of CalibrationRuns' four) and checks what it stored.
+void runMethod(const AvrPaths& paths, const std::string& key, CalibrationRuns& runs) {
+  const std::string lipo_then_10v = "fit from the LiPo sweep, refined by the 10 V bench-supply sweep";
+  if (key == "thesis") {
     runs.thesis = gatherWith(paths, "thesis",
                              fmt::format("thesis: gather_store's default sweep, 10 us, settle auto (cap {} ms)",
                                          kAutoSettleCapMs),
                              10, kAutoSettleCapMs, sim::GatherModel::kThesisV1, true);
+  } else if (key == "thesis_200ms") {
     runs.thesis_200ms = gatherWith(paths, "thesis_200ms", "thesis timing: 10 us steps, 200 ms (settle 200)", 10,
                                    200, sim::GatherModel::kThesisV1);
+  } else if (key == "v2") {
     runs.v2 = gatherWith(paths, "v2",
                          fmt::format("v2: gather_store store v2 on the board, {} us steps, {} ms settle",
                                      kV2StepUs, kV2SettleMs),
                          kV2StepUs, kV2SettleMs, sim::GatherModel::kModelV2);
-    runs.v2.store_v2 = "fit from the LiPo sweep, refined by the 10 V bench-supply sweep";
+    runs.v2.store_v2 = lipo_then_10v;
+    checkStoredV2(runs.v2);  // v2: the records gather_store wrote with store v2
+  } else if (key == "v2_default") {
     runs.v2_default = gatherWith(
         paths, "v2_default",
         fmt::format("v2: gather_store's default sweep, 10 us, settle auto (cap {} ms), store v2", kAutoSettleCapMs),
         10, kAutoSettleCapMs, sim::GatherModel::kModelV2, true);
-    runs.v2_default.store_v2 = "fit from the LiPo sweep, refined by the 10 V bench-supply sweep";
-    // thesis: the stored curve 1 of each slot against its bench
-    for (MethodRun* thesis : {&runs.thesis, &runs.thesis_200ms}) {
-      for (size_t i = 0; i < kSeeds.size(); ++i) {
-        tc::MotorCalibration cal;
-        const std::string status = sim::decodeSlot(thesis->eeprom, static_cast<int>(i), cal);
-        if (status != "ok")
-          throw std::runtime_error(fmt::format("{} slot {} did not decode: {}", thesis->key, i, status));
-        const plant::Bench bench = benchAtStartOfFirstSweep(kSeeds[i]);
-        thesis->errors.push_back(curveError(bench, [&](int g) {
-          return static_cast<double>(cal.first.pwmForGrams(static_cast<uint16_t>(g)));
-        }));
-      }
-    }
-    // v2: the records gather_store wrote with store v2
-    checkStoredV2(runs.v2);
+    runs.v2_default.store_v2 = lipo_then_10v;
     checkStoredV2(runs.v2_default);
-  } catch (const std::exception& e) {
-    runs.error = std::string("the gather scenario failed: ") + e.what();
+  } else {
+    throw std::logic_error("bench: no calibration run named " + key);
+  }
+  if (key != "thesis" && key != "thesis_200ms") return;
+  // thesis: the stored curve 1 of each slot against its bench
+  MethodRun& thesis = key == "thesis" ? runs.thesis : runs.thesis_200ms;
+  for (size_t i = 0; i < kSeeds.size(); ++i) {
+    tc::MotorCalibration cal;
+    const std::string status = sim::decodeSlot(thesis.eeprom, static_cast<int>(i), cal);
+    if (status != "ok") throw std::runtime_error(fmt::format("{} slot {} did not decode: {}", thesis.key, i, status));
+    const plant::Bench bench = benchAtStartOfFirstSweep(kSeeds[i]);
+    thesis.errors.push_back(curveError(bench, [&](int g) {
+      return static_cast<double>(cal.first.pwmForGrams(static_cast<uint16_t>(g)));
+    }));
+  }
+}
+
+// The runs `keys` names, each made at most once per gather_store image (`bench all` runs the
+// gathers once for sections 4 and 5). On failure `error` says why and no run is used.
+CalibrationRuns& calibrationRuns(const AvrPaths& paths, std::initializer_list<const char*> keys) {
+  static CalibrationRuns runs;
+  static std::set<std::string> done;
+  const std::string elf = paths.elf("gather_store");
+  if (runs.done_for != elf) {
+    runs = CalibrationRuns();
+    runs.done_for = elf;
+    done.clear();
+    if (!std::filesystem::exists(elf))
+      runs.error = elf + " not found: build the AVR tree (--target gather_store) or pass --avr-build DIR";
+  }
+  for (const char* key : keys) {
+    if (!runs.error.empty()) break;
+    if (done.count(key)) continue;
+    try {
+      runMethod(paths, key, runs);
+      done.insert(key);
+    } catch (const std::exception& e) {
+      runs.error = std::string("the gather scenario failed: ") + e.what();
+    }
   }
   return runs;
 }
@@ -358,7 +379,7 @@ Section calibrationSection(const AvrPaths& paths, bool fast_sweeps) {
   const std::string title = fmt::format(
       "4. Calibration: gather_store in simavr on the plant's thesis bench, 4 varied motors; "
       "stored model vs the plant over {}-{} g (% of the gram)", kBandLoG, kBandHiG);
-  const CalibrationRuns& runs = calibrationRuns(paths);
+  const CalibrationRuns& runs = calibrationRuns(paths, {"thesis", "thesis_200ms", "v2", "v2_default"});
   if (!runs.error.empty()) {
     s.tables.push_back(notAvailable(title, runs.error));
     s.json = {{"available", false}, {"reason", runs.error}};
@@ -426,7 +447,7 @@ Section liftoffSection(const AvrPaths& paths, bool quick) {
     s.json = {{"available", false}, {"reason", why}};
     return s;
   }
-  const CalibrationRuns& runs = calibrationRuns(paths);
+  const CalibrationRuns& runs = calibrationRuns(paths, {"thesis_200ms", "v2"});  // what it flies
   if (!runs.error.empty()) {
     s.tables.push_back(notAvailable(title, "needs the calibration runs: " + runs.error));
     s.json = {{"available", false}, {"reason", runs.error}};

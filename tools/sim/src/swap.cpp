@@ -249,9 +249,11 @@ SwapResult runSwap(const SwapOptions& o) {
     progress(fmt::format("{} flights: {}, stock and {} part(s), {} IMU unit(s)", runs.size(), peer, o.parts.size(),
                          o.imu_seeds.size()));
   else
-    progress(fmt::format("{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s){}",
+    progress(fmt::format("{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s){}{}{}",
                          runs.size(), o.rigs.size(), o.modes.size(), o.parts.size(), o.gains.size(),
-                         o.imu_seeds.size(), peer.empty() ? "" : ", " + peer));
+                         o.imu_seeds.size(), peer.empty() ? "" : ", " + peer,
+                         o.steps > 1 ? fmt::format(", {} steps a flight (figures: their means)", o.steps) : "",
+                         o.part_mass_only ? ", each part only as its weight on the stock motor 1" : ""));
   res.runs = flyAll(o, res.calibration, runs, progress);
   res.targets = swapTargets(res.runs, o.parts);
   riseChanges(res.dynamics.parts, res.runs);

@@ -27,6 +27,18 @@ struct SwapArgs {
   std::string peer;
 };
 
+// How each flight measures: its steps, and the part's weight alone (a diagnostic).
+void declareStepOptions(CLI::App* cmd, swap::SwapOptions* o) {
+  cmd->add_option("--steps", o->steps,
+                  "up-steps per flight, each back to level for --window-s before the next; a run's figures "
+                  "are the means over its steps (one step's rise time scatters by about 1 % with the same motors)")
+      ->check(CLI::Range(1, 20))
+      ->capture_default_str();
+  cmd->add_flag("--part-mass-only", o->part_mass_only,
+                "diagnostic: each part's runs fly the stock motor 1 carrying the part's motor and propeller "
+                "masses (and the seesaw's counterweight) on the stock records: what the part changes in the rig alone");
+}
+
 void declareSwapOptions(CLI::App* cmd, SwapArgs& a) {
   swap::SwapOptions* o = &a.o;
   cmd->add_option(
@@ -88,6 +100,7 @@ void declareSwapOptions(CLI::App* cmd, SwapArgs& a) {
   cmd->add_option("--window-s", o->window_s, "simulated time after the step")
       ->check(CLI::Range(0.5, 20.0))
       ->capture_default_str();
+  declareStepOptions(cmd, o);
   cmd->add_option("--jobs", o->jobs, "flights at once, each on its own simulated board")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();

@@ -80,6 +80,12 @@ AirframeOptions rigOptions(const SwapOptions& o, const RunSpec& r) {
   if (r.part != kStock) {
     const plant::ActuatorParams replaced = a.motors[kSwapSlot];
     a.motors[kSwapSlot] = actuatorOf(findPart(r.part), o.variation);
+    if (o.part_mass_only) {  // the stock motor with the part's weight on it
+      plant::ActuatorParams weighted = replaced;
+      weighted.motor.mass_g = a.motors[kSwapSlot].motor.mass_g;
+      weighted.prop.mass_g = a.motors[kSwapSlot].prop.mass_g;
+      a.motors[kSwapSlot] = weighted;
+    }
     if (r.rig == AirRig::kSeesaw) counterweigh(a.seesaw, replaced, a.motors[kSwapSlot]);
   }
   a.imu_params.seed = r.imu_seed;
@@ -147,20 +153,30 @@ double angleOf(const AirSample& s, const std::string& axis) {
 
 }  // namespace
 
-void writeSeries(const std::string& path, const std::vector<AirSample>& rows, double t_step, const RunSpec& r,
-                 double sp_deg) {
+// The setpoint at `t` of a flight whose steps came at `t_steps` (each held `window_s`).
+double setpointAt(double t, const std::vector<double>& t_steps, double window_s, double sp_deg) {
+  for (const double ts : t_steps)
+    if (t >= ts && t < ts + window_s + 1e-9) return sp_deg;
+  return 0.0;
+}
+
+void writeSeries(const std::string& path, const std::vector<AirSample>& rows, const std::vector<double>& t_steps,
+                 double window_s, const RunSpec& r, double sp_deg) {
   std::ofstream out(path, std::ios::trunc);
   if (!out) throw std::runtime_error(fmt::format("{}: cannot write the time series; check --out-dir", path));
   const int motors = rows.empty() ? 0 : rows.front().motors;
-  out << fmt::format("# thrustcal sim swap: {} (the rig's truth; t from the step)\n", runId(r));
+  const double t0 = t_steps.front();
+  out << fmt::format("# thrustcal sim swap: {} (the rig's truth; t from the first step, {} step(s))\n", runId(r),
+                     t_steps.size());
   out << "t_s,sp_deg,angle_deg,roll_deg,pitch_deg,yaw_deg";
   for (int i = 0; i < motors; ++i) out << fmt::format(",pulse{}_us", i);
   for (int i = 0; i < motors; ++i) out << fmt::format(",force{}_g", i);
   out << "\n";
   for (const AirSample& s : rows) {
-    const double t = s.truth.t_s - t_step;
-    out << fmt::format("{:.4f},{},{:.3f},{:.3f},{:.3f},{:.3f}", t, t < 0 ? 0.0 : sp_deg, angleOf(s, r.axis),
-                       s.truth.roll_deg, s.truth.pitch_deg, s.truth.yaw_deg);
+    const double t = s.truth.t_s - t0;
+    out << fmt::format("{:.4f},{},{:.3f},{:.3f},{:.3f},{:.3f}", t,
+                       setpointAt(s.truth.t_s, t_steps, window_s, sp_deg), angleOf(s, r.axis), s.truth.roll_deg,
+                       s.truth.pitch_deg, s.truth.yaw_deg);
     for (int i = 0; i < motors; ++i) out << fmt::format(",{:.1f}", s.pulse_us[i]);
     for (int i = 0; i < motors; ++i) out << fmt::format(",{:.1f}", s.thrust_g[i]);
     out << "\n";
@@ -171,6 +187,19 @@ namespace {
 
 double settleOf(const SwapOptions& o, const RunSpec& r) {
   return r.gains == Gains::kPid ? o.pid_settle_s : o.settle_s;
+}
+
+// The mean of each figure over the steps (NaN, a step that never rose or settled, stays NaN).
+StepMetrics meanOf(const std::vector<StepMetrics>& steps) {
+  StepMetrics m;
+  m.rise_s = m.overshoot_pct = m.settling_s = m.sse = m.itae = m.final_value = m.peak = 0;
+  for (const StepMetrics& s : steps) {
+    m.rise_s += s.rise_s, m.overshoot_pct += s.overshoot_pct, m.settling_s += s.settling_s;
+    m.sse += s.sse, m.itae += s.itae, m.final_value += s.final_value, m.peak += s.peak;
+  }
+  const double n = static_cast<double>(steps.size());
+  m.rise_s /= n, m.overshoot_pct /= n, m.settling_s /= n, m.sse /= n, m.itae /= n, m.final_value /= n, m.peak /= n;
+  return m;
 }
 
 }  // namespace
@@ -221,25 +250,47 @@ RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, c
   RunResult res;
   res.spec = r;
   AirframeRig rig(o.fly_elf, rigOptions(o, r));
-  rig.board().setEeprom(r.mode == Mode::kForceDyn ? c.of(r.part).eeprom_dyn : c.of(r.part).eeprom);
+  const PartCalibration& records = c.of(o.part_mass_only ? std::string(kStock) : r.part);
+  rig.board().setEeprom(r.mode == Mode::kForceDyn ? records.eeprom_dyn : records.eeprom);
   Console con(rig.board(), "fly> ");
   const double spool_s = armed(rig, con, setupLines(o, c, r), r, o.level);
   const double settle_s = settleOf(o, r);
   flyFor(rig, spool_s + settle_s);
-  const double t_step = rig.board().timeS();  // the step: the moment its line is sent
-  mustSay(con, r.axis == "roll" ? fmt::format("sp {} 0", o.step_deg) : fmt::format("sp 0 {}", o.step_deg), r);
-  flyFor(rig, t_step + o.window_s - rig.board().timeS());
+  const std::string step =
+      r.axis == "roll" ? fmt::format("sp {} 0", o.step_deg) : fmt::format("sp 0 {}", o.step_deg);
+  std::vector<double> t_steps;
+  for (int k = 0; k < std::max(1, o.steps); ++k) {
+    if (k > 0) {  // back to level, as long as a step's window, before the next
+      mustSay(con, "sp 0 0", r);
+      flyFor(rig, o.window_s);
+    }
+    t_steps.push_back(rig.board().timeS());  // the step: the moment its line is sent
+    mustSay(con, step, r);
+    flyFor(rig, t_steps.back() + o.window_s - rig.board().timeS());
+  }
   res.integrator_mnm = integratorOf(con, r);
-  finishRun(res, rig, t_step, settle_s, o, csv_path, wall0);
+  finishRun(res, rig, t_steps, settle_s, o, csv_path, wall0);
   return res;
 }
 
-void finishRun(RunResult& res, AirframeRig& rig, double t_step, double settle_s, const SwapOptions& o,
-               const std::string& csv_path, std::chrono::steady_clock::time_point wall0) {
-  const std::vector<AirSample> rows = windowOf(rig.samples(), t_step, settle_s, o.window_s);
-  measure(res, rows, t_step, o);
+void finishRun(RunResult& res, AirframeRig& rig, const std::vector<double>& t_steps, double settle_s,
+               const SwapOptions& o, const std::string& csv_path, std::chrono::steady_clock::time_point wall0) {
+  std::vector<StepMetrics> each;
+  double y0 = 0, spread = 0;
+  for (std::size_t k = 0; k < t_steps.size(); ++k) {  // the first after the level flight, the others after
+                                                       // their return to level
+    measure(res, windowOf(rig.samples(), t_steps[k], k == 0 ? settle_s : o.window_s, o.window_s), t_steps[k], o);
+    each.push_back(res.metrics);
+    res.step_rise_s.push_back(res.metrics.rise_s);
+    y0 += res.y0_deg, spread += res.hover_pwm_spread_us;
+  }
+  res.metrics = meanOf(each);
+  res.y0_deg = y0 / static_cast<double>(t_steps.size());
+  res.hover_pwm_spread_us = spread / static_cast<double>(t_steps.size());
   if (!csv_path.empty()) {
-    writeSeries(csv_path, rows, t_step, res.spec, o.step_deg);
+    const std::vector<AirSample> rows =
+        windowOf(rig.samples(), t_steps.front(), settle_s, t_steps.back() - t_steps.front() + o.window_s);
+    writeSeries(csv_path, rows, t_steps, o.window_s, res.spec, o.step_deg);
     res.csv_path = csv_path;
   }
   res.simulated_s = rig.board().timeS();

@@ -18,11 +18,14 @@ std::vector<AirSample> windowOf(const std::vector<AirSample>& log, double t_step
                                 double window_s);
 // The step's figures (the window's rows, t from the step), y0 and the hover pulse spread.
 void measure(RunResult& res, const std::vector<AirSample>& rows, double t_step, const SwapOptions& o);
-void writeSeries(const std::string& path, const std::vector<AirSample>& rows, double t_step, const RunSpec& r,
-                 double sp_deg);
-// After the window: the figures from the log (`settle_s` of level flight before the step), the
-// time series written to `csv_path` ("" = none), the simulated and wall times.
-void finishRun(RunResult& res, AirframeRig& rig, double t_step, double settle_s, const SwapOptions& o,
-               const std::string& csv_path, std::chrono::steady_clock::time_point wall0);
+// The flight from the first step's level flight on, t from the first step; sp_deg while a step
+// (`t_steps`, each held `window_s`) is on, 0 otherwise.
+void writeSeries(const std::string& path, const std::vector<AirSample>& rows, const std::vector<double>& t_steps,
+                 double window_s, const RunSpec& r, double sp_deg);
+// After the last window: each step's figures from the log (the first with `settle_s` of level
+// flight before it, the others with their return to level), their means, the time series written
+// to `csv_path` ("" = none), the simulated and wall times.
+void finishRun(RunResult& res, AirframeRig& rig, const std::vector<double>& t_steps, double settle_s,
+               const SwapOptions& o, const std::string& csv_path, std::chrono::steady_clock::time_point wall0);
 
 }  // namespace sim::swap

@@ -30,6 +30,8 @@ nlohmann::json runJson(const RunResult& r, int step_deg) {
           {"y0_deg", num(r.y0_deg)},
           {"final_deg", num(m.final_value)},
           {"peak_deg", num(m.peak)},
+          {"steps", r.step_rise_s.size()},
+          {"step_rise_s", r.step_rise_s},
           {"csv", r.csv_path}};
 }
 
@@ -52,6 +54,8 @@ nlohmann::json setupJson(const SwapOptions& o) {
           {"settle_s", {{"pd", o.settle_s}, {"pid", o.pid_settle_s}}},
           {"level", o.level},
           {"window_s", o.window_s},
+          {"steps", o.steps},
+          {"part_mass_only", o.part_mass_only},
           {"log_period_s", o.log_period_s},
           {"gimbal_layout", "plus"},
           {"calibration_model", gatherModelName(o.model)},

@@ -115,7 +115,7 @@ RunResult flyPeerRun(const SwapOptions& o, const RunSpec& r, const std::string& 
   checkArmed(rig, p, r, sticks.t_step);
   rig.run(o.window_s);
   res.integrator_mnm = std::numeric_limits<double>::quiet_NaN();  // not ours to read
-  finishRun(res, rig, sticks.t_step, o.settle_s, o, csv_path, wall0);
+  finishRun(res, rig, {sticks.t_step}, o.settle_s, o, csv_path, wall0);
   return res;
 }
 

@@ -4,7 +4,8 @@
 // docs no longer say what the code does: run tools/results.sh and commit what it writes.
 // Measured again (seconds, not minutes): the compute cycles (the bench probe in simavr), the
 // images' flash and static SRAM (avr-size, fly included), the stacks never used and the models'
-// SRAM (footprint), and a reduced swap (the gimbal, force mode, PD gains, one part, IMU unit 1),
+// SRAM (footprint), air_probe's TWI reads and the MPU-6050 model's DLPF figures (benchmarks 11 and
+// 12, about a second), and a reduced swap (the gimbal, force mode, PD gains, one part, IMU unit 1),
 // whose runs are compared with the same runs of the full swap.
 #pragma once
 #include <string>
@@ -25,7 +26,8 @@ struct DriftFigure {
 };
 
 // The figures compared: every one `now` has of the fixed list (compute, footprint, fly's image),
-// and each run of now's swap.runs[] with its step figures.
+// each row of now's twi.rows[] (bus and driver cycles) and imu.dlpf[] (delay, -3 dB, noise), and
+// each run of now's swap.runs[] with its step figures.
 std::vector<DriftFigure> driftFigures(const nlohmann::json& now);
 
 struct DriftResult {

@@ -60,6 +60,12 @@ std::string sourcePath(const std::string& rel);
 // Benchmark 10 (sections_rigs.cpp): the seesaw's and the gimbal's physics against hand
 // calculations, plant only (docs/sim.md, "The rigs").
 Section rigsSection();
+// Benchmarks 11 and 12 (sections_airframe.cpp; docs/sim.md, "The TWI" and "The MPU-6050"):
+// the test image air_probe reading the MPU-6050 in simavr at 400 and 100 kHz, the TWI's bus time
+// against the datasheet's formula and each driver's cycles; the MPU-6050 model's DLPF settings
+// measured (delay, -3 dB, noise) beside the datasheet's table. A second each.
+Section twiSection();
+Section imuSection();
 Section accuracySection(const AccuracyConfig& config);
 Section computeSection(const AvrPaths& paths);
 Section footprintSection(const AvrPaths& paths);

@@ -95,6 +95,15 @@ struct SwapOptions {
   bool level = true;          // fly's `level` (the accelerometer's trim) before each flight
   double pid_settle_s = 4.0;  // ... with PID gains: the integrator's time to take up the mismatch
   double window_s = 2.5;      // after the step
+  // Up-steps per flight: the step, `window_s` of it, back to level for `window_s`, the next
+  // step... Each run's figures are the means over its steps (fly's figures; a peer flies one).
+  // One step's rise time scatters by about 1 % (SD) with the same motors (the IMU's noise, the
+  // rig's motion at the step), as much as force+dyn's 1 % target: docs/fly.md, "Equal dynamics".
+  int steps = 1;
+  // Diagnostic: each part's runs fly the stock motor 1 carrying the part's motor and propeller
+  // masses (and, on the seesaw, the counterweight), on the stock records: what the part changes
+  // in the rig alone, without its thrust or dynamics.
+  bool part_mass_only = false;
   double log_period_s = 0.0025;
   int jobs = 1;  // flights at once (each its own simulated board)
   // A peer (`--peer FILE`): flown on the gimbal with stock and every part, each IMU unit, roll
@@ -159,7 +168,9 @@ std::string runModeName(const RunSpec& spec);  // modeName(), or "peer:NAME"
 
 struct RunResult {
   RunSpec spec;
-  StepMetrics metrics;             // of the true angle of the step's axis, in degrees
+  StepMetrics metrics;             // of the true angle of the step's axis, in degrees (the
+                                   // mean over the flight's steps)
+  std::vector<double> step_rise_s;  // each step's rise time, in order
   double y0_deg = 0;               // mean over the 0.1 s before the step
   double integrator_mnm = 0;       // the step axis's integrator at the end (fly's status)
   double hover_pwm_spread_us = 0;  // max - min of the flying motors' mean pulses, last 0.25 s before the step
