@@ -13,8 +13,8 @@
 // Each curve remembers the gram it walked to last, its PWM and its step to the next gram (5
 // bytes): a motor holding its force reads nothing, one changing it by 1-3 g reads those step
 // bytes one by one (walkNear); a longer jump walks from the nearest checkpoint, at most 8 steps
-// away but near the heaviest gram, in one EEPROM block read (walkTo). placeCursor walks there
-// ahead of a start (a stop's 1 g, fly's idle force at the arm). The voltage
+// away but near the heaviest gram, in one EEPROM block read (walkTo). placeCursor walks ahead of
+// a start from a stop (fw::ForceActuators' start force: 1 g, fly's idle force). The voltage
 // term is 16-bit arithmetic with the record's span's reciprocal (forceToPwmDg below): on the
 // ATmega2560 this took four motors' option 2.1 in fly (with their sag offsets) from about
 // 12,000 cycles a frame to about 5,800, walkNear and the sag offsets looked up after the write
@@ -58,9 +58,10 @@ struct ThesisCurveRun {
   // The PWM at `grams` + `tenths` / 10 in 0.1 us: tc::pwmTenthsAt's value (the first gram's
   // PWM below it, the heaviest's at and beyond it, the straight line between two grams), from
   // the cursor's PWM and its step to the next gram. Fits 16 bits for a curve whose PWMs are at
-  // most 6553 us. Inlined into forceToPwmDg: the gram walked to last again (a motor holding its force) costs
-  // a comparison, a few grams from it below the heaviest (a motor changing its force) a walk of
-  // those few EEPROM bytes (walkNear), anything else the walk from the nearest known PWM.
+  // most 6553 us. Inlined into forceToPwmDg: the gram walked to last again (a motor holding its
+  // force) costs a comparison, a few grams from it below the heaviest (a motor changing its
+  // force) a walk of those few EEPROM bytes (walkNear), anything else the walk from the nearest
+  // known PWM (walkTo).
   template <class Storage>
   __attribute__((always_inline)) uint16_t pwmTenths(uint16_t grams, uint8_t tenths) const {
     if (grams != cursor_g_ || grams == 0) {
@@ -154,8 +155,8 @@ struct ThesisCurveRun {
   }
 
   // The PWM at `grams` (1..max_grams), walked from the nearest known PWM: a checkpoint (at most
-  // half their spacing away but near the heaviest gram) or the gram this curve walked to last (a
-  // motor holding or slowly changing its force walks 0-2 steps a frame). The steps walked over
+  // half their spacing away but near the heaviest gram) or the gram this curve walked to last
+  // (pwmTenths takes moves of up to kThesisNearGrams to walkNear). The steps walked over
   // and the step to the next gram are one EEPROM block, at most kThesisCheckpointEvery bytes;
   // forward the PWM adds them, backward it takes them off. Every PWM it starts from was summed
   // from the same bytes, so the result is exact. The gram, its PWM and its step to the next gram
