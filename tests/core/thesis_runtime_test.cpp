@@ -156,7 +156,9 @@ TEST_P(ThesisRuntime, GivesOption21sPwmForEveryDecigramInAnyOrder) {
     for (uint32_t m = 0; m < (1ul << 24); m += 61) ASSERT_EQ(run.spanQuotient(m), m / d) << m;
     for (uint32_t q = 0; q * d < (1ul << 24); ++q) {
       for (const uint32_t m : {q * d, q * d + d - 1}) {
-        if (m < (1ul << 24)) ASSERT_EQ(run.spanQuotient(m), m / d) << m;
+        if (m < (1ul << 24)) {
+          ASSERT_EQ(run.spanQuotient(m), m / d) << m;
+        }
       }
     }
   }
