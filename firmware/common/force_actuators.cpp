@@ -5,6 +5,19 @@
 
 namespace fw {
 
+namespace {
+
+// A thesis motor's sag offset (thesis fig. 6.9) for the pulse it was last sent, looked up in its
+// model's table only when that pulse changed: after each write (prepareNextFrame) and, for a
+// pulse set without one, in the frame (flyMotor).
+inline void keepSagOffset(Motor& m, const tc::SagTable& sag) {
+  if (m.sag_pwm_us == m.pwm_us) return;
+  m.sag_offset_mv = sag.offsetFor(m.pwm_us);
+  m.sag_pwm_us = m.pwm_us;
+}
+
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------
 // Battery
 
@@ -218,9 +231,7 @@ void ForceActuators::prepareNextFrame() {
   for (uint8_t i = 0; i < kMotors; ++i) {
     Motor& m = motors_[i];
     const Motor& source = motors_[m.source];
-    if (m.lane != kNoLane || !source.isArmable() || m.sag_pwm_us == m.pwm_us) continue;
-    m.sag_offset_mv = source.model.v1().sag.offsetFor(m.pwm_us);
-    m.sag_pwm_us = m.pwm_us;
+    if (m.lane == kNoLane && source.isArmable()) keepSagOffset(m, source.model.v1().sag);
   }
 }
 
@@ -258,10 +269,7 @@ void ForceActuators::flyMotor(Motor& m) {
   // was last sent (looked up again only when that pulse changed; after a write
   // prepareNextFrame has done it).
   const tc::ThesisRun& thesis = source.model.v1();
-  if (m.sag_pwm_us != m.pwm_us) {
-    m.sag_offset_mv = thesis.sag.offsetFor(m.pwm_us);
-    m.sag_pwm_us = m.pwm_us;
-  }
+  keepSagOffset(m, thesis.sag);
   m.vbat_mv = tc::BatteryMonitor::withSagOffset(battery_.medianMv(), m.sag_offset_mv);
   static const tc::ForcePwmLimits kLimits;  // the defaults, made once, not on every call
   const tc::ForcePwmResult result = tc::forceToPwmDg<hal::Eeprom>(thesis, m.shaped_dg, m.vbat_mv, kLimits);

@@ -143,6 +143,7 @@ struct CalibrationRuns {
   MethodRun v2;             // 15 us, 500 ms, store v2 (fit + refine): lift-off flies these records
   MethodRun v2_default;     // gather_store's default sweep, store v2 (fit + refine)
   std::string done_for;     // the gather_store image these runs are of
+  std::set<std::string> done;  // the keys made for it
   std::string error;  // non-empty: not available, and why
 };
 
@@ -253,21 +254,19 @@ void runMethod(const AvrPaths& paths, const std::string& key, CalibrationRuns& r
 // gathers once for sections 4 and 5). On failure `error` says why and no run is used.
 CalibrationRuns& calibrationRuns(const AvrPaths& paths, std::initializer_list<const char*> keys) {
   static CalibrationRuns runs;
-  static std::set<std::string> done;
   const std::string elf = paths.elf("gather_store");
   if (runs.done_for != elf) {
     runs = CalibrationRuns();
     runs.done_for = elf;
-    done.clear();
     if (!std::filesystem::exists(elf))
       runs.error = elf + " not found: build the AVR tree (--target gather_store) or pass --avr-build DIR";
   }
   for (const char* key : keys) {
     if (!runs.error.empty()) break;
-    if (done.count(key)) continue;
+    if (runs.done.count(key)) continue;
     try {
       runMethod(paths, key, runs);
-      done.insert(key);
+      runs.done.insert(key);
     } catch (const std::exception& e) {
       runs.error = std::string("the gather scenario failed: ") + e.what();
     }
