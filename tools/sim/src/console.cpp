@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <regex>
+
 namespace sim {
 
 Console::Console(Board& board, std::string prompt) : board_(board), prompt_(std::move(prompt)) {
@@ -33,7 +35,11 @@ void Console::keepAlive() {
   next_keepalive_s_ = board_.timeS() + keepalive_period_s_;
 }
 
-bool Console::findIn(const std::regex* re, const std::string* literal,
+struct Console::Pattern {
+  std::regex re;
+};
+
+bool Console::findIn(const Pattern* re, const std::string* literal,
                      std::vector<std::string>& groups) {
   const std::string& out = board_.output();
   std::size_t pos = scanned_;
@@ -49,7 +55,7 @@ bool Console::findIn(const std::regex* re, const std::string* literal,
       const char* e = out.data() + end;
       if (re) {
         std::cmatch m;
-        if (std::regex_search(b, e, m, *re)) {
+        if (std::regex_search(b, e, m, re->re)) {
           groups.clear();
           for (const auto& g : m) groups.emplace_back(g.first, g.second);
           match_begin_ = begin + static_cast<std::size_t>(m.position(0));
@@ -77,9 +83,9 @@ bool Console::findIn(const std::regex* re, const std::string* literal,
 }
 
 std::vector<std::string> Console::expect(const std::string& regex, double budget_s) {
-  std::regex re;
+  Pattern re;
   try {
-    re = std::regex(regex, std::regex::ECMAScript);
+    re.re = std::regex(regex, std::regex::ECMAScript);
   } catch (const std::regex_error& e) {
     throw std::invalid_argument(fmt::format("expect: '{}' is not a valid regex: {}", regex, e.what()));
   }

@@ -9,7 +9,6 @@
 // long, and shows the last lines of the console.
 #pragma once
 #include <functional>
-#include <regex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -61,7 +60,8 @@ class Console {
   const std::string& prompt() const { return prompt_; }
 
  private:
-  bool findIn(const std::regex* re, const std::string* literal, std::vector<std::string>& groups);
+  struct Pattern;  // a compiled regex (console.cpp: <regex> stays out of this header)
+  bool findIn(const Pattern* re, const std::string* literal, std::vector<std::string>& groups);
   void keepAlive();
   std::vector<std::string> linesBetween(std::size_t from, std::size_t to) const;
   void onByte(uint8_t byte);
