@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "sim/board.hpp"
 #include "sim/console.hpp"
@@ -171,6 +172,28 @@ TEST(Board, MissingImageSaysWhatToDo) {
   } catch (const sim::BoardError& e) {
     EXPECT_NE(std::string(e.what()).find("build it first"), std::string::npos);
   }
+}
+
+TEST(Board, AFileThatIsNeitherElfNorHexSaysBoth) {
+  // given: a ".elf" that is text (a truncated download, a wrong file saved under the name)
+  const std::string path = ::testing::TempDir() + "not_an_image.elf";
+  {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("<html>404 Not Found</html>\n", f);
+    std::fclose(f);
+  }
+  try {
+    sim::Board b(path);
+    FAIL() << "a text file was loaded as firmware";
+  } catch (const sim::BoardError& e) {
+    const std::string what = e.what();
+    // then: the error names both formats, what is wrong as HEX, and what to give instead
+    EXPECT_NE(what.find("neither an AVR ELF file"), std::string::npos) << what;
+    EXPECT_NE(what.find(":1: record does not start with ':'"), std::string::npos) << what;
+    EXPECT_NE(what.find("avr-objcopy -O ihex"), std::string::npos) << what;
+  }
+  std::remove(path.c_str());
 }
 
 }  // namespace

@@ -31,8 +31,9 @@ std::vector<uint8_t> parseIntelHex(const std::string& text, std::size_t size_byt
     if (line.empty()) continue;
     auto fail = [&](const std::string& what) {
       return HexError(fmt::format("{}:{}: {}; expected Intel HEX records like "
-                                  "':10000000FFFF...FF00' (write one with avrdude "
-                                  "-U eeprom:r:FILE:i or thrustcal sim)",
+                                  "':10000000FFFF...FF00' (avrdude writes them with "
+                                  "-U eeprom:r:FILE:i or -U flash:r:FILE:i, thrustcal sim an "
+                                  "EEPROM's)",
                                   origin, line_no, what));
     };
     if (saw_eof) throw fail("data after the end-of-file record");

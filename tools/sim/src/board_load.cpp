@@ -98,7 +98,16 @@ AppImage readApplication(const std::string& app) {
                                  "build/avr) or pass the right --elf path",
                                  app));
   if (!isElfFile(app)) {
-    a.hex = readHexFlash(app, "application");
+    try {
+      a.hex = readHexFlash(app, "application");
+    } catch (const BoardError& e) {
+      // Not ELF and not Intel HEX: say both, so a truncated or foreign .elf is not reported as
+      // a broken HEX file only.
+      throw BoardError(fmt::format("{}: neither an AVR ELF file (it does not start with the ELF magic "
+                                   "0x7F 'E' 'L' 'F') nor Intel HEX; give the .elf the AVR build "
+                                   "wrote, or a .hex of it (avr-objcopy -O ihex). As Intel HEX: {}",
+                                   app, e.what()));
+    }
     a.end = a.hex.hi;
     return a;
   }
