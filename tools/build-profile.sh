@@ -52,18 +52,12 @@ say "building it with -j $JOBS (a few minutes)"
   || { tail -20 "$dir/build.log"; die "the build failed (log: $dir/build.log)"; }
 read -r wall user sys < "$dir/build-time.txt"
 
-awk -v wall="$wall" -v user="$user" -v sys="$sys" -v top="$top" -v root="$dir/" '
-  { cpu = $1 + $2; sum += cpu; n++; name = $4; sub(root, "", name); line[n] = sprintf("%8.1f %8.1f  %s", cpu, $3, name); key[n] = cpu }
-  END {
-    printf "build: %.0f s wall, %.0f CPU s (%.0f user + %.0f sys), %d compiles summing %.0f CPU s\n", wall, user + sys, user, sys, n, sum
-    printf "(the rest of the CPU: linking, archiving, make, GoogleTest discovery)\n\n"
-    printf "%8s %8s  %s\n", "CPU s", "wall s", "object (the slowest compiles)"
-    for (k = 1; k <= top && k <= n; k++) {
-      best = 0
-      for (i = 1; i <= n; i++) if (!(i in done) && (best == 0 || key[i] > key[best])) best = i
-      done[best] = 1
-      print line[best]
-    }
-  }' "$THRUSTCAL_PROFILE_LOG"
+printf 'build: %.0f s wall, %.0f CPU s (%.0f user + %.0f sys), ' "$wall" "$(awk -v u="$user" -v s="$sys" 'BEGIN { print u + s }')" "$user" "$sys"
+awk '{ sum += $1 + $2 } END { printf "%d compiles summing %.0f CPU s\n", NR, sum }' "$THRUSTCAL_PROFILE_LOG"
+echo "(the rest of the CPU: linking, archiving, make, GoogleTest discovery)"
+echo
+printf '%8s %8s  %s\n' "CPU s" "wall s" "object (the slowest compiles)"
+awk -v root="$dir/" '{ name = $4; sub(root, "", name); printf "%8.1f %8.1f  %s\n", $1 + $2, $3, name }' \
+  "$THRUSTCAL_PROFILE_LOG" | sort -rn | awk -v n="$top" 'NR <= n'
 echo
 echo "every compile: $THRUSTCAL_PROFILE_LOG (user s, sys s, wall s, object)"

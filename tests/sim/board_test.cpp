@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 
 #include "sim/board.hpp"
 #include "sim/console.hpp"
@@ -177,12 +178,7 @@ TEST(Board, MissingImageSaysWhatToDo) {
 TEST(Board, AFileThatIsNeitherElfNorHexSaysBoth) {
   // given: a ".elf" that is text (a truncated download, a wrong file saved under the name)
   const std::string path = ::testing::TempDir() + "not_an_image.elf";
-  {
-    std::FILE* f = std::fopen(path.c_str(), "w");
-    ASSERT_NE(f, nullptr);
-    std::fputs("<html>404 Not Found</html>\n", f);
-    std::fclose(f);
-  }
+  std::ofstream(path) << "<html>404 Not Found</html>\n";
   try {
     sim::Board b(path);
     FAIL() << "a text file was loaded as firmware";
