@@ -16,8 +16,10 @@ print_firmware_sizes
 build_checked
 
 # Sanitizer findings fail the run: UBSan stops at the first one (-fno-sanitize-recover), ASan
-# always does; both print a stack. Leak checking stays on.
-export ASAN_OPTIONS="${ASAN_OPTIONS:-abort_on_error=1:detect_leaks=1:strict_string_checks=1}"
+# always does; both print a stack. Leak checking stays on. A 16 MB quarantine (ASan's default is
+# 256 MB): a block freed within the last 16 MB of frees is still caught when used, and the tests
+# take ~15 % less CPU, mostly page faults saved (docs/testing.md, "The ASan quarantine").
+export ASAN_OPTIONS="${ASAN_OPTIONS:-abort_on_error=1:detect_leaks=1:strict_string_checks=1:quarantine_size_mb=16}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 
 say "running tests"

@@ -63,13 +63,21 @@ inline uint64_t fileHash(const std::string& path) {
   return std::hash<std::string>{}(s.str());
 }
 
+// This test binary's identity: its size and modification time (every link writes a new file).
+// Not its content: reading and hashing tens of MB took 0.3-0.4 s in every test process.
+inline uint64_t selfStamp() {
+  const fs::path self = fs::read_symlink("/proc/self/exe");
+  const auto when = fs::last_write_time(self).time_since_epoch().count();
+  return static_cast<uint64_t>(when) * 1000003u + static_cast<uint64_t>(fs::file_size(self));
+}
+
 // EEPROM with all four fleet motors calibrated by the real gather_store. Gathered once and
 // cached next to the test binary (ctest runs each test in its own process), keyed by the
-// gather_store image and this test binary (which holds the plant and the scenario settings):
-// a change to either, or a damaged cache file, means a fresh gather.
+// gather_store image and this test binary (which holds the plant and the scenario settings; a
+// relink counts as a change): a change to either, or a damaged cache file, means a fresh gather.
 inline std::vector<uint8_t> fleetEeprom() {
   const std::string elf = imagePath("gather_store");
-  const uint64_t key = fileHash(elf) * 31 + fileHash("/proc/self/exe");
+  const uint64_t key = fileHash(elf) * 31 + selfStamp();
   const fs::path cache = fs::path(HIL_CACHE_DIR) /
                          ("thrustcal_hil_fleet_" + std::to_string(key) + ".hex");
   if (fs::exists(cache)) {
