@@ -79,7 +79,7 @@ endfunction()
 # unit (0: one per library; 1: off). Both trees: the plain tree that tools/demo.sh builds gains
 # as much. A source with its own compile options stays a translation unit of its own (CMake
 # leaves such files out of unity sources). Call before thrustcal_checked_cli.
-set(THRUSTCAL_UNITY_BATCH 8 CACHE STRING "Tool libraries: source files per unity translation unit (1: no unity build)")
+set(THRUSTCAL_UNITY_BATCH 32 CACHE STRING "Tool libraries: source files per unity translation unit (1: no unity build)")
 function(thrustcal_unity_libraries dir)
   if(THRUSTCAL_UNITY_BATCH LESS_EQUAL 1 AND NOT THRUSTCAL_UNITY_BATCH EQUAL 0)
     return()

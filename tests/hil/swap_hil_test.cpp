@@ -59,15 +59,20 @@ TEST(SwapHil, ForceModeMeetsTheTargetsAndEqualDynamicsBringAKv900InSlot1CloserTo
     for (const double rise_s : run.step_rise_s) EXPECT_NEAR(rise_s, run.metrics.rise_s, 0.05 * run.metrics.rise_s) << id;
     // force+dyn flies the reference's slower lag with force mode's gains: its steps ring
     // longer and may not settle within 2 % in the window (docs/fly.md, "Equal dynamics")
-    if (run.spec.mode == sim::swap::Mode::kForce) EXPECT_FALSE(std::isnan(run.metrics.settling_s)) << id;
+    if (run.spec.mode == sim::swap::Mode::kForce) {
+      EXPECT_FALSE(std::isnan(run.metrics.settling_s)) << id;
+    }
     EXPECT_GT(run.metrics.peak, run.y0_deg + 8.0) << id;  // it moved by about the 10 degrees asked
     EXPECT_DOUBLE_EQ(run.integrator_mnm, 0.0) << id;      // PD gains: no integral term
   }
   // the four targets: overshoot within 5 pp of stock, rise time within 10 %, sse <= 0.5 deg,
   // ITAE <= 1.5x stock, each the worst of the two axes
   ASSERT_EQ(r.targets.size(), 8u);
-  for (const sim::swap::Target& t : r.targets)
-    if (t.mode == "force") EXPECT_TRUE(t.met) << t.target << ": " << t.figure;
+  for (const sim::swap::Target& t : r.targets) {
+    if (t.mode == "force") {
+      EXPECT_TRUE(t.met) << t.target << ": " << t.figure;
+    }
+  }
   // and what the calibration cannot change is measured: the KV900's own motor time constant
   ASSERT_EQ(r.dynamics.parts.size(), 1u);
   EXPECT_GT(r.dynamics.parts[0].tau_s, 0.0);

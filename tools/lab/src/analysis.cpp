@@ -13,6 +13,7 @@
 #include "lab/effect.hpp"
 #include "lab/evidence.hpp"
 #include "lab/stats.hpp"
+#include "csv_reader.hpp"
 
 namespace lab {
 
@@ -21,11 +22,6 @@ namespace {
 constexpr std::size_t kMaxRankRows = 20000;  // refits of the ranking on evenly spaced rows above
 
 bool startsWith(const std::string& s, const char* p) { return s.rfind(p, 0) == 0; }
-
-std::string lowerCopy(std::string s) {
-  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 // What the registry says about a variable or a finding, given what the model already has.
 struct Advice {
@@ -37,7 +33,7 @@ struct Advice {
 
 // A column name against an entry's patterns: exact, or a prefix ending in '*'; any case.
 bool matches(const std::string& name, const std::vector<std::string>& patterns) {
-  const std::string v = lowerCopy(name);
+  const std::string v = csv::lower(name);
   for (const auto& p : patterns) {
     if (!p.empty() && p.back() == '*' ? startsWith(v, p.substr(0, p.size() - 1).c_str()) : v == p) return true;
   }
@@ -256,7 +252,7 @@ std::vector<std::pair<double, std::string>> scoreTrials(Suspect& s,
 Suspect rankCause(Suspect s, const Profile& pr, const std::vector<double>& z, const std::vector<double>& pwm,
                   const Dataset& data, const Dataset& work, const FitResult& fit, const ModelSpec& spec) {
   const std::string& name = s.variable;
-  const std::string lname = lowerCopy(name);
+  const std::string lname = csv::lower(name);
   if ((startsWith(lname, "pressure") || startsWith(lname, "baro")) && data.has("rho_kg_m3")) {
     s.advice = name + " acts through the air density: see rho_kg_m3";
     return s;
@@ -340,7 +336,7 @@ void scoreEvidence(const Dataset& data_in, const FitResult& fit_in, const ModelS
 }
 
 Role roleOf(const std::string& name) {
-  const std::string v = lowerCopy(name);
+  const std::string v = csv::lower(name);
   for (const char* word : {"rpm", "speed", "torque", "power", "efficien", "thrust", "force", "weight", "current",
                            "vibration", "accel"})
     if (v.find(word) != std::string::npos) return Role::kResponse;

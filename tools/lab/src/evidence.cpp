@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "csv_reader.hpp"
 #include "lab/analysis.hpp"
 
 namespace lab {
@@ -18,20 +19,15 @@ constexpr double kShareTol = 0.01;     // runs share a ceiling within 1 %
 constexpr std::size_t kMinPlateauPoints = 3;
 constexpr double kStillRising = 0.01;  // a response still rising: +1 % across the plateau
 
-std::string lowerCopy(std::string s) {
-  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
 // The first column whose lower-case name is one of `exact`, else starts with one of `prefixes`.
 std::string columnLike(const Dataset& d, std::initializer_list<const char*> exact,
                        std::initializer_list<const char*> prefixes) {
   for (const char* e : exact)
     for (const auto& n : d.names)
-      if (lowerCopy(n) == e) return n;
+      if (csv::lower(n) == e) return n;
   for (const char* p : prefixes)
     for (const auto& n : d.names)
-      if (lowerCopy(n).rfind(p, 0) == 0) return n;
+      if (csv::lower(n).rfind(p, 0) == 0) return n;
   return {};
 }
 

@@ -16,7 +16,7 @@ namespace lab {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kNoScore = std::numeric_limits<double>::quiet_NaN();  // no hold-out asked
 
 }  // namespace
 
@@ -36,7 +36,7 @@ Holdout parseHoldout(const std::string& text) {
 
 double holdoutRmse(const Dataset& data, const ModelSpec& spec, Holdout kind, int* groups_out) {
   if (groups_out) *groups_out = 0;
-  if (kind == Holdout::kNone) return kNaN;
+  if (kind == Holdout::kNone) return kNoScore;
   std::vector<int> group(data.rows());
   int groups = 0;
   if (kind == Holdout::kRuns) {

@@ -7,6 +7,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "csv_reader.hpp"
 #include "lab/effect.hpp"
 
 // The model's SPEC: the catalogue (from the effects' registry, effects/registry.cpp), parsing and
@@ -27,8 +28,7 @@ std::string trimCopy(const std::string& s) {
 // A pressure column and its scale to pascal.
 int pressureColumn(const Dataset& d, double& to_pa) {
   for (std::size_t c = 0; c < d.names.size(); ++c) {
-    std::string n = d.names[c];
-    for (auto& ch : n) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    const std::string n = csv::lower(d.names[c]);
     if (n.rfind("pressure", 0) != 0 && n.rfind("baro", 0) != 0 && n != "p_pa" && n != "p_hpa")
       continue;
     auto ends = [&](const char* s) {

@@ -2,6 +2,8 @@
 // and the sweeps whose neighbouring rows give the contrasts.
 #include "noise_rows.hpp"
 
+#include "csv_reader.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -20,8 +22,7 @@ bool contains(const std::string& s, const char* word) { return s.find(word) != s
 // A column that may be computed from the force reading (a thrust in other units, an
 // efficiency in g/W): regressing it out would take the noise with it.
 bool mayHoldForce(const std::string& name) {
-  std::string n = name;
-  for (auto& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string n = csv::lower(name);
   for (const char* w : {"force", "thrust", "weight", "efficien", "lift", "load", "mass"})
     if (contains(n, w)) return true;
   return false;

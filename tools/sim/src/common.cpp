@@ -11,12 +11,12 @@ namespace sim {
 namespace {
 
 // EEPROM storage over a host image, for the firmware's own codec.
-struct ImageStorage {
+struct ReadOnlyImage {
   static const std::vector<uint8_t>* image;
   static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
   static void updateByte(uint16_t, uint8_t) {}  // decode only
 };
-const std::vector<uint8_t>* ImageStorage::image = nullptr;
+const std::vector<uint8_t>* ReadOnlyImage::image = nullptr;
 
 void checkImageAndSlot(const std::vector<uint8_t>& eeprom, int slot) {
   if (eeprom.size() < static_cast<std::size_t>(tc::kRecordBytes) * tc::kMotorSlots)
@@ -31,17 +31,17 @@ void checkImageAndSlot(const std::vector<uint8_t>& eeprom, int slot) {
 
 std::string decodeSlot(const std::vector<uint8_t>& eeprom, int slot, tc::MotorCalibration& out) {
   checkImageAndSlot(eeprom, slot);
-  ImageStorage::image = &eeprom;
-  const tc::DecodeStatus status = tc::readRecord<ImageStorage>(static_cast<uint8_t>(slot), out);
-  ImageStorage::image = nullptr;
+  ReadOnlyImage::image = &eeprom;
+  const tc::DecodeStatus status = tc::readRecord<ReadOnlyImage>(static_cast<uint8_t>(slot), out);
+  ReadOnlyImage::image = nullptr;
   return tc::decodeStatusText(status);
 }
 
 std::string decodeSlotV2(const std::vector<uint8_t>& eeprom, int slot, tc::ModelV2& out) {
   checkImageAndSlot(eeprom, slot);
-  ImageStorage::image = &eeprom;
-  const tc::RecordV2Read r = tc::readModelV2<ImageStorage>(static_cast<uint8_t>(slot), out);
-  ImageStorage::image = nullptr;
+  ReadOnlyImage::image = &eeprom;
+  const tc::RecordV2Read r = tc::readModelV2<ReadOnlyImage>(static_cast<uint8_t>(slot), out);
+  ReadOnlyImage::image = nullptr;
   return tc::decodeStatusText(r.status);
 }
 
