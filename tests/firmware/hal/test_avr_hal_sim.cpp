@@ -269,13 +269,25 @@ TEST_P(AvrHalSimSlot, SweepDrivesTheSelectedPinAndReadsTheAdcOnTheMillisecondClo
   const size_t out_from = board_->output().size();
   const std::string out = board_->command("sweep", 3.0);
   board_->runCycles(static_cast<avr_cycle_count_t>(0.05 * kCpuHz));
-  // then: the pin carried exactly the swept widths, and 1000 us again at the end
+  // then: the pin carried exactly the swept widths, and 1000 us again at the end. simavr 1.6's
+  // own timer (this harness's) applies an OCRnx write at once, where the chip buffers it until
+  // BOTTOM in mode 14: a shorter width written while the pin is high and the counter already
+  // past it misses its compare match, and that one pulse lasts a frame plus the new width. Only
+  // that signature is set aside, at most once per width change (tools/sim's board models the
+  // buffer; tests/timers checks it).
   std::vector<double> widths;
+  int missed_compares = 0;
   for (size_t i = pulses_before; i < board_->pulses(ch).size(); ++i) {
     const double w = board_->pulses(ch)[i].width_us;
+    if (i + 1 < board_->pulses(ch).size() &&
+        std::fabs(w - (20000.0 + board_->pulses(ch)[i + 1].width_us)) < 0.5) {
+      ++missed_compares;
+      continue;
+    }
     if (widths.empty() && std::fabs(w - 1000.0) < 0.5) continue;  // frames before step 1
     if (widths.empty() || std::fabs(widths.back() - w) > 0.5) widths.push_back(w);
   }
+  EXPECT_LE(missed_compares, 1);
   std::string seen;
   for (double w : widths) seen += std::to_string(w) + " ";
   ASSERT_EQ(widths.size(), 4u) << seen << "\n" << out;
