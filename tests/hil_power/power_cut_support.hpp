@@ -34,6 +34,7 @@
 #include "sim/console.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
+#include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -46,19 +47,11 @@ namespace fs = std::filesystem;
 // that name first), and HIL_REQUIRE_IMAGE to skip without them: tests/hil/hil_support.hpp.
 using hil::imagePath;
 
-// ---- EEPROM as codec Storage over a byte vector ----------------------------------------------
+// ---- EEPROM image: slot 0's v2 record ----------------------------------------------------------
 
-struct ImageStorage {
-  static inline std::vector<uint8_t>* image = nullptr;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
-};
-
-inline tc::RecordV2Read readSlot0(std::vector<uint8_t> image, tc::ModelV2& out) {
-  ImageStorage::image = &image;
-  const tc::RecordV2Read r = tc::readModelV2<ImageStorage>(0, out);
-  ImageStorage::image = nullptr;
-  return r;
+inline tc::RecordV2Read readSlot0(const std::vector<uint8_t>& image, tc::ModelV2& out) {
+  const tc::EepromImage::Use use(image);
+  return tc::readModelV2<tc::EepromImage>(0, out);
 }
 
 using hil_power::EepromWrite;

@@ -27,6 +27,7 @@
 #include "sim/console.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
+#include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -38,13 +39,6 @@ std::string gatherStoreElf() {
   return (fs::path(THRUSTCAL_AVR_BUILD_DIR) / "firmware" / "gather_store" / "gather_store.elf")
       .string();
 }
-
-struct SettleImageStorage {
-  static const std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t, uint8_t) {}
-};
-const std::vector<uint8_t>* SettleImageStorage::image = nullptr;
 
 struct SettleRun {
   std::string settle;          // the settle command
@@ -82,10 +76,9 @@ SettleRun calibrate(const std::string& settle_command) {
   for (const auto& l : must("store v2", 10))
     if (l.rfind("stored model v2", 0) == 0) r.store_line = l;
   const std::vector<uint8_t> image = rig.board.eeprom();
-  SettleImageStorage::image = &image;
   tc::ModelV2 model;
-  const bool ok = tc::readModelV2<SettleImageStorage>(0, model).status == tc::DecodeStatus::kOk;
-  SettleImageStorage::image = nullptr;
+  const tc::EepromImage::Use use(image);
+  const bool ok = tc::readModelV2<tc::EepromImage>(0, model).status == tc::DecodeStatus::kOk;
   EXPECT_TRUE(ok) << r.store_line;
   if (!ok) return r;
   double sum2 = 0;

@@ -118,10 +118,8 @@ TEST(ThesisToV2PowerCut, EveryCutLeavesReadRunFlyingTheThesisRecordOrModelV2Whol
   EXPECT_EQ(cutImage(as_store, rec.writes.size()), rec.final_image);
   auto v1 = std::make_unique<tc::MotorCalibration>();
   {
-    std::vector<uint8_t> image = rec.old_image;
-    ImageStorage::image = &image;
-    ASSERT_EQ(tc::readRecord<ImageStorage>(0, *v1), tc::DecodeStatus::kOk);
-    ImageStorage::image = nullptr;
+    const tc::EepromImage::Use use(rec.old_image);
+    ASSERT_EQ(tc::readRecord<tc::EepromImage>(0, *v1), tc::DecodeStatus::kOk);
   }
   tc::ModelV2 v2;
   ASSERT_EQ(readSlot0(rec.final_image, v2).copy, 0);

@@ -277,10 +277,10 @@ TEST_P(AvrHalSimSlot, SweepDrivesTheSelectedPinAndReadsTheAdcOnTheMillisecondClo
   // buffer; tests/timers checks it).
   std::vector<double> widths;
   int missed_compares = 0;
-  for (size_t i = pulses_before; i < board_->pulses(ch).size(); ++i) {
-    const double w = board_->pulses(ch)[i].width_us;
-    if (i + 1 < board_->pulses(ch).size() &&
-        std::fabs(w - (20000.0 + board_->pulses(ch)[i + 1].width_us)) < 0.5) {
+  const auto& pulses = board_->pulses(ch);
+  for (size_t i = pulses_before; i < pulses.size(); ++i) {
+    const double w = pulses[i].width_us;
+    if (i + 1 < pulses.size() && std::fabs(w - (20000.0 + pulses[i + 1].width_us)) < 0.5) {
       ++missed_compares;
       continue;
     }

@@ -14,20 +14,13 @@
 #include "sim/scenarios.hpp"
 #include "thrustcal/curve_builder.hpp"
 #include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/record_v2.hpp"
 
 namespace bench {
 
 namespace {
-
-
-struct ImageStorage {
-  static std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
-};
-std::vector<uint8_t>* ImageStorage::image = nullptr;
 
 // store 1 / store 2: the thesis curve of a sweep and its sag offsets (the first sweep's are kept).
 void addThesisCurve(const Sweep& sweep, int pwm_min_us, bool first, tc::MotorCalibration& cal, size_t motor) {
@@ -52,8 +45,8 @@ void writeV1(const Sweep& lipo, const Sweep& supply, int pwm_min_us, size_t moto
   auto cal = std::make_unique<tc::MotorCalibration>();
   addThesisCurve(lipo, pwm_min_us, true, *cal, motor);
   addThesisCurve(supply, pwm_min_us, false, *cal, motor);
-  ImageStorage::image = &image;
-  tc::writeRecord<ImageStorage>(static_cast<uint8_t>(motor), *cal);
+  const tc::EepromImage::Use use(image);
+  tc::writeRecord<tc::EepromImage>(static_cast<uint8_t>(motor), *cal);
 }
 
 // store v2 after each sweep: fit on the LiPo's, refine with the supply's.
@@ -68,8 +61,8 @@ void writeV2(const Sweep& lipo, const Sweep& supply, size_t motor, std::vector<u
   for (const SweepPoint& p : supply.points) fitter->add(p.pwm_us, p.force_dg, p.vbat_mv);
   fitter->refine(model);
   model.dynamics = dynamics;
-  ImageStorage::image = &image;
-  if (tc::writeModelV2<ImageStorage>(static_cast<uint8_t>(motor), model).status !=
+  const tc::EepromImage::Use use(image);
+  if (tc::writeModelV2<tc::EepromImage>(static_cast<uint8_t>(motor), model).status !=
       tc::WriteV2Status::kWritten)
     throw std::runtime_error(fmt::format("bench records: model v2 of motor {} not written", motor));
 }

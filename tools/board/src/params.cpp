@@ -11,20 +11,13 @@
 
 #include "hal/board.hpp"
 #include "hex/intel_hex.hpp"
+#include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/source_tree.hpp"
 
 namespace board {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The codec's Storage over a byte vector (one at a time: the tool is single-threaded).
-struct ImageStorage {
-  static std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
-};
-std::vector<uint8_t>* ImageStorage::image = nullptr;
 
 uint16_t u16At(const std::vector<uint8_t>& f, std::size_t at) {
   return static_cast<uint16_t>(f[at] | (f[at + 1] << 8));
@@ -274,10 +267,10 @@ std::string withParamDocsTable(const std::string& doc, const std::string& table,
 BoardParamState paramsInImage(const ParamTableCopy& t, const std::vector<uint8_t>& eeprom) {
   BoardParamState s;
   s.values = t.defaults();
-  std::vector<uint8_t> copy = eeprom;
-  ImageStorage::image = &copy;
-  s.where = tc::readParams<ImageStorage>(s.record);
-  ImageStorage::image = nullptr;
+  {
+    const tc::EepromImage::Use use(eeprom);
+    s.where = tc::readParams<tc::EepromImage>(s.record);
+  }
   using How = BoardParamState::How;
   if (s.where.status != tc::DecodeStatus::kOk) {
     s.how = s.where.hosts == 0 ? How::kNoRoom : How::kNone;
@@ -312,10 +305,9 @@ tc::ParamsWrite storeParamsInImage(const ParamTableCopy& t, const std::vector<in
   rec.layout = t.layout;
   rec.length = tc::paramPayloadBytes(t.data(), t.count());
   tc::encodeParams(t.data(), t.count(), values.data(), rec.payload);
-  std::vector<uint8_t> copy = eeprom;
-  ImageStorage::image = &copy;
-  const tc::ParamsWrite w = tc::writeParams<ImageStorage>(rec);
-  ImageStorage::image = nullptr;
+  std::vector<uint8_t> copy = eeprom;  // the image changes only when the whole write succeeded
+  const tc::EepromImage::Use use(copy);
+  const tc::ParamsWrite w = tc::writeParams<tc::EepromImage>(rec);
   if (w.status == tc::ParamsWriteStatus::kWritten) eeprom = copy;
   return w;
 }

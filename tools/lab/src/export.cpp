@@ -10,6 +10,7 @@
 #include "lab/analysis.hpp"
 #include "lab/effect.hpp"
 
+#include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/model_v2_curve.hpp"
 // The record's limits are core's (thrustcal/record_limits.hpp, "never fly a record that cannot
@@ -23,13 +24,6 @@
 namespace lab {
 
 namespace {
-
-// EEPROM image as the Storage type record_v2.hpp's templates need.
-std::vector<uint8_t>* g_image = nullptr;
-struct ImageStorage {
-  static uint8_t readByte(uint16_t addr) { return (*g_image)[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) { (*g_image)[addr] = value; }
-};
 
 double rms(const std::vector<double>& e) {
   double s = 0;
@@ -378,9 +372,10 @@ ExportResult exportModel(const Dataset& data, const ModelSpec& spec_in, uint8_t 
   flyRecord(r, model, data, lab_pred, max_error_pct, top_force, curve.fmax);
 
   std::vector<uint8_t> work = eeprom;
-  g_image = &work;
-  r.write = tc::writeModelV2<ImageStorage>(slot, r.model);
-  g_image = nullptr;
+  {
+    const tc::EepromImage::Use use(work);
+    r.write = tc::writeModelV2<tc::EepromImage>(slot, r.model);
+  }
   if (r.write.status != tc::WriteV2Status::kWritten && r.write.status != tc::WriteV2Status::kUnchanged)
     throw std::runtime_error(fmt::format("writing the v2 record into slot {} failed: {}", slot,
                                          tc::writeV2StatusText(r.write.status)));

@@ -5,18 +5,11 @@
 
 #include "sim/scenarios.hpp"
 #include "thrustcal/eeprom_codec.hpp"
+#include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/record_v2.hpp"
 
 namespace sim {
 namespace {
-
-// EEPROM storage over a host image, for the firmware's own codec.
-struct ReadOnlyImage {
-  static const std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t, uint8_t) {}  // decode only
-};
-const std::vector<uint8_t>* ReadOnlyImage::image = nullptr;
 
 void checkImageAndSlot(const std::vector<uint8_t>& eeprom, int slot) {
   if (eeprom.size() < static_cast<std::size_t>(tc::kRecordBytes) * tc::kMotorSlots)
@@ -31,18 +24,14 @@ void checkImageAndSlot(const std::vector<uint8_t>& eeprom, int slot) {
 
 std::string decodeSlot(const std::vector<uint8_t>& eeprom, int slot, tc::MotorCalibration& out) {
   checkImageAndSlot(eeprom, slot);
-  ReadOnlyImage::image = &eeprom;
-  const tc::DecodeStatus status = tc::readRecord<ReadOnlyImage>(static_cast<uint8_t>(slot), out);
-  ReadOnlyImage::image = nullptr;
-  return tc::decodeStatusText(status);
+  const tc::EepromImage::Use use(eeprom);
+  return tc::decodeStatusText(tc::readRecord<tc::EepromImage>(static_cast<uint8_t>(slot), out));
 }
 
 std::string decodeSlotV2(const std::vector<uint8_t>& eeprom, int slot, tc::ModelV2& out) {
   checkImageAndSlot(eeprom, slot);
-  ReadOnlyImage::image = &eeprom;
-  const tc::RecordV2Read r = tc::readModelV2<ReadOnlyImage>(static_cast<uint8_t>(slot), out);
-  ReadOnlyImage::image = nullptr;
-  return tc::decodeStatusText(r.status);
+  const tc::EepromImage::Use use(eeprom);
+  return tc::decodeStatusText(tc::readModelV2<tc::EepromImage>(static_cast<uint8_t>(slot), out).status);
 }
 
 void copySlot(std::vector<uint8_t>& eeprom, int from, int to) {

@@ -15,6 +15,7 @@
 #include "sim/console.hpp"
 #include "sim/rigs.hpp"
 #include "thrustcal/board_settings.hpp"
+#include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/record_v2.hpp"
 
 namespace sim {
@@ -23,25 +24,18 @@ namespace {
 
 constexpr double kPlantStepS = 0.00025;
 
-struct VecEeprom {  // an EEPROM image as the codecs' Storage
-  static const std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t, uint8_t) {}
-};
-const std::vector<uint8_t>* VecEeprom::image = nullptr;
+// The board settings an EEPROM image holds (defaults where it holds none valid).
+tc::DecodeStatus readImageSettings(const std::vector<uint8_t>& eeprom, tc::BoardSettings& settings) {
+  const tc::EepromImage::Use use(eeprom);
+  return tc::readSettings<tc::EepromImage>(settings).status;
+}
 
-struct WritableEeprom {  // the same, written by the v2 record's writer
-  static std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
-};
-std::vector<uint8_t>* WritableEeprom::image = nullptr;
-
-// Slot's v2 record in the image VecEeprom reads; false when there is none valid.
-bool readSlotModel(int slot, tc::ModelV2& model) {
+// Slot's v2 record in the image; false when there is none valid.
+bool readSlotModel(const std::vector<uint8_t>& eeprom, int slot, tc::ModelV2& model) {
   tc::BoardSettings settings;
-  tc::readSettings<VecEeprom>(settings);
-  return tc::readModelV2<VecEeprom>(static_cast<uint8_t>(slot), model, settings.recordLimits()).status ==
+  readImageSettings(eeprom, settings);
+  const tc::EepromImage::Use use(eeprom);
+  return tc::readModelV2<tc::EepromImage>(static_cast<uint8_t>(slot), model, settings.recordLimits()).status ==
          tc::DecodeStatus::kOk;
 }
 
@@ -84,18 +78,16 @@ void parseFit(const std::string& l, DynStep& s) {
 }  // namespace
 
 tc::MotorDynamics storedDynamics(const std::vector<uint8_t>& eeprom, int slot) {
-  VecEeprom::image = &eeprom;
   tc::ModelV2 model;
-  return readSlotModel(slot, model) ? model.dynamics : tc::MotorDynamics();
+  return readSlotModel(eeprom, slot, model) ? model.dynamics : tc::MotorDynamics();
 }
 
 bool storePlantDynamics(std::vector<uint8_t>& eeprom, int slot, const plant::ActuatorParams& motor) {
-  VecEeprom::image = &eeprom;
   tc::ModelV2 model;
-  if (!readSlotModel(slot, model)) return false;
+  if (!readSlotModel(eeprom, slot, model)) return false;
   model.dynamics = plant::recordDynamics(motor);
-  WritableEeprom::image = &eeprom;
-  if (tc::writeModelV2<WritableEeprom>(static_cast<uint8_t>(slot), model).status != tc::WriteV2Status::kWritten)
+  const tc::EepromImage::Use use(eeprom);
+  if (tc::writeModelV2<tc::EepromImage>(static_cast<uint8_t>(slot), model).status != tc::WriteV2Status::kWritten)
     throw std::runtime_error(fmt::format("slot {}'s record with the motor's dynamics was not written", slot));
   return true;
 }
@@ -138,9 +130,8 @@ DynSessionResult runDynSession(const DynSessionOptions& o) {  // long: the sessi
     if (!log) throw std::runtime_error(o.log_path + ": cannot write the step log; check the folder");
   }
   DynSessionResult r;
-  VecEeprom::image = &o.eeprom;
   tc::BoardSettings settings;
-  if (o.eeprom.empty() || tc::readSettings<VecEeprom>(settings).status != tc::DecodeStatus::kOk ||
+  if (o.eeprom.empty() || readImageSettings(o.eeprom, settings) != tc::DecodeStatus::kOk ||
       !settings.bench.isPresent()) {
     progress(fmt::format("slot {}: dyn cell, a {:.0f} g weight lifted off the plate", o.slot, o.cell_weight_g));
     rig->bench.placeWeight_g(o.cell_weight_g);
@@ -194,8 +185,7 @@ DynSessionResult runDynSession(const DynSessionOptions& o) {  // long: the sessi
   for (const auto& l : lines)
     if (l.rfind("error:", 0) == 0) throw std::runtime_error("dyn: " + l + "\n" + con.tail());
   r.eeprom = rig->board.eeprom();
-  VecEeprom::image = &r.eeprom;
-  tc::readSettings<VecEeprom>(settings);
+  readImageSettings(r.eeprom, settings);
   r.bench = settings.bench;
   r.dynamics = storedDynamics(r.eeprom, o.slot);
   r.simulated_s = rig->board.simulatedSeconds();

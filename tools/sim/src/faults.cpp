@@ -9,6 +9,7 @@
 #include "sim/console.hpp"
 #include "sim/elf_symbols.hpp"
 #include "thrustcal/curve_builder.hpp"
+#include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/record_v2.hpp"
@@ -16,13 +17,6 @@
 namespace sim {
 
 namespace {
-
-struct WritableImage {
-  static std::vector<uint8_t>* image;
-  static uint8_t readByte(uint16_t addr) { return (*image)[addr]; }
-  static void updateByte(uint16_t addr, uint8_t value) { (*image)[addr] = value; }
-};
-std::vector<uint8_t>* WritableImage::image = nullptr;
 
 double plantForceG(double k, int pwm_us, double v) {
   if (pwm_us <= 1080) return 0.0;
@@ -36,7 +30,7 @@ double batteryPinMv(double volts) { return volts * 1000.0 * 47.0 / 147.0; }
 
 std::vector<uint8_t> calibratedTestEeprom() {
   std::vector<uint8_t> image(kEepromBytes, 0xFF);
-  WritableImage::image = &image;
+  const tc::EepromImage::Use use(image);
   for (uint8_t slot = 0; slot < 4; ++slot) {
     const double k = 12.5 + slot;
     if (slot < 2) {
@@ -53,7 +47,7 @@ std::vector<uint8_t> calibratedTestEeprom() {
         curve->start_mv = static_cast<uint16_t>(v * 1000);
       }
       cal->sag.base_pwm_us = 1000;
-      tc::writeRecord<WritableImage>(slot, *cal);
+      tc::writeRecord<tc::EepromImage>(slot, *cal);
     } else {
       auto fitter = std::make_unique<tc::ModelV2Fitter<128>>();
       for (int pwm = 1000; pwm <= 2000; pwm += 10)
@@ -61,11 +55,10 @@ std::vector<uint8_t> calibratedTestEeprom() {
                     static_cast<int16_t>(std::lround(plantForceG(k, pwm, 12.0) * 10.0)), 12000);
       tc::ModelV2 model;
       if (fitter->fit(model).status != tc::FitV2Status::kOk ||
-          tc::writeModelV2<WritableImage>(slot, model).status != tc::WriteV2Status::kWritten)
+          tc::writeModelV2<tc::EepromImage>(slot, model).status != tc::WriteV2Status::kWritten)
         throw std::logic_error("calibratedTestEeprom: model v2 did not fit or store");
     }
   }
-  WritableImage::image = nullptr;
   return image;
 }
 
