@@ -7,11 +7,11 @@
 
 #include <cstdio>
 #include <memory>
-#include <regex>
 #include <string>
 
 #include "air_support.hpp"
 #include "sim/twi.hpp"
+#include "text_match.hpp"
 
 namespace {
 
@@ -25,7 +25,7 @@ TEST_F(TwiProbe, PolledRegisterReadShowsTheChipsStatusSequence) {
   const auto r = command("rd 117 1");
   // then: 08 18 28 10 40 58, the byte 0x68, and the driver spun while TWINT was clear
   ASSERT_EQ(r.size(), 2u) << console->tail();
-  EXPECT_TRUE(std::regex_match(r[0], std::regex(R"(st 08 18 28 10 40 58 cyc \d+ data 68)"))) << r[0];
+  EXPECT_TRUE(tc::test::Pattern(R"(st 08 18 28 10 40 58 cyc \d+ data 68)").matches(r[0])) << r[0];
   const int spins = std::stoi(r[1].substr(5));
   EXPECT_GT(spins, 0) << "TWINT read as set right after it was cleared (simavr 1.6's bug)";
 }
@@ -43,8 +43,7 @@ TEST_F(TwiProbe, InterruptDrivenReadSeesTheSameSequenceFromTheTwiVector) {
   wake();
   const auto r = command("ri 117 2");
   ASSERT_FALSE(r.empty());
-  EXPECT_TRUE(std::regex_match(r[0], std::regex(R"(st 08 18 28 10 40 50 58 cyc \d+ data 68 00)")))
-      << r[0];
+  EXPECT_TRUE(tc::test::Pattern(R"(st 08 18 28 10 40 50 58 cyc \d+ data 68 00)").matches(r[0])) << r[0];
 }
 
 TEST_F(TwiProbe, AnAbsentSlaveNacksItsAddressWith0x20) {
@@ -102,8 +101,8 @@ TEST_P(TwiTiming, EveryByteTakesNineBitsOf16Plus2TwbrTimes4PowTwps) {
     EXPECT_EQ(bytes, 2 + 1 + 14);  // SLA+W, register, SLA+R, 14 data bytes
     EXPECT_EQ(conditions, 3);      // START, repeated START, STOP
     // and the firmware's own count: the bus time plus a little software per operation
-    std::smatch m;
-    ASSERT_TRUE(std::regex_search(r.at(0), m, std::regex(R"(cyc (\d+))")));
+    tc::test::Groups m;
+    ASSERT_TRUE(tc::test::Pattern(R"(cyc (\d+))").foundIn(r.at(0), &m));
     const uint64_t bus = (17 * 9 + 3) * c.bit_cycles;
     const uint64_t measured = std::stoull(m[1]);
     EXPECT_GE(measured, bus);

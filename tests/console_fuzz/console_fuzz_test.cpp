@@ -21,12 +21,12 @@
 #include <chrono>
 #include <cstdlib>
 #include <random>
-#include <regex>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "safety_support.hpp"
+#include "text_match.hpp"
 
 namespace {
 
@@ -236,7 +236,7 @@ void fuzzImage(const std::string& image, const std::string& prompt, uint64_t see
   Fuzzer f(seed);
   Grammar grammar;
   std::vector<uint8_t> eeprom = start_eeprom;
-  const std::regex changed_slot(R"((erased motor|stored .*of motor) (\d))");
+  const tc::test::Pattern changed_slot(R"((erased motor|stored .*of motor) (\d))");
   bool strict = false;
   const char* env_batches = std::getenv("THRUSTCAL_FUZZ_BATCHES");  // shorter runs while debugging
   const int batches = env_batches ? std::atoi(env_batches) : kBatches;
@@ -309,8 +309,7 @@ void fuzzImage(const std::string& image, const std::string& prompt, uint64_t see
     // EEPROM: unchanged but for the slots a store or erase reported.
     const std::string batch_out = board.output().substr(out_from);
     std::set<int> allowed;
-    for (std::sregex_iterator it(batch_out.begin(), batch_out.end(), changed_slot), end; it != end; ++it)
-      allowed.insert(std::stoi((*it)[2]));
+    for (const tc::test::Groups& m : changed_slot.allIn(batch_out)) allowed.insert(std::stoi(m[2]));
     const std::vector<uint8_t> now = board.eeprom();
     for (std::size_t a = 0; a < now.size(); ++a) {
       if (now[a] != eeprom[a]) {

@@ -18,7 +18,6 @@
 #include <fstream>
 #include <functional>
 #include <memory>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -34,6 +33,7 @@
 #include "sim/console.hpp"
 #include "sim/rigs.hpp"
 #include "sim/scenarios.hpp"
+#include "text_match.hpp"
 #include "thrustcal/eeprom_image.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/record_v2.hpp"
@@ -158,9 +158,9 @@ inline std::string storeLine(const std::vector<std::string>& lines) {
 }
 
 inline int wroteBytes(const std::string& line) {
-  std::smatch m;
-  static const std::regex re(R"(wrote (\d+) bytes?$)");
-  return std::regex_search(line, m, re) ? std::stoi(m[1]) : -1;
+  tc::test::Groups m;
+  static const tc::test::Pattern re(R"(wrote (\d+) bytes?$)");
+  return re.foundIn(line, &m) ? std::stoi(m[1]) : -1;
 }
 
 inline plant::BenchParams benchFor(uint64_t seed, double variation) {
@@ -377,7 +377,7 @@ inline BootResult bootAndFly(const std::vector<uint8_t>& image, const std::vecto
   board.setEeprom(image);
   sim::Console con(board, "rr> ");
   r.report = con.waitPrompt(5.0);
-  static const std::regex status_re(
+  static const tc::test::Pattern status_re(
       R"(^motor 0: (\d+\.\d) g, (\d+) us, battery (\d+)\.(\d{3}) V filtered)");  // force in decigrams
   for (int g : forces_g) {
     FlownCommand f;
@@ -388,8 +388,8 @@ inline BootResult bootAndFly(const std::vector<uint8_t>& image, const std::vecto
       board.runFor(0.3);
     }
     for (const auto& l : con.command("status", 2.0)) {
-      std::smatch m;
-      if (std::regex_search(l, m, status_re)) {
+      tc::test::Groups m;
+      if (status_re.foundIn(l, &m)) {
         f.pwm_us = std::stoi(m[2]);
         f.bus_mv = std::stoi(m[3]) * 1000 + std::stoi(m[4]);
       }

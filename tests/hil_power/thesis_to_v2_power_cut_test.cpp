@@ -77,10 +77,10 @@ std::pair<std::vector<std::string>, V1Status> bootAndCommand(const std::vector<u
     con.send("");
     board.runFor(0.3);
   }
-  static const std::regex status_re(R"(^motor 0: \d+\.\d g, (\d+) us, battery (\d+)\.(\d{3}) V (filtered|compensated))");
+  static const tc::test::Pattern status_re(R"(^motor 0: \d+\.\d g, (\d+) us, battery (\d+)\.(\d{3}) V (filtered|compensated))");
   for (const auto& l : con.command("status", 2.0)) {
-    std::smatch m;
-    if (std::regex_search(l, m, status_re)) {
+    tc::test::Groups m;
+    if (status_re.foundIn(l, &m)) {
       out.second.pwm_us = std::stoi(m[1]);
       out.second.battery_mv = std::stoi(m[2]) * 1000 + std::stoi(m[3]);
     }

@@ -20,7 +20,6 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -33,6 +32,8 @@ extern "C" {
 #include <simavr/sim_avr.h>
 #include <simavr/sim_cycle_timers.h>
 #include <simavr/sim_irq.h>
+
+#include "text_match.hpp"
 }
 
 namespace {
@@ -152,12 +153,12 @@ class FlyReceiverHil : public ::testing::Test {
   // `status`'s receiver line.
   Receiver status() {
     Receiver r;
-    static const std::regex re(
+    static const tc::test::Pattern re(
         "receiver: frames (\\d+), last \\d+ ms ago, rejected pulses (\\d+), bad frames (\\d+), lost edges "
         "(\\d+), failsafes (\\d+); (sticks .*)");
     for (const std::string& line : con_->command("status")) {
-      std::smatch m;
-      if (!std::regex_search(line, m, re)) continue;
+      tc::test::Groups m;
+      if (!re.foundIn(line, &m)) continue;
       r.frames = std::stol(m[1]);
       r.rejected = std::stol(m[2]);
       r.bad = std::stol(m[3]);
@@ -290,9 +291,9 @@ TEST_F(FlyReceiverHil, APpmSumOnA8ArmsFromTheSticksFliesTheRollStickAndStopsOnLo
   // the valid frame's sticks: centred (within the dead band) and the throttle at 1000 us to
   // within the edge timestamps' jitter (taken in the pin-change interrupt, a few microseconds
   // later when another interrupt runs at the edge)
-  std::smatch stick;
-  ASSERT_TRUE(std::regex_match(noisy.sticks, stick,
-                               std::regex("sticks roll 0 pitch 0 yaw 0 us, throttle (\\d+) us, angle mode")))
+  tc::test::Groups stick;
+  ASSERT_TRUE(tc::test::Pattern("sticks roll 0 pitch 0 yaw 0 us, throttle (\\d+) us, angle mode")
+                  .matches(noisy.sticks, &stick))
       << noisy.sticks;
   EXPECT_NEAR(std::stoi(stick[1]), 1000, 2) << noisy.sticks;
   EXPECT_LT(saidAt("armed:", noise_s), 0) << "noise armed it";

@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <regex>
 
 #include "safety_support.hpp"
 #include "sim/rigs.hpp"

@@ -3,11 +3,11 @@
 // the loud stop for an unmodelled timer setting.
 #include <gtest/gtest.h>
 
-#include <regex>
 
 #include "pin_log.hpp"
 #include "sim/console.hpp"
 #include "sim/timers.hpp"
+#include "text_match.hpp"
 
 namespace {
 
@@ -18,9 +18,8 @@ using timers_test::PinLog;
 // The "cN VALUE" lines the capture image printed.
 std::vector<long> captures(const std::string& out, int timer) {
   std::vector<long> v;
-  const std::regex line("c" + std::to_string(timer) + " (\\d+)");
-  for (auto it = std::sregex_iterator(out.begin(), out.end(), line); it != std::sregex_iterator(); ++it)
-    v.push_back(std::stol((*it)[1]));
+  const tc::test::Pattern line("c" + std::to_string(timer) + " (\\d+)");
+  for (const tc::test::Groups& m : line.allIn(out)) v.push_back(std::stol(m[1]));
   return v;
 }
 
@@ -68,9 +67,9 @@ IntCounts askCounts(sim::Board& board) {
                               board.output().find('\n', board.output().find("intf7", from)) != std::string::npos; },
                  sim::secondsToCycles(0.01));
   IntCounts c;
-  std::smatch m;
+  tc::test::Groups m;
   const std::string tail = board.output().substr(from);
-  if (std::regex_search(tail, m, std::regex("int4 (\\d+) int2 (\\d+) int3 (\\d+) intf7 (\\d)"))) {
+  if (tc::test::Pattern("int4 (\\d+) int2 (\\d+) int3 (\\d+) intf7 (\\d)").foundIn(tail, &m)) {
     c.int4 = std::stol(m[1]);
     c.int2 = std::stol(m[2]);
     c.int3 = std::stol(m[3]);

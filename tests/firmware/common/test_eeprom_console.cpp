@@ -5,7 +5,6 @@
 #include <fmt/format.h>
 
 #include <cstring>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -13,6 +12,7 @@
 #include "hal/fake.hpp"
 #include "hal/hal.hpp"
 #include "hex/intel_hex.hpp"
+#include "text_match.hpp"
 #include "thrustcal/crc16.hpp"
 
 namespace {
@@ -58,9 +58,9 @@ TEST_F(EepromConsole, CrcLineGivesEachSlotAndTheWholeImageInUpperCaseHex) {
   // when / then
   const std::string out = run("eeprom crc");
   EXPECT_EQ(out, expectedCrcLine(image()));
-  EXPECT_TRUE(std::regex_match(out, std::regex("eeprom crc slot0 [0-9A-F]{4} slot1 [0-9A-F]{4} "
-                                               "slot2 [0-9A-F]{4} slot3 [0-9A-F]{4} all "
-                                               "[0-9A-F]{4}\r\n")))
+  EXPECT_TRUE(tc::test::Pattern("eeprom crc slot0 [0-9A-F]{4} slot1 [0-9A-F]{4} slot2 [0-9A-F]{4} "
+                                "slot3 [0-9A-F]{4} all [0-9A-F]{4}\r\n")
+                  .matches(out))
       << out;
 }
 

@@ -5,11 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <regex>
 #include <string>
 #include <vector>
 
 #include "gather_store_fixture.hpp"
+#include "text_match.hpp"
 #include "thrustcal/model_v2.hpp"
 #include "thrustcal/record_v2.hpp"
 
@@ -48,10 +48,10 @@ class GatherStoreV2 : public GatherStore {
 
   // The "wrote N bytes" figure of a response; -1 if absent.
   static int wroteBytes(const Response& r) {
-    static const std::regex re(R"(wrote (\d+) bytes?$)");
+    static const tc::test::Pattern re(R"(wrote (\d+) bytes?$)");
     for (const auto& l : r.lines) {
-      std::smatch m;
-      if (std::regex_search(l, m, re)) return std::stoi(m[1]);
+      tc::test::Groups m;
+      if (re.foundIn(l, &m)) return std::stoi(m[1]);
     }
     return -1;
   }

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <memory>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -17,6 +16,7 @@
 #include "hal/fake.hpp"
 #include "hal/hal.hpp"
 #include "plant.hpp"
+#include "text_match.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 
 namespace {
@@ -103,16 +103,16 @@ TEST_F(GatherStore, SweepStreamsAValidCsvWithCommentsOnly) {
   const std::string out = sweep();
   // then: after the echoed command, every line is the header, a CSV row or a "# " comment
   std::vector<std::string> lines = responseLines(out);
-  const std::regex row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),(\d+\.\d{3}),0,1$)");
+  const tc::test::Pattern row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),(\d+\.\d{3}),0,1$)");
   int headers = 0;
   std::vector<int> pwms;
   std::vector<double> times;
   for (const auto& line : lines) {
-    std::smatch m;
+    tc::test::Groups m;
     if (line == "pwm_us,force_g,vbat_v,t_s,motor,dir") {
       ++headers;
       EXPECT_TRUE(pwms.empty()) << "header after data";
-    } else if (std::regex_match(line, m, row)) {
+    } else if (row.matches(line, &m)) {
       pwms.push_back(std::stoi(m[1]));
       times.push_back(std::stod(m[4]));
     } else {
@@ -140,11 +140,11 @@ TEST_F(GatherStore, SweepRowsFollowThePlant) {
   // then: force within 1.5 g of the plant's steady state (0.75 g per count, the median
   // rejects the spikes), battery within 25 mV of what the plant's monitor reads (one count
   // is 15.3 mV; the thesis map() truncates, the pin voltage rounds)
-  const std::regex row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),.*$)");
+  const tc::test::Pattern row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),.*$)");
   int rows = 0;
   for (const auto& line : splitLines(out)) {
-    std::smatch m;
-    if (!std::regex_match(line, m, row)) continue;
+    tc::test::Groups m;
+    if (!row.matches(line, &m)) continue;
     ++rows;
     const double pwm = std::stod(m[1]);
     const double thrust = plant_.steadyThrust(pwm);
@@ -322,11 +322,11 @@ TEST_F(GatherStore, SettleAutoStepsOnOnceTheForceStopsChanging) {
   EXPECT_NE(out.find("# sweep motor 0: 1000..1800 us, step 10 us, settle auto (cap 200 ms)"),
             std::string::npos)
       << out;
-  const std::regex row(R"(^(\d+),(-?\d+\.\d),.*$)");
+  const tc::test::Pattern row(R"(^(\d+),(-?\d+\.\d),.*$)");
   int rows = 0;
   for (const auto& line : splitLines(out)) {
-    std::smatch m;
-    if (!std::regex_match(line, m, row)) continue;
+    tc::test::Groups m;
+    if (!row.matches(line, &m)) continue;
     ++rows;
     EXPECT_NEAR(std::stod(m[2]), plant_.steadyThrust(std::stod(m[1])), 1.5) << line;
   }
@@ -353,11 +353,11 @@ TEST_F(GatherStore, DefaultSweepSettlesByMeasurementAndSettle200IsTheThesisTimin
   const std::string out = sweep();
   // then: every step waits the 200 ms
   EXPECT_NE(out.find("# sweep motor 0: 1000..1100 us, step 10 us, settle 200 ms"), std::string::npos) << out;
-  const std::regex row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),(\d+\.\d{3}),0,1$)");
+  const tc::test::Pattern row(R"(^(\d+),(-?\d+\.\d),(\d+\.\d{3}),(\d+\.\d{3}),0,1$)");
   std::vector<double> times;
   for (const auto& line : splitLines(out)) {
-    std::smatch m;
-    if (std::regex_match(line, m, row)) times.push_back(std::stod(m[4]));
+    tc::test::Groups m;
+    if (row.matches(line, &m)) times.push_back(std::stod(m[4]));
   }
   ASSERT_EQ(times.size(), 11u);
   for (size_t i = 1; i < times.size(); ++i) EXPECT_GE(times[i] - times[i - 1], 0.200 - 1e-9);

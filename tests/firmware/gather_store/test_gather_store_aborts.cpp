@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <memory>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -17,6 +16,7 @@
 #include "hal/fake.hpp"
 #include "hal/hal.hpp"
 #include "plant.hpp"
+#include "text_match.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 
 namespace {
@@ -211,7 +211,7 @@ TEST_F(GatherStore, AbortLinesKeepTheCapturedLogACsvWithComments) {
   calibrateAndTare();
   hal::fake::feedInputAt(hal::fake::nowMs() + 2000, "q");
   for (const auto& line : responseLines(sweep())) {
-    const bool csv = std::regex_match(line, std::regex(R"(^[0-9a-z_,.\-]+$)"));
+    const bool csv = tc::test::Pattern(R"(^[0-9a-z_,.\-]+$)").matches(line);
     EXPECT_TRUE(csv || startsWith(line, "# ")) << line;
   }
 }

@@ -12,11 +12,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <regex>
 #include <string>
 #include <vector>
 
 #include "gather_store_v2_fixture.hpp"
+#include "text_match.hpp"
 
 namespace {
 
@@ -178,13 +178,12 @@ TEST_F(GatherStoreV2, ShowDescribesAV2SlotAndItsPwmsMatchTheModel) {
   // within 2 us of the plant's inverse (4 us at 10 g, where one us is 2 % of force)
   tc::ModelV2 model;
   ASSERT_EQ(load(0, model).status, tc::DecodeStatus::kOk);
-  const std::regex pair(R"((\d+) g (\d+) us)");
+  const tc::test::Pattern pair(R"((\d+) g (\d+) us)");
   int pairs = 0;
-  for (std::sregex_iterator it(out.lines[2].begin(), out.lines[2].end(), pair), end; it != end;
-       ++it) {
+  for (const tc::test::Groups& m : pair.allIn(out.lines[2])) {
     ++pairs;
-    const double grams = std::stod((*it)[1]);
-    const double pwm = std::stod((*it)[2]);
+    const double grams = std::stod(m[1]);
+    const double pwm = std::stod(m[2]);
     plant_.vbat_v = model.rest_mv / 1000.0;
     EXPECT_NEAR(pwm, plant_.pwmFor(grams), grams < 50 ? 4.0 : 2.0) << grams << " g";
   }

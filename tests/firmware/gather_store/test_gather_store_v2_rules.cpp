@@ -6,11 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <regex>
 #include <string>
 #include <vector>
 
 #include "gather_store_v2_fixture.hpp"
+#include "text_match.hpp"
 
 namespace {
 
@@ -108,9 +108,9 @@ TEST_F(GatherStoreV2, TheDividerSettingScalesTheMonitorAndDropsASweepMeasuredWit
   // the plant's A1 still carries the pack through 100k/47k: read through 100k/22k every volt
   // reads 27.727 / 15.638 = 1.77 V
   const Response status = command("status");
-  std::smatch m;
+  tc::test::Groups m;
   const std::string text = status.text();
-  ASSERT_TRUE(std::regex_search(text, m, std::regex(R"(battery (\d+\.\d+) V)"))) << text;
+  ASSERT_TRUE(tc::test::Pattern(R"(battery (\d+\.\d+) V)").foundIn(text, &m)) << text;
   EXPECT_NEAR(std::stod(m[1]), plant_.vbat_v * 27727.0 / 15638.0, 1.5) << text;
   // a new app (a reboot) reads it back
   app_ = std::make_unique<gs::GatherStoreApp>();

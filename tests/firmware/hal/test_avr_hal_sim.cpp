@@ -19,12 +19,12 @@
 #include <fstream>
 #include <functional>
 #include <memory>
-#include <regex>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "hal/board.hpp"
+#include "text_match.hpp"
 #include "thrustcal/eeprom_codec.hpp"
 
 #ifndef GATHER_STORE_ELF
@@ -301,14 +301,14 @@ TEST_P(AvrHalSimSlot, SweepDrivesTheSelectedPinAndReadsTheAdcOnTheMillisecondClo
   }
   // CSV rows: force from A0 through the thesis line (1 count = 0.75 g, so 100 g = 133.3
   // counts reads 99.75 or 100.5 g), battery from A1, time from the millisecond clock.
-  const std::regex row("(\\d+),(-?\\d+\\.\\d),(\\d+\\.\\d{3}),(\\d+\\.\\d{3})," +
-                       std::to_string(ch) + ",1");
+  const tc::test::Pattern row("(\\d+),(-?\\d+\\.\\d),(\\d+\\.\\d{3}),(\\d+\\.\\d{3})," +
+                              std::to_string(ch) + ",1");
   std::vector<double> force, vbat, t, printed_s;
-  for (std::sregex_iterator it(out.begin(), out.end(), row), end; it != end; ++it) {
-    force.push_back(std::stod((*it)[2]));
-    vbat.push_back(std::stod((*it)[3]));
-    t.push_back(std::stod((*it)[4]));
-    printed_s.push_back(board_->outputSeconds(out_from + it->position()));
+  for (const tc::test::Groups& m : row.allIn(out)) {
+    force.push_back(std::stod(m[2]));
+    vbat.push_back(std::stod(m[3]));
+    t.push_back(std::stod(m[4]));
+    printed_s.push_back(board_->outputSeconds(out_from + m.position));
   }
   ASSERT_EQ(force.size(), 3u) << out;
   EXPECT_NEAR(force[0], 0.0, 0.8);

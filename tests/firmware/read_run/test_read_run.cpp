@@ -8,7 +8,6 @@
 // Model v2 slots: test_read_run_v2.cpp.
 #include <gtest/gtest.h>
 
-#include <regex>
 
 #include "read_run_fixture.hpp"
 

@@ -3,9 +3,9 @@
 // fixture as test_read_run.cpp, read_run_fixture.hpp).
 #include <gtest/gtest.h>
 
-#include <regex>
 
 #include "read_run_fixture.hpp"
+#include "text_match.hpp"
 
 namespace {
 
@@ -344,25 +344,25 @@ TEST_F(ReadRun, StreamPrintsTenCsvLinesPerSecondWithThePulsesAndTheBattery) {
   // then
   EXPECT_TRUE(contains(on, "t_s,motor0_pwm_us,motor1_pwm_us,motor2_pwm_us,motor3_pwm_us,vbat_v"))
       << on;
-  const std::regex row(R"((\d+\.\d{3}),(\d+),(\d+),(\d+),(\d+),(\d+\.\d{3}))");
+  const tc::test::Pattern row(R"((\d+\.\d{3}),(\d+),(\d+),(\d+),(\d+),(\d+\.\d{3}))");
   for (const std::string& line : lines(on)) {  // the first row must not follow a prompt
     if (line.empty() || line == "stream on" || line.rfind("t_s,", 0) == 0) continue;
-    EXPECT_TRUE(std::regex_match(line, row)) << "not a clean CSV row: " << line;
+    EXPECT_TRUE(row.matches(line)) << "not a clean CSV row: " << line;
   }
   int rows = 0;
   for (const std::string& line : lines(streamed)) {
     if (line.empty()) continue;  // the keep-alive newlines' echo
-    std::smatch m;
-    ASSERT_TRUE(std::regex_match(line, m, row)) << "not a clean CSV row: " << line;
+    tc::test::Groups m;
+    ASSERT_TRUE(row.matches(line, &m)) << "not a clean CSV row: " << line;
     ++rows;
     EXPECT_EQ(std::stoi(m[2]), pulse(0));
     EXPECT_EQ(std::stoi(m[5]), pulse(3));
-    EXPECT_EQ(m[6].str(), volts(mvFromCounts(kCountsV1)));
+    EXPECT_EQ(m[6], volts(mvFromCounts(kCountsV1)));
   }
   EXPECT_EQ(rows, 10) << streamed;
   EXPECT_FALSE(app_->isStreaming());
   const std::string after = fake::takeOutput();
-  EXPECT_FALSE(std::regex_search(after, row)) << after;
+  EXPECT_FALSE(row.foundIn(after)) << after;
 }
 
 }  // namespace
