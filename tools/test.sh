@@ -53,5 +53,6 @@ echo "ctest summary (realtime tests):"
 sed -n '/tests passed, /,$p' "$realtime_log"
 echo "ctest summary (all other tests):"
 sed -n '/tests passed, /,$p' "$log"
+say "tools/test.sh finished"
 [ "$status" -eq 0 ] || exit "$status"
 exit $cov_status

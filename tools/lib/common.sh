@@ -19,7 +19,9 @@ THRUSTCAL_PACKAGES=("${THRUSTCAL_DEMO_PACKAGES[@]}" "${THRUSTCAL_TEST_PACKAGES[@
 # What tools/fuzz.sh adds (libFuzzer ships with Debian's clang runtime).
 THRUSTCAL_FUZZ_PACKAGES=(clang libclang-rt-14-dev)
 
-say() { printf '\033[1m==> %s\033[0m\n' "$*" >&2; }
+# say MESSAGE: a step's heading, with the seconds since the script started (bash's SECONDS), so
+# a log shows where a run's time went.
+say() { printf '\033[1m==> [%4d s] %s\033[0m\n' "$SECONDS" "$*" >&2; }
 die() { printf 'error: %s\n' "$*" >&2; exit 1; }
 
 # ensure_packages [PACKAGE...]: installs the given packages (default THRUSTCAL_PACKAGES)
