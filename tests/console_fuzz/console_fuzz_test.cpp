@@ -260,15 +260,14 @@ void fuzzImage(const std::string& image, const std::string& prompt, uint64_t see
     for (int i = 0; i < kLinesPerBatch; ++i) {
       const FuzzLine line = makeLine(f, grammar, strict);
       spin_sent = spin_sent || line.spin_checked;
+      const std::size_t mark = board.output().size();
       send(board, line.items);
       ++stats.lines;
-      if (!burst) {  // line by line: wait for the answer (or give up after 0.3 s)
+      if (!burst) {  // line by line: wait for the answer, at most 0.1 s once the line is in
         board.runUntil([&] { return board.pendingInput() == 0; }, sim::secondsToCycles(5));
-        board.runFor(0.002);
-        try {
-          con.waitPrompt(0.1);  // an empty line gets no reply from read_run
-        } catch (const sim::ExpectTimeout&) {
-        }
+        // a prompt; or the echo and 20 ms of nothing more, read_run's whole answer to an empty
+        // line (a keep-alive) and to any line while it streams rows
+        if (sim::waitAnswer(con, mark, 0.02, 0.1) == sim::Answer::kPrompt) con.waitPrompt(0.01);
       }
     }
     sim::drainConsole(con, 0.1);

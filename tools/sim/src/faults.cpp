@@ -87,6 +87,35 @@ std::string withChecksum(const std::string& line) {
   return fmt::format("{}*{:02X}", line, x);
 }
 
+namespace {
+constexpr const char* kRowChars = "0123456789.,-\r\n";  // read_run's `stream on` rows, line ends
+}  // namespace
+
+Answer waitAnswer(Console& con, std::size_t mark, double quiet_s, double budget_s) {
+  Board& board = con.board();
+  std::size_t text_end = mark;  // the output after mark holds nothing but rows beyond this
+  uint64_t still_since = board.cycle();
+  const bool settled = board.runUntil(
+      [&] {
+        const std::string& out = board.output();
+        if (out.find(con.prompt(), mark) != std::string::npos) return true;
+        const std::size_t last_text = out.find_last_not_of(kRowChars);
+        const std::size_t end = last_text == std::string::npos || last_text < mark ? mark : last_text + 1;
+        if (end != text_end || board.pendingInput() != 0) {
+          text_end = end;
+          still_since = board.cycle();
+          return false;
+        }
+        return board.cycle() - still_since >= secondsToCycles(quiet_s);
+      },
+      secondsToCycles(budget_s));
+  const std::string& out = board.output();
+  if (out.find(con.prompt(), mark) != std::string::npos) return Answer::kPrompt;
+  const bool rows_only = out.find_first_not_of(kRowChars, mark) == std::string::npos;
+  if (settled && rows_only && out.find('\n', mark) != std::string::npos) return Answer::kEchoOnly;
+  return Answer::kNone;
+}
+
 void drainConsole(Console& con, double quiet_s) {
   Board& board = con.board();
   board.runUntil([&] { return board.pendingInput() == 0; }, secondsToCycles(120));
@@ -103,21 +132,27 @@ void drainConsole(Console& con, double quiet_s) {
       const std::size_t seen = board.output().size();
       board.runFor(quiet_s);
       const std::string fresh = board.output().substr(seen);
-      if (fresh.find_first_not_of("0123456789.,-\r\n") == std::string::npos) return;
+      if (fresh.find_first_not_of(kRowChars) == std::string::npos) return;
       if (board.timeS() >= t_end) return;
     }
   };
+  int echoed = 0;
   for (int attempt = 0; attempt < 5; ++attempt) {
     wait_quiet();
     while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);
+    const std::size_t mark = board.output().size();
     con.send("");
-    try {
-      const auto answer = con.waitPrompt(2.0);
-      bool error = false;
-      for (const auto& l : answer) error = error || l.rfind("error:", 0) == 0;
-      if (!error) break;
-    } catch (const ExpectTimeout&) {  // the line end was lost: no answer at all
+    const Answer answer = waitAnswer(con, mark, quiet_s, 2.0);
+    // The echo alone (read_run): twice in a row, so no line end before was lost in a full ring.
+    if (answer == Answer::kEchoOnly) {
+      if (++echoed == 2) break;
+      continue;
     }
+    echoed = 0;
+    if (answer == Answer::kNone) continue;  // the line end was lost: no answer at all
+    bool error = false;
+    for (const auto& l : con.waitPrompt(0.01)) error = error || l.rfind("error:", 0) == 0;
+    if (!error) break;
   }
   board.runFor(0.05);
   while (con.unconsumed().find(con.prompt()) != std::string::npos) con.waitPrompt(0.01);

@@ -41,9 +41,19 @@ void restoreFlash(Board& board, const FlashPatch& patch);
 // "f 1 37" -> "f 1 37*53": the XOR of the line's characters as two upper-case hex digits.
 std::string withChecksum(const std::string& line);
 
+// How a firmware answered a line: with a prompt; with its echo (a line end) and nothing else but
+// `stream on` rows for a while (read_run answers an empty line, its keep-alive, so); or not yet.
+enum class Answer { kPrompt, kEchoOnly, kNone };
+// After a line sent when the board's output was `mark` characters long: runs until a prompt
+// follows mark, or until the line has been received and `quiet_s` passed without any output
+// but line ends and stream rows; at most `budget_s` (all simulated). The prompt is not consumed.
+Answer waitAnswer(class Console& con, std::size_t mark, double quiet_s, double budget_s);
+
 // After a flood: waits until the board has received everything sent, `quiet_s` more, ends any
 // partial line (a damaged one gets its error), and consumes every reply up to the last prompt,
-// so the next command starts clean. A sweep still running is aborted by that line end.
+// so the next command starts clean. A sweep still running is aborted by that line end. A firmware
+// that answers the empty line with its echo alone (read_run) is taken as drained once the echo
+// has been followed by `quiet_s` of silence.
 void drainConsole(class Console& con, double quiet_s = 0.3);
 
 struct Pulse {
