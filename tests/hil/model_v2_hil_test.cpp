@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "hil_support.hpp"
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "sim/air_cli.hpp"
 #include "sim/console_stdin.hpp"

@@ -3,6 +3,7 @@
 // (pwm's hover point, ArduPilot's fitted parameters); the motors' time constants.
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <sys/file.h>
 #include <unistd.h>
 

@@ -1,6 +1,7 @@
 // `thrustcal sim swap --json FILE` (sim/swap.hpp): runs[] and targets[] as docs/architecture.md fixes them
 // ("Interfaces other people script against"), with what made them beside.
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "sim/swap.hpp"
 

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>  // toJson() only: the users include json.hpp
 
 #include "plant/bench.hpp"
 #include "plant/params.hpp"

@@ -20,7 +20,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>  // toJson() only: the users include json.hpp
 #include <string>
 #include <vector>
 
