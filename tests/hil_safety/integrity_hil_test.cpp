@@ -239,4 +239,43 @@ TEST(Integrity, GatherStoreExecutesEveryLineOfASetupBurst) {
       << status[0];
 }
 
+// sim::waitAnswer, which the console fuzz and sim::drainConsole wait with: read_run answers an
+// empty line (its keep-alive) with the line end's echo and nothing more, a command with its
+// prompt; gather_store answers an empty line with a prompt.
+TEST(Integrity, AnEmptyLineGetsReadRunsEchoAloneAndGatherStoresPrompt) {
+  HIL_REQUIRE_IMAGE("read_run");
+  HIL_REQUIRE_IMAGE("gather_store");
+  safety::ReadRunBoard rr(safety::calibratedEeprom());
+  std::size_t mark = rr.board.output().size();
+  rr.con.send("");
+  EXPECT_EQ(sim::waitAnswer(rr.con, mark, 0.02, 1.0), sim::Answer::kEchoOnly) << rr.con.tail();
+  EXPECT_EQ(rr.board.output().substr(mark), "\r\n");
+  mark = rr.board.output().size();
+  rr.con.send("status");
+  EXPECT_EQ(sim::waitAnswer(rr.con, mark, 0.02, 1.0), sim::Answer::kPrompt) << rr.con.tail();
+
+  sim::Board gs(hil::imagePath("gather_store"));
+  gs.setEeprom(safety::calibratedEeprom());
+  sim::Console con(gs, "gs> ");
+  con.waitPrompt(10.0);
+  mark = gs.output().size();
+  con.send("");
+  EXPECT_EQ(sim::waitAnswer(con, mark, 0.02, 1.0), sim::Answer::kPrompt) << con.tail();
+}
+
+// A drain while read_run streams its rows (no prompt ever comes for an empty line then) ends
+// once two empty lines were echoed, instead of waiting out five 2 s prompt time-outs, and leaves
+// the console answering.
+TEST(Integrity, ADrainWhileReadRunStreamsEndsWithinASimulatedSecond) {
+  HIL_REQUIRE_IMAGE("read_run");
+  safety::ReadRunBoard rr(safety::calibratedEeprom());
+  rr.con.send("stream on");
+  rr.board.runFor(0.5);
+  const double t0 = rr.board.timeS();
+  sim::drainConsole(rr.con, 0.1);
+  EXPECT_LT(rr.board.timeS() - t0, 1.0) << rr.con.tail();
+  const auto reply = rr.con.command("stream off", 2.0);
+  EXPECT_TRUE(contains(::testing::PrintToString(reply), "# stream off")) << rr.con.tail();
+}
+
 }  // namespace
