@@ -21,6 +21,17 @@ tc::CurveBuilder<351> builder;
 struct Ram { static uint8_t b[1024]; static uint8_t readByte(uint16_t a) { return b[a]; } static void updateByte(uint16_t a, uint8_t v) { b[a] = v; } };
 uint8_t Ram::b[1024];
 
+// One median window as gather_store reads the load cell: reset, 201 pushes of next(), median().
+// Timer1 at clk/64 (a window takes more than 65,535 cycles): cycles, +-64.
+template <typename Next>
+static uint32_t windowCycles(Next next) {
+  TCCR1B = 0; TCNT1 = 0; TCCR1B = 3;
+  med.reset();
+  for (uint16_t i = 0; i < 201; ++i) med.push(next());
+  sink = med.median();
+  return (uint32_t)stop() * 64;
+}
+
 int main() {
   UCSR0B = 1 << TXEN0; UBRR0 = 8;
   fdev_setup_stream(&out_stream, uart_putchar, nullptr, _FDEV_SETUP_WRITE);
@@ -28,19 +39,11 @@ int main() {
   // median 201: one window as gather_store reads the load cell (reset, 201 pushes, median()),
   // then random pushes; then worst case (oldest at one end, new at the other)
   uint16_t x = 1;
-  TCCR1B = 0; TCNT1 = 0; TCCR1B = 3;  // clk/64: a window takes more than 65,535 cycles
-  med.reset();
-  for (uint16_t i = 0; i < 201; ++i) { x = x * 25173u + 13849u; med.push(x >> 6); }
-  sink = med.median();
-  const uint16_t t_window = stop();
-  printf("median201 window (201 pushes + median), 16-bit random: %lu cycles (+-64)\n", (uint32_t)t_window * 64);
+  const uint32_t t_window = windowCycles([&] { x = x * 25173u + 13849u; return (uint16_t)(x >> 6); });
+  printf("median201 window (201 pushes + median), 16-bit random: %lu cycles (+-64)\n", t_window);
   // the same on readings as a settled load cell gives them: 508..515 counts
-  TCCR1B = 0; TCNT1 = 0; TCCR1B = 3;
-  med.reset();
-  for (uint16_t i = 0; i < 201; ++i) { x = x * 25173u + 13849u; med.push(508 + (x >> 13)); }
-  sink = med.median();
-  const uint16_t t_cell = stop();
-  printf("median201 window (201 pushes + median), 508..515 counts: %lu cycles (+-64)\n", (uint32_t)t_cell * 64);
+  const uint32_t t_cell = windowCycles([&] { x = x * 25173u + 13849u; return (uint16_t)(508 + (x >> 13)); });
+  printf("median201 window (201 pushes + median), 508..515 counts: %lu cycles (+-64)\n", t_cell);
   uint32_t total = 0; uint16_t worst = 0;
   for (uint16_t i = 0; i < 1000; ++i) {
     x = x * 25173u + 13849u; uint16_t s = x >> 6;
