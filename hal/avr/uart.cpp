@@ -158,9 +158,26 @@ void Uart::write(uint8_t byte) {
   UCSR0B |= _BV(UDRIE0);
 }
 
+// A string into the ring in runs: as many bytes as there is room for, then the head and
+// UDRIE0 once per run (~10 cycles a byte instead of a write() call's ~35); only a full ring
+// goes through write(), which waits as it always does. The ISR only ever frees room, so the
+// room counted from one read of the tail can only have grown by the time the head is stored.
 void Uart::print(const char* text) {
   if (text == nullptr) return;
-  while (*text != '\0') write(static_cast<uint8_t>(*text++));
+  while (*text != '\0') {
+    uint8_t head = g_tx_head;
+    uint8_t room = static_cast<uint8_t>((g_tx_tail - head - 1) & (kTxSize - 1));
+    if (room == 0) {
+      write(static_cast<uint8_t>(*text++));
+      continue;
+    }
+    do {
+      g_tx[head] = static_cast<uint8_t>(*text++);
+      head = static_cast<uint8_t>((head + 1) & (kTxSize - 1));
+    } while (--room != 0 && *text != '\0');
+    g_tx_head = head;
+    UCSR0B |= _BV(UDRIE0);
+  }
 }
 
 void Uart::printP(const char* progmem_text) {
