@@ -282,24 +282,44 @@ void printFixed(int32_t value, uint8_t decimals) {
   }
 }
 
-void printFixed16(int16_t value, uint8_t decimals) {
+namespace {
+// One digit of formatFixed16 at a constant power of ten (inlined: five straight-line steps, no
+// loop over the powers): the digit by subtraction (at most 9, the first at most 3), printed
+// unless it is a leading zero before the point; the point after the digit at `point`.
+__attribute__((always_inline)) inline char* fixedDigit(char* out, uint16_t& magnitude, uint16_t power, uint8_t k,
+                                                        uint8_t point, bool& leading) {
+  char digit = '0';
+  while (magnitude >= power) {
+    magnitude = static_cast<uint16_t>(magnitude - power);
+    ++digit;
+  }
+  if (digit != '0' || k >= point) leading = false;
+  if (!leading) *out++ = digit;
+  if (k == point && k != 4) *out++ = '.';
+  return out;
+}
+}  // namespace
+
+// No division and no table: each of the five digits by subtraction.
+char* formatFixed16(char* out, int16_t value, uint8_t decimals) {
   uint16_t magnitude = value < 0 ? static_cast<uint16_t>(-static_cast<int32_t>(value)) : static_cast<uint16_t>(value);
-  if (value < 0) hal::Uart::write('-');
+  if (value < 0) *out++ = '-';
   if (decimals > 4) decimals = 4;
   const uint8_t point = static_cast<uint8_t>(4 - decimals);  // the digit before the point
   bool leading = true;
-  uint16_t power = 10000;  // then 1000, 100, 10, 1: no table to read, no division
-  for (uint8_t k = 0; k < 5; ++k) {
-    uint8_t digit = 0;
-    while (magnitude >= power) {  // at most 9 subtractions (6 for the first digit)
-      magnitude = static_cast<uint16_t>(magnitude - power);
-      ++digit;
-    }
-    if (digit != 0 || k >= point) leading = false;
-    if (!leading) hal::Uart::write(static_cast<uint8_t>('0' + digit));
-    if (k == point && decimals != 0) hal::Uart::write('.');
-    power = power == 10000 ? 1000 : power == 1000 ? 100 : power == 100 ? 10 : 1;
-  }
+  out = fixedDigit(out, magnitude, 10000, 0, point, leading);
+  out = fixedDigit(out, magnitude, 1000, 1, point, leading);
+  out = fixedDigit(out, magnitude, 100, 2, point, leading);
+  out = fixedDigit(out, magnitude, 10, 3, point, leading);
+  out = fixedDigit(out, magnitude, 1, 4, point, leading);
+  *out = '\0';
+  return out;
+}
+
+void printFixed16(int16_t value, uint8_t decimals) {
+  char text[kFixed16Chars + 1];
+  formatFixed16(text, value, decimals);
+  hal::Uart::print(text);
 }
 
 void printHex2(uint8_t value) {

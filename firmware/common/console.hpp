@@ -116,6 +116,10 @@ void printFixed(int32_t value, uint8_t decimals);
 // printFixed for a 16-bit value, with no 32-bit division (a few hundred cycles instead of
 // thousands on the AVR: fly prints 50 stream rows a second beside a 400 Hz loop).
 void printFixed16(int16_t value, uint8_t decimals);
+// printFixed16's text into `out` (at least kFixed16Chars + 1 bytes), '\0'-terminated; returns
+// the terminator's address, so a row of numbers is built in one buffer and printed at once.
+constexpr uint8_t kFixed16Chars = 7;  // "-3.2768", "-32768"
+char* formatFixed16(char* out, int16_t value, uint8_t decimals);
 void printHex2(uint8_t value);  // two upper-case hex digits
 void newline();  // "\r\n"
 // The print helpers both apps' console views use (one copy, here).

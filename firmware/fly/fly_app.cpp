@@ -15,9 +15,14 @@ namespace {
 constexpr uint16_t kImuStartMaxMs = 1000;
 constexpr uint16_t kCalibrationMaxMs = 5000;
 
-int16_t centi(float v, float scale) {
-  const float x = v * scale;
-  return x >= 32767.0f ? 32767 : (x <= -32768.0f ? -32768 : static_cast<int16_t>(x));
+// A stream row's numbers from the frame path's own units, integer only (float conversions
+// were a third of a row's cost): angle units to centidegrees, rate units to decidegrees per
+// second, rounded and saturated to 16 bits.
+constexpr Gain kCentidegPerAngleUnit = gainOf(100.0f * kDegPerRad * kRadPerAngleUnit);
+constexpr Gain kDecidegPerSecondPerRateUnit = gainOf(10.0f * kDegPerRad * kRadPerRateUnit);
+FLY_INLINE int16_t scaled16(int32_t units, const Gain& gain) {  // inlined: the gain's shifts fold
+  const int32_t v = applyGain(units, gain);
+  return v > 32767 ? 32767 : (v < -32768 ? -32768 : static_cast<int16_t>(v));
 }
 }  // namespace
 
@@ -337,16 +342,30 @@ void FlyApp::disarm(DisarmCause cause) {
 }
 
 void FlyApp::takeStreamRow(uint32_t now_ms) {
-  const Attitude a = estimator_.attitude();
-  row_.t_ms = now_ms;
-  row_.roll_cdeg = centi(a.roll_rad, 100.0f * kDegPerRad);
-  row_.pitch_cdeg = centi(a.pitch_rad, 100.0f * kDegPerRad);
-  row_.roll_sp_cdeg = centi(command_.setpoint.roll_rad, 100.0f * kDegPerRad);
-  row_.pitch_sp_cdeg = centi(command_.setpoint.pitch_rad, 100.0f * kDegPerRad);
-  for (uint8_t i = 0; i < 3; ++i) row_.rate_ddps[i] = centi(a.rate_rad_s[i], 10.0f * kDegPerRad);
+  const AttitudeQ& q = estimator_.fixed();
+  // Seconds and milliseconds by advancing the last row's (20 ms a row: a subtraction at most),
+  // not by a 32-bit division each row; a row a minute or more after the last divides once.
+  const uint32_t since_ms = now_ms - row_.from_ms;
+  if (since_ms >= 60000u) {
+    row_.t_s = now_ms / 1000u;
+    row_.t_ms = static_cast<uint16_t>(now_ms - row_.t_s * 1000u);
+  } else {
+    uint16_t ms = static_cast<uint16_t>(row_.t_ms + since_ms);
+    while (ms >= 1000u) {
+      ms = static_cast<uint16_t>(ms - 1000u);
+      ++row_.t_s;
+    }
+    row_.t_ms = ms;
+  }
+  row_.from_ms = now_ms;
+  row_.roll_cdeg = scaled16(q.roll, kCentidegPerAngleUnit);
+  row_.pitch_cdeg = scaled16(q.pitch, kCentidegPerAngleUnit);
+  row_.roll_sp_cdeg = scaled16(command_.setpoint_q.roll, kCentidegPerAngleUnit);
+  row_.pitch_sp_cdeg = scaled16(command_.setpoint_q.pitch, kCentidegPerAngleUnit);
+  for (uint8_t i = 0; i < 3; ++i) row_.rate_ddps[i] = scaled16(q.rate[i], kDecidegPerSecondPerRateUnit);
   for (uint8_t i = 0; i < kMotors; ++i) {
-    const int32_t g = roundedGrams(flight_.force.dg[i]);
-    row_.force_g[i] = g <= 0 ? 0 : static_cast<uint16_t>(g);
+    const ForceDg dg = flight_.force.dg[i];
+    row_.force_dg[i] = dg <= 0 ? 0 : (dg > 32767 ? 32767 : static_cast<int16_t>(dg));
     row_.pulse_us[i] = output_.pulseUs(i);
   }
   notes_ |= kNoteStream;

@@ -109,10 +109,12 @@ struct LoopStats {
 
 // One stream row, taken in its frame and printed after it.
 struct StreamRow {
-  uint32_t t_ms = 0;
+  uint32_t t_s = 0;    // the time since start-up: seconds
+  uint16_t t_ms = 0;   // ... and milliseconds, 0..999
+  uint32_t from_ms = 0;  // the clock at the last row (the time advances by the difference)
   int16_t roll_cdeg = 0, pitch_cdeg = 0, roll_sp_cdeg = 0, pitch_sp_cdeg = 0;
   int16_t rate_ddps[3] = {0, 0, 0};
-  uint16_t force_g[kMotors] = {0, 0, 0, 0};
+  int16_t force_dg[kMotors] = {0, 0, 0, 0};  // decigrams, as the mixer gives them
   uint16_t pulse_us[kMotors] = {0, 0, 0, 0};
 };
 

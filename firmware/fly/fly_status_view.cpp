@@ -190,37 +190,43 @@ void streamHeader() {
                     "force0_g,force1_g,force2_g,force3_g,pulse0_us,pulse1_us,pulse2_us,pulse3_us"));
 }
 
-// Every number 16 bits (printFixed16: no 32-bit division); the time as seconds and milliseconds.
+// Every number 16 bits (formatFixed16: no 32-bit division); the time as seconds and
+// milliseconds. The row is built in one buffer and handed to the UART at once (hal::Uart::print
+// fills its ring in runs): one call per row, not one per character.
 void streamRow(const StreamRow& row) {
-  const uint32_t seconds = row.t_ms / 1000u;
-  if (seconds <= 32767u) {
-    fw::printFixed16(static_cast<int16_t>(seconds), 0);
+  constexpr uint8_t kFields = 4 + 3 + 2 * kMotors;  // after the time
+  char text[2 * (fw::kFixed16Chars + 1) + kFields * (fw::kFixed16Chars + 1) + 3];
+  char* p = text;
+  if (row.t_s <= 32767u) {
+    p = fw::formatFixed16(p, static_cast<int16_t>(row.t_s), 0);
   } else {
-    sayCount(seconds);
+    sayCount(row.t_s);  // after nine hours: printed on its own
   }
-  hal::Uart::write('.');
-  const uint16_t ms = static_cast<uint16_t>(row.t_ms - seconds * 1000u);
-  if (ms < 100) hal::Uart::write('0');
-  if (ms < 10) hal::Uart::write('0');
-  fw::printFixed16(static_cast<int16_t>(ms), 0);
+  *p++ = '.';
+  if (row.t_ms < 100) *p++ = '0';
+  if (row.t_ms < 10) *p++ = '0';
+  p = fw::formatFixed16(p, static_cast<int16_t>(row.t_ms), 0);
   const int16_t cdeg[4] = {row.roll_cdeg, row.pitch_cdeg, row.roll_sp_cdeg, row.pitch_sp_cdeg};
   for (int16_t v : cdeg) {
-    hal::Uart::write(',');
-    fw::printFixed16(v, 2);
+    *p++ = ',';
+    p = fw::formatFixed16(p, v, 2);
   }
   for (int16_t v : row.rate_ddps) {
-    hal::Uart::write(',');
-    fw::printFixed16(v, 1);
+    *p++ = ',';
+    p = fw::formatFixed16(p, v, 1);
   }
-  for (uint16_t v : row.force_g) {
-    hal::Uart::write(',');
-    fw::printFixed16(static_cast<int16_t>(v), 0);
+  for (int16_t v : row.force_dg) {
+    *p++ = ',';
+    p = fw::formatFixed16(p, v, 1);  // grams with the decigram the mixer works in
   }
   for (uint16_t v : row.pulse_us) {
-    hal::Uart::write(',');
-    fw::printFixed16(static_cast<int16_t>(v), 0);
+    *p++ = ',';
+    p = fw::formatFixed16(p, static_cast<int16_t>(v), 0);
   }
-  newline();
+  *p++ = '\r';
+  *p++ = '\n';
+  *p = '\0';
+  hal::Uart::print(text);
 }
 
 

@@ -204,6 +204,7 @@ TEST_F(Fly, TheStreamIsACsvOfFiftyRowsASecond) {
   runFor(1000);
   const std::string out = fake::takeOutput();
   int rows = 0;
+  long last_ms = -1;
   for (const std::string& line : lines(out)) {
     if (line.empty()) continue;
     std::stringstream fields(line);
@@ -211,10 +212,20 @@ TEST_F(Fly, TheStreamIsACsvOfFiftyRowsASecond) {
     int n = 0;
     while (std::getline(fields, field, ',')) ++n;
     EXPECT_EQ(n, 16) << line;
+    // t_s as seconds.milliseconds (advanced row by row, not divided): 20 ms apart, across
+    // whole seconds too
+    long s = 0, ms = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%ld.%3ld,", &s, &ms), 2) << line;
+    ASSERT_LT(ms, 1000) << line;
+    EXPECT_EQ(line.find('.'), line.find(',') - 4) << "three digits of milliseconds: " << line;
+    if (last_ms >= 0) {
+      EXPECT_EQ(s * 1000 + ms - last_ms, 20) << line;
+    }
+    last_ms = s * 1000 + ms;
     ++rows;
   }
   EXPECT_EQ(rows, 50);
-  EXPECT_TRUE(contains(out, ",0.00,0.00,0.00,0.00,0.0,0.0,0.0,300,300,300,300,")) << out.substr(0, 200);
+  EXPECT_TRUE(contains(out, ",0.00,0.00,0.00,0.00,0.0,0.0,0.0,300.0,300.0,300.0,300.0,")) << out.substr(0, 200);
   EXPECT_TRUE(contains(command("stream off"), "# stream off"));
 }
 
