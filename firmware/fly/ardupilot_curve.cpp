@@ -22,8 +22,13 @@ void ArduPilotCurve::setParams(const ArduPilotParams& p) {
   vmin_v_ = p.bat_volt_min_v > 0.6f * vmax ? p.bat_volt_min_v : 0.6f * vmax;
   filter_set_ = false;
   ratio_filt_ = 1.0f;
-  derive();
+  const float span_us = static_cast<float>(p_.pwm_max_us) - static_cast<float>(p_.pwm_min_us);
+  p0_ = static_cast<float>(p_.pwm_min_us) + span_us * p_.spin_min;
+  p1_ = span_us * (p_.spin_max - p_.spin_min);
+  p0_x16_ = roundToInt32(p0_ * 16.0f);
+  p_top_x16_ = roundToInt32((p0_ + p1_) * 16.0f);
   buildTable();
+  derive();
 }
 
 float ArduPilotCurve::ratioFor(float vbat_v) const {
@@ -47,26 +52,34 @@ void ArduPilotCurve::updateBattery(uint16_t vbat_mv, float dt_s) {
   derive();
 }
 
+// Per battery reading (50 a second): lift_max and what the table's path needs. The float
+// reference's constants are worked out here only when that path flies (an expo beyond
+// kTableMaxExpo); otherwise pulseUs() works them out when it is called (tests, the reference):
+// their four divisions were most of the reading's cost.
 void ArduPilotCurve::derive() {
   const float v = ratio_filt_;
   const float e = expo_;
   lift_max_ = v * (1.0f - e) + e * v * v;
-  const float gain = lift_max_ > 0 ? 1.0f / lift_max_ : 1.0f;  // get_compensation_gain()
   const float battery_scale = isPositive(v) ? 1.0f / v : 1.0f;
-  thrust_per_g_ = p_.full_thrust_g > 0 ? gain / p_.full_thrust_g : 0.0f;
-  a_ = (1.0f - e) * (1.0f - e);
-  b_ = 4.0f * e * lift_max_;
-  c_ = e - 1.0f;
-  d_ = isZero(e) ? 0.0f : battery_scale / (2.0f * e);
-  lin_ = lift_max_ * battery_scale;
-  const float span_us = static_cast<float>(p_.pwm_max_us) - static_cast<float>(p_.pwm_min_us);
-  p0_ = static_cast<float>(p_.pwm_min_us) + span_us * p_.spin_min;
-  p1_ = span_us * (p_.spin_max - p_.spin_min);
   // pulseUsDg's: thrust 1 at full thrust x lift_max; pulse = p0 + p1 u / v (pulses in 1/16 us)
   max_force_dg_ = roundToInt32(p_.full_thrust_g * lift_max_ * kDgPerGram);
-  p0_x16_ = roundToInt32(p0_ * 16.0f);
-  p_top_x16_ = roundToInt32((p0_ + p1_) * 16.0f);
   pulse_per_u_ = gainOf(p1_ * battery_scale * (16.0f / 32768.0f));
+  if (!table_ok_) float_path_ = floatPath();
+}
+
+ArduPilotCurve::FloatPath ArduPilotCurve::floatPath() const {
+  const float v = ratio_filt_;
+  const float e = expo_;
+  const float gain = lift_max_ > 0 ? 1.0f / lift_max_ : 1.0f;  // get_compensation_gain()
+  const float battery_scale = isPositive(v) ? 1.0f / v : 1.0f;
+  FloatPath f;
+  f.thrust_per_g = p_.full_thrust_g > 0 ? gain / p_.full_thrust_g : 0.0f;
+  f.a = (1.0f - e) * (1.0f - e);
+  f.b = 4.0f * e * lift_max_;
+  f.c = e - 1.0f;
+  f.d = isZero(e) ? 0.0f : battery_scale / (2.0f * e);
+  f.lin = lift_max_ * battery_scale;
+  return f;
 }
 
 // u for a force at full voltage: e u^2 + (1 - e) u = x, x = F / full thrust in 0..1, as
@@ -113,7 +126,8 @@ float ArduPilotCurve::tableErrorUs() const {
     const int32_t from = table_[i].force_dg, width = table_[i + 1].force_dg - from;
     for (int32_t k = 1; k <= 3; ++k) {
       const int32_t f = from + width * k / 4;
-      const float u_table = tableThrottleQ15(f) / 32768.0f;
+      uint8_t segment = i;
+      const float u_table = tableThrottleQ15(f, segment) / 32768.0f;
       const float error = fabsf(u_table - throttleAtFullVoltage(gramsOf(f)));
       if (error > worst_u) worst_u = error;
     }
@@ -123,36 +137,48 @@ float ArduPilotCurve::tableErrorUs() const {
   return worst_u * p1_ / lowest_ratio + 1.0f / 16.0f;  // + the pulse's own 1/16 us
 }
 
-int32_t ArduPilotCurve::tableThrottleQ15(int32_t force_dg) const {
-  uint8_t lo = 0, hi = kTableSegments;  // table_[lo].force_dg <= force_dg < table_[hi].force_dg
-  while (hi - lo > 1) {
-    const uint8_t mid = static_cast<uint8_t>((lo + hi) / 2);
-    if (table_[mid].force_dg <= force_dg) {
-      lo = mid;
+int32_t ArduPilotCurve::tableThrottleQ15(ForceDg force_dg, uint8_t& segment) const {
+  uint8_t lo = segment < kTableSegments ? segment : 0;
+  if (!inSegment(lo, force_dg)) {
+    if (lo + 1 < kTableSegments && inSegment(static_cast<uint8_t>(lo + 1), force_dg)) {
+      ++lo;
+    } else if (lo > 0 && inSegment(static_cast<uint8_t>(lo - 1), force_dg)) {
+      --lo;
     } else {
-      hi = mid;
+      lo = 0;
+      uint8_t hi = kTableSegments;  // table_[lo].force_dg <= force_dg < table_[hi].force_dg
+      while (hi - lo > 1) {
+        const uint8_t mid = static_cast<uint8_t>((lo + hi) / 2);
+        if (table_[mid].force_dg <= force_dg) {
+          lo = mid;
+        } else {
+          hi = mid;
+        }
+      }
     }
   }
+  segment = lo;
   const Node& n = table_[lo];
   return n.u_q15 + applyGain(force_dg - n.force_dg, n.slope);
 }
 
-uint16_t ArduPilotCurve::pulseUsDg(int32_t force_dg) const {
+uint16_t ArduPilotCurve::pulseUsDg(ForceDg force_dg, uint8_t& segment) const {
   if (!table_ok_) return pulseUs(gramsOf(force_dg));
   const int32_t f = force_dg < 0 ? 0 : (force_dg > max_force_dg_ ? max_force_dg_ : force_dg);
-  int32_t pulse_x16 = p0_x16_ + applyGain(tableThrottleQ15(f), pulse_per_u_);
+  int32_t pulse_x16 = p0_x16_ + applyGain(tableThrottleQ15(f, segment), pulse_per_u_);
   if (pulse_x16 > p_top_x16_) pulse_x16 = p_top_x16_;  // y <= 1
   return pulse_x16 > 0 ? static_cast<uint16_t>(pulse_x16 >> 4) : 0;  // truncated, as output_to_pwm
 }
 
 uint16_t ArduPilotCurve::pulseUs(float force_g) const {
-  const float thrust = clamp(force_g * thrust_per_g_, 0.0f, 1.0f);
+  const FloatPath f = table_ok_ ? floatPath() : float_path_;
+  const float thrust = clamp(force_g * f.thrust_per_g, 0.0f, 1.0f);
   float y;
   if (isZero(expo_)) {
-    y = lin_ * thrust;  // the code does not clamp this branch
+    y = f.lin * thrust;  // the code does not clamp this branch
   } else {
-    const float root = a_ + b_ * thrust;
-    y = clamp((c_ + (root > 0 ? sqrtf(root) : 0.0f)) * d_, 0.0f, 1.0f);  // safe_sqrt
+    const float root = f.a + f.b * thrust;
+    y = clamp((f.c + (root > 0 ? sqrtf(root) : 0.0f)) * f.d, 0.0f, 1.0f);  // safe_sqrt
   }
   const float pulse = p0_ + p1_ * y;
   return pulse > 0 ? static_cast<uint16_t>(static_cast<int16_t>(pulse)) : 0;

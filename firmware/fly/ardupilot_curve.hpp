@@ -62,8 +62,15 @@ class ArduPilotCurve {
   // The pulse ArduPilot sends for `force_g` on one motor (float: the reference).
   uint16_t pulseUs(float force_g) const;
   // The same for a force in decigrams, from the table (the frame path); within a microsecond of
-  // pulseUs.
-  uint16_t pulseUsDg(ForceDg force_dg) const;
+  // pulseUs. `segment` is the caller's hint (one per motor, any value 0..kTableSegments - 1 to
+  // start): the table segment the last force was in. A motor's force moves little from frame
+  // to frame, so its segment or a neighbour is checked first and the bisection runs only when
+  // neither holds; the segment found is written back. The same pulse whatever the hint.
+  uint16_t pulseUsDg(ForceDg force_dg, uint8_t& segment) const;
+  uint16_t pulseUsDg(ForceDg force_dg) const {
+    uint8_t segment = 0;
+    return pulseUsDg(force_dg, segment);
+  }
   // Whether pulseUsDg flies the table (false: the parameters need the float path).
   bool usesTable() const { return table_ok_; }
 
@@ -85,7 +92,13 @@ class ArduPilotCurve {
   float ratioFor(float vbat_v) const;
   void buildTable();
   float throttleAtFullVoltage(float force_g) const;
-  int32_t tableThrottleQ15(ForceDg force_dg) const;
+  int32_t tableThrottleQ15(ForceDg force_dg, uint8_t& segment) const;
+  // Whether `segment` is the one the bisection finds for `force_dg`: the last node at or below
+  // the force (the first segment below node 1, the last at and beyond node kTableSegments - 1).
+  FLY_INLINE bool inSegment(uint8_t segment, ForceDg force_dg) const {
+    return (segment == 0 || table_[segment].force_dg <= force_dg) &&
+           (segment == kTableSegments - 1 || force_dg < table_[segment + 1].force_dg);
+  }
 
   ArduPilotParams p_;
   float expo_ = 0.65f;     // clamped
@@ -96,9 +109,14 @@ class ArduPilotCurve {
   float ratio_filt_ = 1.0f;  // v through the filter
   bool filter_set_ = false;
   float lift_max_ = 1.0f;
-  // Per-reading constants of pulseUs: thrust = F * thrust_per_g_; y = (c_ + sqrt(a_ + b_ thrust)) d_
-  // (linear branch when e == 0: y = lin_ thrust); pulse = p0_ + p1_ y.
-  float thrust_per_g_ = 0, a_ = 0, b_ = 0, c_ = 0, d_ = 0, lin_ = 0, p0_ = 0, p1_ = 0;
+  // The per-reading constants of pulseUs: thrust = F * thrust_per_g; y = (c + sqrt(a + b thrust)) d
+  // (linear branch when e == 0: y = lin thrust); pulse = p0_ + p1_ y.
+  struct FloatPath {
+    float thrust_per_g = 0, a = 0, b = 0, c = 0, d = 0, lin = 0;
+  };
+  FloatPath floatPath() const;
+  FloatPath float_path_;  // kept per reading only when the float path flies (!table_ok_)
+  float p0_ = 0, p1_ = 0;  // the pulse at y = 0 and its span to y = 1 (the parameters only)
   // pulseUsDg: the table, and per reading the force that makes thrust 1 and u's pulse gain.
   Node table_[kTableSegments + 1];
   bool table_ok_ = false;

@@ -112,7 +112,7 @@ void OutputStage::compute(const Forces& force, uint8_t mask) {
     } else if (mode() == OutputMode::kPwm) {
       pulse_us_[i] = pwmModePulse(force.dg[i]);
     } else {
-      pulse_us_[i] = ardupilot_.pulseUsDg(force.dg[i]);
+      pulse_us_[i] = ardupilot_.pulseUsDg(force.dg[i], segment_[i]);
     }
   }
 }

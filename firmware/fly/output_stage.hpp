@@ -91,6 +91,7 @@ class OutputStage {
   ForceDg pwm_range_dg_ = 0;
   ArduPilotCurve ardupilot_;
   uint16_t pulse_us_[kMotors] = {tc::kStopPwmUs, tc::kStopPwmUs, tc::kStopPwmUs, tc::kStopPwmUs};
+  uint8_t segment_[kMotors] = {0, 0, 0, 0};  // ardupilot: each motor's table segment (its hint)
 };
 
 }  // namespace fly

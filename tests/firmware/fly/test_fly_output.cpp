@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <string>
 
 #include "ardupilot_curve.hpp"
@@ -92,6 +93,43 @@ TEST(ArduPilotCurve, TheTablesPulsesAreWhatArduPilotSendsWithinOneMicrosecond) {
         ASSERT_NEAR(curve.pulseUsDg(dg), want, 1) << "expo " << p.expo << " at " << mv << " mV, " << dg << " dg";
       }
     }
+  }
+}
+
+// The frame path keeps each motor's table segment as a hint (output_stage.cpp): whatever the
+// hint holds, the pulse is the bisection's. A force wandering a few decigrams a frame (the hint
+// or a neighbour holds), jumps across the table (the bisection runs), every stale hint, the
+// ends of the table and a force beyond full thrust.
+TEST(ArduPilotCurve, ASegmentHintGivesTheSamePulseAsTheBisectionWhateverItHolds) {
+  ArduPilotParams negative = walkthroughParams();
+  negative.expo = -0.3f;
+  for (const ArduPilotParams& p : {walkthroughParams(), negative}) {
+    ArduPilotCurve curve;
+    curve.setParams(p);
+    curve.updateBattery(11100, 0.01f);
+    ASSERT_TRUE(curve.usesTable());
+    const int top_dg = static_cast<int>(p.full_thrust_g * 10) + 50;
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> wander(-40, 40), anywhere(-20, top_dg);
+    uint8_t hint = 0;
+    int dg = 3000;
+    int checked = 0;
+    for (int frame = 0; frame < 20000; ++frame) {
+      dg = frame % 500 == 0 ? anywhere(rng) : std::clamp(dg + wander(rng), -20, top_dg);
+      ASSERT_EQ(curve.pulseUsDg(dg, hint), curve.pulseUsDg(dg)) << "expo " << p.expo << ", " << dg << " dg";
+      ASSERT_LT(hint, ArduPilotCurve::kTableSegments);
+      ++checked;
+    }
+    for (int dg2 : {0, 1, top_dg - 50, top_dg, 123, 9999}) {
+      for (uint8_t stale = 0; stale < ArduPilotCurve::kTableSegments; ++stale) {
+        uint8_t h = stale;
+        ASSERT_EQ(curve.pulseUsDg(dg2, h), curve.pulseUsDg(dg2)) << dg2 << " dg, hint " << int(stale);
+        uint8_t again = h;
+        curve.pulseUsDg(dg2, again);
+        EXPECT_EQ(again, h) << "a force in its own segment keeps its hint";
+      }
+    }
+    EXPECT_EQ(checked, 20000);
   }
 }
 
