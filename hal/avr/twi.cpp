@@ -19,6 +19,12 @@
 
 #include "hal/hal.hpp"
 
+namespace hal {
+namespace detail {
+volatile Twi::Result g_twi_state = Twi::Result::kIdle;
+}  // namespace detail
+}  // namespace hal
+
 namespace {
 
 using Result = hal::Twi::Result;
@@ -31,7 +37,7 @@ constexpr uint8_t kNoStatus = 0xF8;  // TWSR's "no relevant state" code
 
 constexpr uint8_t kGo = _BV(TWINT) | _BV(TWEN) | _BV(TWIE);
 
-volatile Result g_state = Result::kIdle;
+volatile Result& g_state = hal::detail::g_twi_state;
 volatile uint8_t g_last_status = kNoStatus;
 volatile uint8_t g_sla_write = 0;  // address << 1
 volatile uint8_t g_register = 0;
@@ -158,7 +164,6 @@ bool Twi::startRead(uint8_t address, uint8_t reg, uint8_t length) {
   return start(address, reg, 0, length);
 }
 
-Twi::Result Twi::result() { return g_state; }
 
 uint8_t Twi::lastStatus() { return g_last_status; }
 

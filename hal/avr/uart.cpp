@@ -19,6 +19,14 @@
 
 #include "hal/hal.hpp"
 
+namespace hal {
+namespace detail {
+volatile uint8_t g_uart_rx_head = 0;
+volatile uint8_t g_uart_rx_tail = 0;
+volatile bool g_uart_rx_gap = false;
+}  // namespace detail
+}  // namespace hal
+
 namespace {
 constexpr uint8_t kRxSize = 64;
 constexpr uint8_t kTxSize = 128;
@@ -27,9 +35,9 @@ static_assert((kTxSize & (kTxSize - 1)) == 0, "ring buffer size must be a power 
 
 volatile uint8_t g_rx[kRxSize];
 volatile uint8_t g_rx_marks[kRxSize / 8];  // bit set: bytes were lost just before this slot
-volatile uint8_t g_rx_head = 0;            // written by the ISR only
-volatile uint8_t g_rx_tail = 0;            // written by read() only
-volatile bool g_rx_gap = false;            // bytes lost, no byte stored since
+volatile uint8_t& g_rx_head = hal::detail::g_uart_rx_head;  // written by the ISR only
+volatile uint8_t& g_rx_tail = hal::detail::g_uart_rx_tail;  // written by read() only
+volatile bool& g_rx_gap = hal::detail::g_uart_rx_gap;       // bytes lost, no byte stored since
 volatile uint16_t g_rx_damage = 0;
 
 volatile uint8_t g_tx[kTxSize];
@@ -100,8 +108,6 @@ void Uart::init(uint32_t baud) {
   UCSR0B = _BV(RXEN0) | _BV(TXEN0) | _BV(RXCIE0);
   sei();
 }
-
-bool Uart::available() { return g_rx_head != g_rx_tail || g_rx_gap; }
 
 int16_t Uart::read() {
   const uint8_t tail = g_rx_tail;

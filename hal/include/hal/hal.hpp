@@ -197,4 +197,20 @@ struct Stack {
   static uint16_t untouchedBytes(void (*yield)() = nullptr);
 };
 
+// On the chip, the two checks the main loop's sleep makes at every wake (each interrupt wakes
+// it: ~25 a frame in fly, most of them the TWI's bytes) read their state inline instead of
+// calling into the HAL: a call and return are more than the check itself.
+#if defined(__AVR__)
+namespace detail {
+extern volatile uint8_t g_uart_rx_head;  // hal/avr/uart.cpp's receive ring, written by its ISR
+extern volatile uint8_t g_uart_rx_tail;
+extern volatile bool g_uart_rx_gap;
+extern volatile Twi::Result g_twi_state;  // hal/avr/twi.cpp
+}  // namespace detail
+inline bool Uart::available() {
+  return detail::g_uart_rx_head != detail::g_uart_rx_tail || detail::g_uart_rx_gap;
+}
+inline Twi::Result Twi::result() { return detail::g_twi_state; }
+#endif
+
 }  // namespace hal
