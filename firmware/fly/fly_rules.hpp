@@ -98,11 +98,13 @@ inline uint16_t computeBudgetUs(OutputMode mode, uint8_t thesis_motors, uint8_t 
 // A console line is handled in one go (parsing, the setting, the reply: ~800 us for `sp`), and
 // the frame's computation waits for it if the read ends meanwhile: armed, or able to arm (the
 // estimate runs), a line is taken only early in the frame, at least kConsoleSliceUs before the
-// read starts (the read then runs ~500 us, so ~800 us of console work ends before the read
-// does), else in a later frame.
+// read starts (the read then runs ~500 us, so ~900 us of console work ends before the read
+// does), else in a later frame. 300 us was too little: once the reply printed faster and the
+// main loop's wake checks were inlined, a `sp` line taken late in that window ran ~100 us past
+// the read's end in force+dyn (`thrustcal bench fly`: computation 839 us, 732 us with 400).
 // Where the read starts too early to leave such a window (thesis records) the line is taken
 // whenever it comes, as before.
-constexpr uint16_t kConsoleSliceUs = 300;
+constexpr uint16_t kConsoleSliceUs = 400;
 inline bool consoleMayStart(uint16_t frame_time_us, uint16_t phase_us) {
   if (phase_us < kMinPhaseUs + kConsoleSliceUs) return true;
   return frame_time_us + kConsoleSliceUs < phase_us;
