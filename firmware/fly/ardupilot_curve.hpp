@@ -18,7 +18,8 @@
 //   (lift_max cancels), so it depends on the parameters only. The table holds u at kTableNodes
 //   forces (decigrams), spaced evenly in sqrt(2 e u + 1 - e) (the interpolation's error is then
 //   the same in every segment, (sqrt(1 + e) - sqrt(1 - e))^2 / (4 |e| segments^2) in u), each
-//   segment's slope as a gain; a force is found by bisection and interpolated, then
+//   segment's slope as a gain; a force's segment is found from the motor's last one (a neighbour,
+//   else by bisection) and interpolated, then
 //   pulse = PWM_MIN + span (SPIN_MIN + (SPIN_MAX - SPIN_MIN) min(u / v, 1)) with the per-reading
 //   gain. Within |e| <= kTableMaxExpo the table is within kTableMaxErrorUs of the float
 //   arithmetic at every force and voltage (the tests sweep e and measure it: tableErrorUs);
