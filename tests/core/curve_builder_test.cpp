@@ -108,6 +108,44 @@ TEST(CurveBuilder, NoisySweepGivesAMonotoneCurveInsideTheNoiseBand) {
   }
 }
 
+// The inversion carries its division from one gram to the next within a segment; every gram's
+// PWM must be the one dividing at that gram gives: lo.pwm + round((target - lo.force) span_us /
+// span_dg), halves up, on the fitted points the builder keeps. Sweeps with noise (pooled
+// points), steps of 1..20 us, steep and flat segments, and a curve wider than int16 decigrams.
+TEST(CurveBuilder, EachGramsPwmIsTheDivisionAtThatGramExactly) {
+  int checked = 0;
+  for (uint32_t seed = 1; seed <= 40; ++seed) {
+    CurveBuilder<1024> builder;
+    std::mt19937 rng(seed);
+    const uint16_t step_us = static_cast<uint16_t>(1 + seed % 20);
+    const int noise_dg = static_cast<int>(seed % 4) * 20;
+    const double scale = seed % 5 == 0 ? 5.0 : 1.0;  // up to 2.5 kg: a span beyond int16 / 2
+    std::uniform_int_distribution<int> noise(-noise_dg, noise_dg);
+    for (uint32_t pwm = 1000; pwm <= 1800; pwm += step_us)
+      ASSERT_TRUE(builder.add(static_cast<uint16_t>(pwm),
+                              static_cast<int16_t>(std::min(32000.0, scale * forceDg(pwm)) + noise(rng))));
+    ForceCurve<2000> curve;
+    ASSERT_EQ(builder.build(curve).status, BuildStatus::kOk) << seed;
+    curve.start_mv = 12000;
+    uint16_t reach = 0;
+    for (uint16_t g = 1; g <= curve.maxGrams(); ++g) {
+      const int32_t target = 10 * g;
+      while (builder.sample(reach).force_dg < target) ++reach;
+      uint32_t want = builder.sample(reach).pwm_us;
+      if (reach > 0) {
+        const tc::SweepSample& lo = builder.sample(reach - 1);
+        const tc::SweepSample& hi = builder.sample(reach);
+        const uint32_t num = static_cast<uint32_t>(target - lo.force_dg) * (hi.pwm_us - lo.pwm_us);
+        const uint32_t den = static_cast<uint32_t>(hi.force_dg - lo.force_dg);
+        want = lo.pwm_us + num / den + (2 * (num % den) >= den ? 1 : 0);
+      }
+      ASSERT_EQ(curve.pwmForGrams(g), want) << "seed " << seed << " at " << g << " g";
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 40 * 400);
+}
+
 TEST(CurveBuilder, NonMonotoneDataIsPooledToTheLeastSquaresMonotoneFit) {
   // given a dip at 1020 us: 0, 100, 50, 200 dg
   CurveBuilder<8> builder;
