@@ -42,6 +42,46 @@ struct StreamCase {
 const StreamCase kStreams[] = {{1, 65535}, {2, 1023}, {3, 20}, {4, 1}, {5, 0}};
 
 // Each stream is 3 windows + 7 samples long: the ring wraps around several times.
+// The sorted array is kept up to date while queries come every few pushes and given up after
+// kEagerPushes pushes without one (the next query sorts): every pattern of queries gives the
+// reference's median and central mean, including the switches between the two ways, a window
+// filled without a query (gather_store), four pushes a query (read_run and fly), and a reset in
+// between.
+TEST(MedianFilter, AnyPatternOfQueriesGivesTheReferenceMedian) {
+  const uint16_t kEvery[] = {1, 2, 4, 7, 8, 9, 13, 50, 101, 201, 500};
+  int queries = 0;
+  for (const auto& s : kStreams) {
+    tc::MedianFilter<101> filter;
+    std::deque<uint16_t> held;
+    std::mt19937 rng(s.seed);
+    std::uniform_int_distribution<uint32_t> dist(0, s.max_value);
+    std::uniform_int_distribution<size_t> pick(0, sizeof kEvery / sizeof kEvery[0] - 1);
+    for (int round = 0; round < 60; ++round) {
+      if (round == 30) {
+        filter.reset();
+        held.clear();
+      }
+      const uint16_t every = kEvery[pick(rng)];
+      for (uint16_t i = 0; i < every; ++i) {
+        const uint16_t sample = static_cast<uint16_t>(dist(rng));
+        filter.push(sample);
+        held.push_back(sample);
+        if (held.size() > 101) held.pop_front();
+      }
+      ASSERT_EQ(filter.median(), referenceMedian(held)) << "seed " << s.seed << " round " << round;
+      if (held.size() % 2 == 1 && held.size() >= 65 && s.max_value <= 1023) {  // ADC counts: Q4 fits 16 bits
+        std::vector<uint16_t> v(held.begin(), held.end());
+        std::sort(v.begin(), v.end());
+        uint32_t sum = 0;
+        for (size_t k = (v.size() - 65) / 2; k < (v.size() - 65) / 2 + 65; ++k) sum += v[k];
+        ASSERT_EQ(filter.centralMeanQ4(65), (sum * 16 + 32) / 65) << "seed " << s.seed << " round " << round;
+      }
+      ++queries;
+    }
+  }
+  EXPECT_EQ(queries, 5 * 60);
+}
+
 TEST(MedianFilter, WindowOfOneFollowsTheLastSample) {
   for (const auto& s : kStreams) expectMatchesReference<1>(s.seed, s.max_value, 3 * 1 + 7);
 }

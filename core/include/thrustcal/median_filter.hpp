@@ -1,7 +1,9 @@
-// Running median over an odd window (1..201 samples), cheap enough to update on every ADC
-// sample on the ATmega2560: push() is one insertion into a sorted array plus one removal,
-// O(window) word moves, no division, no heap. Its cost per push on the ATmega2560 is measured
-// by tests/core/avr_cycles.sh (docs/results.md).
+// Running median over an odd window (1..201 samples), cheap enough for every ADC sample on the
+// ATmega2560, whichever way it is used: queried every few pushes, each push keeps a sorted
+// array up to date (one insertion and one removal, O(window) word moves); pushed kEagerPushes
+// times or more without a query, pushes only store and the next query sorts the window once (a
+// Shell sort). No division, no heap, no recursion. Its costs on the ATmega2560 are measured by
+// tests/core/avr_cycles.sh (docs/results.md).
 #pragma once
 #include <stdint.h>
 
@@ -10,6 +12,8 @@ namespace tc {
 // Size-independent part (ETL style): the code exists once, whatever the window.
 class MedianFilterBase {
  public:
+  // Pushes without a query after which the sorted array is no longer kept up to date.
+  static constexpr uint16_t kEagerPushes = 8;
   // Forgets every sample.
   void reset();
   // Adds a sample; once the window is full the oldest sample leaves.
@@ -32,11 +36,16 @@ class MedianFilterBase {
       : sorted_(sorted), ring_(ring), window_(window) {}
 
  private:
-  uint16_t* sorted_;  // the samples held, ascending
+  // The samples held, ascending (sorting them on the first query after a push).
+  const uint16_t* sorted() const;
+
+  uint16_t* sorted_;  // a sorted copy of the ring, valid while sorted_valid_
   uint16_t* ring_;    // the samples held, oldest at head_
   uint16_t window_;
   uint16_t count_ = 0;
   uint16_t head_ = 0;
+  mutable bool sorted_valid_ = true;
+  mutable uint16_t unqueried_ = 0;  // pushes since the last query (saturates)
 };
 
 template <uint16_t Window>
