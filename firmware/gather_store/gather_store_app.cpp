@@ -94,6 +94,7 @@ void GatherStoreApp::cmdStore(uint8_t which) {
   const bool had_v2 = tc::probeSlotLayout<hal::Eeprom>(slot, limits) == tc::SlotLayout::kModelV2;
   tc::MotorCalibration& record = scratch_.startRecord();
   facts.before = tc::readRecord<hal::Eeprom>(slot, record, limits);
+  hal::Watchdog::kick();  // the slot's decode (~15 ms) and the store's own checks: kicked between
   facts.limit = tc::ForcePwmLimits().min_voltage_span_mv;
   facts.this_mv = sweep_.curve.start_mv;
   facts.other_mv = record.first.start_mv;
@@ -109,6 +110,7 @@ void GatherStoreApp::cmdStore(uint8_t which) {
   if (report.status != tc::StoreStatus::kImplausible &&
       report.status != tc::StoreStatus::kSettingsNoRoom) {
     outcome.after = tc::readRecord<hal::Eeprom>(slot, record, limits);
+    hal::Watchdog::kick();  // read back (waiting out the last byte's write): then the report
   }
   view::sayV1Outcome(outcome, report, sweep_, record);
 }

@@ -11,6 +11,8 @@
 
 #include "safety_support.hpp"
 #include "sim/airframe.hpp"
+#include "sim/stack_scenario.hpp"
+#include "sim/watchdog_gaps.hpp"
 
 namespace {
 
@@ -77,5 +79,46 @@ INSTANTIATE_TEST_SUITE_P(Table, FlyHang, ::testing::Values(Hang::kInterruptsOn, 
                          [](const ::testing::TestParamInfo<Hang>& info) {
                            return info.param == Hang::kInterruptsOn ? "InterruptsOn" : "InterruptsOff";
                          });
+
+// fly's watchdog headroom (docs/safety.md, "Watchdog headroom"), as gather_store's and
+// read_run's in watchdog_hil_test.cpp: its longest work between two kicks, disarmed (`param
+// list`, `param save` with the chip's 3.4 ms per EEPROM byte, `help`) and armed (the frames
+// with `stream on`, `status`, `help` under way), within half the 64 ms time-out.
+TEST(FlyWatchdogHeadroom, TheLongestWorkBetweenTwoKicksIsAtMostHalfTheTimeOut) {
+  HIL_REQUIRE_IMAGE("fly");
+  sim::AirframeOptions o;
+  o.imu_params.seed = 7;
+  sim::AirframeRig rig(hil::imagePath("fly"), o);
+  rig.board().setEepromWriteTime(3.4e-3);
+  sim::KickGapMeter meter(rig.board(), hil::imagePath("fly"));
+  sim::Console con(rig.board(), "fly> ");
+  const auto fly = [&](double s) {
+    for (double done = 0; done < s - 1e-9; done += 0.1) {
+      rig.board().sendText("\r");
+      rig.run(std::min(0.1, s - done));
+    }
+  };
+  con.expectText("imu: gyro bias", 5.0);
+  con.waitPrompt(1.0);
+  meter.restart();
+  while (rig.truth().t_s < 2.1) fly(0.1);
+  sim::flyDisarmedPaths(con);  // param list, param save
+  con.command("help", 5.0);
+  for (const char* line : {"mode pwm", "hover 1480 1440"}) con.command(line);
+  ASSERT_EQ(con.command("arm").at(0).rfind("armed:", 0), 0u) << con.tail();
+  fly(1.2);
+  con.send("stream on");
+  fly(0.5);
+  con.send("status");
+  fly(0.3);
+  con.send("help");
+  fly(0.5);
+  std::printf("fly: longest %.2f ms without a kick (%s -> %s), %llu kicks\n", meter.longestMs(),
+              meter.longestFrom().c_str(), meter.longestTo().c_str(),
+              static_cast<unsigned long long>(meter.kicks()));
+  RecordProperty("fly_longest_gap_ms", fmt::format("{:.2f}", meter.longestMs()));
+  EXPECT_LE(meter.longestMs(), 32.0) << meter.longestFrom() << " -> " << meter.longestTo();
+  EXPECT_EQ(rig.board().resets(), 0) << con.tail();
+}
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "safety_support.hpp"
 #include "hex/intel_hex.hpp"
 #include "sim/rigs.hpp"
+#include "sim/watchdog_gaps.hpp"
 
 extern "C" {
 #include <simavr/sim_avr.h>
@@ -240,6 +241,57 @@ TEST(WatchdogQuiet, LongWorkInBothImagesNeverTripsIt) {
   EXPECT_TRUE(contains(::testing::PrintToString(stored), "stored model v2")) << con.tail();
   EXPECT_GT(store_s, 0.3) << "the store ran with the chip's EEPROM timing";
   std::printf("store v2 with 3.4 ms per EEPROM byte: %.2f s, no watchdog reset\n", store_s);
+}
+
+// The watchdog's headroom (docs/safety.md, "Watchdog headroom"): no reset is not enough, the
+// longest work between two kicks must leave room for a chip whose watchdog oscillator runs fast
+// or whose code a later change makes slower. gather_store's longest work: the largest sweep
+// (161 steps), its end (the curve and sag table built, the summary printed), storing it, `show`
+// and `help`; read_run's: a burst of `help` and `status` while four motors fly. Each within half
+// the 64 ms time-out.
+TEST(WatchdogHeadroom, TheLongestWorkBetweenTwoKicksIsAtMostHalfTheTimeOut) {
+  HIL_REQUIRE_IMAGE("read_run");
+  HIL_REQUIRE_IMAGE("gather_store");
+  constexpr double kHalfTimeoutMs = 32.0;
+  {
+    safety::ReadRunBoard rr(safety::calibratedEeprom());
+    sim::KickGapMeter meter(rr.board, hil::imagePath("read_run"));
+    meter.restart();
+    rr.con.command("f 150");
+    std::string burst;
+    for (int i = 0; i < 5; ++i) burst += "help\rstatus\r";
+    rr.board.sendText(burst);
+    rr.keepAliveFor(1.5);
+    std::printf("read_run: longest %.2f ms without a kick (%s -> %s), %llu kicks\n", meter.longestMs(),
+                meter.longestFrom().c_str(), meter.longestTo().c_str(),
+                static_cast<unsigned long long>(meter.kicks()));
+    RecordProperty("read_run_longest_gap_ms", fmt::format("{:.2f}", meter.longestMs()));
+    EXPECT_LE(meter.longestMs(), kHalfTimeoutMs) << meter.longestFrom() << " -> " << meter.longestTo();
+    EXPECT_EQ(rr.board.resets(), 0);
+  }
+  plant::BenchParams params = plant::BenchParams::thesis("kv1100_9x4.7");
+  params.actuator = sim::motorForSeed("kv1100_9x4.7", 13, 0.03);
+  sim::BenchRig rig(hil::imagePath("gather_store"), params, 0);
+  rig.board.setEepromWriteTime(3.4e-3);
+  sim::KickGapMeter meter(rig.board, hil::imagePath("gather_store"));
+  sim::Console con(rig.board, "gs> ");
+  con.waitPrompt(10.0);
+  meter.restart();
+  con.command(fmt::format("cal {}", static_cast<int>(std::lround(params.actuator.mountWeight_g()))), 10);
+  con.command("range 1000 1800");
+  con.command("step 5");
+  con.command("settle 50");
+  const auto swept = con.command("sweep", 120);
+  EXPECT_TRUE(contains(::testing::PrintToString(swept), "161 steps")) << con.tail();
+  con.command("store 1", 20);
+  con.command("show", 10);
+  con.command("help", 10);
+  std::printf("gather_store: longest %.2f ms without a kick (%s -> %s), %llu kicks\n", meter.longestMs(),
+              meter.longestFrom().c_str(), meter.longestTo().c_str(),
+              static_cast<unsigned long long>(meter.kicks()));
+  RecordProperty("gather_store_longest_gap_ms", fmt::format("{:.2f}", meter.longestMs()));
+  EXPECT_LE(meter.longestMs(), kHalfTimeoutMs) << meter.longestFrom() << " -> " << meter.longestTo();
+  EXPECT_EQ(rig.board.resets(), 0) << con.tail();
 }
 
 }  // namespace
