@@ -38,6 +38,22 @@ TEST(DocBlocks, MarkersInACodeExampleAreShownNotRewritten) {
                           "<!-- generated: value fly.flash_bytes , -->66,714<!-- generated: end -->");
 }
 
+// A code span broken across lines closes on the next line: the marker after it is rewritten
+// (fly.md once read a stale figure because the rule counted backticks on the marker's line
+// only); one still open there is a code example; a new paragraph, list item or table row
+// starts counting again.
+TEST(DocBlocks, ACodeSpanBrokenAcrossLinesIsClosedWhereItCloses) {
+  const std::string v = "<!-- generated: value fly.flash_bytes , -->1<!-- generated: end -->";
+  const std::string filled = "<!-- generated: value fly.flash_bytes , -->66,714<!-- generated: end -->";
+  EXPECT_EQ(render("With `dyn on` and `stream\n  on` the CPU is " + v + " %."),
+            "With `dyn on` and `stream\n  on` the CPU is " + filled + " %.");
+  const std::string open = "an example: `stream\n  " + v + "` here";
+  EXPECT_EQ(render(open), open);
+  EXPECT_EQ(render("a stray ` here\n\nnext paragraph " + v), "a stray ` here\n\nnext paragraph " + filled);
+  EXPECT_EQ(render("- item with ` stray\n- next item " + v), "- item with ` stray\n- next item " + filled);
+  EXPECT_EQ(render("| a ` | b |\n| " + v + " | c |"), "| a ` | b |\n| " + filled + " | c |");
+}
+
 TEST(DocBlocks, MinMaxRangeAndMaxabsOverAWildcard) {
   EXPECT_EQ(render("<!-- generated: range fly.modes.*.cpu_load_pct .1f -->?<!-- generated: end -->"),
             "<!-- generated: range fly.modes.*.cpu_load_pct .1f -->31.9-49.9<!-- generated: end -->");

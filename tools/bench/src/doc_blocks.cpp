@@ -205,20 +205,38 @@ std::vector<double> numbersAt(const nlohmann::json& j, const std::string& path) 
   return out;
 }
 
+// Whether a line starts a block of its own, where an open code span cannot continue: a blank
+// line, a list item (`- `, `* `, `1. `), a table row, a heading, a fence.
+bool startsBlock(const std::string& text, std::size_t line, std::size_t line_end) {
+  std::size_t i = line;
+  while (i < line_end && text[i] == ' ') ++i;
+  if (i == line_end) return true;  // blank
+  const char c = text[i];
+  if (c == '|' || c == '#' || text.compare(i, 3, "```") == 0) return true;
+  if ((c == '-' || c == '*' || c == '+') && i + 1 < line_end && text[i + 1] == ' ') return true;
+  std::size_t d = i;
+  while (d < line_end && text[d] >= '0' && text[d] <= '9') ++d;
+  return d > i && d + 1 < line_end && text[d] == '.' && text[d + 1] == ' ';
+}
+
 // Whether `at` is inside a code example: a fenced block (between lines starting with ```) or a
-// code span (an odd number of backticks before it on its line). Markers there are shown, not
-// rewritten (docs/testing.md explains the markers with such examples).
+// code span (an odd number of backticks before it in its paragraph, list item or table row: a
+// span may be broken across lines, as Markdown allows, so "`stream\n  on` ..." closes on the
+// second line and a marker after it is rewritten). Markers there are shown, not rewritten
+// (docs/testing.md explains the markers with such examples).
 bool inCodeExample(const std::string& text, std::size_t at) {
   bool fenced = false;
-  std::size_t line = 0;
-  while (line < at) {
+  std::size_t line = 0, block = 0;
+  while (line <= at) {
+    std::size_t next = text.find('\n', line);
+    if (next == std::string::npos) next = text.size();
     if (text.compare(line, 3, "```") == 0) fenced = !fenced;
-    const std::size_t next = text.find('\n', line);
-    if (next == std::string::npos || next >= at) break;
+    if (startsBlock(text, line, next)) block = line;
+    if (next >= at) break;
     line = next + 1;
   }
   if (fenced) return true;
-  return std::count(text.begin() + static_cast<long>(line), text.begin() + static_cast<long>(at), '`') % 2 == 1;
+  return std::count(text.begin() + static_cast<long>(block), text.begin() + static_cast<long>(at), '`') % 2 == 1;
 }
 
 std::vector<DocBlock> findBlocks(const std::string& text, const std::string& file) {
