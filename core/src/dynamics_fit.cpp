@@ -33,6 +33,9 @@ BenchResponse BenchStepFit::response() const {
 }
 
 namespace {
+
+constexpr uint16_t kYieldEvery = 15;  // StepLog::yield every 16 samples (mask)
+
 BenchResponse benchOf(uint8_t stages, float tau_s) {
   BenchResponse r;
   r.stages = stages;
@@ -206,7 +209,7 @@ float motorSse(const Samples& s, const StepLog& slog, const BenchResponse& bench
       phi = rise * (2.0f + (q - 1.0f) * rise) / (q + 1.0f);
     }
     sums.add(s.at(j), chain.push(phi));
-    if ((j & 63u) == 0 && slog.yield) slog.yield();
+    if ((j & kYieldEvery) == 0 && slog.yield) slog.yield();
   }
   return sums.solve(s.mean, c0, c1);
 }
@@ -364,7 +367,7 @@ float benchSse(const Samples& s, uint8_t n, float tau, float step_s, float& c0, 
     sums.add(s.at(j), (g_end - g_prev) / dx);
     g_prev = g_end;
     x = x_end;
-    if ((j & 63u) == 0 && s.slog->yield) s.slog->yield();
+    if ((j & kYieldEvery) == 0 && s.slog->yield) s.slog->yield();
   }
   return sums.solve(s.mean, c0, c1);
 }

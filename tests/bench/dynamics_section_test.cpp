@@ -35,6 +35,10 @@ TEST(BenchDynamicsSection, EveryStepsTimeConstantIsWithinFivePercentOfThePlantsI
   EXPECT_GT(s.json["session_s_max"].get<double>(), 10.0);
   EXPECT_EQ(s.json["bench"]["stages"].get<int>(), 3);
   EXPECT_EQ(s.json["sessions"][0]["stored_points"].get<int>(), 5);
-  ASSERT_EQ(s.targets.size(), 2u);
+  // and: no work in the session (the sweep's end, store v2, dyn's fits) ran half the watchdog's
+  // time-out without a kick (docs/safety.md, "Watchdog headroom")
+  EXPECT_GT(s.json["sessions"][0]["longest_kick_gap_ms"].get<double>(), 0.0);
+  EXPECT_LE(s.json["longest_kick_gap_ms"].get<double>(), 32.0) << s.json["sessions"][0]["kick_gap_where"];
+  ASSERT_EQ(s.targets.size(), 3u);
   for (const bench::TargetCheck& t : s.targets) EXPECT_TRUE(t.met) << t.what << ": " << t.figure;
 }

@@ -33,8 +33,11 @@ struct StepLog {
   const uint16_t* vbat_mv = nullptr;
   uint16_t from_us = 0, to_us = 0;
   float start_us = 0.0f;
-  // Called every 64 samples of every pass over the log (null: none): a fit takes a few hundred
-  // passes, ~1 s on the ATmega2560, and gather_store kicks its watchdog from here.
+  // Called every 16 samples of every pass over the log (null: none): a fit takes a few hundred
+  // passes, ~1 s on the ATmega2560, and gather_store kicks its watchdog from here. A sample of
+  // the motor's pass costs ~8,000 cycles on the AVR (the bench's filter stages in float): 64
+  // samples between calls were 32.7 ms, half the watchdog's time-out (tests/hil_safety,
+  // WatchdogHeadroom); 16 are ~8 ms.
   void (*yield)() = nullptr;
 };
 

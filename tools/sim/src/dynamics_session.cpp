@@ -1,5 +1,6 @@
 // gather_store's dyn session on the virtual bench (sim/dynamics_session.hpp).
 #include "sim/dynamics_session.hpp"
+#include "sim/watchdog_gaps.hpp"
 
 #include <fmt/format.h>
 
@@ -121,6 +122,8 @@ DynSessionResult runDynSession(const DynSessionOptions& o) {  // long: the sessi
   rig->board.setTickHook([tick](double t_s) { tick(t_s, nullptr); }, secondsToCycles(kPlantStepS));
   Console con(rig->board, "gs> ");
   con.waitPrompt(10.0);
+  std::unique_ptr<KickGapMeter> kicks;
+  if (o.watch_kicks) kicks = std::make_unique<KickGapMeter>(rig->board, o.elf_path);
   must(con, fmt::format("motor {}", o.slot), 5);
   must(con, fmt::format("plate {}", static_cast<int>(std::lround(params.load_cell.plate_g))), 5);
   must(con, fmt::format("cal {}", static_cast<int>(std::lround(o.motor.mountWeight_g()))), 15);
@@ -190,6 +193,10 @@ DynSessionResult runDynSession(const DynSessionOptions& o) {  // long: the sessi
   r.dynamics = storedDynamics(r.eeprom, o.slot);
   r.simulated_s = rig->board.simulatedSeconds();
   r.wall_s = rig->board.wallSeconds();
+  if (kicks) {
+    r.longest_kick_gap_ms = kicks->longestMs();
+    r.kick_gap_where = kicks->longestFrom() + " -> " + kicks->longestTo();
+  }
   return r;
 }
 

@@ -35,6 +35,8 @@ struct DynSessionOptions {
   std::string truth_path;             // the plant at every 0.25 ms step during dyn ("" = none):
                                       // t_s (simulated), pulse_us, rpm, thrust_g, bus_v
   ProgressFn progress;
+  bool watch_kicks = false;           // measure the longest work between two watchdog kicks
+                                      // (sim/watchdog_gaps.hpp; slower: a check per instruction)
 };
 
 struct DynStep {
@@ -54,6 +56,8 @@ struct DynSessionResult {
   double simulated_s = 0, wall_s = 0; // the whole run
   std::vector<uint8_t> eeprom;
   std::vector<std::string> summary;   // dyn's lines that are neither CSV nor comments
+  double longest_kick_gap_ms = 0;     // with watch_kicks: from the first prompt to the end
+  std::string kick_gap_where;         // "from -> to" (the kicks' callers)
 };
 
 // Throws std::runtime_error with gather_store's last lines when a command is refused or a
