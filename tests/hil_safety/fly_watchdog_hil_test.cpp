@@ -21,25 +21,44 @@ using safety::Hang;
 
 constexpr double kFlyStopTargetS = 0.100;
 
+// fly on the simulated gimbal (IMU seed 7), booted to its prompt: flown with an empty line every
+// 0.1 s (its link failsafe wants one per 500 ms).
+struct FlyOnGimbal {
+  sim::AirframeRig rig;
+  sim::Console con;
+  static sim::AirframeOptions options() {
+    sim::AirframeOptions o;
+    o.imu_params.seed = 7;
+    return o;
+  }
+  FlyOnGimbal() : rig(hil::imagePath("fly"), options()), con(rig.board(), "fly> ") {}
+  void boot() {
+    con.expectText("imu: gyro bias", 5.0);
+    con.waitPrompt(1.0);
+  }
+  void fly(double s) {
+    for (double done = 0; done < s - 1e-9; done += 0.1) {
+      rig.board().sendText("\r");
+      rig.run(std::min(0.1, s - done));
+    }
+  }
+  void waitForTheEscsArming() {  // their 2 s at the stop pulse
+    while (rig.truth().t_s < 2.1) fly(0.1);
+  }
+};
+
 class FlyHang : public ::testing::TestWithParam<Hang> {};
 
 TEST_P(FlyHang, StopsEveryPulseWithin100MsAndNothingSpinsAfterTheResetUntilArmedAgain) {
   HIL_REQUIRE_IMAGE("fly");
   // given: fly armed in pwm mode, spooled up on the gimbal
-  sim::AirframeOptions o;
-  o.imu_params.seed = 7;
-  sim::AirframeRig rig(hil::imagePath("fly"), o);
-  sim::Console con(rig.board(), "fly> ");
+  FlyOnGimbal g;
+  sim::AirframeRig& rig = g.rig;
+  sim::Console& con = g.con;
+  const auto fly = [&](double s) { g.fly(s); };
   safety::PulseLog log(rig.board());
-  const auto fly = [&](double s) {
-    for (double done = 0; done < s - 1e-9; done += 0.1) {
-      rig.board().sendText("\r");
-      rig.run(std::min(0.1, s - done));
-    }
-  };
-  con.expectText("imu: gyro bias", 5.0);
-  con.waitPrompt(1.0);
-  while (rig.truth().t_s < 2.1) fly(0.1);
+  g.boot();
+  g.waitForTheEscsArming();
   for (const char* line : {"mode pwm", "hover 1480 1440"}) con.command(line);
   ASSERT_EQ(con.command("arm").at(0).rfind("armed:", 0), 0u) << con.tail();
   fly(1.2);
@@ -86,22 +105,15 @@ INSTANTIATE_TEST_SUITE_P(Table, FlyHang, ::testing::Values(Hang::kInterruptsOn, 
 // with `stream on`, `status`, `help` under way), within half the 64 ms time-out.
 TEST(FlyWatchdogHeadroom, TheLongestWorkBetweenTwoKicksIsAtMostHalfTheTimeOut) {
   HIL_REQUIRE_IMAGE("fly");
-  sim::AirframeOptions o;
-  o.imu_params.seed = 7;
-  sim::AirframeRig rig(hil::imagePath("fly"), o);
+  FlyOnGimbal g;
+  sim::AirframeRig& rig = g.rig;
+  sim::Console& con = g.con;
+  const auto fly = [&](double s) { g.fly(s); };
   rig.board().setEepromWriteTime(3.4e-3);
   sim::KickGapMeter meter(rig.board(), hil::imagePath("fly"));
-  sim::Console con(rig.board(), "fly> ");
-  const auto fly = [&](double s) {
-    for (double done = 0; done < s - 1e-9; done += 0.1) {
-      rig.board().sendText("\r");
-      rig.run(std::min(0.1, s - done));
-    }
-  };
-  con.expectText("imu: gyro bias", 5.0);
-  con.waitPrompt(1.0);
+  g.boot();
   meter.restart();
-  while (rig.truth().t_s < 2.1) fly(0.1);
+  g.waitForTheEscsArming();
   sim::flyDisarmedPaths(con);  // param list, param save
   con.command("help", 5.0);
   for (const char* line : {"mode pwm", "hover 1480 1440"}) con.command(line);
