@@ -6,7 +6,9 @@
 // "Watchdog headroom").
 //
 // Watching the program counter takes the board off its fast path (a check per instruction):
-// meant for the safety tests and the bench, not for every simulation.
+// meant for the safety tests and the bench, not for every simulation. The board keeps the
+// watches (it has no way to drop one): make the meter after the board and do not run the board
+// once the meter is gone.
 #pragma once
 #include <cstdint>
 #include <string>
