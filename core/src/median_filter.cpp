@@ -92,25 +92,19 @@ void MedianFilterBase::reset() {
 }
 
 void MedianFilterBase::push(uint16_t sample) {
-  if (sorted_valid_ && unqueried_ >= kEagerPushes) sorted_valid_ = false;  // filled, not queried
-  if (unqueried_ != 0xFFFF) ++unqueried_;
-  if (!sorted_valid_) {  // store only: the next query sorts
-    if (count_ < window_) {
-      ring_[count_] = sample;
-      ++count_;
-      return;
-    }
-    ring_[head_] = sample;
-    head_ = static_cast<uint16_t>(head_ + 1);
-    if (head_ == window_) head_ = 0;
-    return;
+  if (unqueried_ < kEagerPushes) {
+    ++unqueried_;
+  } else {
+    sorted_valid_ = false;  // filled, not queried: the next query sorts
   }
   if (count_ < window_) {
     // Filling up: head_ stays 0, the ring is written in order.
     ring_[count_] = sample;
-    const uint16_t pos = upperBound(sorted_, count_, sample);
-    shiftRight(sorted_ + pos, sorted_ + count_);
-    sorted_[pos] = sample;
+    if (sorted_valid_) {
+      const uint16_t pos = upperBound(sorted_, count_, sample);
+      shiftRight(sorted_ + pos, sorted_ + count_);
+      sorted_[pos] = sample;
+    }
     ++count_;
     return;
   }
@@ -119,7 +113,7 @@ void MedianFilterBase::push(uint16_t sample) {
   ring_[head_] = sample;
   head_ = static_cast<uint16_t>(head_ + 1);
   if (head_ == window_) head_ = 0;
-  if (oldest == sample) return;  // the sorted array is unchanged
+  if (!sorted_valid_ || oldest == sample) return;  // not kept, or unchanged
 
   uint16_t out = lowerBound(sorted_, count_, oldest);  // sorted_[out] == oldest
   if (sample > oldest) {

@@ -13,7 +13,7 @@ namespace tc {
 class MedianFilterBase {
  public:
   // Pushes without a query after which the sorted array is no longer kept up to date.
-  static constexpr uint16_t kEagerPushes = 8;
+  static constexpr uint8_t kEagerPushes = 8;
   // Forgets every sample.
   void reset();
   // Adds a sample; once the window is full the oldest sample leaves.
@@ -45,7 +45,7 @@ class MedianFilterBase {
   uint16_t count_ = 0;
   uint16_t head_ = 0;
   mutable bool sorted_valid_ = true;
-  mutable uint16_t unqueried_ = 0;  // pushes since the last query (saturates)
+  mutable uint8_t unqueried_ = 0;  // pushes since the last query, up to kEagerPushes
 };
 
 template <uint16_t Window>

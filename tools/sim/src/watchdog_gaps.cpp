@@ -39,7 +39,6 @@ void KickGapMeter::restart() {
   last_cycle_ = board_.cycle();
   seen_ = false;
   longest_cycles_ = 0;
-  longest_seen_ = false;
   kicks_ = 0;
 }
 
@@ -61,28 +60,23 @@ void KickGapMeter::onKick(std::size_t site, uint64_t cycle) {
     longest_cycles_ = cycle - last_cycle_;
     longest_from_ = last_where_;
     longest_to_ = where;
-    longest_seen_ = true;
   }
   seen_ = true;
   last_cycle_ = cycle;
   last_where_ = where;
 }
 
-double KickGapMeter::longestMs() const {
-  const uint64_t open = board_.cycle() - last_cycle_;  // from the last kick (or restart) to now
-  return 1000.0 * cyclesToSeconds(open > longest_cycles_ ? open : longest_cycles_);
+// The longest gap: the one still open (from the last kick, or restart(), to now) when it is
+// longer than every closed one.
+KickGapMeter::Gap KickGapMeter::longest() const {
+  const uint64_t open = board_.cycle() - last_cycle_;
+  if (open > longest_cycles_) return {open, seen_ ? symbolAt(symbols_, last_where_) : "(restart)", "(now)"};
+  if (longest_cycles_ == 0) return {0, "(none)", "(none)"};
+  return {longest_cycles_, symbolAt(symbols_, longest_from_), symbolAt(symbols_, longest_to_)};
 }
 
-std::string KickGapMeter::longestFrom() const {
-  const uint64_t open = board_.cycle() - last_cycle_;
-  if (open > longest_cycles_) return seen_ ? symbolAt(symbols_, last_where_) : "(restart)";
-  return longest_seen_ ? symbolAt(symbols_, longest_from_) : "(none)";
-}
-
-std::string KickGapMeter::longestTo() const {
-  const uint64_t open = board_.cycle() - last_cycle_;
-  if (open > longest_cycles_) return "(now)";
-  return longest_seen_ ? symbolAt(symbols_, longest_to_) : "(none)";
-}
+double KickGapMeter::longestMs() const { return 1000.0 * cyclesToSeconds(longest().cycles); }
+std::string KickGapMeter::longestFrom() const { return longest().from; }
+std::string KickGapMeter::longestTo() const { return longest().to; }
 
 }  // namespace sim

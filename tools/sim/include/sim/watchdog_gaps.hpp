@@ -46,6 +46,11 @@ class KickGapMeter {
     std::string function;
     bool leaf;  // a kick function: the kick is its caller's
   };
+  struct Gap {
+    uint64_t cycles;
+    std::string from, to;
+  };
+  Gap longest() const;
   uint32_t whereNow(std::size_t site) const;
   void onKick(std::size_t site, uint64_t cycle);
 
@@ -56,8 +61,7 @@ class KickGapMeter {
   uint32_t last_where_ = 0;  // program address of the last kick (its caller's for a kick function)
   bool seen_ = false;        // a kick since restart()
   uint64_t longest_cycles_ = 0;
-  uint32_t longest_from_ = 0, longest_to_ = 0;
-  bool longest_seen_ = false;
+  uint32_t longest_from_ = 0, longest_to_ = 0;  // 0 cycles: no gap between two kicks yet
   uint64_t kicks_ = 0;
 };
 
