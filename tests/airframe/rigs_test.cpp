@@ -199,6 +199,31 @@ TEST(Gimbal, ASpinPerMotorReplacesTheLayoutsAndTurnsTheYawTorqueAround) {
   EXPECT_GT(t.rate_dps[2], 0.0);
 }
 
+TEST(Gimbal, WithoutReactionTorqueTheMotorsPushWithThrustAlone) {
+  // given: the diagnostic rig (no drag or spin-up torque on the body) and the default one
+  plant::GimbalParams p;
+  p.damping_nms_per_rad = {0, 0, 0};
+  p.common.reaction_torque = false;
+  plant::Gimbal bare(p, {motor(), motor(), motor(), motor()});
+  plant::Gimbal real = quietGimbal();
+  for (plant::Gimbal* g : {&bare, &real}) {
+    for (int i = 0; i < 4; ++i) g->holdPulse(i, 1450);
+    g->step(0.5);
+    // when: the counter-clockwise pair spins up and motor 1 speeds up against motor 3 (a roll)
+    g->holdPulse(0, 1550);
+    g->holdPulse(2, 1550);
+    g->holdPulse(1, 1500);
+    g->step(0.2);
+  }
+  const auto b = bare.truth(), r = real.truth();
+  // then: no yaw torque and no yaw on the diagnostic rig, the same roll torque as the real one's
+  EXPECT_EQ(b.motor_torque_nm[2], 0.0);
+  EXPECT_NEAR(b.rate_dps[2], 0.0, 1e-9);
+  EXPECT_LT(r.motor_torque_nm[2], -1e-3);
+  EXPECT_NEAR(b.motor_torque_nm[0], r.motor_torque_nm[0], 1e-9);
+  EXPECT_GT(std::abs(b.motor_torque_nm[0]), 0.01);
+}
+
 TEST(Gimbal, ASpinListOfTheWrongLengthOrValueIsRefused) {
   plant::GimbalParams p;
   p.common.spin = {1, -1, 1};

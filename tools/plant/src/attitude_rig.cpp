@@ -92,7 +92,7 @@ void AttitudeRig::substep(double h) {
     const double j = a.params().inertia_kgm2();
     torque[0] += m.y_m * f;
     torque[1] -= m.x_m * f;
-    torque[2] -= m.spin * (a.torque_nm() + j * (w1 - w0) / h);
+    if (common_.reaction_torque) torque[2] -= m.spin * (a.torque_nm() + j * (w1 - w0) / h);
     momentum += m.spin * j * w1;
     rotor_angle_rad_[i] = std::fmod(rotor_angle_rad_[i] + w1 * h, 2.0 * std::numbers::pi);
   }

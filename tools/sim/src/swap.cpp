@@ -215,6 +215,15 @@ std::vector<Target> swapTargets(const std::vector<RunResult>& runs, const std::v
 
 namespace {
 
+// The progress line's word on the steps: ", 4 steps a flight (figures: their means)", force+dyn's
+// own count when it differs.
+std::string stepsNote(const SwapOptions& o) {
+  const int dyn = o.dyn_steps > 0 ? o.dyn_steps : o.steps;
+  if (dyn == o.steps)
+    return o.steps > 1 ? fmt::format(", {} steps a flight (figures: their means)", o.steps) : "";
+  return fmt::format(", {} step(s) a flight, {} in force+dyn (figures: their means)", o.steps, dyn);
+}
+
 // The mean rise-time change of each part against stock, force mode, PD, roll (motor 1's axis on
 // both rigs).
 void riseChanges(std::vector<Dynamics>& dynamics, const std::vector<RunResult>& runs) {
@@ -249,11 +258,11 @@ SwapResult runSwap(const SwapOptions& o) {
     progress(fmt::format("{} flights: {}, stock and {} part(s), {} IMU unit(s)", runs.size(), peer, o.parts.size(),
                          o.imu_seeds.size()));
   else
-    progress(fmt::format("{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s){}{}{}",
+    progress(fmt::format("{} flights: {} rig(s), {} mode(s), stock and {} part(s), {} gain set(s), {} IMU unit(s){}{}{}{}",
                          runs.size(), o.rigs.size(), o.modes.size(), o.parts.size(), o.gains.size(),
                          o.imu_seeds.size(), peer.empty() ? "" : ", " + peer,
-                         o.steps > 1 ? fmt::format(", {} steps a flight (figures: their means)", o.steps) : "",
-                         o.part_mass_only ? ", each part only as its weight on the stock motor 1" : ""));
+                         stepsNote(o), o.part_mass_only ? ", each part only as its weight on the stock motor 1" : "",
+                         o.no_reaction_torque ? ", the rotors without reaction torque (diagnostic)" : ""));
   res.runs = flyAll(o, res.calibration, runs, progress);
   res.targets = swapTargets(res.runs, o.parts);
   riseChanges(res.dynamics.parts, res.runs);

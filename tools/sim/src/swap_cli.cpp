@@ -35,6 +35,13 @@ void declareStepOptions(CLI::App* cmd, swap::SwapOptions* o) {
                   "are the means over its steps (one step's rise time scatters by about 1 % with the same motors)")
       ->check(CLI::Range(1, 20))
       ->capture_default_str();
+  cmd->add_option("--dyn-steps", o->dyn_steps,
+                  "force+dyn's up-steps per flight (default: --steps); its 1 % rise-time target is finer than "
+                  "one step's scatter, the mean of 8 measures a run to about 0.4 %")
+      ->check(CLI::Range(1, 20));
+  cmd->add_flag("--no-reaction-torque", o->no_reaction_torque,
+                "diagnostic: the rotors push the rig with their thrust alone, without their drag and spin-up "
+                "torques about its z axis: what a part's torque-to-thrust ratio does through the yaw balance");
   cmd->add_flag("--part-mass-only", o->part_mass_only,
                 "diagnostic: each part's runs fly the stock motor 1 carrying the part's motor and propeller "
                 "masses (and the seesaw's counterweight) on the stock records: what the part changes in the rig alone");

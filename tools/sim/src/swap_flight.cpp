@@ -88,6 +88,7 @@ AirframeOptions rigOptions(const SwapOptions& o, const RunSpec& r) {
     }
     if (r.rig == AirRig::kSeesaw) counterweigh(a.seesaw, replaced, a.motors[kSwapSlot]);
   }
+  a.gimbal.common.reaction_torque = a.seesaw.common.reaction_torque = !o.no_reaction_torque;
   a.imu_params.seed = r.imu_seed;
   a.log_period_s = o.log_period_s;
   return a;
@@ -238,6 +239,10 @@ std::string runModeName(const RunSpec& r) {
   return r.mode == Mode::kPeer ? "peer:" + r.peer : std::string(modeName(r.mode));
 }
 
+int stepsOf(const SwapOptions& o, const RunSpec& r) {
+  return std::max(1, r.mode == Mode::kForceDyn && o.dyn_steps > 0 ? o.dyn_steps : o.steps);
+}
+
 std::string runId(const RunSpec& r) {
   if (r.mode == Mode::kPeer)  // its own gains
     return fmt::format("{}_peer-{}_{}_{}_s{}", airRigName(r.rig), r.peer, r.part, r.axis, r.imu_seed);
@@ -259,7 +264,7 @@ RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, c
   const std::string step =
       r.axis == "roll" ? fmt::format("sp {} 0", o.step_deg) : fmt::format("sp 0 {}", o.step_deg);
   std::vector<double> t_steps;
-  for (int k = 0; k < std::max(1, o.steps); ++k) {
+  for (int k = 0; k < stepsOf(o, r); ++k) {
     if (k > 0) {  // back to level, as long as a step's window, before the next
       mustSay(con, "sp 0 0", r);
       flyFor(rig, o.window_s);

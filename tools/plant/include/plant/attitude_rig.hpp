@@ -50,6 +50,11 @@ struct RigCommon {
   // place of the rig's layout (firmware differ: MultiWii's QUADX turns its front-left propeller
   // clockwise, the gimbal's X layout counter-clockwise). Empty: the layout's.
   std::vector<int> spin;
+  // The rotors' reaction on the body: each propeller's drag torque and its spin-up torque about
+  // the motor's axis (the body's z). false is a diagnostic only (`sim swap
+  // --no-reaction-torque`): the motors then push the body with their thrust alone, as if each
+  // motor's torque-to-thrust ratio and inertia were nil, which no real rig is.
+  bool reaction_torque = true;
 };
 
 // A rotation state the rigs report: body to world, body rates and angular acceleration.

@@ -100,10 +100,17 @@ struct SwapOptions {
   // One step's rise time scatters by about 1 % (SD) with the same motors (the IMU's noise, the
   // rig's motion at the step), as much as force+dyn's 1 % target: docs/fly.md, "Equal dynamics".
   int steps = 1;
+  // force+dyn's up-steps per flight (0: `steps`). Its targets (1 % rise time) are ten times
+  // finer than force mode's: the mean of 8 steps measures a run's rise time to about 0.4 %.
+  int dyn_steps = 0;
   // Diagnostic: each part's runs fly the stock motor 1 carrying the part's motor and propeller
   // masses (and, on the seesaw, the counterweight), on the stock records: what the part changes
   // in the rig alone, without its thrust or dynamics.
   bool part_mass_only = false;
+  // Diagnostic: the rigs' rotors push with their thrust alone, without their drag and spin-up
+  // torques about the body's z (plant::RigCommon::reaction_torque): what a part's different
+  // torque-to-thrust ratio does through the yaw balance.
+  bool no_reaction_torque = false;
   double log_period_s = 0.0025;
   int jobs = 1;  // flights at once (each its own simulated board)
   // A peer (`--peer FILE`): flown on the gimbal with stock and every part, each IMU unit, roll
@@ -163,6 +170,8 @@ struct RunSpec {
   uint64_t imu_seed = 1;
   std::string peer;  // Mode::kPeer: the peer's name (its gains are its own; `gains` unused)
 };
+// The up-steps a run flies: `dyn_steps` in force+dyn (when set), `steps` otherwise.
+int stepsOf(const SwapOptions& o, const RunSpec& r);
 std::string runId(const RunSpec& spec);  // "gimbal_force_pd_stock_roll_s1", "gimbal_peer-NAME_stock_roll_s1"
 std::string runModeName(const RunSpec& spec);  // modeName(), or "peer:NAME"
 
