@@ -133,13 +133,32 @@ TEST(LabDynamics, ASweepKeepsOneTimeConstant) {
 TEST(LabDynamics, ATimeColumnUnderItsUsualNamesIsTheTime) {
   // given a step log's time under the names loggers give it, in seconds or milliseconds
   for (const auto& [name, scale] : std::vector<std::pair<std::string, double>>{
-           {"time", 1.0}, {"Time (s)", 1.0}, {"time_ms", 1e-3}, {"t_ms", 1e-3}, {"Time (ms)", 1e-3}}) {
+           {"time", 1.0}, {"Time (s)", 1.0}, {"time_ms", 1e-3}, {"t_ms", 1e-3}, {"Time (ms)", 1e-3},
+           {"time_us", 1e-6}, {"t_us", 1e-6}, {"Time (us)", 1e-6}, {"Time (\u00b5s)", 1e-6},
+           {"timestamp (ms)", 1e-3}, {"timestamp_us", 1e-6}, {"timestamp_ms", 1e-3}, {"timestamp_s", 1.0}}) {
     const std::string csv = name + ",pwm_us,force_g\n0,1500,100\n10,1500,101\n20,1550,120\n";
     const lab::Dataset d = lab::parseText(csv, "steps.csv", lab::ReadOptions());
     // then it is t_s in seconds
     ASSERT_TRUE(d.has("t_s")) << name;
     EXPECT_DOUBLE_EQ(d.col("t_s")[2], 20 * scale) << name;
   }
+}
+
+TEST(LabDynamics, ATimestampWithoutUnitIsNotGuessedButSaysHowToMapIt) {
+  // given a log stamped in microseconds under a bare `timestamp` (as PX4 writes it)
+  const std::string csv = "timestamp,pwm_us,force_g\n0,1500,100\n2000,1500,101\n4000,1550,120\n";
+  const lab::Dataset d = lab::parseText(csv, "steps.csv", lab::ReadOptions());
+  // then it is not the time, and a note says how to make it one
+  EXPECT_FALSE(d.has("t_s"));
+  bool said = false;
+  for (const std::string& n : d.notes) said = said || n.find("--map t_s=timestamp/1000000") != std::string::npos;
+  EXPECT_TRUE(said);
+  // when mapped as the note says, it is the time in seconds
+  lab::ReadOptions o;
+  o.maps.push_back(lab::parseColumnMap("t_s=timestamp/1000000"));
+  const lab::Dataset m = lab::parseText(csv, "steps.csv", o);
+  ASSERT_TRUE(m.has("t_s"));
+  EXPECT_DOUBLE_EQ(m.col("t_s")[2], 0.004);
 }
 
 TEST(LabDynamics, DiagnoseJsonCarriesEachMotorsDynamicsAndTheFloorsEstimator) {

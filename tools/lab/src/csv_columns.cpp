@@ -77,6 +77,13 @@ void StreamParser::standColumn(std::size_t c, const KnownColumn& kc, const std::
   for (const auto& us : kc.units)
     if (us.unit == uk) scale = us.scale;
   if (!std::isfinite(scale) && kc.any_unit && uk.find('%') == std::string::npos) scale = 1.0;
+  if (!std::isfinite(scale) && uk.empty() && std::string(kc.target) == "t_s") {
+    out_.notes.push_back(fmt::format("{}: column '{}' has no unit, so it is not read as the time (t_s): "
+                                     "--map t_s={}/1000000 if it counts microseconds (PX4, micros()), "
+                                     "--map t_s={}/1000 for milliseconds, --map t_s={} for seconds",
+                                     file_, origin_[c], out_.names[c], out_.names[c], out_.names[c]));
+    return;
+  }
   if (!std::isfinite(scale)) {
     out_.notes.push_back(fmt::format("{}: column '{}': unit '{}' is not one the lab converts; kept as {} "
                                      "(map it yourself: --map {}=...)",

@@ -163,12 +163,20 @@ std::string unitKey(const std::string& unit) {
 
 const std::vector<KnownColumn>& knownColumns() {
   static const std::vector<KnownColumn> k = {
-      // a time column under any of its usual names: seconds unless its unit says milliseconds (a bare
-      // `time` is taken as seconds, with a note)
-      {"time", "t_s", "s", {{"s", 1.0}, {"ms", 1e-3}, {"", 1.0}}},
+      // a time column under any of its usual names: seconds unless its name or unit says
+      // milliseconds or microseconds (a logger's micros(), PX4's timestamps). A bare `time` is
+      // taken as seconds, with a note; a bare `timestamp` is not taken at all (loggers count it in
+      // seconds, milliseconds or microseconds alike): a note says how to map it.
+      {"time", "t_s", "s", {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"", 1.0}}},
       {"time_s", "t_s", "s", {{"", 1.0}}},
       {"time_ms", "t_s", "s", {{"", 1e-3}}},
       {"t_ms", "t_s", "s", {{"", 1e-3}}},
+      {"time_us", "t_s", "s", {{"", 1e-6}}},
+      {"t_us", "t_s", "s", {{"", 1e-6}}},
+      {"timestamp", "t_s", "s", {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}}},
+      {"timestamp_s", "t_s", "s", {{"", 1.0}}},
+      {"timestamp_ms", "t_s", "s", {{"", 1e-3}}},
+      {"timestamp_us", "t_s", "s", {{"", 1e-6}}},
       {"esc signal", "pwm_us", "µs", {{"us", 1.0}, {"ms", 1000.0}}, true},
       {"thrust", "force_g", "g",
        {{"n", kGramsPerNewton}, {"kgf", 1000.0}, {"gf", 1.0}, {"g", 1.0}, {"kg", 1000.0},
