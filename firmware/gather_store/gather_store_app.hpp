@@ -336,6 +336,7 @@ class GatherStoreApp {
   tc::SweepLagCorrector lag_;
   tc::MotorDynamics lag_dynamics_;
   uint32_t step_edge_us_ = 0, step_read_us_ = 0;
+  uint32_t force_window_centre_us_ = 0;  // the last readForceCounts's readings' centre
   // The sample held for the lag correction; pwm_us 0: none (a sweep's pulses are >= 1000 us).
   tc::SweepPointV2 pending_ = {0, 0, 0};
 };

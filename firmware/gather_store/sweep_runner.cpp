@@ -60,6 +60,7 @@ bool GatherStoreApp::settleForce(uint16_t& counts) {
 
 bool GatherStoreApp::readForceCounts(uint16_t& counts) {
   force_median_.reset();
+  const uint32_t first_us = hal::Clock::micros();
   for (uint16_t i = 0; i < kForceWindow; ++i) {
     hal::Watchdog::kick();
     if (hal::Uart::available()) {
@@ -68,6 +69,9 @@ bool GatherStoreApp::readForceCounts(uint16_t& counts) {
     }
     force_median_.push(hal::Adc::readCounts(hal::kAdcLoadCell));
   }
+  // The readings' centre, taken before the median's sort (a few ms at the window's end, which
+  // would move the instant a lag-corrected sweep reads at: sweep_lag.hpp).
+  force_window_centre_us_ = first_us + (hal::Clock::micros() - first_us) / 2u;
   counts = force_median_.median();
   return true;
 }
@@ -256,9 +260,8 @@ bool GatherStoreApp::measureStep(uint16_t pwm_us, uint32_t start_us, int16_t& fo
     const uint32_t busy_ms = (hal::Clock::micros() - written_us) / 1000u;  // whole ms: 0 without a correction
     const uint16_t settle_ms = sweep_settings_.settle_ms;
     if (!waitOrAbort(busy_ms < settle_ms ? static_cast<uint16_t>(settle_ms - busy_ms) : 0)) return false;
-    const uint32_t read_from_us = hal::Clock::micros();
     if (!readForceCounts(force_counts)) return false;
-    step_read_us_ = read_from_us + (hal::Clock::micros() - read_from_us) / 2u;
+    step_read_us_ = force_window_centre_us_;
   }
   const tc::LoadCellStatus cell_status = cell_.check(force_counts);
   if (cell_status == tc::LoadCellStatus::kImplausible) {
