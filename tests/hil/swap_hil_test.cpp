@@ -8,7 +8,8 @@
 // equal dynamics bring the swap closer to stock, are asserted on the simulated figures (the rig's
 // true attitude in simulated time), never on wall time. Each force+dyn flight flies three steps
 // and its figures are their means (`dyn_steps`): one step's rise time scatters by about 1 % with
-// the same motors, as much as force+dyn's target; force mode's targets (10 %) need one step. The calibrations are cached beside the test binary, as `sim swap`
+// the same motors, as much as force+dyn's target; force mode's targets (10 %) need one step.
+// The calibrations are cached beside the test binary, as `sim swap`
 // caches them.
 #include <gtest/gtest.h>
 
