@@ -278,7 +278,9 @@ class GatherStoreApp {
   bool settleForce(uint16_t& counts);
   void printSettle();  // "settle 200 ms" / "settle auto (cap 200 ms)"
   void printSweepPlan();  // "1000..1800 us, step 10 us, settle auto (cap 500 ms)"
-  bool readForceCounts(uint16_t& counts);  // false: a key arrived during the 201 readings
+  // false: a key arrived during the 201 readings. centre_us: their middle instant, taken before
+  // the median's sort.
+  bool readForceCounts(uint16_t& counts, uint32_t& centre_us);
   bool readBatteryCounts(uint16_t& counts);
   void stopMotor();
   // kKey: `value` is the key (a hal::Uart::read() item) or kKeyUnread while it is still in the
@@ -336,7 +338,6 @@ class GatherStoreApp {
   tc::SweepLagCorrector lag_;
   tc::MotorDynamics lag_dynamics_;
   uint32_t step_edge_us_ = 0, step_read_us_ = 0;
-  uint32_t force_window_centre_us_ = 0;  // the last readForceCounts's readings' centre
   // The sample held for the lag correction; pwm_us 0: none (a sweep's pulses are >= 1000 us).
   tc::SweepPointV2 pending_ = {0, 0, 0};
 };

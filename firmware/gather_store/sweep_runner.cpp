@@ -52,13 +52,14 @@ bool GatherStoreApp::settleForce(uint16_t& counts) {
   tc::SettleAuto settle;
   for (;;) {
     if (!waitOrAbort(kSettleProbeMs)) return false;
-    if (!readForceCounts(counts)) return false;
+    uint32_t centre_us;  // settle auto reads until the force is steady: no instant to correct
+    if (!readForceCounts(counts, centre_us)) return false;
     settle = tc::settleAutoNext(settle, counts);
     if (tc::settleAutoDone(settle, hal::Clock::millis() - start, sweep_settings_.settle_ms)) return true;
   }
 }
 
-bool GatherStoreApp::readForceCounts(uint16_t& counts) {
+bool GatherStoreApp::readForceCounts(uint16_t& counts, uint32_t& centre_us) {
   force_median_.reset();
   const uint32_t first_us = hal::Clock::micros();
   for (uint16_t i = 0; i < kForceWindow; ++i) {
@@ -71,7 +72,7 @@ bool GatherStoreApp::readForceCounts(uint16_t& counts) {
   }
   // The readings' centre, taken before the median's sort (a few ms at the window's end, which
   // would move the instant a lag-corrected sweep reads at: sweep_lag.hpp).
-  force_window_centre_us_ = first_us + (hal::Clock::micros() - first_us) / 2u;
+  centre_us = first_us + (hal::Clock::micros() - first_us) / 2u;
   counts = force_median_.median();
   return true;
 }
@@ -260,8 +261,7 @@ bool GatherStoreApp::measureStep(uint16_t pwm_us, uint32_t start_us, int16_t& fo
     const uint32_t busy_ms = (hal::Clock::micros() - written_us) / 1000u;  // whole ms: 0 without a correction
     const uint16_t settle_ms = sweep_settings_.settle_ms;
     if (!waitOrAbort(busy_ms < settle_ms ? static_cast<uint16_t>(settle_ms - busy_ms) : 0)) return false;
-    if (!readForceCounts(force_counts)) return false;
-    step_read_us_ = force_window_centre_us_;
+    if (!readForceCounts(force_counts, step_read_us_)) return false;
   }
   const tc::LoadCellStatus cell_status = cell_.check(force_counts);
   if (cell_status == tc::LoadCellStatus::kImplausible) {

@@ -15,6 +15,7 @@
 #include "sim/board.hpp"
 #include "sim/console.hpp"
 #include "sim/faults.hpp"
+#include "sim/watchdog_gaps.hpp"
 
 namespace safety {
 
@@ -36,6 +37,17 @@ inline bool contains(const std::string& text, const std::string& what) {
 }
 
 inline void drain(sim::Console& con, double quiet_s = 0.3) { sim::drainConsole(con, quiet_s); }
+
+// The watchdog headroom tests' figure and check: the longest gap `meter` saw in `image`,
+// printed and recorded (`IMAGE_longest_gap_ms`), at most half the time-out.
+inline void expectKickHeadroom(const sim::KickGapMeter& meter, const std::string& image) {
+  std::printf("%s: longest %.2f ms without a kick (%s -> %s), %llu kicks\n", image.c_str(), meter.longestMs(),
+              meter.longestFrom().c_str(), meter.longestTo().c_str(),
+              static_cast<unsigned long long>(meter.kicks()));
+  ::testing::Test::RecordProperty(image + "_longest_gap_ms", fmt::format("{:.2f}", meter.longestMs()));
+  EXPECT_LE(meter.longestMs(), sim::KickGapMeter::kHeadroomTargetMs)
+      << image << ": " << meter.longestFrom() << " -> " << meter.longestTo();
+}
 
 // read_run on a bare board: battery on A1, nothing on A0.
 struct ReadRunBoard {

@@ -15,6 +15,7 @@
 #include "sim/dynamics_session.hpp"
 #include "sim/scenarios.hpp"
 #include "sim/swap.hpp"
+#include "sim/watchdog_gaps.hpp"
 #endif
 
 namespace bench {
@@ -32,7 +33,7 @@ namespace {
 
 constexpr double kTauTargetPct = 5.0;
 constexpr double kSessionTargetS = 40.0;
-constexpr double kKickGapTargetMs = 32.0;  // half the watchdog's 64 ms (docs/safety.md)
+constexpr double kKickGapTargetMs = sim::KickGapMeter::kHeadroomTargetMs;
 
 struct BenchPart {
   std::string name;  // "stock" for the four stock motors, else the swap part's name

@@ -218,7 +218,7 @@ namespace {
 // The progress line's word on the steps: ", 4 steps a flight (figures: their means)", force+dyn's
 // own count when it differs.
 std::string stepsNote(const SwapOptions& o) {
-  const int dyn = o.dyn_steps > 0 ? o.dyn_steps : o.steps;
+  const int dyn = stepsOf(o, Mode::kForceDyn);
   if (dyn == o.steps)
     return o.steps > 1 ? fmt::format(", {} steps a flight (figures: their means)", o.steps) : "";
   return fmt::format(", {} step(s) a flight, {} in force+dyn (figures: their means)", o.steps, dyn);

@@ -239,8 +239,8 @@ std::string runModeName(const RunSpec& r) {
   return r.mode == Mode::kPeer ? "peer:" + r.peer : std::string(modeName(r.mode));
 }
 
-int stepsOf(const SwapOptions& o, const RunSpec& r) {
-  return std::max(1, r.mode == Mode::kForceDyn && o.dyn_steps > 0 ? o.dyn_steps : o.steps);
+int stepsOf(const SwapOptions& o, Mode mode) {
+  return std::max(1, mode == Mode::kForceDyn && o.dyn_steps > 0 ? o.dyn_steps : o.steps);
 }
 
 std::string runId(const RunSpec& r) {
@@ -264,7 +264,7 @@ RunResult flyRun(const SwapOptions& o, const Calibration& c, const RunSpec& r, c
   const std::string step =
       r.axis == "roll" ? fmt::format("sp {} 0", o.step_deg) : fmt::format("sp 0 {}", o.step_deg);
   std::vector<double> t_steps;
-  for (int k = 0; k < stepsOf(o, r); ++k) {
+  for (int k = 0; k < stepsOf(o, r.mode); ++k) {
     if (k > 0) {  // back to level, as long as a step's window, before the next
       mustSay(con, "sp 0 0", r);
       flyFor(rig, o.window_s);

@@ -56,7 +56,7 @@ nlohmann::json setupJson(const SwapOptions& o) {
           {"level", o.level},
           {"window_s", o.window_s},
           {"steps", o.steps},
-          {"dyn_steps", o.dyn_steps > 0 ? o.dyn_steps : o.steps},
+          {"dyn_steps", stepsOf(o, Mode::kForceDyn)},
           {"part_mass_only", o.part_mass_only},
           {"reaction_torque", !o.no_reaction_torque},
           {"log_period_s", o.log_period_s},

@@ -170,8 +170,8 @@ struct RunSpec {
   uint64_t imu_seed = 1;
   std::string peer;  // Mode::kPeer: the peer's name (its gains are its own; `gains` unused)
 };
-// The up-steps a run flies: `dyn_steps` in force+dyn (when set), `steps` otherwise.
-int stepsOf(const SwapOptions& o, const RunSpec& r);
+// The up-steps a flight in `mode` flies: `dyn_steps` in force+dyn (when set), `steps` otherwise.
+int stepsOf(const SwapOptions& o, Mode mode);
 std::string runId(const RunSpec& spec);  // "gimbal_force_pd_stock_roll_s1", "gimbal_peer-NAME_stock_roll_s1"
 std::string runModeName(const RunSpec& spec);  // modeName(), or "peer:NAME"
 

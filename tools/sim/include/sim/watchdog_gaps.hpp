@@ -21,6 +21,10 @@ namespace sim {
 
 class KickGapMeter {
  public:
+  // The most any piece of work may run between two kicks: half the 64 ms time-out, so a chip
+  // whose watchdog oscillator runs fast, or work that grows, still has a margin (docs/safety.md).
+  static constexpr double kHeadroomTargetMs = 32.0;
+
   // Watches every `wdr` in `elf_path`'s functions on `board` (which runs that image).
   // Throws std::runtime_error when the image has none.
   KickGapMeter(Board& board, const std::string& elf_path);
